@@ -1,0 +1,20 @@
+# hof_module(NAME SOURCES ... DEPENDS ...): one static library per module of the design,
+# `hof_<name>` with alias `hof::<name>`, include root at src/ so headers read <hof/<name>/x.h>.
+function(hof_module name)
+  cmake_parse_arguments(ARG "" "" "SOURCES;DEPENDS;PRIVATE_DEPENDS" ${ARGN})
+  add_library(hof_${name} STATIC ${ARG_SOURCES})
+  add_library(hof::${name} ALIAS hof_${name})
+  target_include_directories(hof_${name} PUBLIC ${PROJECT_SOURCE_DIR}/src)
+  target_link_libraries(hof_${name} PUBLIC ${ARG_DEPENDS} PRIVATE hof_warnings ${ARG_PRIVATE_DEPENDS})
+endfunction()
+
+# hof_test(NAME SOURCES ... DEPENDS ...): a GoogleTest executable registered with CTest.
+# HOF_ANCHORS points at ../shared/anchors (third-party inputs read in place, never copied).
+function(hof_test name)
+  cmake_parse_arguments(ARG "" "" "SOURCES;DEPENDS" ${ARGN})
+  add_executable(${name} ${ARG_SOURCES})
+  target_link_libraries(${name} PRIVATE ${ARG_DEPENDS} GTest::gtest_main GTest::gmock hof_warnings)
+  target_compile_definitions(${name} PRIVATE
+    HOF_ANCHORS_DIR="${HOF_ANCHORS_DIR}" HOF_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
+  gtest_discover_tests(${name} DISCOVERY_TIMEOUT 60 PROPERTIES TIMEOUT 600)
+endfunction()
