@@ -6,7 +6,7 @@ set -euo pipefail
 packages=(
   build-essential cmake ninja-build pkg-config git
   libeigen3-dev libtet1.5-dev libpugixml-dev libglfw3-dev libimgui-dev libepoxy-dev
-  libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev libtbb-dev
+  libfmt-dev nlohmann-json3-dev libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev libtbb-dev
   gnuplot-nox xvfb xauth libgl1-mesa-dri libspnav-dev
 )
 

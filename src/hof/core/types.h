@@ -2,7 +2,7 @@
 /// @file
 /// Fixed-size linear-algebra types used across HoF. All quantities are SI (m, kg, s, N).
 
-#include <Eigen/Core>
+#include <Eigen/Dense>
 
 namespace hof {
 

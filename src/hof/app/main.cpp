@@ -1,0 +1,83 @@
+// The `hof` command: parses the command line (CLI11 lives in this file only, it is slow to
+// compile) and hands over to the verbs in this folder.
+
+#include <CLI/CLI.hpp>
+#include <cstdio>
+
+#include "hof/app/mesh_commands.h"
+
+namespace {
+
+void add_mesh_commands(CLI::App& app, int& status) {
+  CLI::App* mesh = app.add_subcommand("mesh", "Generate, inspect, convert and tetrahedralize meshes");
+  mesh->require_subcommand(1);
+
+  static hof::app::MeshInfoOptions info;
+  CLI::App* info_cmd = mesh->add_subcommand(
+      "info", "Print nodes, elements, surface, bounding box, volume, quality and problems of a mesh");
+  info_cmd->add_option("file", info.file, "Mesh file (.msh, .obj, .stl, .off, .vtu)")->required();
+  info_cmd->add_flag("--json", info.json, "Print the report as JSON");
+  info_cmd->add_flag("-q,--quiet", info.quiet, "No progress output");
+  info_cmd->callback([&] { status = hof::app::run_mesh_info(info); });
+
+  static hof::app::MeshGenerateOptions gen;
+  CLI::App* gen_cmd = mesh->add_subcommand(
+      "generate", "Generate a standard organ model (writes OUT.msh and its surface as OUT.obj)");
+  gen_cmd->add_option("shape", gen.shape, "Shape to generate")->check(CLI::IsMember({"liver"}))->required();
+  gen_cmd->add_option("-r,--resolution", gen.resolution,
+                      "simple (~600 tets), coarse (~2,500), medium (~10,000) or fine (~40,000)")
+      ->check(CLI::IsMember({"simple", "coarse", "medium", "fine"}))
+      ->capture_default_str();
+  gen_cmd->add_option("-o,--output", gen.output, "Output volume mesh (.msh, .vtu)")->required();
+  gen_cmd->add_option("--msh-version", gen.msh_version, "Gmsh version to write: 2 or 4")
+      ->check(CLI::IsMember({2, 4}))
+      ->capture_default_str();
+  gen_cmd->add_flag("-q,--quiet", gen.quiet, "No progress output");
+  gen_cmd->callback([&] { status = hof::app::run_mesh_generate(gen); });
+
+  static hof::app::MeshTetrahedralizeOptions tet;
+  CLI::App* tet_cmd = mesh->add_subcommand(
+      "tetrahedralize", "Fill a closed triangle surface with quality tetrahedra (TetGen)");
+  tet_cmd->add_option("surface", tet.surface, "Closed surface (.obj, .stl, .off, .msh)")->required();
+  tet_cmd->add_option("-o,--output", tet.output, "Output volume mesh (.msh, .vtu)")->required();
+  tet_cmd->add_option("--max-volume", tet.max_volume_m3, "Largest tetrahedron volume in m^3 (0 = no bound)")
+      ->capture_default_str();
+  tet_cmd->add_option("--quality", tet.quality,
+                      "Radius-edge ratio bound (>= 1; smaller is better shaped; 0 = no refinement)")
+      ->capture_default_str();
+  tet_cmd->add_option("--min-dihedral", tet.min_dihedral_deg, "Dihedral angle to aim for, degrees")
+      ->capture_default_str();
+  tet_cmd->add_flag("--preserve-surface", tet.preserve_surface, "Do not split surface triangles");
+  tet_cmd->add_option("--msh-version", tet.msh_version, "Gmsh version to write: 2 or 4")
+      ->check(CLI::IsMember({2, 4}))
+      ->capture_default_str();
+  tet_cmd->add_flag("-q,--quiet", tet.quiet, "No progress output");
+  tet_cmd->callback([&] { status = hof::app::run_mesh_tetrahedralize(tet); });
+
+  static hof::app::MeshConvertOptions conv;
+  CLI::App* conv_cmd =
+      mesh->add_subcommand("convert", "Convert between mesh formats (chosen from the extensions)");
+  conv_cmd->add_option("input", conv.input, "Input mesh")->required();
+  conv_cmd->add_option("output", conv.output, "Output mesh (.msh, .vtu, .obj, .off)")->required();
+  conv_cmd->add_option("--msh-version", conv.msh_version, "Gmsh version to write: 2 or 4")
+      ->check(CLI::IsMember({2, 4}))
+      ->capture_default_str();
+  conv_cmd->add_flag("-q,--quiet", conv.quiet, "No progress output");
+  conv_cmd->callback([&] { status = hof::app::run_mesh_convert(conv); });
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"HoF - Haptics Open Framework: touch deformable soft-tissue models"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "hof 0.1.0");
+  int status = 0;
+  add_mesh_commands(app, status);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+  return status;
+}
