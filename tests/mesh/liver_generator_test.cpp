@@ -100,7 +100,7 @@ TEST_P(LiverResolutionTest, TwoLobesNotASphereOrABox) {
 INSTANTIATE_TEST_SUITE_P(Standard, LiverResolutionTest,
                          ::testing::Values(LiverResolution::kSimple, LiverResolution::kCoarse,
                                            LiverResolution::kMedium, LiverResolution::kFine),
-                         [](const auto& info) { return std::string(to_string(info.param)); });
+                         [](const auto& param_info) { return std::string(to_string(param_info.param)); });
 
 std::string file_bytes(const std::filesystem::path& p) {
   std::ifstream in(p, std::ios::binary);
