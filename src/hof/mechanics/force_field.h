@@ -1,0 +1,81 @@
+#pragma once
+/// @file
+/// The interface every internal or applied force of a mechanical model implements. A force
+/// field is built once (its element precomputation fixed), bound to the model's matrix pattern,
+/// and then only read; what changes from step to step (element rotations, ...) lives in a
+/// ForceFieldState owned by the MechanicalState.
+///
+/// Sign convention: `add_force` adds the force f(x, v) acting on the nodes; `add_stiffness`
+/// adds scale·K with K = −∂f/∂x (positive semi-definite for a stable material), the matrix
+/// the implicit and static solvers need.
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include "hof/core/types.h"
+#include "hof/mechanics/block_sparse_matrix.h"
+
+namespace hof::mechanics {
+
+/// Per-state data of a force field, sized by ForceField::make_state().
+struct ForceFieldState {
+  std::vector<Mat3> rotations;                 ///< (E) element rotations (co-rotational FEM)
+  std::vector<Eigen::Quaterniond> warm_start;  ///< (E) last polar rotation, to start from
+  std::vector<double> element_scalars;         ///< field-specific per-element values
+  std::vector<Eigen::Matrix<double, 9, 9>> element_tangents;  ///< (E) dP/dF (hyperelastic)
+  std::vector<Mat3> element_matrices;          ///< (E) field-specific per-element 3x3 data
+};
+
+class ForceField {
+ public:
+  ForceField() = default;
+  ForceField(const ForceField&) = delete;
+  ForceField& operator=(const ForceField&) = delete;
+  virtual ~ForceField() = default;
+
+  /// SOFA component type, e.g. "TetrahedronFEMForceField".
+  [[nodiscard]] virtual std::string_view type_name() const = 0;
+  /// The user's name for this instance (the scene's `name`), for messages.
+  [[nodiscard]] const std::string& name() const { return name_; }
+  void set_name(std::string name) { name_ = std::move(name); }
+
+  /// State this field needs per MechanicalState.
+  [[nodiscard]] virtual ForceFieldState make_state() const { return {}; }
+
+  /// Node pairs this field couples in its stiffness (for the matrix pattern).
+  virtual void collect_couplings(std::vector<std::pair<std::int32_t, std::int32_t>>& pairs) const = 0;
+
+  /// Precomputes the block slots this field writes. Called once while the model is built.
+  virtual void bind(const BlockSparseMatrix& pattern) = 0;
+
+  /// f += force at positions x and velocities v (3N each). Updates per-element data in `state`
+  /// (rotations, tangents) that add_stiffness then uses.
+  virtual void add_force(const Eigen::VectorXd& x, const Eigen::VectorXd& v, ForceFieldState& state,
+                         Eigen::VectorXd& f) const = 0;
+
+  /// K += scale · (−∂f/∂x), linearised at the positions of the last add_force.
+  virtual void add_stiffness(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const = 0;
+
+  /// Whether add_stiffness adds anything (constant forces do not).
+  [[nodiscard]] virtual bool has_stiffness() const { return true; }
+
+  /// Elastic (or potential) energy at x, J.
+  [[nodiscard]] virtual double potential_energy(const Eigen::VectorXd& x, const ForceFieldState& state) const = 0;
+
+  /// Index of an element this field cannot continue with at x (a linear element turned inside
+  /// out), or −1. Checked after each step for divergence reports.
+  [[nodiscard]] virtual std::int64_t find_invalid_element(const Eigen::VectorXd& x) const {
+    (void)x;
+    return -1;
+  }
+
+ private:
+  std::string name_;
+};
+
+}  // namespace hof::mechanics

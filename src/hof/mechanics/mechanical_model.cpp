@@ -1,0 +1,246 @@
+#include "hof/mechanics/mechanical_model.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include "hof/mechanics/linear_system.h"
+#include "hof/mechanics/mechanical_state.h"
+#include "hof/mechanics/neo_hookean_force_field.h"
+#include "hof/mesh/tet_geometry.h"
+
+namespace hof::mechanics {
+
+namespace {
+
+const char* mass_type(MassKind kind) { return kind == MassKind::kUniform ? "UniformMass" : "DiagonalMass"; }
+
+Expected<std::vector<double>> build_masses(const ModelConfig& c) {
+  const std::size_t n = c.positions.size();
+  const std::string who = fmt::format("{} '{}'", mass_type(c.mass.kind), c.mass.name);
+  std::vector<double> mass(n, 0.0);
+  if (c.mass.kind == MassKind::kUniform) {
+    if (c.mass.vertex_mass_kg) {
+      if (!(*c.mass.vertex_mass_kg > 0.0)) {
+        return make_error(ErrorCode::kInvalidArgument, fmt::format("{}: vertexMass must be > 0 kg, got {}", who, *c.mass.vertex_mass_kg));
+      }
+      std::fill(mass.begin(), mass.end(), *c.mass.vertex_mass_kg);
+    } else {
+      if (!(c.mass.total_mass_kg > 0.0) || !std::isfinite(c.mass.total_mass_kg)) {
+        return make_error(ErrorCode::kInvalidArgument, fmt::format("{}: totalMass must be > 0 kg, got {}", who, c.mass.total_mass_kg));
+      }
+      std::fill(mass.begin(), mass.end(), c.mass.total_mass_kg / static_cast<double>(n));
+    }
+    return mass;
+  }
+  // DiagonalMass: each tetrahedron gives ρV/4 to each of its nodes (lumped mass).
+  if (c.tets.empty()) {
+    return make_error(ErrorCode::kInvalidArgument, fmt::format("{}: needs tetrahedra to compute volumes", who));
+  }
+  if (!(c.mass.mass_density_kg_per_m3 > 0.0) || !std::isfinite(c.mass.mass_density_kg_per_m3)) {
+    return make_error(ErrorCode::kInvalidArgument,
+                      fmt::format("{}: massDensity must be > 0 kg/m^3, got {}", who, c.mass.mass_density_kg_per_m3));
+  }
+  for (const mesh::Tet& t : c.tets) {
+    const auto p = mesh::tet_corners(c.positions, t);
+    const double quarter = c.mass.mass_density_kg_per_m3 * std::abs(mesh::tet_signed_volume(p[0], p[1], p[2], p[3])) / 4.0;
+    for (mesh::NodeIndex i : t) mass[i] += quarter;
+  }
+  if (c.mass.diagonal_total_mass_kg) {
+    const double total = std::accumulate(mass.begin(), mass.end(), 0.0);
+    const double target = *c.mass.diagonal_total_mass_kg;
+    if (!(target > 0.0)) return make_error(ErrorCode::kInvalidArgument, fmt::format("{}: totalMass must be > 0 kg", who));
+    for (double& m : mass) m *= target / total;
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!(mass[i] > 0.0)) {
+      return make_error(ErrorCode::kInvalidMesh,
+                        fmt::format("{}: node {} belongs to no tetrahedron and gets no mass; remove unused nodes "
+                                    "or use UniformMass",
+                                    who, i));
+    }
+  }
+  return mass;
+}
+
+}  // namespace
+
+double MechanicalModel::total_mass_kg() const { return std::accumulate(node_mass_kg.begin(), node_mass_kg.end(), 0.0); }
+
+Expected<MechanicalModel> build_model(const ModelConfig& c) {
+  const std::size_t n = c.positions.size();
+  if (n == 0) return make_error(ErrorCode::kInvalidArgument, fmt::format("model '{}': no nodes", c.name));
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!c.positions[i].allFinite()) {
+      return make_error(ErrorCode::kInvalidMesh, fmt::format("model '{}': node {} has a non-finite position", c.name, i));
+    }
+  }
+  for (std::size_t t = 0; t < c.tets.size(); ++t) {
+    for (mesh::NodeIndex i : c.tets[t]) {
+      if (i < 0 || static_cast<std::size_t>(i) >= n) {
+        return make_error(ErrorCode::kInvalidMesh,
+                          fmt::format("model '{}': tetrahedron {} refers to node {} of {}", c.name, t, i, n));
+      }
+    }
+  }
+  if (!(c.dt_s > 0.0) || !std::isfinite(c.dt_s)) {
+    return make_error(ErrorCode::kInvalidArgument, fmt::format("model '{}': dt must be > 0 s, got {}", c.name, c.dt_s));
+  }
+  if (!c.gravity_m_per_s2.allFinite()) {
+    return make_error(ErrorCode::kInvalidArgument, fmt::format("model '{}': gravity is not finite", c.name));
+  }
+  const std::string ode_who = fmt::format("solver '{}'", c.ode.name);
+  if (c.ode.rayleigh_mass < 0.0 || c.ode.rayleigh_stiffness < 0.0) {
+    return make_error(ErrorCode::kInvalidArgument,
+                      fmt::format("EulerImplicitSolver '{}': rayleighStiffness and rayleighMass must be >= 0", c.ode.name));
+  }
+  if (c.ode.kind == OdeSolverKind::kStatic && c.ode.newton_iterations < 1) {
+    return make_error(ErrorCode::kInvalidArgument, fmt::format("StaticSolver '{}': newton_iterations must be >= 1", c.ode.name));
+  }
+  if (c.linear.kind == LinearSolverKind::kConjugateGradient &&
+      (c.linear.iterations < 1 || !(c.linear.tolerance >= 0.0) || !(c.linear.threshold >= 0.0))) {
+    return make_error(ErrorCode::kInvalidArgument,
+                      fmt::format("CGLinearSolver '{}': iterations must be >= 1, tolerance and threshold >= 0", c.linear.name));
+  }
+  (void)ode_who;
+
+  MechanicalModel m;
+  m.name = c.name;
+  m.rest_positions = c.positions;
+  m.tets = c.tets;
+  m.triangles = c.triangles;
+  m.mass_name = c.mass.name;
+  m.ode = c.ode;
+  m.linear = c.linear;
+  m.gravity_m_per_s2 = c.gravity_m_per_s2;
+  m.dt_s = c.dt_s;
+  m.max_speed_m_per_s = c.max_speed_m_per_s;
+  m.threads = c.threads;
+  m.needs_matrix = c.ode.kind == OdeSolverKind::kEulerImplicit || c.ode.kind == OdeSolverKind::kStatic;
+
+  auto masses = build_masses(c);
+  if (!masses) return std::unexpected(masses.error());
+  m.node_mass_kg = std::move(*masses);
+
+  for (const ForceFieldConfig& f : c.force_fields) {
+    if (f.tetrahedron_fem) {
+      auto field = TetrahedronFemForceField::make(c.positions, c.tets, *f.tetrahedron_fem, f.name);
+      if (!field) return std::unexpected(field.error());
+      m.force_fields.push_back(std::move(*field));
+    } else if (f.mesh_springs) {
+      auto field = MeshSpringForceField::make(c.positions, c.tets, c.triangles, *f.mesh_springs, f.name);
+      if (!field) return std::unexpected(field.error());
+      m.force_fields.push_back(std::move(*field));
+    } else if (f.neo_hookean) {
+      auto field = NeoHookeanForceField::make(c.positions, c.tets, *f.neo_hookean, f.name);
+      if (!field) return std::unexpected(field.error());
+      m.force_fields.push_back(std::move(*field));
+    } else if (f.constant_force) {
+      auto field = ConstantForceField::make(n, *f.constant_force, f.name);
+      if (!field) return std::unexpected(field.error());
+      m.force_fields.push_back(std::move(*field));
+    } else {
+      return make_error(ErrorCode::kInvalidArgument, fmt::format("model '{}': force field '{}' has no type", c.name, f.name));
+    }
+  }
+
+  // Fixed nodes from indices and boxes (projective constraints).
+  m.fixed_dof_mask.assign(3 * n, 0);
+  for (const FixedConstraintConfig& fixed : c.fixed) {
+    auto hold = [&](std::size_t node) {
+      for (std::size_t a = 0; a < 3; ++a) {
+        if (fixed.directions[a]) m.fixed_dof_mask[3 * node + a] = 1;
+      }
+    };
+    if (fixed.fix_all) {
+      for (std::size_t i = 0; i < n; ++i) hold(i);
+    }
+    for (std::int32_t i : fixed.indices) {
+      if (i < 0 || static_cast<std::size_t>(i) >= n) {
+        return make_error(ErrorCode::kInvalidArgument,
+                          fmt::format("FixedProjectiveConstraint '{}': index {} is out of range (the model has {} nodes)",
+                                      fixed.name, i, n));
+      }
+      hold(static_cast<std::size_t>(i));
+    }
+    if (fixed.box) {
+      const auto& [lo, hi] = *fixed.box;
+      if (!(lo.array() <= hi.array()).all()) {
+        return make_error(ErrorCode::kInvalidArgument,
+                          fmt::format("FixedProjectiveConstraint '{}': box min must not exceed max", fixed.name));
+      }
+      std::size_t inside = 0;
+      for (std::size_t i = 0; i < n; ++i) {
+        if ((c.positions[i].array() >= lo.array()).all() && (c.positions[i].array() <= hi.array()).all()) {
+          hold(i);
+          ++inside;
+        }
+      }
+      if (inside == 0) {
+        return make_error(ErrorCode::kInvalidArgument,
+                          fmt::format("FixedProjectiveConstraint '{}': the box contains no node", fixed.name));
+      }
+    }
+  }
+  for (std::size_t d = 0; d < 3 * n; ++d) {
+    if (m.fixed_dof_mask[d]) m.fixed_dofs.push_back(static_cast<std::int32_t>(d));
+  }
+
+  std::vector<std::pair<std::int32_t, std::int32_t>> pairs;
+  for (const auto& field : m.force_fields) field->collect_couplings(pairs);
+  m.pattern = BlockSparseMatrix::from_pairs(static_cast<std::int32_t>(n), pairs);
+  for (auto& field : m.force_fields) field->bind(m.pattern);
+  return m;
+}
+
+// ---- state ------------------------------------------------------------------------------------
+
+MechanicalState::MechanicalState() = default;
+MechanicalState::MechanicalState(MechanicalState&&) noexcept = default;
+MechanicalState& MechanicalState::operator=(MechanicalState&&) noexcept = default;
+MechanicalState::~MechanicalState() = default;
+
+MechanicalState make_state(const MechanicalModel& model) {
+  MechanicalState s;
+  const Eigen::Index dofs = 3 * static_cast<Eigen::Index>(model.node_count());
+  s.x.resize(dofs);
+  s.v = Eigen::VectorXd::Zero(dofs);
+  s.f = Eigen::VectorXd::Zero(dofs);
+  s.external_force = Eigen::VectorXd::Zero(dofs);
+  for (std::size_t i = 0; i < model.node_count(); ++i) s.x.segment<3>(3 * static_cast<Eigen::Index>(i)) = model.rest_positions[i];
+  for (const auto& field : model.force_fields) s.field_states.push_back(field->make_state());
+  SolverWorkspace& w = s.work;
+  for (Eigen::VectorXd* vec : {&w.b, &w.dv, &w.r, &w.p, &w.z, &w.ap, &w.diag_inv, &w.x_saved, &w.v_saved, &w.k1x,
+                               &w.k1v, &w.k2x, &w.k2v, &w.k3x, &w.k3v, &w.k4x, &w.k4v, &w.xt, &w.vt}) {
+    *vec = Eigen::VectorXd::Zero(dofs);
+  }
+  w.partials.assign(1024, 0.0);
+  w.block_jacobi.assign(model.node_count(), Mat3::Identity());
+  if (model.needs_matrix) {
+    w.system = model.pattern;
+    detail::prepare_linear_solver(model, s);
+  }
+  s.arena = std::make_unique<tbb::task_arena>(model.threads > 0 ? model.threads : int{tbb::task_arena::automatic});
+  return s;
+}
+
+void reset(const MechanicalModel& model, MechanicalState& state) {
+  for (std::size_t i = 0; i < model.node_count(); ++i) {
+    state.x.segment<3>(3 * static_cast<Eigen::Index>(i)) = model.rest_positions[i];
+  }
+  state.v.setZero();
+  state.f.setZero();
+  state.external_force.setZero();
+  state.time_s = 0.0;
+  state.steps = 0;
+  state.divergence = {};
+  state.stats = {};
+  for (std::size_t k = 0; k < model.force_fields.size(); ++k) {
+    ForceFieldState fresh = model.force_fields[k]->make_state();
+    state.field_states[k] = std::move(fresh);
+  }
+}
+
+}  // namespace hof::mechanics

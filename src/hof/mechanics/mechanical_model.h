@@ -1,0 +1,145 @@
+#pragma once
+/// @file
+/// A deformable body as SOFA models it in one node: a state (positions, velocities), a
+/// topology, a mass, force fields, projective constraints and an ODE solver with its linear
+/// solver. MechanicalModel is built once from a validated ModelConfig and is then immutable;
+/// everything that changes lives in a MechanicalState (see mechanical_state.h), made by
+/// make_state() and advanced by step() (see step.h).
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "hof/core/error.h"
+#include "hof/mechanics/block_sparse_matrix.h"
+#include "hof/mechanics/constant_force_field.h"
+#include "hof/mechanics/force_field.h"
+#include "hof/mechanics/mesh_spring_force_field.h"
+#include "hof/mechanics/tetrahedron_fem_force_field.h"
+#include "hof/mesh/mesh.h"
+
+namespace hof::mechanics {
+
+// ---- configuration (validated by build_model) ---------------------------------------------
+
+enum class MassKind : std::uint8_t {
+  kUniform,   ///< SOFA UniformMass: totalMass/N per node, or vertexMass
+  kDiagonal,  ///< SOFA DiagonalMass: lumped ρV/4 from each tetrahedron to its nodes
+};
+
+struct MassConfig {
+  MassKind kind{MassKind::kDiagonal};
+  std::string name{"mass"};
+  double total_mass_kg{1.0};                 ///< UniformMass totalMass (SOFA default 1)
+  std::optional<double> vertex_mass_kg;      ///< UniformMass vertexMass (overrides totalMass)
+  double mass_density_kg_per_m3{1.0};        ///< DiagonalMass massDensity (SOFA default 1)
+  std::optional<double> diagonal_total_mass_kg;  ///< DiagonalMass totalMass: rescales the lumped masses
+};
+
+/// SOFA's Neo-Hookean counterpart; see neo_hookean_force_field.h.
+struct NeoHookeanConfig {
+  double young_modulus_pa{5000.0};
+  double poisson_ratio{0.45};
+};
+
+/// One force field of the model; exactly one member is set.
+struct ForceFieldConfig {
+  std::string name;
+  std::optional<MeshSpringConfig> mesh_springs;
+  std::optional<TetrahedronFemConfig> tetrahedron_fem;
+  std::optional<NeoHookeanConfig> neo_hookean;
+  std::optional<ConstantForceConfig> constant_force;
+};
+
+/// SOFA FixedProjectiveConstraint (FixedConstraint): nodes by index, or every node whose rest
+/// position lies inside an axis-aligned box. With `directions` other than all three it is
+/// SOFA's PartialFixedProjectiveConstraint (`fixedDirections`): only those axes are held.
+struct FixedConstraintConfig {
+  std::string name{"fixed"};
+  std::vector<std::int32_t> indices;
+  std::optional<std::pair<Vec3, Vec3>> box;  ///< (min, max) corners, m
+  bool fix_all{false};
+  std::array<bool, 3> directions{true, true, true};  ///< which of x, y, z are held
+};
+
+enum class OdeSolverKind : std::uint8_t {
+  kEulerExplicit,  ///< SOFA EulerExplicitSolver (`symplectic`)
+  kRungeKutta4,    ///< SOFA RungeKutta4Solver
+  kStatic,         ///< SOFA StaticSolver: Newton iterations on f(x) = 0
+  kEulerImplicit,  ///< SOFA EulerImplicitSolver (Baraff–Witkin), Rayleigh damping
+};
+
+struct OdeSolverConfig {
+  OdeSolverKind kind{OdeSolverKind::kEulerImplicit};
+  std::string name{"odesolver"};
+  bool symplectic{true};            ///< explicit Euler: update v first, then x with the new v
+  double rayleigh_stiffness{0.0};   ///< implicit Euler r_K (SOFA default 0; liver.scn 0.1)
+  double rayleigh_mass{0.0};        ///< implicit Euler r_M (SOFA default 0; liver.scn 0.1)
+  int newton_iterations{10};        ///< static solver
+  double newton_residual_tolerance_n{1e-6};  ///< static solver: stop when |f| (N) is below
+  double newton_correction_tolerance{1e-10}; ///< static solver: stop when |Δx| / |x| is below
+};
+
+enum class LinearSolverKind : std::uint8_t {
+  kConjugateGradient,  ///< SOFA CGLinearSolver
+  kSparseLdlt,         ///< sparse direct LDLᵀ (Eigen SimplicialLDLT, AMD ordering)
+};
+
+struct LinearSolverConfig {
+  LinearSolverKind kind{LinearSolverKind::kConjugateGradient};
+  std::string name{"linearsolver"};
+  int iterations{25};          ///< CG maximum iterations (SOFA default 25)
+  double tolerance{1e-5};      ///< CG stops when |r|²/|b|² is below (SOFA semantics)
+  double threshold{1e-5};      ///< CG stops when pᵀAp falls below threshold × its first value
+  bool block_jacobi{false};    ///< precondition CG with the inverse 3x3 diagonal blocks
+};
+
+struct ModelConfig {
+  std::string name{"model"};
+  std::vector<Vec3> positions;           ///< (N) rest positions, m
+  std::vector<mesh::Tet> tets;           ///< topology (may be empty for spring-only surfaces)
+  std::vector<mesh::Tri> triangles;      ///< surface triangles (springs on surfaces)
+  MassConfig mass;
+  std::vector<ForceFieldConfig> force_fields;
+  std::vector<FixedConstraintConfig> fixed;
+  OdeSolverConfig ode;
+  LinearSolverConfig linear;
+  Vec3 gravity_m_per_s2{0.0, -9.81, 0.0};  ///< SOFA default
+  double dt_s{0.01};                       ///< SOFA default
+  double max_speed_m_per_s{100.0};         ///< a node faster than this means divergence
+  int threads{0};                          ///< 0 = all cores
+};
+
+// ---- the model --------------------------------------------------------------------------------
+
+struct MechanicalModel {
+  std::string name;
+  std::vector<Vec3> rest_positions;                   ///< (N) m
+  std::vector<mesh::Tet> tets;
+  std::vector<mesh::Tri> triangles;
+  std::vector<double> node_mass_kg;                   ///< (N) lumped mass per node
+  std::string mass_name;
+  std::vector<std::unique_ptr<ForceField>> force_fields;
+  std::vector<std::int32_t> fixed_dofs;               ///< sorted, unique degrees of freedom (3·node + axis)
+  std::vector<std::uint8_t> fixed_dof_mask;           ///< (3N) 1 where the dof is held
+  OdeSolverConfig ode;
+  LinearSolverConfig linear;
+  Vec3 gravity_m_per_s2{Vec3::Zero()};
+  double dt_s{0.01};
+  double max_speed_m_per_s{100.0};
+  int threads{0};
+  BlockSparseMatrix pattern;                          ///< system-matrix pattern (values unused)
+  bool needs_matrix{false};                           ///< implicit or static solver
+
+  [[nodiscard]] std::size_t node_count() const { return rest_positions.size(); }
+  [[nodiscard]] double total_mass_kg() const;
+};
+
+/// Validates `config` and builds the model. Errors name the component (type and name) and the
+/// offending value, node or element.
+[[nodiscard]] Expected<MechanicalModel> build_model(const ModelConfig& config);
+
+}  // namespace hof::mechanics

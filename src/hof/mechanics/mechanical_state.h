@@ -1,0 +1,85 @@
+#pragma once
+/// @file
+/// Everything about a mechanical model that changes while it runs: positions, velocities,
+/// forces, the coupling input, per-field element data, solver scratch (sized once, so a step
+/// never allocates), and the divergence report.
+
+#include <Eigen/Core>
+#include <Eigen/SparseCholesky>
+#include <tbb/task_arena.h>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "hof/mechanics/block_sparse_matrix.h"
+#include "hof/mechanics/force_field.h"
+
+namespace hof::mechanics {
+
+struct MechanicalModel;
+
+/// Why and where a model stopped. Once diverged, step() does nothing until reset().
+struct Divergence {
+  bool diverged{false};
+  std::int64_t step{-1};       ///< step index at which it was detected
+  std::string component;       ///< e.g. "TetrahedronFEMForceField 'FEM'" or "EulerExplicitSolver"
+  std::string reason;          ///< one sentence
+};
+
+/// Timings and solver figures of the last step (for benchmarks and reports).
+struct StepStats {
+  double force_s{0.0};     ///< computing forces
+  double assembly_s{0.0};  ///< filling the system matrix
+  double solve_s{0.0};     ///< linear solves and updates
+  int linear_iterations{0};
+  double linear_residual{0.0};  ///< CG: |r|²/|b|² at exit; LDLT: 0
+  int newton_iterations{0};
+  double residual_force_n{0.0};  ///< static solver: |f| at exit
+};
+
+/// Solver scratch, sized by make_state().
+struct SolverWorkspace {
+  Eigen::VectorXd b, dv, r, p, z, ap, diag_inv;  // CG and implicit Euler (3N)
+  Eigen::VectorXd x_saved, v_saved;               // last good state, restored on divergence
+  Eigen::VectorXd k1x, k1v, k2x, k2v, k3x, k3v, k4x, k4v, xt, vt;  // RK4
+  std::vector<double> partials;                    // deterministic reductions
+  BlockSparseMatrix system;                        // A = αM + βK, values refilled each step
+  std::vector<Eigen::Matrix3d> block_jacobi;       // (N) inverse diagonal blocks
+  // Sparse direct solver: CSC copy of `system` and the value map from block storage.
+  Eigen::SparseMatrix<double> csc;
+  std::vector<std::int64_t> csc_from_block;        // csc value k <- block value index
+  std::unique_ptr<Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>> ldlt;
+};
+
+struct MechanicalState {
+  MechanicalState();
+  MechanicalState(MechanicalState&&) noexcept;
+  MechanicalState& operator=(MechanicalState&&) noexcept;
+  ~MechanicalState();
+
+  Eigen::VectorXd x;               ///< (3N) positions, m
+  Eigen::VectorXd v;               ///< (3N) velocities, m/s
+  Eigen::VectorXd f;               ///< (3N) total force at the last evaluation, N
+  Eigen::VectorXd external_force;  ///< (3N) N; written by the coupling before each step, kept
+  double time_s{0.0};
+  std::int64_t steps{0};
+  std::vector<ForceFieldState> field_states;  ///< one per model force field
+  Divergence divergence;
+  StepStats stats;
+  SolverWorkspace work;
+  std::unique_ptr<tbb::task_arena> arena;     ///< limits the threads this model uses
+
+  /// Node i's position / velocity.
+  [[nodiscard]] Eigen::Vector3d position(std::int32_t i) const { return x.segment<3>(3 * static_cast<Eigen::Index>(i)); }
+  [[nodiscard]] Eigen::Vector3d velocity(std::int32_t i) const { return v.segment<3>(3 * static_cast<Eigen::Index>(i)); }
+};
+
+/// A state at rest for `model`, with all scratch sized.
+[[nodiscard]] MechanicalState make_state(const MechanicalModel& model);
+
+/// Back to rest: positions to rest, velocities and forces to zero, time to 0, divergence
+/// cleared. Keeps the scratch (no allocation).
+void reset(const MechanicalModel& model, MechanicalState& state);
+
+}  // namespace hof::mechanics

@@ -1,0 +1,30 @@
+#pragma once
+/// @file
+/// Advancing a mechanical model: step() reads like the algorithm — forces (internal, gravity,
+/// constant, coupling input) → solve (the model's ODE solver) → project constraints → check
+/// for divergence. Also the energies used by tests and reports.
+
+#include "hof/mechanics/mechanical_model.h"
+#include "hof/mechanics/mechanical_state.h"
+
+namespace hof::mechanics {
+
+/// Advances `state` by one time step of model.dt_s. Returns false when the model has diverged
+/// (now or before); the state then holds the last good positions and velocities and
+/// state.divergence says what happened. Never allocates after make_state().
+bool step(const MechanicalModel& model, MechanicalState& state);
+
+/// Kinetic energy ½ Σ m_i |v_i|², J.
+[[nodiscard]] double kinetic_energy(const MechanicalModel& model, const MechanicalState& state);
+/// Elastic energy of all force fields plus gravitational potential −Σ m_i g·x_i, J.
+[[nodiscard]] double potential_energy(const MechanicalModel& model, const MechanicalState& state);
+
+/// Total force at the state's positions and velocities (internal + gravity + constant +
+/// external), with fixed nodes' entries set to zero. Also refreshes per-field element data.
+void compute_forces(const MechanicalModel& model, MechanicalState& state, const Eigen::VectorXd& x,
+                    const Eigen::VectorXd& v, Eigen::VectorXd& f);
+
+/// Largest residual force on a free node (N): how far from static equilibrium the state is.
+[[nodiscard]] double max_residual_force(const MechanicalModel& model, MechanicalState& state);
+
+}  // namespace hof::mechanics

@@ -1,0 +1,240 @@
+#include "hof/mechanics/tetrahedron_fem_force_field.h"
+
+#include <fmt/format.h>
+
+#include <Eigen/SVD>
+#include <cmath>
+
+namespace hof::mechanics {
+
+namespace {
+
+// Orthonormal frame of the triangle (p0, p1, p2): first axis along p1−p0, third normal to the
+// triangle. Columns are the axes.
+Mat3 triangle_frame(const Vec3& p0, const Vec3& p1, const Vec3& p2) {
+  const Vec3 a = (p1 - p0).normalized();
+  const Vec3 c = a.cross(p2 - p0).normalized();
+  Mat3 frame;
+  frame.col(0) = a;
+  frame.col(1) = c.cross(a);
+  frame.col(2) = c;
+  return frame;
+}
+
+Vec3 node(const Eigen::VectorXd& x, std::int32_t n) { return x.segment<3>(3 * static_cast<Eigen::Index>(n)); }
+
+// Deformation gradient F = Σ_i x_i b_iᵀ, using Σ b_i = 0 to work with edge vectors.
+template <class Element>
+Mat3 deformation_gradient(const Element& e, const Eigen::VectorXd& x) {
+  const Vec3 x0 = node(x, e.nodes[0]);
+  return (node(x, e.nodes[1]) - x0) * e.gradients[1].transpose() +
+         (node(x, e.nodes[2]) - x0) * e.gradients[2].transpose() +
+         (node(x, e.nodes[3]) - x0) * e.gradients[3].transpose();
+}
+
+}  // namespace
+
+Lame lame_parameters(double young_modulus_pa, double poisson_ratio) {
+  // Standard isotropic relations (e.g. Sadd, "Elasticity", 2009, Table 6.1).
+  return {young_modulus_pa * poisson_ratio / ((1.0 + poisson_ratio) * (1.0 - 2.0 * poisson_ratio)),
+          young_modulus_pa / (2.0 * (1.0 + poisson_ratio))};
+}
+
+Expected<std::unique_ptr<TetrahedronFemForceField>> TetrahedronFemForceField::make(
+    const std::vector<Vec3>& rest_positions, const std::vector<mesh::Tet>& tets,
+    const TetrahedronFemConfig& config, std::string name) {
+  const std::string who = fmt::format("TetrahedronFEMForceField '{}'", name);
+  if (!(config.young_modulus_pa > 0.0) || !std::isfinite(config.young_modulus_pa)) {
+    return make_error(ErrorCode::kInvalidArgument,
+                      fmt::format("{}: youngModulus must be > 0 Pa, got {}", who, config.young_modulus_pa));
+  }
+  if (!(config.poisson_ratio > -1.0 && config.poisson_ratio < 0.5)) {
+    return make_error(ErrorCode::kInvalidArgument,
+                      fmt::format("{}: poissonRatio must be in (-1, 0.5), got {}", who, config.poisson_ratio));
+  }
+  if (tets.empty()) {
+    return make_error(ErrorCode::kInvalidArgument, fmt::format("{}: the topology has no tetrahedra", who));
+  }
+  auto field = std::unique_ptr<TetrahedronFemForceField>(new TetrahedronFemForceField());
+  field->set_name(std::move(name));
+  field->config_ = config;
+  field->lame_ = lame_parameters(config.young_modulus_pa, config.poisson_ratio);
+  field->elements_.reserve(tets.size());
+  for (std::size_t t = 0; t < tets.size(); ++t) {
+    Element e{};
+    e.nodes = tets[t];
+    for (std::int32_t n : e.nodes) {
+      if (n < 0 || static_cast<std::size_t>(n) >= rest_positions.size()) {
+        return make_error(ErrorCode::kInvalidMesh,
+                          fmt::format("{}: tetrahedron {} refers to node {} of {}", who, t, n, rest_positions.size()));
+      }
+    }
+    const Vec3& p0 = rest_positions[e.nodes[0]];
+    Mat3 dm;
+    dm.col(0) = rest_positions[e.nodes[1]] - p0;
+    dm.col(1) = rest_positions[e.nodes[2]] - p0;
+    dm.col(2) = rest_positions[e.nodes[3]] - p0;
+    const double det = dm.determinant();
+    const double scale = dm.colwise().norm().maxCoeff();
+    if (!(std::abs(det) > 1e-12 * scale * scale * scale)) {
+      return make_error(ErrorCode::kInvalidMesh,
+                        fmt::format("{}: tetrahedron {} (nodes {} {} {} {}) is degenerate at rest (volume {:.3g} m^3)",
+                                    who, t, e.nodes[0], e.nodes[1], e.nodes[2], e.nodes[3], det / 6.0));
+    }
+    if (det < 0.0) {
+      // An inverted rest element: reorder it rather than refuse the mesh (many files use the
+      // opposite orientation convention). The physics does not depend on node order.
+      std::swap(e.nodes[2], e.nodes[3]);
+      dm.col(1).swap(dm.col(2));
+    }
+    e.volume = std::abs(det) / 6.0;
+    const Mat3 dm_inv = dm.inverse();
+    e.gradients[1] = dm_inv.row(0).transpose();
+    e.gradients[2] = dm_inv.row(1).transpose();
+    e.gradients[3] = dm_inv.row(2).transpose();
+    e.gradients[0] = -(e.gradients[1] + e.gradients[2] + e.gradients[3]);
+    e.rest_frame_transposed =
+        triangle_frame(rest_positions[e.nodes[0]], rest_positions[e.nodes[1]], rest_positions[e.nodes[2]]).transpose();
+    e.slots.fill(-1);
+    field->elements_.push_back(e);
+  }
+  std::vector<std::array<std::int32_t, 4>> node_lists;
+  node_lists.reserve(field->elements_.size());
+  for (const Element& e : field->elements_) node_lists.push_back(e.nodes);
+  field->coloring_ = color_elements<4>(node_lists, rest_positions.size());
+  return field;
+}
+
+ForceFieldState TetrahedronFemForceField::make_state() const {
+  ForceFieldState s;
+  s.rotations.assign(elements_.size(), Mat3::Identity());
+  if (config_.method == FemMethod::kPolar) s.warm_start.assign(elements_.size(), Eigen::Quaterniond::Identity());
+  return s;
+}
+
+void TetrahedronFemForceField::collect_couplings(std::vector<std::pair<std::int32_t, std::int32_t>>& pairs) const {
+  for (const Element& e : elements_) {
+    for (int i = 0; i < 4; ++i) {
+      for (int j = i + 1; j < 4; ++j) pairs.emplace_back(e.nodes[i], e.nodes[j]);
+    }
+  }
+}
+
+void TetrahedronFemForceField::bind(const BlockSparseMatrix& pattern) {
+  for (Element& e : elements_) {
+    for (int i = 0; i < 4; ++i) {
+      for (int j = 0; j < 4; ++j) e.slots[4 * i + j] = static_cast<std::int32_t>(pattern.slot(e.nodes[i], e.nodes[j]));
+    }
+  }
+}
+
+Mat3 TetrahedronFemForceField::rotation(const Element& e, const Mat3& f, const Eigen::VectorXd& x,
+                                        Eigen::Quaterniond& warm_start) const {
+  switch (config_.method) {
+    case FemMethod::kSmall:
+      return Mat3::Identity();
+    case FemMethod::kLarge:
+      return triangle_frame(node(x, e.nodes[0]), node(x, e.nodes[1]), node(x, e.nodes[2])) * e.rest_frame_transposed;
+    case FemMethod::kPolar: {
+      // Müller et al. 2016: rotate q by the axis-angle that aligns its columns with F's
+      // columns, until the correction vanishes. Warm-started from the last step, it converges
+      // in one or two iterations; it stays defined for degenerate and inverted F.
+      Eigen::Quaterniond q = warm_start;
+      for (int iteration = 0; iteration < 20; ++iteration) {
+        const Mat3 r = q.toRotationMatrix();
+        const Vec3 omega = (r.col(0).cross(f.col(0)) + r.col(1).cross(f.col(1)) + r.col(2).cross(f.col(2))) /
+                           (std::abs(r.col(0).dot(f.col(0)) + r.col(1).dot(f.col(1)) + r.col(2).dot(f.col(2))) + 1e-9);
+        const double w = omega.norm();
+        if (!(w > 1e-12)) break;
+        q = Eigen::Quaterniond(Eigen::AngleAxisd(w, omega / w)) * q;
+        q.normalize();
+      }
+      Mat3 r = q.toRotationMatrix();
+      if (!((r.transpose() * f).trace() > 0.0)) {
+        // The iteration has a stationary point half a turn away from the answer (a 180°
+        // rotation from the warm start gives zero correction). RᵀF must have a positive
+        // trace at the polar rotation; when it does not, take R from the SVD instead.
+        const Eigen::JacobiSVD<Mat3> svd(f, Eigen::ComputeFullU | Eigen::ComputeFullV);
+        Mat3 u = svd.matrixU();
+        if ((u * svd.matrixV().transpose()).determinant() < 0.0) u.col(2) = -u.col(2);
+        r = u * svd.matrixV().transpose();
+        q = Eigen::Quaterniond(r);
+      }
+      warm_start = q;
+      return r;
+    }
+  }
+  return Mat3::Identity();
+}
+
+void TetrahedronFemForceField::add_force(const Eigen::VectorXd& x, const Eigen::VectorXd& /*v*/,
+                                         ForceFieldState& state, Eigen::VectorXd& f) const {
+  const double lambda = lame_.lambda;
+  const double mu = lame_.mu;
+  Eigen::Quaterniond unused = Eigen::Quaterniond::Identity();
+  coloring_.for_each([&](std::int32_t index) {
+    const Element& e = elements_[index];
+    const Mat3 deformation = deformation_gradient(e, x);
+    Eigen::Quaterniond& warm = state.warm_start.empty() ? unused : state.warm_start[index];
+    Eigen::Quaterniond local = warm;
+    const Mat3 r = rotation(e, deformation, x, local);
+    if (!state.warm_start.empty()) warm = local;
+    state.rotations[index] = r;
+    // Linear law in the element's unrotated frame: ε = sym(RᵀF) − I, σ = λ tr(ε) I + 2μ ε;
+    // nodal forces f_i = −V R σ b_i.
+    const Mat3 unrotated = r.transpose() * deformation;
+    const Mat3 strain = 0.5 * (unrotated + unrotated.transpose()) - Mat3::Identity();
+    const Mat3 stress = lambda * strain.trace() * Mat3::Identity() + 2.0 * mu * strain;
+    const Mat3 rs = -e.volume * (r * stress);
+    for (int i = 0; i < 4; ++i) f.segment<3>(3 * static_cast<Eigen::Index>(e.nodes[i])) += rs * e.gradients[i];
+  });
+}
+
+void TetrahedronFemForceField::add_stiffness(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const {
+  const double lambda = lame_.lambda;
+  const double mu = lame_.mu;
+  double* values = k.values();
+  coloring_.for_each([&](std::int32_t index) {
+    const Element& e = elements_[index];
+    const Mat3& r = state.rotations[index];
+    // Rotated stiffness R K_e Rᵀ, block (i, j) = V (λ c_i c_jᵀ + μ c_j c_iᵀ + μ (b_i·b_j) I)
+    // with c_i = R b_i: the linear-elastic element stiffness written per node pair.
+    std::array<Vec3, 4> c;
+    for (int i = 0; i < 4; ++i) c[i] = r * e.gradients[i];
+    const double w = scale * e.volume;
+    for (int i = 0; i < 4; ++i) {
+      for (int j = 0; j < 4; ++j) {
+        Eigen::Map<Eigen::Matrix<double, 3, 3, Eigen::RowMajor>> block(values + 9 * static_cast<std::int64_t>(e.slots[4 * i + j]));
+        block.noalias() += (w * lambda) * c[i] * c[j].transpose() + (w * mu) * c[j] * c[i].transpose();
+        block.diagonal().array() += w * mu * e.gradients[i].dot(e.gradients[j]);
+      }
+    }
+  });
+}
+
+double TetrahedronFemForceField::potential_energy(const Eigen::VectorXd& x, const ForceFieldState& state) const {
+  double energy = 0.0;
+  for (std::size_t index = 0; index < elements_.size(); ++index) {
+    const Element& e = elements_[index];
+    const Mat3 deformation = deformation_gradient(e, x);
+    Eigen::Quaterniond warm = state.warm_start.empty() ? Eigen::Quaterniond::Identity() : state.warm_start[index];
+    const Mat3 r = rotation(e, deformation, x, warm);
+    const Mat3 unrotated = r.transpose() * deformation;
+    const Mat3 strain = 0.5 * (unrotated + unrotated.transpose()) - Mat3::Identity();
+    // W = μ ε:ε + λ/2 (tr ε)² per unit volume.
+    energy += e.volume * (lame_.mu * strain.squaredNorm() + 0.5 * lame_.lambda * strain.trace() * strain.trace());
+  }
+  return energy;
+}
+
+std::int64_t TetrahedronFemForceField::find_invalid_element(const Eigen::VectorXd& x) const {
+  // Linear elements have no defence against inversion: once inside out they push the wrong
+  // way. Co-rotational elements recover, so only `small` reports.
+  if (config_.method != FemMethod::kSmall) return -1;
+  for (std::size_t index = 0; index < elements_.size(); ++index) {
+    if (!(deformation_gradient(elements_[index], x).determinant() > 0.0)) return static_cast<std::int64_t>(index);
+  }
+  return -1;
+}
+
+}  // namespace hof::mechanics

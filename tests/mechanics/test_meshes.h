@@ -1,0 +1,50 @@
+#pragma once
+// Structured tetrahedral meshes for analytic tests.
+
+#include <vector>
+
+#include "hof/mesh/mesh.h"
+#include "hof/mesh/tet_geometry.h"
+
+namespace hof::mechanics::testing {
+
+struct BoxMesh {
+  std::vector<Vec3> nodes;
+  std::vector<mesh::Tet> tets;
+  int nx, ny, nz;
+  Vec3 size;
+  [[nodiscard]] std::int32_t index(int i, int j, int k) const { return (k * (ny + 1) + j) * (nx + 1) + i; }
+};
+
+/// The box [0, size] split into nx·ny·nz cubes of 6 tetrahedra each (Kuhn/Freudenthal split
+/// around each cube's main diagonal: conforming across cubes), positively oriented.
+inline BoxMesh box_mesh(int nx, int ny, int nz, const Vec3& size) {
+  BoxMesh m{{}, {}, nx, ny, nz, size};
+  for (int k = 0; k <= nz; ++k) {
+    for (int j = 0; j <= ny; ++j) {
+      for (int i = 0; i <= nx; ++i) {
+        // The far faces sit exactly at `size`, so tests can select them with ==.
+        auto at = [](double length, int step, int steps) { return step == steps ? length : length * step / steps; };
+        m.nodes.emplace_back(at(size.x(), i, nx), at(size.y(), j, ny), at(size.z(), k, nz));
+      }
+    }
+  }
+  // Corner c of a cube: bit 0 = +x, bit 1 = +y, bit 2 = +z. The six paths 0 → 7 along edges.
+  const int paths[6][2] = {{1, 3}, {1, 5}, {2, 3}, {2, 6}, {4, 5}, {4, 6}};
+  for (int k = 0; k < nz; ++k) {
+    for (int j = 0; j < ny; ++j) {
+      for (int i = 0; i < nx; ++i) {
+        auto corner = [&](int c) { return m.index(i + (c & 1), j + ((c >> 1) & 1), k + ((c >> 2) & 1)); };
+        for (const auto& p : paths) {
+          mesh::Tet t = {corner(0), corner(p[0]), corner(p[1]), corner(7)};
+          const auto c = mesh::tet_corners(m.nodes, t);
+          if (mesh::tet_signed_volume(c[0], c[1], c[2], c[3]) < 0) std::swap(t[2], t[3]);
+          m.tets.push_back(t);
+        }
+      }
+    }
+  }
+  return m;
+}
+
+}  // namespace hof::mechanics::testing
