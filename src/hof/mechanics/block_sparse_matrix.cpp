@@ -2,6 +2,10 @@
 
 #include <algorithm>
 
+#if defined(__AVX2__)
+#include <immintrin.h>
+#endif
+
 #include "hof/mechanics/parallel.h"
 
 namespace hof::mechanics {
@@ -28,7 +32,7 @@ BlockSparseMatrix BlockSparseMatrix::from_pairs(
     ++m.row_start_[row + 1];
   }
   for (std::size_t r = 0; r < static_cast<std::size_t>(block_rows); ++r) m.row_start_[r + 1] += m.row_start_[r];
-  m.values_.assign(m.columns_.size() * 9, 0.0);
+  m.values_.assign(m.columns_.size() * kBlockStride, 0.0);
   return m;
 }
 
@@ -45,25 +49,93 @@ void BlockSparseMatrix::set_zero() {
   });
 }
 
+namespace {
+
+#if defined(__AVX2__) && defined(__FMA__)
+inline __m256d load_column(const double* a) { return _mm256_loadu_pd(a); }
+inline __m256d load_column(const float* a) { return _mm256_cvtps_pd(_mm_loadu_ps(a)); }
+#endif
+
+// y = A x over block rows [r0, r1) for values of type T (double, or float widened on load).
+// Six independent accumulators (three columns × two blocks) keep the fused multiply-adds
+// from waiting on each other: the loop is bound by loads, not by FMA latency.
+template <class T>
+void multiply_rows(const std::int64_t* row_start, const std::int32_t* columns, const T* values, const double* xs,
+                   double* ys, std::size_t r0, std::size_t r1) {
+  constexpr std::int64_t kStride = BlockSparseMatrix::kBlockStride;
+  for (std::size_t r = r0; r < r1; ++r) {
+    std::int64_t s = row_start[r];
+    const std::int64_t end = row_start[r + 1];
+#if defined(__AVX2__) && defined(__FMA__)
+    __m256d a0 = _mm256_setzero_pd(), a1 = _mm256_setzero_pd(), a2 = _mm256_setzero_pd();
+    __m256d b0 = _mm256_setzero_pd(), b1 = _mm256_setzero_pd(), b2 = _mm256_setzero_pd();
+    for (; s + 1 < end; s += 2) {
+      const T* a = values + kStride * s;
+      const double* xa = xs + 3 * static_cast<std::int64_t>(columns[s]);
+      const double* xb = xs + 3 * static_cast<std::int64_t>(columns[s + 1]);
+      a0 = _mm256_fmadd_pd(load_column(a), _mm256_broadcast_sd(xa), a0);
+      a1 = _mm256_fmadd_pd(load_column(a + 4), _mm256_broadcast_sd(xa + 1), a1);
+      a2 = _mm256_fmadd_pd(load_column(a + 8), _mm256_broadcast_sd(xa + 2), a2);
+      b0 = _mm256_fmadd_pd(load_column(a + 12), _mm256_broadcast_sd(xb), b0);
+      b1 = _mm256_fmadd_pd(load_column(a + 16), _mm256_broadcast_sd(xb + 1), b1);
+      b2 = _mm256_fmadd_pd(load_column(a + 20), _mm256_broadcast_sd(xb + 2), b2);
+    }
+    if (s < end) {
+      const T* a = values + kStride * s;
+      const double* xa = xs + 3 * static_cast<std::int64_t>(columns[s]);
+      a0 = _mm256_fmadd_pd(load_column(a), _mm256_broadcast_sd(xa), a0);
+      a1 = _mm256_fmadd_pd(load_column(a + 4), _mm256_broadcast_sd(xa + 1), a1);
+      a2 = _mm256_fmadd_pd(load_column(a + 8), _mm256_broadcast_sd(xa + 2), a2);
+    }
+    const __m256d sum = _mm256_add_pd(_mm256_add_pd(_mm256_add_pd(a0, b0), _mm256_add_pd(a1, b1)), _mm256_add_pd(a2, b2));
+    alignas(32) double out[4];
+    _mm256_store_pd(out, sum);
+    ys[3 * r] = out[0];
+    ys[3 * r + 1] = out[1];
+    ys[3 * r + 2] = out[2];
+#else
+    double y0 = 0.0, y1 = 0.0, y2 = 0.0;
+    for (; s < end; ++s) {
+      const T* a = values + kStride * s;
+      const double* xc = xs + 3 * static_cast<std::int64_t>(columns[s]);
+      y0 += double(a[0]) * xc[0] + double(a[4]) * xc[1] + double(a[8]) * xc[2];
+      y1 += double(a[1]) * xc[0] + double(a[5]) * xc[1] + double(a[9]) * xc[2];
+      y2 += double(a[2]) * xc[0] + double(a[6]) * xc[1] + double(a[10]) * xc[2];
+    }
+    ys[3 * r] = y0;
+    ys[3 * r + 1] = y1;
+    ys[3 * r + 2] = y2;
+#endif
+  }
+}
+
+}  // namespace
+
 void BlockSparseMatrix::multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const {
+  const std::int64_t* rows = row_start_.data();
+  const std::int32_t* cols = columns_.data();
+  const double* v = values_.data();
   const double* xs = x.data();
   double* ys = y.data();
-  const double* v = values_.data();
-  parallel_chunks(static_cast<std::size_t>(block_rows()), 256, [&](std::size_t r0, std::size_t r1) {
-    for (std::size_t r = r0; r < r1; ++r) {
-      double y0 = 0.0, y1 = 0.0, y2 = 0.0;
-      for (std::int64_t s = row_start_[r]; s < row_start_[r + 1]; ++s) {
-        const double* a = v + 9 * s;
-        const double* xc = xs + 3 * static_cast<std::int64_t>(columns_[s]);
-        y0 += a[0] * xc[0] + a[1] * xc[1] + a[2] * xc[2];
-        y1 += a[3] * xc[0] + a[4] * xc[1] + a[5] * xc[2];
-        y2 += a[6] * xc[0] + a[7] * xc[1] + a[8] * xc[2];
-      }
-      ys[3 * r] = y0;
-      ys[3 * r + 1] = y1;
-      ys[3 * r + 2] = y2;
-    }
+  parallel_chunks(static_cast<std::size_t>(block_rows()), 256,
+                  [=](std::size_t r0, std::size_t r1) { multiply_rows(rows, cols, v, xs, ys, r0, r1); });
+}
+
+void BlockSparseMatrix::update_single_precision() {
+  values_single_.resize(values_.size());
+  parallel_chunks(values_.size(), 1 << 14, [&](std::size_t b, std::size_t e) {
+    for (std::size_t i = b; i < e; ++i) values_single_[i] = static_cast<float>(values_[i]);
   });
+}
+
+void BlockSparseMatrix::multiply_single(const Eigen::VectorXd& x, Eigen::VectorXd& y) const {
+  const std::int64_t* rows = row_start_.data();
+  const std::int32_t* cols = columns_.data();
+  const float* v = values_single_.data();
+  const double* xs = x.data();
+  double* ys = y.data();
+  parallel_chunks(static_cast<std::size_t>(block_rows()), 256,
+                  [=](std::size_t r0, std::size_t r1) { multiply_rows(rows, cols, v, xs, ys, r0, r1); });
 }
 
 Eigen::MatrixXd BlockSparseMatrix::to_dense() const {

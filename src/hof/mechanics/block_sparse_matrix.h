@@ -4,6 +4,11 @@
 /// of the implicit solvers. The pattern is fixed when the model is built (from the node pairs
 /// the force fields couple); each step only refills the values, and force fields write into
 /// precomputed block slots, so assembly does no search and no allocation.
+///
+/// Storage: each block is column-major with its columns padded to four doubles (12 values,
+/// the fourth of each column always zero). The product then needs three 4-wide fused
+/// multiply-adds per block (y += a₀x₀ + a₁x₁ + a₂x₂ with broadcast x), which is what makes
+/// the conjugate-gradient solve fast.
 
 #include <Eigen/Core>
 #include <cstdint>
@@ -32,13 +37,18 @@ class BlockSparseMatrix {
   /// Slot of the diagonal block of `row`.
   [[nodiscard]] std::int64_t diagonal_slot(std::int32_t row) const { return diagonal_[row]; }
 
-  /// The 3x3 block stored at `slot` (row-major).
-  [[nodiscard]] Eigen::Map<Eigen::Matrix<double, 3, 3, Eigen::RowMajor>> block(std::int64_t slot) {
-    return Eigen::Map<Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(values_.data() + 9 * slot);
+  /// Doubles per stored block.
+  static constexpr std::int64_t kBlockStride = 12;
+  using BlockRef = Eigen::Map<Eigen::Matrix3d, 0, Eigen::OuterStride<4>>;
+  using ConstBlockRef = Eigen::Map<const Eigen::Matrix3d, 0, Eigen::OuterStride<4>>;
+
+  /// The 3x3 block stored at `slot`.
+  [[nodiscard]] BlockRef block(std::int64_t slot) { return BlockRef(values_.data() + kBlockStride * slot); }
+  [[nodiscard]] ConstBlockRef block(std::int64_t slot) const {
+    return ConstBlockRef(values_.data() + kBlockStride * slot);
   }
-  [[nodiscard]] Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>> block(std::int64_t slot) const {
-    return Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(values_.data() + 9 * slot);
-  }
+  /// Index in values() of entry (i, j) of the block at `slot`.
+  [[nodiscard]] static std::int64_t value_index(std::int64_t slot, int i, int j) { return kBlockStride * slot + 4 * j + i; }
   [[nodiscard]] double* values() { return values_.data(); }
   [[nodiscard]] const double* values() const { return values_.data(); }
   [[nodiscard]] const std::vector<std::int64_t>& row_start() const { return row_start_; }
@@ -49,6 +59,12 @@ class BlockSparseMatrix {
   /// y = A x (parallel over block rows; each row is summed in column order: deterministic).
   void multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const;
 
+  /// Copies the values to single precision for multiply_single (the conjugate-gradient
+  /// product: half the memory traffic, and a matrix of this size then stays in cache).
+  void update_single_precision();
+  /// y = A x with the single-precision copy of the values (accumulated in double).
+  void multiply_single(const Eigen::VectorXd& x, Eigen::VectorXd& y) const;
+
   /// Dense copy, for tests and small problems.
   [[nodiscard]] Eigen::MatrixXd to_dense() const;
 
@@ -56,7 +72,8 @@ class BlockSparseMatrix {
   std::vector<std::int64_t> row_start_{0};  // (rows+1) first slot of each block row
   std::vector<std::int32_t> columns_;       // (blocks) column of each slot, sorted per row
   std::vector<std::int64_t> diagonal_;      // (rows) slot of the diagonal block
-  std::vector<double> values_;              // (9*blocks) row-major 3x3 blocks
+  std::vector<double> values_;              // (12*blocks) column-major padded 3x3 blocks
+  std::vector<float> values_single_;        // same layout, single precision (CG only)
 };
 
 }  // namespace hof::mechanics

@@ -41,13 +41,8 @@ void assemble_system(const MechanicalModel& model, MechanicalState& state, doubl
       model.force_fields[k]->add_stiffness(state.field_states[k], stiffness_coeff, a);
     }
   }
-  double* values = a.values();
   for (std::size_t n = 0; n < model.node_count(); ++n) {
-    double* d = values + 9 * a.diagonal_slot(static_cast<std::int32_t>(n));
-    const double m = mass_coeff * model.node_mass_kg[n];
-    d[0] += m;
-    d[4] += m;
-    d[8] += m;
+    a.block(a.diagonal_slot(static_cast<std::int32_t>(n))).diagonal().array() += mass_coeff * model.node_mass_kg[n];
   }
   // Fixed degrees of freedom: identity rows and columns (projection P A P + (I − P)).
   const auto& row_start = a.row_start();
@@ -65,6 +60,7 @@ void assemble_system(const MechanicalModel& model, MechanicalState& state, doubl
 
 void prepare_linear_solver(const MechanicalModel& model, MechanicalState& state) {
   SolverWorkspace& w = state.work;
+  if (model.needs_matrix) w.system.update_single_precision();  // sizes the copy once
   if (model.linear.kind != LinearSolverKind::kSparseLdlt || !model.needs_matrix) return;
   // CSC copy of the block matrix. Each triplet carries its block-storage index + 1 as its
   // value, which gives the map from CSC storage back to block storage after compression.
@@ -76,7 +72,7 @@ void prepare_linear_solver(const MechanicalModel& model, MechanicalState& state)
       const std::int32_t c = a.columns()[s];
       for (int i = 0; i < 3; ++i) {
         for (int j = 0; j < 3; ++j) {
-          triplets.emplace_back(3 * r + i, 3 * c + j, static_cast<double>(9 * s + 3 * i + j + 1));
+          triplets.emplace_back(3 * r + i, 3 * c + j, static_cast<double>(BlockSparseMatrix::value_index(s, i, j) + 1));
         }
       }
     }
@@ -114,8 +110,9 @@ bool solve_ldlt(MechanicalState& state, const Eigen::VectorXd& b, Eigen::VectorX
 bool solve_cg(const MechanicalModel& model, MechanicalState& state, const Eigen::VectorXd& b, Eigen::VectorXd& x) {
   SolverWorkspace& w = state.work;
   const LinearSolverConfig& cfg = model.linear;
-  const BlockSparseMatrix& a = w.system;
+  BlockSparseMatrix& a = w.system;
   const bool precondition = cfg.block_jacobi;
+  if (cfg.mixed_precision) a.update_single_precision();
   const std::size_t nodes = model.node_count();
 
   if (precondition) {
@@ -147,7 +144,8 @@ bool solve_cg(const MechanicalModel& model, MechanicalState& state, const Eigen:
   int iteration = 0;
   for (; iteration < cfg.iterations; ++iteration) {
     if (r_norm2 / b_norm2 <= cfg.tolerance) break;
-    a.multiply(w.p, w.ap);
+    if (cfg.mixed_precision) a.multiply_single(w.p, w.ap);
+    else a.multiply(w.p, w.ap);
     const double curvature = dot(w.p, w.ap, w.partials);
     // SOFA compares pᵀAp with `threshold` in absolute terms, which in its unit-free scenes
     // means "the denominator vanished". In SI units (kg, m) pᵀAp is legitimately tiny, so

@@ -4,6 +4,8 @@
 
 #include <cmath>
 
+#include "hof/mechanics/parallel.h"
+
 #include "hof/mesh/boundary.h"
 
 namespace hof::mechanics {
@@ -45,14 +47,16 @@ Expected<std::unique_ptr<MeshSpringForceField>> MeshSpringForceField::make(
   std::vector<std::array<std::int32_t, 2>> node_lists;
   node_lists.reserve(field->springs_.size());
   for (const Spring& s : field->springs_) node_lists.push_back(s.nodes);
-  field->coloring_ = color_elements<2>(node_lists, rest_positions.size());
+  field->incidence_ = make_node_incidence<2>(node_lists, rest_positions.size());
   return field;
 }
 
 ForceFieldState MeshSpringForceField::make_state() const {
-  // element_matrices[s] holds the spring's stiffness block −∂f_i/∂x_i at the last positions.
+  // element_matrices[s]: the spring's stiffness block −∂f_i/∂x_i at the last positions;
+  // element_scalars[3s..3s+2]: the force on its first node.
   ForceFieldState s;
   s.element_matrices.assign(springs_.size(), Mat3::Zero());
+  s.element_scalars.assign(3 * springs_.size(), 0.0);
   return s;
 }
 
@@ -72,40 +76,67 @@ void MeshSpringForceField::add_force(const Eigen::VectorXd& x, const Eigen::Vect
                                      Eigen::VectorXd& f) const {
   const double k = config_.stiffness_n_per_m;
   const double c = config_.damping_n_s_per_m;
-  coloring_.for_each([&](std::int32_t index) {
-    const Spring& s = springs_[index];
-    const Eigen::Index i = 3 * static_cast<Eigen::Index>(s.nodes[0]);
-    const Eigen::Index j = 3 * static_cast<Eigen::Index>(s.nodes[1]);
-    const Vec3 d = x.segment<3>(j) - x.segment<3>(i);
-    const double length = d.norm();
-    if (!(length > 0.0)) {
-      state.element_matrices[index] = k * Mat3::Identity();
-      return;
-    }
-    const Vec3 u = d / length;
-    const double tension = k * (length - s.rest_length) + c * (v.segment<3>(j) - v.segment<3>(i)).dot(u);
-    f.segment<3>(i) += tension * u;
-    f.segment<3>(j) -= tension * u;
-    // −∂f_i/∂x_i = k u uᵀ + k (1 − l0/l)(I − u uᵀ). The transverse term is negative for a
-    // compressed spring; it is clamped at zero so that the system matrix stays positive
-    // definite (Choi & Ko, "Stable but responsive cloth", SIGGRAPH 2002).
-    const Mat3 uu = u * u.transpose();
-    const double transverse = std::max(0.0, k * (1.0 - s.rest_length / length));
-    state.element_matrices[index] = k * uu + transverse * (Mat3::Identity() - uu);
-  });
+  // Spring pass: tension and stiffness block of each spring, independently.
+  parallel_chunks(
+      springs_.size(), 256,
+      [&](std::size_t begin, std::size_t end) {
+        for (std::size_t index = begin; index < end; ++index) {
+          const Spring& s = springs_[index];
+          const Eigen::Index i = 3 * static_cast<Eigen::Index>(s.nodes[0]);
+          const Eigen::Index j = 3 * static_cast<Eigen::Index>(s.nodes[1]);
+          const Vec3 d = x.segment<3>(j) - x.segment<3>(i);
+          const double length = d.norm();
+          Eigen::Map<Vec3> force_on_first(state.element_scalars.data() + 3 * index);
+          if (!(length > 0.0)) {
+            force_on_first.setZero();
+            state.element_matrices[index] = k * Mat3::Identity();
+            continue;
+          }
+          const Vec3 u = d / length;
+          const double tension = k * (length - s.rest_length) + c * (v.segment<3>(j) - v.segment<3>(i)).dot(u);
+          force_on_first = tension * u;
+          // −∂f_i/∂x_i = k u uᵀ + k (1 − l0/l)(I − u uᵀ). The transverse term is negative for
+          // a compressed spring; it is clamped at zero so that the system matrix stays
+          // positive definite (Choi & Ko, "Stable but responsive cloth", SIGGRAPH 2002).
+          const Mat3 uu = u * u.transpose();
+          const double transverse = std::max(0.0, k * (1.0 - s.rest_length / length));
+          state.element_matrices[index] = (k - transverse) * uu + transverse * Mat3::Identity();
+        }
+      },
+      /*min_parallel=*/1024);
+  // Node pass: each node gathers its springs' forces in a fixed order.
+  parallel_chunks(
+      incidence_.start.size() - 1, 256,
+      [&](std::size_t begin, std::size_t end) {
+        for (std::size_t n = begin; n < end; ++n) {
+          Vec3 sum = Vec3::Zero();
+          for (std::int32_t entry : incidence_.of(n)) {
+            const Eigen::Map<const Vec3> force_on_first(state.element_scalars.data() + 3 * (entry >> 1));
+            if (entry & 1) sum -= force_on_first;
+            else sum += force_on_first;
+          }
+          f.segment<3>(3 * static_cast<Eigen::Index>(n)) += sum;
+        }
+      },
+      /*min_parallel=*/1024);
 }
 
 void MeshSpringForceField::add_stiffness(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const {
-  double* values = k.values();
-  coloring_.for_each([&](std::int32_t index) {
-    const Spring& s = springs_[index];
-    const Mat3 block = scale * state.element_matrices[index];
-    using Block = Eigen::Map<Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>;
-    Block(values + 9 * static_cast<std::int64_t>(s.slots[0])) += block;
-    Block(values + 9 * static_cast<std::int64_t>(s.slots[1])) -= block;
-    Block(values + 9 * static_cast<std::int64_t>(s.slots[2])) -= block;
-    Block(values + 9 * static_cast<std::int64_t>(s.slots[3])) += block;
-  });
+  // Row pass: node n adds +K_s to its diagonal block and −K_s to the block of the other end.
+  parallel_chunks(
+      incidence_.start.size() - 1, 256,
+      [&](std::size_t begin, std::size_t end) {
+        for (std::size_t n = begin; n < end; ++n) {
+          for (std::int32_t entry : incidence_.of(n)) {
+            const Spring& s = springs_[static_cast<std::size_t>(entry >> 1)];
+            const Mat3 block = scale * state.element_matrices[static_cast<std::size_t>(entry >> 1)];
+            const bool second = (entry & 1) != 0;
+            k.block(second ? s.slots[3] : s.slots[0]) += block;
+            k.block(second ? s.slots[2] : s.slots[1]) -= block;
+          }
+        }
+      },
+      /*min_parallel=*/1024);
 }
 
 double MeshSpringForceField::potential_energy(const Eigen::VectorXd& x, const ForceFieldState&) const {

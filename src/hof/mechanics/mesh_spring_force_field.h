@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "hof/core/error.h"
-#include "hof/mechanics/element_coloring.h"
+#include "hof/mechanics/node_incidence.h"
 #include "hof/mechanics/force_field.h"
 #include "hof/mesh/mesh.h"
 
@@ -50,7 +50,7 @@ class MeshSpringForceField final : public ForceField {
 
   MeshSpringConfig config_;
   std::vector<Spring> springs_;
-  ElementColoring coloring_;
+  NodeIncidence incidence_;  // spring·2 + end
 };
 
 }  // namespace hof::mechanics

@@ -278,8 +278,8 @@ void NeoHookeanForceField::add_stiffness(const ForceFieldState& state, double sc
     }
     const double w = scale * e.volume;
     auto block_at = [&](int i, int j) {
-      return Eigen::Map<Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(values +
-                                                                       9 * static_cast<std::int64_t>(e.slots[4 * i + j]));
+      return BlockSparseMatrix::BlockRef(values + BlockSparseMatrix::kBlockStride *
+                                                                   static_cast<std::int64_t>(e.slots[4 * i + j]));
     };
     // T is symmetric, so K_ji = K_ijᵀ: compute i ≤ j and mirror, keeping K exactly symmetric.
     for (int i = 0; i < 4; ++i) {

@@ -5,6 +5,8 @@
 #include <Eigen/SVD>
 #include <cmath>
 
+#include "hof/mechanics/parallel.h"
+
 namespace hof::mechanics {
 
 namespace {
@@ -95,19 +97,23 @@ Expected<std::unique_ptr<TetrahedronFemForceField>> TetrahedronFemForceField::ma
     e.gradients[0] = -(e.gradients[1] + e.gradients[2] + e.gradients[3]);
     e.rest_frame_transposed =
         triangle_frame(rest_positions[e.nodes[0]], rest_positions[e.nodes[1]], rest_positions[e.nodes[2]]).transpose();
-    e.slots.fill(-1);
     field->elements_.push_back(e);
+    field->gradients_.push_back(e.gradients);
+    field->volumes_.push_back(e.volume);
   }
   std::vector<std::array<std::int32_t, 4>> node_lists;
   node_lists.reserve(field->elements_.size());
   for (const Element& e : field->elements_) node_lists.push_back(e.nodes);
-  field->coloring_ = color_elements<4>(node_lists, rest_positions.size());
+  field->incidence_ = make_node_incidence<4>(node_lists, rest_positions.size());
+  field->slots_.assign(field->elements_.size(), {});
   return field;
 }
 
 ForceFieldState TetrahedronFemForceField::make_state() const {
   ForceFieldState s;
   s.rotations.assign(elements_.size(), Mat3::Identity());
+  s.element_matrices.assign(elements_.size(), Mat3::Zero());  // −V R σ per element
+  s.element_scalars.assign(16 * elements_.size(), 0.0);       // c_i = R b_i, padded to 4
   if (config_.method == FemMethod::kPolar) s.warm_start.assign(elements_.size(), Eigen::Quaterniond::Identity());
   return s;
 }
@@ -121,9 +127,10 @@ void TetrahedronFemForceField::collect_couplings(std::vector<std::pair<std::int3
 }
 
 void TetrahedronFemForceField::bind(const BlockSparseMatrix& pattern) {
-  for (Element& e : elements_) {
+  for (std::size_t k = 0; k < elements_.size(); ++k) {
+    const Element& e = elements_[k];
     for (int i = 0; i < 4; ++i) {
-      for (int j = 0; j < 4; ++j) e.slots[4 * i + j] = static_cast<std::int32_t>(pattern.slot(e.nodes[i], e.nodes[j]));
+      for (int j = 0; j < 4; ++j) slots_[k][4 * i + j] = static_cast<std::int32_t>(pattern.slot(e.nodes[i], e.nodes[j]));
     }
   }
 }
@@ -171,45 +178,88 @@ void TetrahedronFemForceField::add_force(const Eigen::VectorXd& x, const Eigen::
                                          ForceFieldState& state, Eigen::VectorXd& f) const {
   const double lambda = lame_.lambda;
   const double mu = lame_.mu;
-  Eigen::Quaterniond unused = Eigen::Quaterniond::Identity();
-  coloring_.for_each([&](std::int32_t index) {
-    const Element& e = elements_[index];
-    const Mat3 deformation = deformation_gradient(e, x);
-    Eigen::Quaterniond& warm = state.warm_start.empty() ? unused : state.warm_start[index];
-    Eigen::Quaterniond local = warm;
-    const Mat3 r = rotation(e, deformation, x, local);
-    if (!state.warm_start.empty()) warm = local;
-    state.rotations[index] = r;
-    // Linear law in the element's unrotated frame: ε = sym(RᵀF) − I, σ = λ tr(ε) I + 2μ ε;
-    // nodal forces f_i = −V R σ b_i.
-    const Mat3 unrotated = r.transpose() * deformation;
-    const Mat3 strain = 0.5 * (unrotated + unrotated.transpose()) - Mat3::Identity();
-    const Mat3 stress = lambda * strain.trace() * Mat3::Identity() + 2.0 * mu * strain;
-    const Mat3 rs = -e.volume * (r * stress);
-    for (int i = 0; i < 4; ++i) f.segment<3>(3 * static_cast<Eigen::Index>(e.nodes[i])) += rs * e.gradients[i];
-  });
+  const bool polar = config_.method == FemMethod::kPolar;
+  // Element pass: rotation and the stress term −V R σ of each element, independently.
+  parallel_chunks(
+      elements_.size(), 64,
+      [&](std::size_t begin, std::size_t end) {
+        for (std::size_t index = begin; index < end; ++index) {
+          const Element& e = elements_[index];
+          const Mat3 deformation = deformation_gradient(e, x);
+          Eigen::Quaterniond warm = polar ? state.warm_start[index] : Eigen::Quaterniond::Identity();
+          const Mat3 r = rotation(e, deformation, x, warm);
+          if (polar) state.warm_start[index] = warm;
+          state.rotations[index] = r;
+          // Linear law in the element's unrotated frame: ε = sym(RᵀF) − I,
+          // σ = λ tr(ε) I + 2μ ε; nodal forces f_i = −V R σ b_i.
+          const Mat3 unrotated = r.transpose() * deformation;
+          const Mat3 strain = 0.5 * (unrotated + unrotated.transpose()) - Mat3::Identity();
+          const Mat3 stress = lambda * strain.trace() * Mat3::Identity() + 2.0 * mu * strain;
+          state.element_matrices[index].noalias() = -e.volume * (r * stress);
+          // Rotated gradients for the stiffness, padded to four lanes for the row pass.
+          double* c = state.element_scalars.data() + 16 * index;
+          for (int i = 0; i < 4; ++i) {
+            const Vec3 ci = r * e.gradients[i];
+            c[4 * i] = ci.x();
+            c[4 * i + 1] = ci.y();
+            c[4 * i + 2] = ci.z();
+            c[4 * i + 3] = 0.0;
+          }
+        }
+      },
+      /*min_parallel=*/256);
+  // Node pass: each node gathers f_i = Σ (−V R σ) b_i over its elements, in a fixed order.
+  parallel_chunks(
+      incidence_.start.size() - 1, 128,
+      [&](std::size_t begin, std::size_t end) {
+        for (std::size_t n = begin; n < end; ++n) {
+          Vec3 sum = Vec3::Zero();
+          for (std::int32_t entry : incidence_.of(n)) {
+            const std::size_t element = static_cast<std::size_t>(entry) >> 2;
+            sum.noalias() += state.element_matrices[element] * gradients_[element][entry & 3];
+          }
+          f.segment<3>(3 * static_cast<Eigen::Index>(n)) += sum;
+        }
+      },
+      /*min_parallel=*/512);
 }
 
 void TetrahedronFemForceField::add_stiffness(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const {
   const double lambda = lame_.lambda;
   const double mu = lame_.mu;
   double* values = k.values();
-  coloring_.for_each([&](std::int32_t index) {
-    const Element& e = elements_[index];
-    const Mat3& r = state.rotations[index];
-    // Rotated stiffness R K_e Rᵀ, block (i, j) = V (λ c_i c_jᵀ + μ c_j c_iᵀ + μ (b_i·b_j) I)
-    // with c_i = R b_i: the linear-elastic element stiffness written per node pair.
-    std::array<Vec3, 4> c;
-    for (int i = 0; i < 4; ++i) c[i] = r * e.gradients[i];
-    const double w = scale * e.volume;
-    for (int i = 0; i < 4; ++i) {
-      for (int j = 0; j < 4; ++j) {
-        Eigen::Map<Eigen::Matrix<double, 3, 3, Eigen::RowMajor>> block(values + 9 * static_cast<std::int64_t>(e.slots[4 * i + j]));
-        block.noalias() += (w * lambda) * c[i] * c[j].transpose() + (w * mu) * c[j] * c[i].transpose();
-        block.diagonal().array() += w * mu * e.gradients[i].dot(e.gradients[j]);
-      }
-    }
-  });
+  // Row pass: each block row (node i) gathers, from every element using node i, the rotated
+  // element stiffness blocks R K_e Rᵀ (i, j) = V (λ c_i c_jᵀ + μ c_j c_iᵀ + μ (b_i·b_j) I)
+  // with c = R b. One thread per row: no write conflicts, fixed summation order. Blocks are
+  // stored as padded columns, so column q gets λV c_i c_j[q] + μV c_j c_i[q] in four lanes.
+  parallel_chunks(
+      incidence_.start.size() - 1, 64,
+      [&](std::size_t begin, std::size_t end) {
+        for (std::size_t n = begin; n < end; ++n) {
+          for (std::int32_t entry : incidence_.of(n)) {
+            const std::size_t element = static_cast<std::size_t>(entry) >> 2;
+            const int i = entry & 3;
+            const double* c = state.element_scalars.data() + 16 * element;
+            const std::array<Vec3, 4>& b = gradients_[element];
+            const double w = scale * volumes_[element];
+            const Eigen::Map<const Eigen::Vector4d> ci(c + 4 * i);
+            const Eigen::Vector4d wl_ci = (w * lambda) * ci;
+            const Eigen::Vector3d wm_ci = (w * mu) * ci.head<3>();
+            for (int j = 0; j < 4; ++j) {
+              const Eigen::Map<const Eigen::Vector4d> cj(c + 4 * j);
+              double* block = values + BlockSparseMatrix::kBlockStride * slots_[element][4 * i + j];
+              for (int q = 0; q < 3; ++q) {
+                Eigen::Map<Eigen::Vector4d>(block + 4 * q) += wl_ci * cj[q] + cj * wm_ci[q];
+              }
+              const double diagonal = w * mu * b[i].dot(b[j]);
+              block[0] += diagonal;
+              block[5] += diagonal;
+              block[10] += diagonal;
+            }
+          }
+        }
+      },
+      /*min_parallel=*/256);
 }
 
 double TetrahedronFemForceField::potential_energy(const Eigen::VectorXd& x, const ForceFieldState& state) const {

@@ -15,7 +15,7 @@
 #include <vector>
 
 #include "hof/core/error.h"
-#include "hof/mechanics/element_coloring.h"
+#include "hof/mechanics/node_incidence.h"
 #include "hof/mechanics/force_field.h"
 #include "hof/mesh/mesh.h"
 
@@ -62,7 +62,6 @@ class TetrahedronFemForceField final : public ForceField {
 
   [[nodiscard]] const TetrahedronFemConfig& config() const { return config_; }
   [[nodiscard]] std::size_t element_count() const { return elements_.size(); }
-  [[nodiscard]] std::size_t color_count() const { return coloring_.colors(); }
 
  private:
   struct Element {
@@ -70,7 +69,6 @@ class TetrahedronFemForceField final : public ForceField {
     double volume;                       // rest volume, m^3
     std::array<Vec3, 4> gradients;       // shape-function gradients b_i at rest, 1/m
     Mat3 rest_frame_transposed;          // QR frame of the rest element, transposed
-    std::array<std::int32_t, 16> slots;  // matrix slot of block (i, j) at 4*i+j
   };
 
   TetrahedronFemForceField() = default;
@@ -81,7 +79,11 @@ class TetrahedronFemForceField final : public ForceField {
   TetrahedronFemConfig config_;
   Lame lame_{};
   std::vector<Element> elements_;
-  ElementColoring coloring_;
+  // Compact copies for the gather passes, which visit elements in node order.
+  std::vector<std::array<Vec3, 4>> gradients_;       // (E) b_i
+  std::vector<double> volumes_;                      // (E)
+  std::vector<std::array<std::int32_t, 16>> slots_;  // (E) matrix slot of block (i, j) at 4i+j
+  NodeIncidence incidence_;
 };
 
 }  // namespace hof::mechanics

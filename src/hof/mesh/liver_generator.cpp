@@ -3,8 +3,10 @@
 #include <array>
 #include <cmath>
 #include <fmt/format.h>
+#include <algorithm>
 #include <map>
 
+#include "hof/mesh/boundary.h"
 #include "hof/mesh/tetrahedralize.h"
 #include "hof/mesh/tet_geometry.h"
 
@@ -149,7 +151,54 @@ ResolutionPlan plan(LiverResolution r) {
   return {600, 4};
 }
 
+// Spreads the low 10 bits of v so that two zero bits separate each (for 3-D Morton codes).
+std::uint32_t spread_bits(std::uint32_t v) {
+  v &= 0x3ffu;
+  v = (v | (v << 16)) & 0x030000ffu;
+  v = (v | (v << 8)) & 0x0300f00fu;
+  v = (v | (v << 4)) & 0x030c30c3u;
+  v = (v | (v << 2)) & 0x09249249u;
+  return v;
+}
+
 }  // namespace
+
+Mesh renumber_for_locality(const Mesh& in) {
+  // Nodes along a Morton (Z-order) curve, tetrahedra by their smallest node: elements that
+  // share nodes sit close in memory, which is what the solvers' gather loops and sparse
+  // matrix products need from the cache.
+  Vec3 lo = in.nodes.front(), hi = in.nodes.front();
+  for (const Vec3& p : in.nodes) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  const Vec3 scale = 1023.0 * (hi - lo).cwiseMax(Vec3::Constant(1e-300)).cwiseInverse();
+  std::vector<std::pair<std::uint32_t, NodeIndex>> keyed(in.nodes.size());
+  for (std::size_t i = 0; i < in.nodes.size(); ++i) {
+    const Vec3 q = (in.nodes[i] - lo).cwiseProduct(scale);
+    const auto code = spread_bits(static_cast<std::uint32_t>(q.x())) | (spread_bits(static_cast<std::uint32_t>(q.y())) << 1) |
+                      (spread_bits(static_cast<std::uint32_t>(q.z())) << 2);
+    keyed[i] = {code, static_cast<NodeIndex>(i)};
+  }
+  std::sort(keyed.begin(), keyed.end());
+  std::vector<NodeIndex> new_index(in.nodes.size());
+  Mesh out;
+  out.nodes.resize(in.nodes.size());
+  for (std::size_t k = 0; k < keyed.size(); ++k) {
+    new_index[keyed[k].second] = static_cast<NodeIndex>(k);
+    out.nodes[k] = in.nodes[keyed[k].second];
+  }
+  out.tets = in.tets;
+  for (Tet& t : out.tets) {
+    for (NodeIndex& n : t) n = new_index[n];
+  }
+  std::sort(out.tets.begin(), out.tets.end(), [](const Tet& a, const Tet& b) {
+    return std::array<NodeIndex, 4>{*std::min_element(a.begin(), a.end()), a[0], a[1], a[2]} <
+           std::array<NodeIndex, 4>{*std::min_element(b.begin(), b.end()), b[0], b[1], b[2]};
+  });
+  out.triangles = extract_boundary(out.nodes, out.tets).volume_triangles;
+  return out;
+}
 
 std::int64_t target_tet_count(LiverResolution resolution) { return plan(resolution).target_tets; }
 
@@ -194,6 +243,7 @@ Expected<Mesh> generate_liver(LiverResolution resolution, const ProgressSink& pr
   options.preserve_surface = true;
   auto mesh = tetrahedralize(surface, options, fmt::format("liver ({})", to_string(resolution)));
   if (!mesh) return std::unexpected(mesh.error());
+  *mesh = renumber_for_locality(*mesh);
   if (progress) progress(task, 1.0);
   return mesh;
 }

@@ -1,0 +1,176 @@
+// Mechanics step time: every force field × ODE solver on the four standard livers, and SOFA's
+// liver demo with its own settings. Run: build/release/bin/hof_bench_mechanics
+// (filter with --benchmark_filter=REGEX; threads with HOF_THREADS, default all cores).
+//
+// Settings: liver material E = 5.4 kPa (shear modulus 1.8 kPa, literature.md §6), ν = 0.45,
+// density 1060 kg/m³, gravity, three fixed nodes; implicit Euler with Rayleigh 0.1/0.1 and
+// CG with 25 iterations (the reference configuration); explicit solvers at a step
+// they are stable at; the static solver does one Newton iteration per step.
+
+#include <benchmark/benchmark.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <map>
+#include <string>
+
+#include "hof/mechanics/step.h"
+#include "hof/mesh/liver_generator.h"
+#include "hof/mesh/mesh_io.h"
+
+namespace {
+
+using namespace hof;
+using namespace hof::mechanics;
+
+int thread_count() {
+  const char* env = std::getenv("HOF_THREADS");
+  return env ? std::atoi(env) : 0;
+}
+
+const mesh::Mesh& liver(mesh::LiverResolution r) {
+  static std::map<mesh::LiverResolution, mesh::Mesh> cache;
+  auto it = cache.find(r);
+  if (it == cache.end()) {
+    auto m = mesh::generate_liver(r);
+    if (!m) {
+      std::fprintf(stderr, "%s\n", m.error().to_string().c_str());
+      std::exit(1);
+    }
+    it = cache.emplace(r, std::move(*m)).first;
+  }
+  return it->second;
+}
+
+enum class Field { kSprings, kSmall, kLarge, kPolar, kNeoHookean };
+
+ForceFieldConfig field_config(Field f) {
+  ForceFieldConfig c;
+  c.name = "tissue";
+  switch (f) {
+    case Field::kSprings: c.mesh_springs = MeshSpringConfig{5000.0, 25.0}; break;  // the thesis' settings
+    case Field::kSmall: c.tetrahedron_fem = TetrahedronFemConfig{5400.0, 0.45, FemMethod::kSmall}; break;
+    case Field::kLarge: c.tetrahedron_fem = TetrahedronFemConfig{5400.0, 0.45, FemMethod::kLarge}; break;
+    case Field::kPolar: c.tetrahedron_fem = TetrahedronFemConfig{5400.0, 0.45, FemMethod::kPolar}; break;
+    case Field::kNeoHookean: c.neo_hookean = NeoHookeanConfig{5400.0, 0.45}; break;
+  }
+  return c;
+}
+
+ModelConfig liver_config(const mesh::Mesh& m, Field field, OdeSolverKind solver) {
+  ModelConfig c;
+  c.name = "liver";
+  c.positions = m.nodes;
+  c.tets = m.tets;
+  c.mass.kind = MassKind::kDiagonal;
+  c.mass.mass_density_kg_per_m3 = 1060.0;
+  c.gravity_m_per_s2 = Vec3(0, 0, -9.81);
+  c.force_fields.push_back(field_config(field));
+  // Three nodes of the top surface hold the liver.
+  std::vector<std::int32_t> top;
+  for (const Vec3& target : {Vec3(0.06, 0.0, 0.1), Vec3(0.0, 0.04, 0.1), Vec3(-0.03, -0.03, 0.1)}) {
+    std::int32_t best = 0;
+    for (std::size_t i = 0; i < m.nodes.size(); ++i) {
+      if ((m.nodes[i] - target).norm() < (m.nodes[best] - target).norm()) best = static_cast<std::int32_t>(i);
+    }
+    top.push_back(best);
+  }
+  c.fixed.push_back(FixedConstraintConfig{"fixed", top, std::nullopt, false, {true, true, true}});
+  c.ode.kind = solver;
+  c.ode.rayleigh_mass = c.ode.rayleigh_stiffness = 0.1;
+  c.ode.newton_iterations = 1;
+  c.linear.iterations = 25;
+  c.linear.tolerance = 1e-12;
+  c.linear.threshold = 1e-12;
+  c.dt_s = (solver == OdeSolverKind::kEulerExplicit || solver == OdeSolverKind::kRungeKutta4) ? 1e-5 : 0.02;
+  c.threads = thread_count();
+  return c;
+}
+
+void run_steps(benchmark::State& bench, const ModelConfig& config) {
+  auto model = build_model(config);
+  if (!model) {
+    bench.SkipWithError(model.error().to_string().c_str());
+    return;
+  }
+  MechanicalState state = make_state(*model);
+  double force = 0, assembly = 0, solve = 0;
+  for (auto _ : bench) {
+    if (!step(*model, state)) {
+      bench.SkipWithError(state.divergence.reason.c_str());
+      break;
+    }
+    force += state.stats.force_s;
+    assembly += state.stats.assembly_s;
+    solve += state.stats.solve_s;
+  }
+  const auto n = static_cast<double>(bench.iterations());
+  bench.counters["steps_per_s"] = benchmark::Counter(n, benchmark::Counter::kIsRate);
+  bench.counters["force_us"] = 1e6 * force / n;
+  bench.counters["assembly_us"] = 1e6 * assembly / n;
+  bench.counters["solve_us"] = 1e6 * solve / n;
+  bench.counters["tets"] = static_cast<double>(model->tets.size());
+}
+
+void BM_Liver(benchmark::State& bench, mesh::LiverResolution r, Field field, OdeSolverKind solver) {
+  run_steps(bench, liver_config(liver(r), field, solver));
+}
+
+// SOFA's liver.scn: 181 nodes / 596 tets, dt 0.02, gravity −9.81 y, implicit Euler with
+// Rayleigh 0.1/0.1, CG 25 iterations tolerance and threshold 1e-9, co-rotational FEM
+// (large) E 3000 ν 0.3, DiagonalMass density 1, fixed 3 39 64 — its own units.
+void BM_SofaLiverScn(benchmark::State& bench) {
+  auto read = mesh::read_mesh(HOF_ANCHORS_DIR "/sofa/mesh/liver.msh");
+  if (!read) {
+    bench.SkipWithError(read.error().to_string().c_str());
+    return;
+  }
+  ModelConfig c;
+  c.positions = read->mesh.nodes;
+  c.tets = read->mesh.tets;
+  c.mass.kind = MassKind::kDiagonal;
+  c.mass.mass_density_kg_per_m3 = 1.0;
+  ForceFieldConfig fem;
+  fem.name = "FEM";
+  fem.tetrahedron_fem = TetrahedronFemConfig{3000.0, 0.3, FemMethod::kLarge};
+  c.force_fields.push_back(fem);
+  c.fixed.push_back(FixedConstraintConfig{"fixed", {3, 39, 64}, std::nullopt, false, {true, true, true}});
+  c.ode.rayleigh_mass = c.ode.rayleigh_stiffness = 0.1;
+  c.linear.iterations = 25;
+  c.linear.tolerance = c.linear.threshold = 1e-9;
+  c.dt_s = 0.02;
+  c.threads = thread_count();
+  run_steps(bench, c);
+}
+
+void register_all() {
+  using R = mesh::LiverResolution;
+  const std::pair<Field, const char*> fields[] = {{Field::kSprings, "MeshSprings"},
+                                                  {Field::kSmall, "FEMSmall"},
+                                                  {Field::kLarge, "FEMLarge"},
+                                                  {Field::kPolar, "FEMPolar"},
+                                                  {Field::kNeoHookean, "NeoHookean"}};
+  const std::pair<OdeSolverKind, const char*> solvers[] = {{OdeSolverKind::kEulerImplicit, "ImplicitCG25"},
+                                                           {OdeSolverKind::kEulerExplicit, "SymplecticEuler"},
+                                                           {OdeSolverKind::kRungeKutta4, "RK4"},
+                                                           {OdeSolverKind::kStatic, "StaticNewton1"}};
+  for (R r : {R::kSimple, R::kCoarse, R::kMedium, R::kFine}) {
+    for (const auto& [field, field_name] : fields) {
+      for (const auto& [solver, solver_name] : solvers) {
+        const std::string name = std::string("Liver/") + std::string(mesh::to_string(r)) + "/" + field_name + "/" + solver_name;
+        benchmark::RegisterBenchmark(name.c_str(), BM_Liver, r, field, solver)->Unit(benchmark::kMicrosecond)->MinTime(0.3);
+      }
+    }
+  }
+  benchmark::RegisterBenchmark("SofaLiverScn/FEMLarge/ImplicitCG25", BM_SofaLiverScn)->Unit(benchmark::kMicrosecond)->MinTime(0.5);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  register_all();
+  benchmark::Initialize(&argc, argv);
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}
