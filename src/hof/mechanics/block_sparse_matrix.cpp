@@ -56,11 +56,13 @@ inline __m256d load_column(const double* a) { return _mm256_loadu_pd(a); }
 inline __m256d load_column(const float* a) { return _mm256_cvtps_pd(_mm_loadu_ps(a)); }
 #endif
 
+}  // namespace
+
 // y = A x over block rows [r0, r1) for values of type T (double, or float widened on load).
 // Six independent accumulators (three columns × two blocks) keep the fused multiply-adds
 // from waiting on each other: the loop is bound by loads, not by FMA latency.
 template <class T>
-void multiply_rows(const std::int64_t* row_start, const std::int32_t* columns, const T* values, const double* xs,
+static void multiply_block_rows(const std::int64_t* row_start, const std::int32_t* columns, const T* values, const double* xs,
                    double* ys, std::size_t r0, std::size_t r1) {
   constexpr std::int64_t kStride = BlockSparseMatrix::kBlockStride;
   for (std::size_t r = r0; r < r1; ++r) {
@@ -109,7 +111,6 @@ void multiply_rows(const std::int64_t* row_start, const std::int32_t* columns, c
   }
 }
 
-}  // namespace
 
 void BlockSparseMatrix::multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const {
   const std::int64_t* rows = row_start_.data();
@@ -118,7 +119,18 @@ void BlockSparseMatrix::multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y) c
   const double* xs = x.data();
   double* ys = y.data();
   parallel_chunks(static_cast<std::size_t>(block_rows()), 256,
-                  [=](std::size_t r0, std::size_t r1) { multiply_rows(rows, cols, v, xs, ys, r0, r1); });
+                  [=](std::size_t r0, std::size_t r1) { multiply_block_rows(rows, cols, v, xs, ys, r0, r1); });
+}
+
+void BlockSparseMatrix::multiply_rows(const Eigen::VectorXd& x, Eigen::VectorXd& y, std::size_t first,
+                                      std::size_t last) const {
+  multiply_block_rows(row_start_.data(), columns_.data(), values_.data(), x.data(), y.data(), first, last);
+}
+
+void BlockSparseMatrix::multiply_single_rows(const Eigen::VectorXd& x, Eigen::VectorXd& y, std::size_t first,
+                                             std::size_t last) const {
+  multiply_block_rows(row_start_.data(), columns_.data(), values_single_.data(), x.data(), y.data(), first,
+                                last);
 }
 
 void BlockSparseMatrix::update_single_precision() {
@@ -135,7 +147,7 @@ void BlockSparseMatrix::multiply_single(const Eigen::VectorXd& x, Eigen::VectorX
   const double* xs = x.data();
   double* ys = y.data();
   parallel_chunks(static_cast<std::size_t>(block_rows()), 256,
-                  [=](std::size_t r0, std::size_t r1) { multiply_rows(rows, cols, v, xs, ys, r0, r1); });
+                  [=](std::size_t r0, std::size_t r1) { multiply_block_rows(rows, cols, v, xs, ys, r0, r1); });
 }
 
 Eigen::MatrixXd BlockSparseMatrix::to_dense() const {

@@ -65,6 +65,10 @@ class BlockSparseMatrix {
   /// y = A x with the single-precision copy of the values (accumulated in double).
   void multiply_single(const Eigen::VectorXd& x, Eigen::VectorXd& y) const;
 
+  /// Rows [first, last) of y = A x (double or single-precision values).
+  void multiply_rows(const Eigen::VectorXd& x, Eigen::VectorXd& y, std::size_t first, std::size_t last) const;
+  void multiply_single_rows(const Eigen::VectorXd& x, Eigen::VectorXd& y, std::size_t first, std::size_t last) const;
+
   /// Dense copy, for tests and small problems.
   [[nodiscard]] Eigen::MatrixXd to_dense() const;
 

@@ -1,3 +1,6 @@
+// The LDLᵀ factorisation keeps its work vectors on the stack (no heap allocation in a step)
+// whatever the model size: the default limit would move them to the heap above 16k dofs.
+#define EIGEN_STACK_ALLOCATION_LIMIT 0
 #include "hof/mechanics/linear_system.h"
 
 #include <cmath>
@@ -56,6 +59,11 @@ void assemble_system(const MechanicalModel& model, MechanicalState& state, doubl
     }
     a.block(a.diagonal_slot(n))(axis, axis) = 1.0;
   }
+  if (uses_single_precision(model)) a.update_single_precision();
+}
+
+bool uses_single_precision(const MechanicalModel& model) {
+  return model.linear.kind == LinearSolverKind::kConjugateGradient && model.linear.mixed_precision;
 }
 
 void prepare_linear_solver(const MechanicalModel& model, MechanicalState& state) {
@@ -78,14 +86,32 @@ void prepare_linear_solver(const MechanicalModel& model, MechanicalState& state)
     }
   }
   const Eigen::Index n = 3 * static_cast<Eigen::Index>(a.block_rows());
+  Eigen::SparseMatrix<double> full(n, n);
+  full.setFromTriplets(triplets.begin(), triplets.end());
+  // Fill-reducing ordering once, applied here rather than inside every factorisation (where
+  // Eigen would build a permuted copy, allocating, at each step).
+  Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> p;
+  Eigen::AMDOrdering<int>()(full, p);
+  const Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> p_inverse = p.inverse();
+  w.permutation.assign(p_inverse.indices().data(), p_inverse.indices().data() + n);
+  // Upper triangle of P A Pᵀ; the values still carry the block-storage index + 1.
+  std::vector<Eigen::Triplet<double>> lower;
+  lower.reserve(static_cast<std::size_t>(full.nonZeros()) / 2 + static_cast<std::size_t>(n));
+  for (Eigen::Index col = 0; col < full.outerSize(); ++col) {
+    for (Eigen::SparseMatrix<double>::InnerIterator it(full, col); it; ++it) {
+      const int row_p = w.permutation[static_cast<std::size_t>(it.row())];
+      const int col_p = w.permutation[static_cast<std::size_t>(it.col())];
+      if (row_p <= col_p) lower.emplace_back(row_p, col_p, it.value());
+    }
+  }
   w.csc.resize(n, n);
-  w.csc.setFromTriplets(triplets.begin(), triplets.end());
+  w.csc.setFromTriplets(lower.begin(), lower.end());
   w.csc.makeCompressed();
   w.csc_from_block.resize(static_cast<std::size_t>(w.csc.nonZeros()));
   for (Eigen::Index k = 0; k < w.csc.nonZeros(); ++k) {
     w.csc_from_block[static_cast<std::size_t>(k)] = static_cast<std::int64_t>(w.csc.valuePtr()[k]) - 1;
   }
-  w.ldlt = std::make_unique<Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>>();
+  w.ldlt = std::make_unique<PreorderedLdlt>();
   w.ldlt->analyzePattern(w.csc);
 }
 
@@ -96,80 +122,148 @@ bool solve_ldlt(MechanicalState& state, const Eigen::VectorXd& b, Eigen::VectorX
   const double* block_values = w.system.values();
   double* csc_values = w.csc.valuePtr();
   for (std::size_t k = 0; k < w.csc_from_block.size(); ++k) csc_values[k] = block_values[w.csc_from_block[k]];
-  w.ldlt->factorize(w.csc);
+  w.ldlt->refactor(w.csc);
   if (w.ldlt->info() != Eigen::Success) return false;
-  x = w.ldlt->solve(b);
+  // Solve P A Pᵀ (P x) = P b in place in w.z.
+  const std::size_t n = w.permutation.size();
+  for (std::size_t i = 0; i < n; ++i) w.z[w.permutation[i]] = b[static_cast<Eigen::Index>(i)];
+  w.ldlt->matrixL().solveInPlace(w.z);
+  w.z.array() /= w.ldlt->vectorD().array();
+  w.ldlt->matrixU().solveInPlace(w.z);
+  for (std::size_t i = 0; i < n; ++i) x[static_cast<Eigen::Index>(i)] = w.z[w.permutation[i]];
   state.stats.linear_iterations = 1;
   state.stats.linear_residual = 0.0;
   return x.allFinite();
 }
 
 // Conjugate gradients with SOFA's CGLinearSolver stopping rules: stop when |r|²/|b|² falls
-// below `tolerance`, or when the curvature pᵀAp falls below `threshold`, or after
-// `iterations`. Optional block-Jacobi preconditioning (inverse 3x3 diagonal blocks).
+// below `tolerance`, or when the curvature pᵀAp falls below `threshold` (relative, see
+// below), or after `iterations`. Optional block-Jacobi preconditioning (inverse 3x3 diagonal
+// blocks). Each iteration makes three passes over fixed node chunks — (Ap, pᵀAp), (x, r, z
+// updates with rᵀz and rᵀr), (p update) — with per-chunk partial sums added in chunk order,
+// so the result does not depend on the number of threads.
 bool solve_cg(const MechanicalModel& model, MechanicalState& state, const Eigen::VectorXd& b, Eigen::VectorXd& x) {
   SolverWorkspace& w = state.work;
   const LinearSolverConfig& cfg = model.linear;
   BlockSparseMatrix& a = w.system;
   const bool precondition = cfg.block_jacobi;
-  if (cfg.mixed_precision) a.update_single_precision();
+  const bool single = cfg.mixed_precision;
   const std::size_t nodes = model.node_count();
-
+  constexpr std::size_t kChunk = 256;  // nodes per chunk
+  const std::size_t chunks = (nodes + kChunk - 1) / kChunk;
+  if (w.partials.size() < 3 * chunks) w.partials.resize(3 * chunks);  // sized by make_state
+  double* part0 = w.partials.data();
+  double* part1 = part0 + chunks;
+  double* part2 = part1 + chunks;
+  auto sum = [&](const double* parts) {
+    double total = 0.0;
+    for (std::size_t c = 0; c < chunks; ++c) total += parts[c];
+    return total;
+  };
+  // Runs body(chunk, first dof, end dof) over all chunks, in parallel when large.
+  auto over_chunks = [&](auto&& body) {
+    parallel_chunks(
+        chunks, 1,
+        [&](std::size_t c0, std::size_t c1) {
+          for (std::size_t c = c0; c < c1; ++c) {
+            body(c, 3 * c * kChunk, 3 * std::min(nodes, (c + 1) * kChunk));
+          }
+        },
+        /*min_parallel=*/(kParallelThreshold / 3 + kChunk - 1) / kChunk);
+  };
   if (precondition) {
-    for (std::size_t n = 0; n < nodes; ++n) {
-      w.block_jacobi[n] = a.block(a.diagonal_slot(static_cast<std::int32_t>(n))).inverse();
-    }
-  }
-  auto apply_preconditioner = [&](const Eigen::VectorXd& in, Eigen::VectorXd& out) {
-    parallel_chunks(nodes, 512, [&](std::size_t n0, std::size_t n1) {
-      for (std::size_t n = n0; n < n1; ++n) {
-        const Eigen::Index i = 3 * static_cast<Eigen::Index>(n);
-        out.segment<3>(i).noalias() = w.block_jacobi[n] * in.segment<3>(i);
+    over_chunks([&](std::size_t, std::size_t d0, std::size_t d1) {
+      for (std::size_t n = d0 / 3; n < d1 / 3; ++n) {
+        w.block_jacobi[n] = a.block(a.diagonal_slot(static_cast<std::int32_t>(n))).inverse();
       }
     });
-  };
+  }
 
-  x.setZero();
-  w.r = b;
-  const double b_norm2 = dot(b, b, w.partials);
+  double* xs = x.data();
+  double* rs = w.r.data();
+  double* zs = precondition ? w.z.data() : w.r.data();
+  double* ps = w.p.data();
+  double* aps = w.ap.data();
+  const double* bs = b.data();
+
+  // r = b, z = M⁻¹ r, p = z, x = 0; |b|² and rᵀz.
+  over_chunks([&](std::size_t c, std::size_t d0, std::size_t d1) {
+    double bb = 0.0, rz = 0.0;
+    for (std::size_t d = d0; d < d1; ++d) {
+      xs[d] = 0.0;
+      rs[d] = bs[d];
+      bb += bs[d] * bs[d];
+    }
+    if (precondition) {
+      for (std::size_t n = d0 / 3; n < d1 / 3; ++n) {
+        Eigen::Map<Eigen::Vector3d>(zs + 3 * n) = w.block_jacobi[n] * Eigen::Map<const Eigen::Vector3d>(rs + 3 * n);
+      }
+    }
+    for (std::size_t d = d0; d < d1; ++d) {
+      ps[d] = zs[d];
+      rz += rs[d] * zs[d];
+    }
+    part0[c] = bb;
+    part1[c] = rz;
+  });
+  const double b_norm2 = sum(part0);
+  double rho = sum(part1);
   state.stats.linear_iterations = 0;
   state.stats.linear_residual = 0.0;
   if (!(b_norm2 > 0.0)) return std::isfinite(b_norm2);
-  if (precondition) apply_preconditioner(w.r, w.z);
-  const Eigen::VectorXd& z = precondition ? w.z : w.r;
-  w.p = z;
-  double rho = dot(w.r, z, w.partials);
+
+  const auto& row_start = a.row_start();
   double r_norm2 = b_norm2;
   double first_curvature = 0.0;
   int iteration = 0;
   for (; iteration < cfg.iterations; ++iteration) {
     if (r_norm2 / b_norm2 <= cfg.tolerance) break;
-    if (cfg.mixed_precision) a.multiply_single(w.p, w.ap);
-    else a.multiply(w.p, w.ap);
-    const double curvature = dot(w.p, w.ap, w.partials);
+    // Ap and pᵀAp.
+    over_chunks([&](std::size_t c, std::size_t d0, std::size_t d1) {
+      if (single) a.multiply_single_rows(w.p, w.ap, d0 / 3, d1 / 3);
+      else a.multiply_rows(w.p, w.ap, d0 / 3, d1 / 3);
+      double pap = 0.0;
+      for (std::size_t d = d0; d < d1; ++d) pap += ps[d] * aps[d];
+      part0[c] = pap;
+    });
+    (void)row_start;
+    const double curvature = sum(part0);
     // SOFA compares pᵀAp with `threshold` in absolute terms, which in its unit-free scenes
     // means "the denominator vanished". In SI units (kg, m) pᵀAp is legitimately tiny, so
     // the same intent is kept scale-free: relative to the first iteration's curvature.
     if (iteration == 0) first_curvature = std::abs(curvature);
     if (!(std::abs(curvature) > cfg.threshold * first_curvature) || !(first_curvature > 0.0)) break;
     const double alpha = rho / curvature;
-    axpy(alpha, w.p, x);
-    axpy(-alpha, w.ap, w.r);
-    if (precondition) apply_preconditioner(w.r, w.z);
-    const double rho_next = dot(w.r, z, w.partials);
-    r_norm2 = precondition ? dot(w.r, w.r, w.partials) : rho_next;
+    // x += αp, r −= αAp, z = M⁻¹r; rᵀz and rᵀr.
+    over_chunks([&](std::size_t c, std::size_t d0, std::size_t d1) {
+      double rr = 0.0, rz = 0.0;
+      for (std::size_t d = d0; d < d1; ++d) {
+        xs[d] += alpha * ps[d];
+        rs[d] -= alpha * aps[d];
+        rr += rs[d] * rs[d];
+      }
+      if (precondition) {
+        for (std::size_t n = d0 / 3; n < d1 / 3; ++n) {
+          Eigen::Map<Eigen::Vector3d>(zs + 3 * n) = w.block_jacobi[n] * Eigen::Map<const Eigen::Vector3d>(rs + 3 * n);
+        }
+        for (std::size_t d = d0; d < d1; ++d) rz += rs[d] * zs[d];
+      } else {
+        rz = rr;
+      }
+      part1[c] = rr;
+      part2[c] = rz;
+    });
+    r_norm2 = sum(part1);
+    const double rho_next = sum(part2);
     const double beta = rho_next / rho;
     rho = rho_next;
-    // p = z + beta p
-    const double* pz = z.data();
-    double* pp = w.p.data();
-    parallel_chunks(static_cast<std::size_t>(w.p.size()), kVectorChunk, [&](std::size_t i0, std::size_t i1) {
-      for (std::size_t i = i0; i < i1; ++i) pp[i] = pz[i] + beta * pp[i];
+    over_chunks([&](std::size_t, std::size_t d0, std::size_t d1) {
+      for (std::size_t d = d0; d < d1; ++d) ps[d] = zs[d] + beta * ps[d];
     });
   }
   state.stats.linear_iterations = iteration;
   state.stats.linear_residual = r_norm2 / b_norm2;
-  return std::isfinite(r_norm2);
+  return std::isfinite(r_norm2) && x.allFinite();
 }
 
 }  // namespace

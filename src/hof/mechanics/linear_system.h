@@ -15,6 +15,9 @@ namespace hof::mechanics::detail {
 /// fields last evaluated forces.
 void assemble_system(const MechanicalModel& model, MechanicalState& state, double mass_coeff, double stiffness_coeff);
 
+/// Whether the CG product uses the single-precision copy of A (made by assemble_system).
+bool uses_single_precision(const MechanicalModel& model);
+
 /// Solves A·x = b with the model's linear solver (x starts from zero). b's fixed entries must
 /// be zero. Fills state.stats.linear_iterations and linear_residual. Returns false when the
 /// solve broke down (non-finite values, a failed factorisation).

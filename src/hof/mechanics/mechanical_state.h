@@ -38,6 +38,13 @@ struct StepStats {
   double residual_force_n{0.0};  ///< static solver: |f| at exit
 };
 
+/// Eigen's LDLᵀ without its per-call ordering step: the matrix given is already permuted
+/// (upper triangle stored), so refactoring allocates nothing.
+class PreorderedLdlt : public Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Upper, Eigen::NaturalOrdering<int>> {
+ public:
+  void refactor(const Eigen::SparseMatrix<double>& upper) { factorize_preordered<true>(upper); }
+};
+
 /// Solver scratch, sized by make_state().
 struct SolverWorkspace {
   Eigen::VectorXd b, dv, r, p, z, ap, diag_inv;  // CG and implicit Euler (3N)
@@ -47,9 +54,12 @@ struct SolverWorkspace {
   BlockSparseMatrix system;                        // A = αM + βK, values refilled each step
   std::vector<Eigen::Matrix3d> block_jacobi;       // (N) inverse diagonal blocks
   // Sparse direct solver: CSC copy of `system` and the value map from block storage.
+  // Sparse direct solver on the fill-reducing (AMD) permutation P A Pᵀ, lower triangle,
+  // computed once: each step copies values and refactors without allocating.
   Eigen::SparseMatrix<double> csc;
   std::vector<std::int64_t> csc_from_block;        // csc value k <- block value index
-  std::unique_ptr<Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>> ldlt;
+  std::vector<int> permutation;                    // dof i of A is dof permutation[i] of P A Pᵀ
+  std::unique_ptr<PreorderedLdlt> ldlt;
 };
 
 struct MechanicalState {

@@ -98,14 +98,25 @@ Expected<std::unique_ptr<TetrahedronFemForceField>> TetrahedronFemForceField::ma
     e.rest_frame_transposed =
         triangle_frame(rest_positions[e.nodes[0]], rest_positions[e.nodes[1]], rest_positions[e.nodes[2]]).transpose();
     field->elements_.push_back(e);
-    field->gradients_.push_back(e.gradients);
-    field->volumes_.push_back(e.volume);
   }
   std::vector<std::array<std::int32_t, 4>> node_lists;
   node_lists.reserve(field->elements_.size());
   for (const Element& e : field->elements_) node_lists.push_back(e.nodes);
   field->incidence_ = make_node_incidence<4>(node_lists, rest_positions.size());
-  field->slots_.assign(field->elements_.size(), {});
+  field->incidences_.reserve(field->incidence_.entries.size());
+  for (std::int32_t entry : field->incidence_.entries) {
+    const Element& e = field->elements_[static_cast<std::size_t>(entry >> 2)];
+    const int i = entry & 3;
+    Incidence inc{};
+    inc.gradient = e.gradients[i];
+    inc.lambda_volume = field->lame_.lambda * e.volume;
+    inc.mu_volume = field->lame_.mu * e.volume;
+    for (int j = 0; j < 4; ++j) inc.mu_dots[j] = inc.mu_volume * e.gradients[i].dot(e.gradients[j]);
+    inc.slots.fill(-1);
+    inc.element = entry >> 2;
+    inc.corner = i;
+    field->incidences_.push_back(inc);
+  }
   return field;
 }
 
@@ -127,10 +138,10 @@ void TetrahedronFemForceField::collect_couplings(std::vector<std::pair<std::int3
 }
 
 void TetrahedronFemForceField::bind(const BlockSparseMatrix& pattern) {
-  for (std::size_t k = 0; k < elements_.size(); ++k) {
-    const Element& e = elements_[k];
-    for (int i = 0; i < 4; ++i) {
-      for (int j = 0; j < 4; ++j) slots_[k][4 * i + j] = static_cast<std::int32_t>(pattern.slot(e.nodes[i], e.nodes[j]));
+  for (Incidence& inc : incidences_) {
+    const Element& e = elements_[static_cast<std::size_t>(inc.element)];
+    for (int j = 0; j < 4; ++j) {
+      inc.slots[j] = static_cast<std::int32_t>(pattern.slot(e.nodes[inc.corner], e.nodes[j]));
     }
   }
 }
@@ -209,14 +220,18 @@ void TetrahedronFemForceField::add_force(const Eigen::VectorXd& x, const Eigen::
       },
       /*min_parallel=*/256);
   // Node pass: each node gathers f_i = Σ (−V R σ) b_i over its elements, in a fixed order.
+  // The element terms are the only random reads: fetch them a few incidences ahead.
+  constexpr std::int32_t kAhead = 6;
   parallel_chunks(
       incidence_.start.size() - 1, 128,
       [&](std::size_t begin, std::size_t end) {
+        const std::int32_t last = incidence_.start[end];
         for (std::size_t n = begin; n < end; ++n) {
           Vec3 sum = Vec3::Zero();
-          for (std::int32_t entry : incidence_.of(n)) {
-            const std::size_t element = static_cast<std::size_t>(entry) >> 2;
-            sum.noalias() += state.element_matrices[element] * gradients_[element][entry & 3];
+          for (std::int32_t k = incidence_.start[n]; k < incidence_.start[n + 1]; ++k) {
+            if (k + kAhead < last) __builtin_prefetch(&state.element_matrices[incidences_[k + kAhead].element]);
+            const Incidence& inc = incidences_[k];
+            sum.noalias() += state.element_matrices[inc.element] * inc.gradient;
           }
           f.segment<3>(3 * static_cast<Eigen::Index>(n)) += sum;
         }
@@ -225,37 +240,38 @@ void TetrahedronFemForceField::add_force(const Eigen::VectorXd& x, const Eigen::
 }
 
 void TetrahedronFemForceField::add_stiffness(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const {
-  const double lambda = lame_.lambda;
-  const double mu = lame_.mu;
   double* values = k.values();
+  const double* rotated = state.element_scalars.data();
   // Row pass: each block row (node i) gathers, from every element using node i, the rotated
   // element stiffness blocks R K_e Rᵀ (i, j) = V (λ c_i c_jᵀ + μ c_j c_iᵀ + μ (b_i·b_j) I)
   // with c = R b. One thread per row: no write conflicts, fixed summation order. Blocks are
   // stored as padded columns, so column q gets λV c_i c_j[q] + μV c_j c_i[q] in four lanes.
+  constexpr std::int32_t kAhead = 6;
   parallel_chunks(
       incidence_.start.size() - 1, 64,
       [&](std::size_t begin, std::size_t end) {
-        for (std::size_t n = begin; n < end; ++n) {
-          for (std::int32_t entry : incidence_.of(n)) {
-            const std::size_t element = static_cast<std::size_t>(entry) >> 2;
-            const int i = entry & 3;
-            const double* c = state.element_scalars.data() + 16 * element;
-            const std::array<Vec3, 4>& b = gradients_[element];
-            const double w = scale * volumes_[element];
-            const Eigen::Map<const Eigen::Vector4d> ci(c + 4 * i);
-            const Eigen::Vector4d wl_ci = (w * lambda) * ci;
-            const Eigen::Vector3d wm_ci = (w * mu) * ci.head<3>();
-            for (int j = 0; j < 4; ++j) {
-              const Eigen::Map<const Eigen::Vector4d> cj(c + 4 * j);
-              double* block = values + BlockSparseMatrix::kBlockStride * slots_[element][4 * i + j];
-              for (int q = 0; q < 3; ++q) {
-                Eigen::Map<Eigen::Vector4d>(block + 4 * q) += wl_ci * cj[q] + cj * wm_ci[q];
-              }
-              const double diagonal = w * mu * b[i].dot(b[j]);
-              block[0] += diagonal;
-              block[5] += diagonal;
-              block[10] += diagonal;
+        const std::int32_t last = incidence_.start[end];
+        for (std::int32_t at = incidence_.start[begin]; at < last; ++at) {
+          if (at + kAhead < last) {
+            const double* ahead = rotated + 16 * static_cast<std::int64_t>(incidences_[at + kAhead].element);
+            __builtin_prefetch(ahead);
+            __builtin_prefetch(ahead + 8);
+          }
+          const Incidence& inc = incidences_[at];
+          const double* c = rotated + 16 * static_cast<std::int64_t>(inc.element);
+          const Eigen::Map<const Eigen::Vector4d> ci(c + 4 * inc.corner);
+          const Eigen::Vector4d wl_ci = (scale * inc.lambda_volume) * ci;
+          const Eigen::Vector3d wm_ci = (scale * inc.mu_volume) * ci.head<3>();
+          for (int j = 0; j < 4; ++j) {
+            const Eigen::Map<const Eigen::Vector4d> cj(c + 4 * j);
+            double* block = values + BlockSparseMatrix::kBlockStride * inc.slots[j];
+            for (int q = 0; q < 3; ++q) {
+              Eigen::Map<Eigen::Vector4d>(block + 4 * q) += wl_ci * cj[q] + cj * wm_ci[q];
             }
+            const double diagonal = scale * inc.mu_dots[j];
+            block[0] += diagonal;
+            block[5] += diagonal;
+            block[10] += diagonal;
           }
         }
       },

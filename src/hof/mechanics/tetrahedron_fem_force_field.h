@@ -80,10 +80,19 @@ class TetrahedronFemForceField final : public ForceField {
   Lame lame_{};
   std::vector<Element> elements_;
   // Compact copies for the gather passes, which visit elements in node order.
-  std::vector<std::array<Vec3, 4>> gradients_;       // (E) b_i
-  std::vector<double> volumes_;                      // (E)
-  std::vector<std::array<std::int32_t, 16>> slots_;  // (E) matrix slot of block (i, j) at 4i+j
   NodeIncidence incidence_;
+  // Per incidence (node n's use of element e at corner i), in incidence order, so that the
+  // gather passes stream through them: only the element's per-step data is fetched at random.
+  struct Incidence {
+    Vec3 gradient;                     // b_i
+    double lambda_volume;              // λ V
+    std::array<double, 4> mu_dots;     // μ V (b_i · b_j)
+    std::array<std::int32_t, 4> slots; // matrix slot of block (i, j)
+    std::int32_t element;
+    std::int32_t corner;
+    double mu_volume;                  // μ V
+  };
+  std::vector<Incidence> incidences_;
 };
 
 }  // namespace hof::mechanics

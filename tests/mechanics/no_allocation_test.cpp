@@ -1,0 +1,99 @@
+// (GCC cannot see that the replaced operator new uses malloc.)
+#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
+
+// A mechanics step allocates no memory once the state is made (MuJoCo/Drake practice: the
+// hot loop runs from storage sized up front). Counted by replacing global operator new.
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cstdlib>
+#include <new>
+
+#include "hof/mechanics/step.h"
+#include "hof/mesh/liver_generator.h"
+
+namespace {
+std::atomic<long> g_allocations{0};
+}
+
+void* operator new(std::size_t size) {
+  g_allocations.fetch_add(1, std::memory_order_relaxed);
+  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
+  throw std::bad_alloc();
+}
+void* operator new[](std::size_t size) { return operator new(size); }
+void* operator new(std::size_t size, std::align_val_t align) {
+  g_allocations.fetch_add(1, std::memory_order_relaxed);
+  const auto a = static_cast<std::size_t>(align);
+  if (void* p = std::aligned_alloc(a, (size + a - 1) / a * a)) return p;
+  throw std::bad_alloc();
+}
+void* operator new[](std::size_t size, std::align_val_t align) { return operator new(size, align); }
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete[](void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+void operator delete(void* p, std::align_val_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::align_val_t) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
+
+namespace hof::mechanics {
+namespace {
+
+struct Case {
+  const char* name;
+  ForceFieldConfig field;
+  OdeSolverKind solver;
+  LinearSolverKind linear;
+};
+
+std::vector<Case> cases() {
+  ForceFieldConfig springs{"springs", MeshSpringConfig{5000.0, 25.0}, {}, {}, {}};
+  ForceFieldConfig large{"fem", {}, TetrahedronFemConfig{5400.0, 0.45, FemMethod::kLarge}, {}, {}};
+  ForceFieldConfig polar{"fem", {}, TetrahedronFemConfig{5400.0, 0.45, FemMethod::kPolar}, {}, {}};
+  ForceFieldConfig neo{"neo", {}, {}, NeoHookeanConfig{5400.0, 0.45}, {}};
+  return {{"springs/implicit-cg", springs, OdeSolverKind::kEulerImplicit, LinearSolverKind::kConjugateGradient},
+          {"large/implicit-cg", large, OdeSolverKind::kEulerImplicit, LinearSolverKind::kConjugateGradient},
+          {"polar/implicit-ldlt", polar, OdeSolverKind::kEulerImplicit, LinearSolverKind::kSparseLdlt},
+          {"neo/static-cg", neo, OdeSolverKind::kStatic, LinearSolverKind::kConjugateGradient},
+          {"large/explicit", large, OdeSolverKind::kEulerExplicit, LinearSolverKind::kConjugateGradient},
+          {"large/rk4", large, OdeSolverKind::kRungeKutta4, LinearSolverKind::kConjugateGradient}};
+}
+
+TEST(NoAllocation, StepsAllocateNothingAfterMakeState) {
+  const mesh::Mesh liver = *mesh::generate_liver(mesh::LiverResolution::kMedium);  // parallel paths run
+  for (const Case& c : cases()) {
+    ModelConfig config;
+    config.positions = liver.nodes;
+    config.tets = liver.tets;
+    config.mass.kind = MassKind::kDiagonal;
+    config.mass.mass_density_kg_per_m3 = 1060.0;
+    config.gravity_m_per_s2 = Vec3(0, 0, -9.81);
+    config.force_fields = {c.field};
+    config.fixed.push_back(FixedConstraintConfig{"fixed", {0, 1, 2}, std::nullopt, false, {true, true, true}});
+    config.ode.kind = c.solver;
+    config.ode.newton_iterations = 2;
+    config.linear.kind = c.linear;
+    config.linear.block_jacobi = true;
+    config.dt_s = c.solver == OdeSolverKind::kEulerImplicit || c.solver == OdeSolverKind::kStatic ? 0.02 : 1e-5;
+    auto model = build_model(config);
+    ASSERT_TRUE(model) << model.error().to_string();
+    MechanicalState state = make_state(*model);
+    for (int i = 0; i < 3; ++i) ASSERT_TRUE(step(*model, state));  // warm-up (thread pool start)
+    const long before = g_allocations.load();
+    for (int i = 0; i < 5; ++i) ASSERT_TRUE(step(*model, state)) << c.name << ": " << state.divergence.reason;
+    EXPECT_EQ(g_allocations.load() - before, 0) << c.name;
+  }
+}
+
+TEST(NoAllocation, TheCounterCounts) {
+  const long before = g_allocations.load();
+  auto* p = new std::vector<int>(100);
+  delete p;
+  EXPECT_GE(g_allocations.load() - before, 2);
+}
+
+}  // namespace
+}  // namespace hof::mechanics
