@@ -125,7 +125,6 @@ ForceFieldState TetrahedronFemForceField::make_state() const {
   s.rotations.assign(elements_.size(), Mat3::Identity());
   s.element_matrices.assign(elements_.size(), Mat3::Zero());  // −V R σ per element
   s.element_scalars.assign(16 * elements_.size(), 0.0);       // c_i = R b_i, padded to 4
-  if (config_.method == FemMethod::kPolar) s.warm_start.assign(elements_.size(), Eigen::Quaterniond::Identity());
   return s;
 }
 
@@ -154,32 +153,30 @@ Mat3 TetrahedronFemForceField::rotation(const Element& e, const Mat3& f, const E
     case FemMethod::kLarge:
       return triangle_frame(node(x, e.nodes[0]), node(x, e.nodes[1]), node(x, e.nodes[2])) * e.rest_frame_transposed;
     case FemMethod::kPolar: {
-      // Müller et al. 2016: rotate q by the axis-angle that aligns its columns with F's
-      // columns, until the correction vanishes. Warm-started from the last step, it converges
-      // in one or two iterations; it stays defined for degenerate and inverted F.
-      Eigen::Quaterniond q = warm_start;
-      for (int iteration = 0; iteration < 20; ++iteration) {
-        const Mat3 r = q.toRotationMatrix();
-        const Vec3 omega = (r.col(0).cross(f.col(0)) + r.col(1).cross(f.col(1)) + r.col(2).cross(f.col(2))) /
-                           (std::abs(r.col(0).dot(f.col(0)) + r.col(1).dot(f.col(1)) + r.col(2).dot(f.col(2))) + 1e-9);
-        const double w = omega.norm();
-        if (!(w > 1e-12)) break;
-        q = Eigen::Quaterniond(Eigen::AngleAxisd(w, omega / w)) * q;
-        q.normalize();
+      (void)warm_start;
+      // Polar decomposition F = R S by Higham's scaled Newton iteration
+      // X ← ½(γX + X⁻ᵀ/γ), γ = (‖X⁻¹‖_F/‖X‖_F)^½ (Higham, "Computing the polar decomposition
+      // with applications", SIAM J. Sci. Stat. Comput. 7(4), 1986): quadratic convergence,
+      // five or six iterations from F for any element shape. Inverted or flat elements
+      // (det F ≤ 0) have no rotation in their polar factor: take R from the SVD with the
+      // sign fixed to a proper rotation instead.
+      const double det = f.determinant();
+      if (det > 1e-9 * std::max(1e-300, f.squaredNorm() * f.norm())) {
+        Mat3 r = f;
+        for (int iteration = 0; iteration < 12; ++iteration) {
+          const Mat3 inverse = r.inverse();
+          const double gamma = std::sqrt(inverse.norm() / r.norm());
+          const Mat3 next = 0.5 * (gamma * r + inverse.transpose() / gamma);
+          const double change = (next - r).squaredNorm();
+          r = next;
+          if (change < 3e-24) break;
+        }
+        return r;
       }
-      Mat3 r = q.toRotationMatrix();
-      if (!((r.transpose() * f).trace() > 0.0)) {
-        // The iteration has a stationary point half a turn away from the answer (a 180°
-        // rotation from the warm start gives zero correction). RᵀF must have a positive
-        // trace at the polar rotation; when it does not, take R from the SVD instead.
-        const Eigen::JacobiSVD<Mat3> svd(f, Eigen::ComputeFullU | Eigen::ComputeFullV);
-        Mat3 u = svd.matrixU();
-        if ((u * svd.matrixV().transpose()).determinant() < 0.0) u.col(2) = -u.col(2);
-        r = u * svd.matrixV().transpose();
-        q = Eigen::Quaterniond(r);
-      }
-      warm_start = q;
-      return r;
+      const Eigen::JacobiSVD<Mat3> svd(f, Eigen::ComputeFullU | Eigen::ComputeFullV);
+      Mat3 u = svd.matrixU();
+      if ((u * svd.matrixV().transpose()).determinant() < 0.0) u.col(2) = -u.col(2);
+      return u * svd.matrixV().transpose();
     }
   }
   return Mat3::Identity();
@@ -189,7 +186,6 @@ void TetrahedronFemForceField::add_force(const Eigen::VectorXd& x, const Eigen::
                                          ForceFieldState& state, Eigen::VectorXd& f) const {
   const double lambda = lame_.lambda;
   const double mu = lame_.mu;
-  const bool polar = config_.method == FemMethod::kPolar;
   // Element pass: rotation and the stress term −V R σ of each element, independently.
   parallel_chunks(
       elements_.size(), 64,
@@ -197,9 +193,8 @@ void TetrahedronFemForceField::add_force(const Eigen::VectorXd& x, const Eigen::
         for (std::size_t index = begin; index < end; ++index) {
           const Element& e = elements_[index];
           const Mat3 deformation = deformation_gradient(e, x);
-          Eigen::Quaterniond warm = polar ? state.warm_start[index] : Eigen::Quaterniond::Identity();
-          const Mat3 r = rotation(e, deformation, x, warm);
-          if (polar) state.warm_start[index] = warm;
+          Eigen::Quaterniond unused = Eigen::Quaterniond::Identity();
+          const Mat3 r = rotation(e, deformation, x, unused);
           state.rotations[index] = r;
           // Linear law in the element's unrotated frame: ε = sym(RᵀF) − I,
           // σ = λ tr(ε) I + 2μ ε; nodal forces f_i = −V R σ b_i.
@@ -278,13 +273,13 @@ void TetrahedronFemForceField::add_stiffness(const ForceFieldState& state, doubl
       /*min_parallel=*/256);
 }
 
-double TetrahedronFemForceField::potential_energy(const Eigen::VectorXd& x, const ForceFieldState& state) const {
+double TetrahedronFemForceField::potential_energy(const Eigen::VectorXd& x, const ForceFieldState& /*state*/) const {
   double energy = 0.0;
   for (std::size_t index = 0; index < elements_.size(); ++index) {
     const Element& e = elements_[index];
     const Mat3 deformation = deformation_gradient(e, x);
-    Eigen::Quaterniond warm = state.warm_start.empty() ? Eigen::Quaterniond::Identity() : state.warm_start[index];
-    const Mat3 r = rotation(e, deformation, x, warm);
+    Eigen::Quaterniond unused = Eigen::Quaterniond::Identity();
+    const Mat3 r = rotation(e, deformation, x, unused);
     const Mat3 unrotated = r.transpose() * deformation;
     const Mat3 strain = 0.5 * (unrotated + unrotated.transpose()) - Mat3::Identity();
     // W = μ ε:ε + λ/2 (tr ε)² per unit volume.
