@@ -1,0 +1,98 @@
+#pragma once
+/// @file
+/// The haptic device interface: position, velocity, orientation and buttons in; force and
+/// torque out; a specification that the safety layer enforces. Backends are chosen by a spec
+/// string (see open_device). read() and write_force() are called from the haptic thread every
+/// tick: they never allocate, lock a mutex, block or do I/O — backends that talk to hardware
+/// or a network do it on their own thread and exchange with the tick through atomics.
+///
+/// Frames: positions are in the device frame (metres; x right, y up, z toward the user, as
+/// H3D). The haptic loop applies the calibration (H3D positionCalibration /
+/// orientationCalibration) to get world coordinates.
+
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <string_view>
+
+#include "hof/core/error.h"
+#include "hof/core/types.h"
+
+namespace hof::haptics {
+
+/// What the device can do; the safety layer clamps to it (cf. CHAI3D cHapticDeviceInfo).
+struct DeviceSpec {
+  std::string model{"virtual"};
+  double max_force_n{8.0};                 ///< |F| never exceeds this at the device
+  double max_stiffness_n_per_m{3000.0};    ///< largest stable rendering stiffness
+  double max_damping_n_s_per_m{20.0};
+  double workspace_radius_m{0.08};
+  double nominal_rate_hz{1000.0};
+  double max_force_rate_n_per_s{2000.0};   ///< force slew limit (safety)
+};
+
+/// One sample from the device, in the device frame.
+struct DeviceReading {
+  double time_s{0.0};                                     ///< device or virtual time of the sample
+  Vec3 position_m{Vec3::Zero()};
+  Vec3 velocity_m_per_s{Vec3::Zero()};
+  Eigen::Quaterniond orientation{Eigen::Quaterniond::Identity()};
+  std::uint32_t buttons{0};                               ///< bit 0 = main button
+  bool valid{false};  ///< false when the device has no fresh sample (absent, timed out, ended)
+};
+
+/// Connection state, readable from any thread.
+enum class DeviceHealth : std::uint8_t {
+  kOk,
+  kTimedOut,   ///< no sample within the backend's timeout: the loop fades force to zero
+  kEnded,      ///< a finite source (replay, script) has run out
+  kFailed,     ///< the backend stopped working (socket error, device unplugged)
+};
+
+class Device {
+ public:
+  Device() = default;
+  Device(const Device&) = delete;
+  Device& operator=(const Device&) = delete;
+  virtual ~Device() = default;
+
+  [[nodiscard]] virtual const DeviceSpec& spec() const = 0;
+  /// Backend name, e.g. "replay", "scripted", "virtual-hand", "udp", "spacemouse".
+  [[nodiscard]] virtual std::string_view backend() const = 0;
+
+  /// The sample for haptic time `time_s` (virtual time in lock-step mode, the loop's clock in
+  /// real-time mode). Simulated backends compute it for that time; hardware backends return
+  /// their latest sample. Real-time safe.
+  virtual DeviceReading read(double time_s) = 0;
+
+  /// The force (N) and torque (N·m) to render until the next call, in the device frame.
+  /// Already clamped by the safety layer. Real-time safe.
+  virtual void write_force(const Vec3& force_n, const Vec3& torque_n_m) = 0;
+
+  [[nodiscard]] virtual DeviceHealth health() const = 0;
+
+  /// Stops background threads and sends a zero force. Idempotent; the destructor calls it.
+  virtual void close() {}
+};
+
+/// Opens a device from a spec string:
+///   replay:PATH.csv[,loop]                       recorded trajectory (docs/device-protocol.md)
+///   scripted:poke[,key=value...]                 built-in motions: poke, press-and-slide, circle
+///   virtual-hand:MOTION[,key=value...]           compliant hand following a scripted motion
+///   udp:[HOST:]PORT[,timeout=S]                  datagram bridge (docs/device-protocol.md)
+///   spacemouse[,scale=M]                         3Dconnexion SpaceMouse via spacenavd (input only)
+/// Every backend also takes model=virtual|falcon|omni|touch (device_spec_for_model(); for
+/// udp, a hello packet received within hello_wait=S overrides it). Keys and motions are listed
+/// in docs/device-protocol.md ("Spec strings").
+/// Errors name the spec and what is wrong (unknown backend or key, bad value, missing file,
+/// absent device).
+[[nodiscard]] Expected<std::unique_ptr<Device>> open_device(std::string_view spec);
+
+/// The DeviceSpec of a known model, with CHAI3D's figures (reference/literature.md §4):
+/// "virtual" (the defaults above), "falcon" (Novint Falcon: 8 N, 3000 N/m, 20 N·s/m, 0.04 m),
+/// "omni" (PHANTOM Omni: 3.3 N, 700 N/m, 5 N·s/m, 0.10 m), "touch" (3D Systems Touch: 3.3 N,
+/// 400 N/m, 4 N·s/m, 0.075 m). kInvalidArgument for any other name.
+[[nodiscard]] Expected<DeviceSpec> device_spec_for_model(std::string_view model);
+
+}  // namespace hof::haptics

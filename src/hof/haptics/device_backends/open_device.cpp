@@ -1,0 +1,424 @@
+// open_device(): the spec-string loader. Strings end here: each backend gets a typed config.
+//
+//   SPEC    := BACKEND [':' ARGUMENT] (',' OPTION)*
+//   OPTION  := KEY ['=' VALUE]          (a bare KEY is a flag)
+//   VECTOR  := NUMBER ';' NUMBER ';' NUMBER
+//
+// ARGUMENT runs to the first ',' (a replay path cannot contain ','). Every error message
+// starts with "device spec 'SPEC': ".
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <array>
+#include <charconv>
+#include <cmath>
+#include <limits>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "hof/haptics/device.h"
+#include "hof/haptics/device_backends/replay_device.h"
+#include "hof/haptics/device_backends/scripted_device.h"
+#include "hof/haptics/device_backends/spacemouse_device.h"
+#include "hof/haptics/device_backends/udp_device.h"
+#include "hof/haptics/device_backends/virtual_hand_device.h"
+
+namespace hof::haptics {
+
+Expected<DeviceSpec> device_spec_for_model(std::string_view model) {
+  DeviceSpec s;
+  if (model == "virtual") return s;
+  s.model = std::string(model);
+  // {max force N, max stiffness N/m, max damping N·s/m, workspace radius m}
+  std::array<double, 4> figures{};
+  if (model == "falcon") {
+    figures = {8.0, 3000.0, 20.0, 0.04};
+  } else if (model == "omni") {
+    figures = {3.3, 700.0, 5.0, 0.10};
+  } else if (model == "touch") {
+    figures = {3.3, 400.0, 4.0, 0.075};
+  } else {
+    return make_error(ErrorCode::kInvalidArgument,
+                      fmt::format("unknown device model '{}' (known: virtual, falcon, omni, touch)", model));
+  }
+  s.max_force_n = figures[0];
+  s.max_stiffness_n_per_m = figures[1];
+  s.max_damping_n_s_per_m = figures[2];
+  s.workspace_radius_m = figures[3];
+  return s;
+}
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+std::string_view trim(std::string_view s) {
+  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
+  while (!s.empty() && (s.back() == ' ' || s.back() == '\t')) s.remove_suffix(1);
+  return s;
+}
+
+struct Option {
+  std::string_view key;
+  std::string_view value;
+  bool has_value{false};
+};
+
+/// Splits and converts the parts of one spec string; every error names the spec.
+class SpecParser {
+ public:
+  explicit SpecParser(std::string_view spec) : spec_(spec) {}
+
+  std::unexpected<Error> fail(ErrorCode code, const std::string& what) const {
+    return make_error(code, fmt::format("device spec '{}': {}", spec_, what));
+  }
+  std::unexpected<Error> fail(const std::string& what) const { return fail(ErrorCode::kInvalidArgument, what); }
+  std::unexpected<Error> wrap(const Error& e) const {
+    Error out = e;
+    out.message = fmt::format("device spec '{}': {}", spec_, e.message);
+    return std::unexpected(std::move(out));
+  }
+
+  /// Backend, argument and options; duplicate or empty options are errors.
+  Expected<void> split() {
+    std::string_view rest = spec_;
+    const auto head_end = rest.find_first_of(":,");
+    backend_ = trim(rest.substr(0, head_end));
+    if (head_end == std::string_view::npos) return {};
+    if (rest[head_end] == ':') {
+      has_argument_ = true;
+      rest.remove_prefix(head_end + 1);
+      const auto comma = rest.find(',');
+      argument_ = trim(rest.substr(0, comma));
+      if (comma == std::string_view::npos) return {};
+      rest.remove_prefix(comma);
+    } else {
+      rest.remove_prefix(head_end);
+    }
+    while (!rest.empty()) {  // rest starts with ','
+      rest.remove_prefix(1);
+      const auto comma = rest.find(',');
+      const std::string_view token = trim(rest.substr(0, comma));
+      rest.remove_prefix(comma == std::string_view::npos ? rest.size() : comma);
+      if (token.empty()) return fail("empty option (two commas in a row or a trailing comma)");
+      Option o;
+      const auto eq = token.find('=');
+      o.key = trim(token.substr(0, eq));
+      if (eq != std::string_view::npos) {
+        o.value = trim(token.substr(eq + 1));
+        o.has_value = true;
+      }
+      if (o.key.empty()) return fail(fmt::format("option '{}' has no key", token));
+      for (const Option& seen : options_) {
+        if (seen.key == o.key) return fail(fmt::format("key '{}' is given twice", o.key));
+      }
+      options_.push_back(o);
+    }
+    return {};
+  }
+
+  [[nodiscard]] std::string_view backend() const { return backend_; }
+  [[nodiscard]] bool has_argument() const { return has_argument_; }
+  [[nodiscard]] std::string_view argument() const { return argument_; }
+  [[nodiscard]] const std::vector<Option>& options() const { return options_; }
+
+  Expected<double> number(const Option& o) const {
+    if (!o.has_value || o.value.empty()) return fail(fmt::format("key '{}' needs a number (e.g. {}=0.01)", o.key, o.key));
+    double v = 0.0;
+    const auto [end, ec] = std::from_chars(o.value.data(), o.value.data() + o.value.size(), v);
+    if (ec != std::errc{} || end != o.value.data() + o.value.size() || !std::isfinite(v)) {
+      return fail(fmt::format("bad value '{}' for key '{}' (expected a finite number)", o.value, o.key));
+    }
+    return v;
+  }
+
+  Expected<Vec3> vector(const Option& o) const {
+    Vec3 v;
+    std::string_view text = o.value;
+    const auto bad = [&] {
+      return fail(fmt::format("bad value '{}' for key '{}' (expected three numbers x;y;z)", o.value, o.key));
+    };
+    if (!o.has_value) return bad();
+    for (int i = 0; i < 3; ++i) {
+      const auto semi = text.find(';');
+      const bool last = i == 2;
+      if (last != (semi == std::string_view::npos)) return bad();  // exactly two ';'
+      auto c = number(Option{o.key, trim(text.substr(0, semi)), true});
+      if (!c) return bad();
+      v[i] = *c;
+      if (!last) text.remove_prefix(semi + 1);
+    }
+    return v;
+  }
+
+  Expected<bool> flag(const Option& o) const {
+    if (!o.has_value || o.value == "true" || o.value == "1" || o.value == "yes") return true;
+    if (o.value == "false" || o.value == "0" || o.value == "no") return false;
+    return fail(fmt::format("bad value '{}' for key '{}' (expected true or false)", o.value, o.key));
+  }
+
+  /// repeat: a bare key, "forever" or 0 → forever; else the number of cycles.
+  Expected<std::uint32_t> repeat(const Option& o) const {
+    if (!o.has_value || o.value == "forever") return 0U;
+    std::uint32_t n = 0;
+    const auto [end, ec] = std::from_chars(o.value.data(), o.value.data() + o.value.size(), n);
+    if (ec != std::errc{} || end != o.value.data() + o.value.size() || o.value.empty()) {
+      return fail(fmt::format("bad value '{}' for key 'repeat' (expected a count of cycles or 'forever')", o.value));
+    }
+    return n;
+  }
+
+  Expected<void> unknown_key(const Option& o, std::string_view what, std::span<const std::string_view> keys) const {
+    std::string list;
+    for (const std::string_view k : keys) list += (list.empty() ? "" : ", ") + std::string(k);
+    return fail(fmt::format("unknown key '{}' for {} (known: {})", o.key, what, list));
+  }
+
+ private:
+  std::string_view spec_;
+  std::string_view backend_;
+  std::string_view argument_;
+  bool has_argument_{false};
+  std::vector<Option> options_;
+};
+
+bool contains(std::span<const std::string_view> keys, std::string_view key) {
+  return std::find(keys.begin(), keys.end(), key) != keys.end();
+}
+
+// ---------------------------------------------------------------------------------------
+// Keys shared by the simulated backends
+
+constexpr std::string_view kMotions = "poke, press-and-slide, circle, hold";
+
+Expected<MotionKind> motion_kind(const SpecParser& p, std::string_view name) {
+  if (name == "poke") return MotionKind::kPoke;
+  if (name == "press-and-slide") return MotionKind::kPressAndSlide;
+  if (name == "circle") return MotionKind::kCircle;
+  if (name == "hold") return MotionKind::kHold;
+  if (name.empty()) return p.fail(fmt::format("missing motion (one of {})", kMotions));
+  return p.fail(fmt::format("unknown motion '{}' (known: {})", name, kMotions));
+}
+
+std::span<const std::string_view> motion_keys(MotionKind kind) {
+  static constexpr std::string_view kPoke[] = {"start", "direction", "approach", "depth", "speed", "hold", "repeat"};
+  static constexpr std::string_view kSlide[] = {"start", "direction", "approach", "depth",       "speed", "hold",
+                                                "repeat", "slide",    "distance", "slide_speed"};
+  static constexpr std::string_view kCircle[] = {"centre", "center", "normal", "radius", "period", "repeat"};
+  static constexpr std::string_view kHold[] = {"start", "hold", "repeat"};
+  switch (kind) {
+    case MotionKind::kPoke: return kPoke;
+    case MotionKind::kPressAndSlide: return kSlide;
+    case MotionKind::kCircle: return kCircle;
+    case MotionKind::kHold: return kHold;
+  }
+  return {};
+}
+
+/// Applies one motion key (already known to belong to the motion) to `c`.
+Expected<void> apply_motion_key(const SpecParser& p, const Option& o, MotionConfig& c) {
+  const auto set = [&](double& field) -> Expected<void> {
+    auto v = p.number(o);
+    if (!v) return std::unexpected(v.error());
+    field = *v;
+    return {};
+  };
+  const auto set_vec = [&](Vec3& field) -> Expected<void> {
+    auto v = p.vector(o);
+    if (!v) return std::unexpected(v.error());
+    field = *v;
+    return {};
+  };
+  const std::string_view k = o.key;
+  if (k == "start") return set_vec(c.start_m);
+  if (k == "direction") return set_vec(c.direction);
+  if (k == "approach") return set(c.approach_m);
+  if (k == "depth") return set(c.depth_m);
+  if (k == "speed") return set(c.speed_m_per_s);
+  if (k == "hold") {
+    if (o.value == "forever" || o.value == "inf") {
+      c.hold_s = kInf;
+      return {};
+    }
+    return set(c.hold_s);
+  }
+  if (k == "slide") return set_vec(c.slide_direction);
+  if (k == "distance") return set(c.slide_distance_m);
+  if (k == "slide_speed") return set(c.slide_speed_m_per_s);
+  if (k == "centre" || k == "center") return set_vec(c.centre_m);
+  if (k == "normal") return set_vec(c.normal);
+  if (k == "radius") return set(c.radius_m);
+  if (k == "period") return set(c.period_s);
+  if (k == "repeat") {
+    auto n = p.repeat(o);
+    if (!n) return std::unexpected(n.error());
+    c.repeat = *n;
+  }
+  return {};
+}
+
+Expected<void> apply_model(const SpecParser& p, const Option& o, DeviceSpec& spec) {
+  auto s = device_spec_for_model(o.has_value ? o.value : std::string_view{});
+  if (!s) return p.wrap(s.error());
+  spec = *s;
+  return {};
+}
+
+// ---------------------------------------------------------------------------------------
+// Backends
+
+Expected<std::unique_ptr<Device>> open_replay(const SpecParser& p) {
+  static constexpr std::string_view kKeys[] = {"loop", "model"};
+  if (p.argument().empty()) return p.fail("missing file (replay:PATH.csv)");
+  bool loop = false;
+  DeviceSpec spec;
+  for (const Option& o : p.options()) {
+    Expected<void> r;
+    if (o.key == "loop") {
+      auto f = p.flag(o);
+      if (!f) return std::unexpected(f.error());
+      loop = *f;
+    } else if (o.key == "model") {
+      r = apply_model(p, o, spec);
+    } else {
+      r = p.unknown_key(o, "replay", kKeys);
+    }
+    if (!r) return std::unexpected(r.error());
+  }
+  auto device = ReplayDevice::open(std::filesystem::path(std::string(p.argument())), loop, spec);
+  if (!device) return std::unexpected(device.error());  // names file and line
+  return std::unique_ptr<Device>(std::move(*device));
+}
+
+/// Motion, hand parameters and spec of `scripted:` and `virtual-hand:` specs.
+struct SimulatedConfig {
+  MotionConfig motion;
+  VirtualHandParams hand;
+  DeviceSpec spec;
+};
+
+Expected<SimulatedConfig> parse_simulated(const SpecParser& p, bool hand) {
+  static constexpr std::string_view kHandKeys[] = {"mass",    "stiffness",  "damping", "device_damping",
+                                                    "substep", "integrator", "model"};
+  SimulatedConfig c;
+  auto kind = motion_kind(p, p.argument());
+  if (!kind) return std::unexpected(kind.error());
+  c.motion.kind = *kind;
+  if (*kind == MotionKind::kHold) c.motion.hold_s = kInf;  // a held target stays unless told
+  const auto keys = motion_keys(*kind);
+  for (const Option& o : p.options()) {
+    Expected<void> r;
+    if (contains(keys, o.key)) {
+      r = apply_motion_key(p, o, c.motion);
+    } else if (o.key == "model") {
+      r = apply_model(p, o, c.spec);
+    } else if (hand && o.key == "integrator") {
+      if (o.value == "euler") {
+        c.hand.integrator = HandIntegrator::kSemiImplicitEuler;
+      } else if (o.value == "exact") {
+        c.hand.integrator = HandIntegrator::kExactZeroOrderHold;
+      } else {
+        return p.fail(fmt::format("bad value '{}' for key 'integrator' (expected euler or exact)", o.value));
+      }
+    } else if (hand && contains(kHandKeys, o.key)) {
+      auto v = p.number(o);
+      if (!v) return std::unexpected(v.error());
+      if (o.key == "mass") c.hand.mass_kg = *v;
+      if (o.key == "stiffness") c.hand.stiffness_n_per_m = *v;
+      if (o.key == "damping") c.hand.damping_n_s_per_m = *v;
+      if (o.key == "device_damping") c.hand.device_damping_n_s_per_m = *v;
+      if (o.key == "substep") c.hand.substep_s = *v;
+    } else {
+      std::vector<std::string_view> known(keys.begin(), keys.end());
+      if (hand) known.insert(known.end(), std::begin(kHandKeys), std::end(kHandKeys));
+      else known.push_back("model");
+      r = p.unknown_key(o, fmt::format("{} {}", hand ? "virtual-hand" : "scripted", p.argument()), known);
+    }
+    if (!r) return std::unexpected(r.error());
+  }
+  return c;
+}
+
+Expected<std::unique_ptr<Device>> open_simulated(const SpecParser& p, bool hand) {
+  auto c = parse_simulated(p, hand);
+  if (!c) return std::unexpected(c.error());
+  auto motion = ScriptedMotion::make(c->motion);
+  if (!motion) return p.wrap(motion.error());
+  if (!hand) return std::unique_ptr<Device>(std::make_unique<ScriptedDevice>(*motion, c->spec));
+  if (auto valid = validate(c->hand); !valid) return p.wrap(valid.error());
+  return std::unique_ptr<Device>(std::make_unique<VirtualHandDevice>(*motion, c->hand, c->spec));
+}
+
+Expected<std::unique_ptr<Device>> open_udp(const SpecParser& p) {
+  static constexpr std::string_view kKeys[] = {"timeout", "hello_wait", "model"};
+  UdpDeviceConfig config;
+  const std::string_view arg = p.argument();
+  if (arg.empty()) return p.fail("missing port (udp:PORT or udp:HOST:PORT)");
+  const auto colon = arg.rfind(':');
+  const std::string_view port_text = colon == std::string_view::npos ? arg : arg.substr(colon + 1);
+  if (colon != std::string_view::npos) {
+    config.host = std::string(arg.substr(0, colon));
+    if (config.host.empty()) return p.fail("empty host before ':' (udp:HOST:PORT)");
+  }
+  const auto [end, ec] = std::from_chars(port_text.data(), port_text.data() + port_text.size(), config.port);
+  if (ec != std::errc{} || end != port_text.data() + port_text.size() || port_text.empty()) {
+    return p.fail(fmt::format("bad port '{}' (expected 0 to 65535)", port_text));
+  }
+  for (const Option& o : p.options()) {
+    Expected<void> r;
+    if (o.key == "timeout" || o.key == "hello_wait") {
+      auto v = p.number(o);
+      if (!v) return std::unexpected(v.error());
+      (o.key == "timeout" ? config.timeout_s : config.hello_wait_s) = *v;
+    } else if (o.key == "model") {
+      r = apply_model(p, o, config.spec);
+    } else {
+      r = p.unknown_key(o, "udp", kKeys);
+    }
+    if (!r) return std::unexpected(r.error());
+  }
+  auto device = UdpDevice::open(config);
+  if (!device) return p.wrap(device.error());
+  return std::unique_ptr<Device>(std::move(*device));
+}
+
+Expected<std::unique_ptr<Device>> open_spacemouse(const SpecParser& p) {
+  static constexpr std::string_view kKeys[] = {"scale", "model"};
+  if (p.has_argument()) return p.fail(fmt::format("spacemouse takes no argument (got '{}')", p.argument()));
+  SpacemouseConfig config;
+  for (const Option& o : p.options()) {
+    Expected<void> r;
+    if (o.key == "scale") {
+      auto v = p.number(o);
+      if (!v) return std::unexpected(v.error());
+      config.scale_m_per_unit_s = *v;
+    } else if (o.key == "model") {
+      r = apply_model(p, o, config.spec);
+    } else {
+      r = p.unknown_key(o, "spacemouse", kKeys);
+    }
+    if (!r) return std::unexpected(r.error());
+  }
+  auto device = SpacemouseDevice::open(config);
+  if (!device) return std::unexpected(device.error());  // the exact spnav message
+  return std::unique_ptr<Device>(std::move(*device));
+}
+
+}  // namespace
+
+Expected<std::unique_ptr<Device>> open_device(std::string_view spec) {
+  SpecParser p(spec);
+  if (auto split = p.split(); !split) return std::unexpected(split.error());
+  const std::string_view backend = p.backend();
+  if (backend == "replay") return open_replay(p);
+  if (backend == "scripted") return open_simulated(p, false);
+  if (backend == "virtual-hand") return open_simulated(p, true);
+  if (backend == "udp") return open_udp(p);
+  if (backend == "spacemouse") return open_spacemouse(p);
+  if (backend.empty()) return p.fail("empty backend (known: replay, scripted, virtual-hand, udp, spacemouse)");
+  return p.fail(fmt::format("unknown backend '{}' (known: replay, scripted, virtual-hand, udp, spacemouse)", backend));
+}
+
+}  // namespace hof::haptics

@@ -1,0 +1,149 @@
+#pragma once
+/// @file
+/// Built-in stylus motions as pure functions of time (ScriptedMotion) and the device that
+/// plays one back (ScriptedDevice, spec `scripted:MOTION[,key=value...]`). The same motion is
+/// the target of the compliant virtual hand (virtual_hand_device.h).
+///
+/// Motions (device frame, metres, seconds; t = 0 is the start of the motion):
+///  - `poke`: from `start` along the unit `direction`, travel `approach` (to the contact
+///    plane) then `depth` further at `speed`, hold `hold` s, retract to `start` at `speed`.
+///    The default approach is the distance from `start` to the plane through the origin
+///    normal to `direction`, so the default poke presses 2 cm below y = 0.
+///  - `press-and-slide`: the poke's press, hold, then slide `distance` along the tangent
+///    `slide` (projected into the plane normal to `direction`) at `slide_speed`, slide back,
+///    retract.
+///  - `circle`: a circle of `radius` around `centre` in the plane normal to `normal`, one
+///    turn per `period`, starting at centre + radius·u (u: first in-plane axis, see
+///    plane_basis()).
+///  - `hold`: stays at `start` for `hold` s (the spec string `scripted:hold` holds forever
+///    unless given `hold=S`).
+/// One cycle is the motion above; `repeat` cycles are played (0 = forever), then the motion
+/// rests at its final position and the device reports DeviceHealth::kEnded.
+/// Poke and press-and-slide are piecewise linear (constant speed per segment): positions
+/// are continuous, velocities jump at the corners.
+
+#include <array>
+#include <atomic>
+#include <cstdint>
+#include <limits>
+#include <string_view>
+
+#include "hof/haptics/device.h"
+
+namespace hof::haptics {
+
+/// The built-in motions (see the file comment).
+enum class MotionKind : std::uint8_t { kPoke, kPressAndSlide, kCircle, kHold };
+
+/// The typed description of a motion; validated by ScriptedMotion::make().
+struct MotionConfig {
+  MotionKind kind{MotionKind::kPoke};
+  // poke / press-and-slide / hold
+  Vec3 start_m{0.0, 0.05, 0.0};                ///< where the motion begins, device frame
+  Vec3 direction{0.0, -1.0, 0.0};              ///< press direction (normalised by make())
+  double approach_m{-1.0};                     ///< < 0: distance from start to the origin plane
+  double depth_m{0.02};                        ///< travel past the approach, ≥ 0
+  double speed_m_per_s{0.01};                  ///< approach, press and retract speed, > 0
+  double hold_s{1.0};                          ///< pause at full depth (or the whole hold), ≥ 0
+  // press-and-slide
+  Vec3 slide_direction{Vec3::Zero()};          ///< zero: first axis of plane_basis(direction)
+  double slide_distance_m{0.02};
+  double slide_speed_m_per_s{0.0};             ///< ≤ 0: same as speed
+  // circle
+  Vec3 centre_m{Vec3::Zero()};
+  Vec3 normal{0.0, 1.0, 0.0};                  ///< plane normal (normalised by make())
+  double radius_m{0.02};
+  double period_s{2.0};
+  /// Number of cycles; 0 = forever.
+  std::uint32_t repeat{1};
+};
+
+/// Two unit vectors (u, w) spanning the plane normal to the unit vector `n`, with u × w = n.
+/// u is the x axis projected into the plane unless n is close to x, then the y axis.
+void plane_basis(const Vec3& n, Vec3& u, Vec3& w);
+
+/// A motion as a pure function of time; a small value type (no heap), safe to copy and to
+/// call from the haptic tick.
+class ScriptedMotion {
+ public:
+  /// Validates `config` (finite values, positive speeds/period, non-zero directions,
+  /// tangent slide). Errors are kInvalidArgument and name the field.
+  [[nodiscard]] static Expected<ScriptedMotion> make(const MotionConfig& config);
+  /// A target that stays at `position_m` forever.
+  [[nodiscard]] static ScriptedMotion stationary(const Vec3& position_m);
+
+  /// Position at time `t_s` (m, device frame). Before 0: the start; after duration(): the
+  /// final position.
+  [[nodiscard]] Vec3 position(double t_s) const;
+  /// Analytic velocity (m/s); zero outside [0, duration()]. At a corner of a piecewise
+  /// linear path it is the velocity of the segment that starts there.
+  [[nodiscard]] Vec3 velocity(double t_s) const;
+  /// Total duration (s): cycles × cycle_duration(); +infinity when it repeats forever.
+  [[nodiscard]] double duration() const;
+  /// Duration of one cycle (s); may be +infinity for `hold` without a time.
+  [[nodiscard]] double cycle_duration() const { return cycle_s_; }
+  [[nodiscard]] MotionKind kind() const { return kind_; }
+  /// The deepest point of a poke / press-and-slide (start + (approach + depth)·direction).
+  [[nodiscard]] Vec3 deepest_point() const { return deepest_m_; }
+  /// Where the press meets the contact plane (start + approach·direction).
+  [[nodiscard]] Vec3 contact_point() const { return contact_m_; }
+
+ private:
+  /// One straight piece of a piecewise linear path: from `from` at `velocity` for `duration_s`.
+  struct Segment {
+    Vec3 from{Vec3::Zero()};
+    Vec3 velocity{Vec3::Zero()};
+    double duration_s{0.0};
+  };
+  static constexpr int kMaxSegments = 7;
+
+  ScriptedMotion() = default;
+  void add_segment(const Vec3& from, const Vec3& to, double speed_m_per_s);
+  void add_hold(const Vec3& at, double duration_s);
+  /// Time within the current cycle, or -1 before the start, or +inf after the end.
+  [[nodiscard]] double cycle_time(double t_s) const;
+  [[nodiscard]] Vec3 path_position(double tc_s) const;
+  [[nodiscard]] Vec3 path_velocity(double tc_s) const;
+
+  MotionKind kind_{MotionKind::kHold};
+  std::array<Segment, kMaxSegments> segments_{};
+  int segment_count_{0};
+  Vec3 start_m_{Vec3::Zero()};
+  Vec3 end_m_{Vec3::Zero()};
+  Vec3 contact_m_{Vec3::Zero()};
+  Vec3 deepest_m_{Vec3::Zero()};
+  // circle
+  Vec3 centre_m_{Vec3::Zero()};
+  Vec3 u_{Vec3::UnitX()};
+  Vec3 w_{Vec3::UnitZ()};
+  double radius_m_{0.0};
+  double omega_rad_per_s_{0.0};
+  double cycle_s_{std::numeric_limits<double>::infinity()};
+  std::uint32_t repeat_{0};
+};
+
+/// Spec `scripted:...`: plays a ScriptedMotion as a device. read(t) evaluates the motion at
+/// t (identity orientation, no buttons); after duration() health is kEnded and the reading
+/// invalid (position held at the end). write_force() is ignored (the motion is kinematic).
+class ScriptedDevice final : public Device {
+ public:
+  explicit ScriptedDevice(const ScriptedMotion& motion, const DeviceSpec& spec = DeviceSpec{});
+
+  [[nodiscard]] const DeviceSpec& spec() const override { return spec_; }
+  [[nodiscard]] std::string_view backend() const override { return "scripted"; }
+  DeviceReading read(double time_s) override;
+  void write_force(const Vec3& force_n, const Vec3& torque_n_m) override;
+  [[nodiscard]] DeviceHealth health() const override { return health_.load(std::memory_order_acquire); }
+
+  [[nodiscard]] const ScriptedMotion& motion() const { return motion_; }
+  /// The last force written (N), for tests.
+  [[nodiscard]] const Vec3& last_force() const { return force_n_; }
+
+ private:
+  DeviceSpec spec_;
+  ScriptedMotion motion_;
+  Vec3 force_n_{Vec3::Zero()};
+  std::atomic<DeviceHealth> health_{DeviceHealth::kOk};
+};
+
+}  // namespace hof::haptics

@@ -1,0 +1,162 @@
+#include "hof/haptics/haptic_loop.h"
+
+#include <pthread.h>
+#include <sched.h>
+#include <time.h>
+
+#include <Eigen/SVD>
+#include <cmath>
+#include <limits>
+
+namespace hof::haptics {
+
+namespace {
+
+double monotonic_seconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+void sleep_until(double seconds) {
+  timespec ts{};
+  ts.tv_sec = static_cast<time_t>(std::floor(seconds));
+  ts.tv_nsec = static_cast<long>((seconds - std::floor(seconds)) * 1e9);
+  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
+  }
+}
+
+}  // namespace
+
+Vec3 Calibration::vector_to_device(const Vec3& v) const {
+  // Forces go back to the device by the rotation part of the calibration: a scaling
+  // calibration (a Falcon's workspace blown up 3×) must not scale the force.
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(position.topLeftCorner<3, 3>(), Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d u = svd.matrixU();
+  if ((u * svd.matrixV().transpose()).determinant() < 0.0) u.col(2) = -u.col(2);
+  return (u * svd.matrixV().transpose()).transpose() * v;
+}
+
+HapticLoop::HapticLoop(Device& device, TripleBuffer<SurfaceSnapshot>& surfaces, const HapticLoopConfig& config)
+    : device_(device),
+      surfaces_(surfaces),
+      config_(config),
+      renderer_(config.renderer, config.material, device.spec().max_stiffness_n_per_m),
+      safety_(device.spec(), config.safety),
+      stats_(1.0 / config.rate_hz),
+      telemetry_(config.telemetry_capacity) {
+  // The rotation that takes world vectors to the device frame, computed once (not per tick).
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(config_.calibration.position.topLeftCorner<3, 3>(),
+                                              Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d u = svd.matrixU();
+  if ((u * svd.matrixV().transpose()).determinant() < 0.0) u.col(2) = -u.col(2);
+  world_to_device_ = (u * svd.matrixV().transpose()).transpose();
+}
+
+HapticLoop::~HapticLoop() { stop(); }
+
+void HapticLoop::tick(double time_s) {
+  const double nominal = 1.0 / config_.rate_hz;
+  const double period = last_time_s_ < 0.0 ? nominal : time_s - last_time_s_;
+  last_time_s_ = time_s;
+  tick_impl(time_s, period, false);
+}
+
+void HapticLoop::tick_impl(double time_s, double period_s, bool overrun) {
+  const double dt = period_s > 0.0 && std::isfinite(period_s) ? period_s : 1.0 / config_.rate_hz;
+  const bool changed = surfaces_.acquire();
+  if (changed) have_surface_ = true;
+  const SurfaceSnapshot& surface = surfaces_.read();
+
+  // Read and calibrate.
+  const DeviceReading reading = device_.read(time_s);
+  const bool valid = reading.valid && reading.position_m.allFinite() && reading.velocity_m_per_s.allFinite();
+  const Vec3 x = valid ? config_.calibration.to_world(reading.position_m) : Vec3::Zero();
+  const Vec3 v = valid ? config_.calibration.vector_to_world(reading.velocity_m_per_s) : Vec3::Zero();
+  if (valid && !proxy_initialised_) {
+    renderer_.reset(x);
+    proxy_initialised_ = true;
+  }
+
+  // Render: surface contact, then force effects.
+  Vec3 requested = Vec3::Zero();
+  ContactState contact;
+  if (valid && proxy_initialised_) {
+    if (have_surface_ && !surface.triangles.empty()) contact = renderer_.update(x, v, surface, changed, dt);
+    requested = contact.force + effects_.evaluate(x, v);
+  }
+
+  // Safety, then out to the device (in its own frame).
+  const double age = !have_surface_ ? std::numeric_limits<double>::infinity()
+                     : surface.is_static ? 0.0
+                                         : time_s - surface.time_s;
+  const Vec3 sent = safety_.filter(requested, valid, age, overrun, dt);
+  device_.write_force(world_to_device_ * sent, Vec3::Zero());
+
+  // Publish.
+  const std::uint64_t tick = ticks_.fetch_add(1, std::memory_order_relaxed);
+  HapticSample& out = samples_.write_slot();
+  out.tick = tick;
+  out.time_s = time_s;
+  out.device = x;
+  out.device_velocity = v;
+  out.proxy = proxy_initialised_ ? renderer_.contact().proxy : x;
+  out.force = sent;
+  out.requested_force = requested;
+  out.contact = contact.in_contact;
+  out.triangle = contact.triangle;
+  out.barycentric = contact.barycentric;
+  out.contact_point = contact.point;
+  out.contact_normal = contact.normal;
+  out.penetration_m = contact.penetration_m;
+  out.snapshot_sequence = have_surface_ ? surface.sequence : 0;
+  out.period_s = period_s;
+  out.buttons = reading.buttons;
+  out.valid = valid;
+  telemetry_.push(out);
+  samples_.publish();
+  if (tick > 0) stats_.record(period_s, overrun);
+}
+
+void HapticLoop::start() {
+  if (running_.load()) return;
+  stop_requested_.store(false);
+  running_.store(true, std::memory_order_release);
+  thread_ = std::thread([this] { run_thread(); });
+}
+
+void HapticLoop::stop() {
+  stop_requested_.store(true, std::memory_order_release);
+  if (thread_.joinable()) thread_.join();
+  running_.store(false, std::memory_order_release);
+  device_.write_force(Vec3::Zero(), Vec3::Zero());
+}
+
+void HapticLoop::run_thread() {
+  if (config_.realtime_priority) {
+    // A 1 kHz loop must not wait behind the simulation; ask for real-time scheduling and
+    // carry on without it where that is not permitted.
+    sched_param param{};
+    param.sched_priority = std::min(80, sched_get_priority_max(SCHED_FIFO));
+    pthread_setschedparam(pthread_self(), SCHED_FIFO, &param);
+  }
+  const double period = 1.0 / config_.rate_hz;
+  const double origin = monotonic_seconds();
+  double next = origin;
+  double last_start = origin;
+  bool first = true;
+  while (!stop_requested_.load(std::memory_order_acquire)) {
+    const double now = monotonic_seconds();
+    const double measured = first ? period : now - last_start;
+    const bool overrun = !first && now > next + period;  // started a whole period late
+    last_start = now;
+    first = false;
+    tick_impl(now - origin, measured, overrun);
+    next += period;
+    if (next < now) next = now;  // after a stall, do not try to catch up in a burst
+    sleep_until(next);
+  }
+  running_.store(false, std::memory_order_release);
+}
+
+}  // namespace hof::haptics

@@ -1,0 +1,124 @@
+#pragma once
+/// @file
+/// The haptic loop: read device → calibrate → update proxy on the latest surface snapshot →
+/// force (surface + effects) → safety → write → publish. In real-time mode it runs on its own
+/// thread at `rate_hz`, sleeping to an absolute clock; in virtual-time mode the caller ticks
+/// it in lock-step (tests, CI, `hof run --deterministic`). A tick never allocates, locks a
+/// mutex or does I/O; it exchanges with other threads only through the surface TripleBuffer
+/// (in), the sample TripleBuffer and the telemetry SpscRing (out), and atomics.
+
+#include <Eigen/Geometry>
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <thread>
+
+#include "hof/core/spsc_ring.h"
+#include "hof/core/triple_buffer.h"
+#include "hof/haptics/device.h"
+#include "hof/haptics/force_effects.h"
+#include "hof/haptics/haptic_renderer.h"
+#include "hof/haptics/period_stats.h"
+#include "hof/haptics/safety.h"
+#include "hof/haptics/surface_snapshot.h"
+
+namespace hof::haptics {
+
+/// Device frame → world frame, as H3D: tracker = positionCalibration · device position;
+/// orientation = orientationCalibration · device orientation.
+struct Calibration {
+  Eigen::Matrix4d position{Eigen::Matrix4d::Identity()};
+  Eigen::Quaterniond orientation{Eigen::Quaterniond::Identity()};
+
+  [[nodiscard]] Vec3 to_world(const Vec3& p_device) const { return (position * p_device.homogeneous()).head<3>(); }
+  /// Velocities and forces transform with the linear part only.
+  [[nodiscard]] Vec3 vector_to_world(const Vec3& v) const { return position.topLeftCorner<3, 3>() * v; }
+  [[nodiscard]] Vec3 vector_to_device(const Vec3& v) const;
+};
+
+struct HapticLoopConfig {
+  double rate_hz{1000.0};
+  RendererConfig renderer;
+  SurfaceMaterial material;
+  SafetyConfig safety;
+  Calibration calibration;
+  bool realtime_priority{true};  ///< ask for SCHED_FIFO (ignored when not permitted)
+  std::size_t telemetry_capacity{1 << 16};
+};
+
+/// One tick, as published to other threads and logged (world frame unless noted).
+struct HapticSample {
+  std::uint64_t tick{0};
+  double time_s{0.0};
+  Vec3 device{Vec3::Zero()};
+  Vec3 device_velocity{Vec3::Zero()};
+  Vec3 proxy{Vec3::Zero()};
+  Vec3 force{Vec3::Zero()};          ///< sent to the device (after safety), world frame, N
+  Vec3 requested_force{Vec3::Zero()};///< before safety
+  bool contact{false};
+  std::int32_t triangle{-1};
+  Vec3 barycentric{Vec3::Zero()};
+  Vec3 contact_point{Vec3::Zero()};
+  Vec3 contact_normal{Vec3::Zero()};
+  double penetration_m{0.0};
+  std::uint64_t snapshot_sequence{0};
+  double period_s{0.0};
+  std::uint32_t buttons{0};
+  bool valid{false};
+};
+
+class HapticLoop {
+ public:
+  /// `surfaces` is written by the simulation (or a static scene) and read here.
+  HapticLoop(Device& device, TripleBuffer<SurfaceSnapshot>& surfaces, const HapticLoopConfig& config);
+  HapticLoop(const HapticLoop&) = delete;
+  HapticLoop& operator=(const HapticLoop&) = delete;
+  ~HapticLoop();
+
+  /// One tick at haptic time `time_s` (virtual-time mode). Not to be mixed with start().
+  void tick(double time_s);
+
+  /// Real-time mode: starts the thread; time counts from the call.
+  void start();
+  /// Stops the thread (joins), then sends a zero force. Idempotent.
+  void stop();
+  [[nodiscard]] bool running() const { return running_.load(std::memory_order_acquire); }
+
+  /// Latest sample (consumer side: one reader thread).
+  TripleBuffer<HapticSample>& samples() { return samples_; }
+  /// Every tick's sample, for logging (one consumer).
+  SpscRing<HapticSample>& telemetry() { return telemetry_; }
+
+  /// Period statistics and safety counters: read them after stop() (or in virtual mode).
+  [[nodiscard]] const PeriodStats& period_stats() const { return stats_; }
+  [[nodiscard]] const SafetyCounters& safety_counters() const { return safety_.counters(); }
+  [[nodiscard]] std::uint64_t ticks() const { return ticks_.load(std::memory_order_relaxed); }
+  [[nodiscard]] const HapticRenderer& renderer() const { return renderer_; }
+  [[nodiscard]] HapticRenderer& renderer() { return renderer_; }
+  ForceEffects& effects() { return effects_; }
+  [[nodiscard]] double nominal_period_s() const { return 1.0 / config_.rate_hz; }
+
+ private:
+  void run_thread();
+  void tick_impl(double time_s, double period_s, bool overrun);
+
+  Device& device_;
+  TripleBuffer<SurfaceSnapshot>& surfaces_;
+  HapticLoopConfig config_;
+  HapticRenderer renderer_;
+  ForceEffects effects_;
+  SafetyFilter safety_;
+  PeriodStats stats_;
+  TripleBuffer<HapticSample> samples_;
+  SpscRing<HapticSample> telemetry_;
+  std::atomic<bool> running_{false};
+  std::atomic<bool> stop_requested_{false};
+  std::atomic<std::uint64_t> ticks_{0};
+  std::thread thread_;
+  Eigen::Matrix3d world_to_device_{Eigen::Matrix3d::Identity()};
+  double last_time_s_{-1.0};
+  bool have_surface_{false};
+  bool proxy_initialised_{false};
+};
+
+}  // namespace hof::haptics

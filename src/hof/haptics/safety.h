@@ -1,0 +1,60 @@
+#pragma once
+/// @file
+/// The last stage before a force reaches a device — the device layer owns safety (CHAI3D's
+/// setUseForceRise/setWaitForSmallForce, OpenHaptics' force ramping, H3D forceLimit):
+///  - a non-finite force or device reading gives zero force;
+///  - the force fades in over `fade_in_s` when the loop starts (and after a fault clears);
+///  - a watchdog fades it out over `fade_out_s` when the geometry snapshot is older than
+///    `max_snapshot_age_s` or the loop overran `max_consecutive_overruns` ticks in a row;
+///  - its rate of change is limited to the device's max_force_rate_n_per_s;
+///  - its magnitude is clamped to the device's max_force_n — last, so nothing after can
+///    exceed it.
+
+#include <cstdint>
+
+#include "hof/core/types.h"
+#include "hof/haptics/device.h"
+
+namespace hof::haptics {
+
+struct SafetyConfig {
+  double fade_in_s{0.5};
+  double fade_out_s{0.05};
+  double max_snapshot_age_s{0.25};
+  int max_consecutive_overruns{20};
+};
+
+/// Counters of what the filter had to do (read by reports; written by the haptic thread).
+struct SafetyCounters {
+  std::uint64_t non_finite{0};   ///< ticks with a NaN/Inf force or reading
+  std::uint64_t clamped{0};      ///< ticks whose force exceeded the device maximum
+  std::uint64_t rate_limited{0}; ///< ticks whose force change exceeded the slew limit
+  std::uint64_t watchdog{0};     ///< ticks faded by the watchdog
+};
+
+class SafetyFilter {
+ public:
+  SafetyFilter(const DeviceSpec& spec, const SafetyConfig& config);
+
+  /// The force to send for this tick.
+  /// @param requested      force from rendering and effects, N
+  /// @param reading_valid  whether the device reading was valid and finite
+  /// @param snapshot_age_s how old the geometry snapshot is
+  /// @param overrunning    whether this tick overran its period
+  Vec3 filter(const Vec3& requested, bool reading_valid, double snapshot_age_s, bool overrunning, double dt);
+
+  [[nodiscard]] const SafetyCounters& counters() const { return counters_; }
+  [[nodiscard]] double gain() const { return gain_; }
+  [[nodiscard]] const Vec3& last_force() const { return last_; }
+  void reset();
+
+ private:
+  DeviceSpec spec_;
+  SafetyConfig config_;
+  SafetyCounters counters_;
+  double gain_{0.0};  // fade factor in [0, 1]
+  int consecutive_overruns_{0};
+  Vec3 last_{Vec3::Zero()};
+};
+
+}  // namespace hof::haptics

@@ -1,0 +1,66 @@
+#include "hof/haptics/surface_snapshot.h"
+
+#include <algorithm>
+#include <chrono>
+
+namespace hof::haptics {
+
+namespace {
+
+void compute_vertex_normals(SurfaceSnapshot& s) {
+  std::fill(s.vertex_normals.begin(), s.vertex_normals.end(), Vec3::Zero());
+  for (const mesh::Tri& t : s.triangles) {
+    // Area-weighted: the cross product's length is twice the area.
+    const Vec3 n = (s.vertices[t[1]] - s.vertices[t[0]]).cross(s.vertices[t[2]] - s.vertices[t[0]]);
+    for (mesh::NodeIndex v : t) s.vertex_normals[v] += n;
+  }
+  for (Vec3& n : s.vertex_normals) {
+    const double length = n.norm();
+    n = length > 0.0 ? Vec3(n / length) : Vec3::Zero();
+  }
+}
+
+}  // namespace
+
+Vec3 SurfaceSnapshot::face_normal(std::int32_t t) const {
+  const mesh::Tri& tri = triangles[t];
+  const Vec3 n = (vertices[tri[1]] - vertices[tri[0]]).cross(vertices[tri[2]] - vertices[tri[0]]);
+  const double length = n.norm();
+  return length > 0.0 ? Vec3(n / length) : Vec3::Zero();
+}
+
+Vec3 SurfaceSnapshot::shaded_normal(std::int32_t t, const Vec3& w) const {
+  const mesh::Tri& tri = triangles[t];
+  const Vec3 n = w[0] * vertex_normals[tri[0]] + w[1] * vertex_normals[tri[1]] + w[2] * vertex_normals[tri[2]];
+  const double length = n.norm();
+  return length > 0.0 ? Vec3(n / length) : face_normal(t);
+}
+
+SurfaceSnapshot make_snapshot(const mesh::TriMesh& surface, const collision::AabbTreeOptions& options) {
+  SurfaceSnapshot s;
+  s.vertices = surface.vertices;
+  s.triangles = surface.triangles;
+  s.velocities.assign(surface.vertices.size(), Vec3::Zero());
+  s.vertex_normals.assign(surface.vertices.size(), Vec3::Zero());
+  compute_vertex_normals(s);
+  s.tree = collision::AabbTree::build(s.view(), options);
+  return s;
+}
+
+void update_snapshot(SurfaceSnapshot& s, std::span<const Vec3> positions, std::span<const Vec3> velocities,
+                     double time_s) {
+  const auto start = std::chrono::steady_clock::now();
+  std::copy(positions.begin(), positions.end(), s.vertices.begin());
+  if (velocities.empty()) {
+    std::fill(s.velocities.begin(), s.velocities.end(), Vec3::Zero());
+  } else {
+    std::copy(velocities.begin(), velocities.end(), s.velocities.begin());
+  }
+  compute_vertex_normals(s);
+  if (s.tree.refit(s.view())) s.tree = collision::AabbTree::build(s.view(), s.tree.options());
+  s.time_s = time_s;
+  ++s.sequence;
+  s.refit_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+}  // namespace hof::haptics

@@ -1,0 +1,56 @@
+#pragma once
+/// @file
+/// The touchable surface as the haptic loop sees it: an immutable snapshot of vertex
+/// positions, velocities and normals (world frame, metres) over a fixed triangle topology,
+/// with its bounding-volume tree refitted. The simulation thread fills a snapshot slot of a
+/// TripleBuffer and publishes it; the haptic thread swaps the latest in between ticks.
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "hof/collision/aabb_tree.h"
+#include "hof/mesh/mesh.h"
+
+namespace hof::haptics {
+
+struct SurfaceSnapshot {
+  std::vector<Vec3> vertices;         ///< (V) world frame, m
+  std::vector<Vec3> velocities;       ///< (V) m/s
+  std::vector<Vec3> vertex_normals;   ///< (V) unit, area-weighted average of face normals
+  std::vector<mesh::Tri> triangles;   ///< (F) fixed for the life of the scene
+  collision::AabbTree tree;
+  double time_s{0.0};                 ///< simulation time the positions belong to
+  std::uint64_t sequence{0};          ///< increases with every publish
+  double refit_s{0.0};                ///< time spent refitting this snapshot's tree
+  /// Geometry that never changes (no simulation behind it): never considered stale.
+  bool is_static{false};
+
+  [[nodiscard]] collision::TriangleMeshView view() const { return {vertices, triangles}; }
+  /// Point of triangle `t` at barycentric weights `w`.
+  [[nodiscard]] Vec3 point(std::int32_t t, const Vec3& w) const {
+    const mesh::Tri& tri = triangles[t];
+    return w[0] * vertices[tri[0]] + w[1] * vertices[tri[1]] + w[2] * vertices[tri[2]];
+  }
+  /// Velocity of that point.
+  [[nodiscard]] Vec3 velocity(std::int32_t t, const Vec3& w) const {
+    const mesh::Tri& tri = triangles[t];
+    return w[0] * velocities[tri[0]] + w[1] * velocities[tri[1]] + w[2] * velocities[tri[2]];
+  }
+  /// Unit face normal of triangle t (zero for a degenerate triangle).
+  [[nodiscard]] Vec3 face_normal(std::int32_t t) const;
+  /// Interpolated (Phong) unit normal at barycentric w: the basis of force shading.
+  [[nodiscard]] Vec3 shaded_normal(std::int32_t t, const Vec3& w) const;
+};
+
+/// A snapshot of `surface` at rest (velocities zero), tree built with `options`.
+[[nodiscard]] SurfaceSnapshot make_snapshot(const mesh::TriMesh& surface,
+                                            const collision::AabbTreeOptions& options = {});
+
+/// Producer side: new positions (and velocities, or zero when empty) for the same topology;
+/// recomputes vertex normals and refits the tree (rebuilding it when refit degrades it).
+/// Reuses the snapshot's storage: no allocation once sized.
+void update_snapshot(SurfaceSnapshot& snapshot, std::span<const Vec3> positions, std::span<const Vec3> velocities,
+                     double time_s);
+
+}  // namespace hof::haptics
