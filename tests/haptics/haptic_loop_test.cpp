@@ -129,6 +129,23 @@ TEST(Safety, ForceFadesInAtStartAndRespectsTheSlewLimit) {
   EXPECT_NEAR(device.last_force.z(), 700.0 * 0.004, 1e-3);  // + the proxy's 1 µm clearance
 }
 
+TEST(Safety, RepeatedOverrunsFadeTheForceOut) {
+  SafetyConfig config;
+  config.fade_in_s = 0.0;
+  config.fade_out_s = 0.01;
+  config.max_consecutive_overruns = 5;
+  SafetyFilter filter(omni(), config);
+  EXPECT_NEAR(filter.filter(Vec3(0, 0, 2), true, 0.0, false, 1e-3).z(), 2.0, 1e-12);
+  Vec3 f = Vec3::Zero();
+  for (int i = 0; i < 4; ++i) f = filter.filter(Vec3(0, 0, 2), true, 0.0, true, 1e-3);
+  EXPECT_NEAR(f.z(), 2.0, 1e-12);  // a few late ticks are tolerated
+  for (int i = 0; i < 20; ++i) f = filter.filter(Vec3(0, 0, 2), true, 0.0, true, 1e-3);
+  EXPECT_EQ(f, Vec3::Zero());  // a loop that keeps overrunning fades to zero
+  EXPECT_GT(filter.counters().watchdog, 0u);
+  for (int i = 0; i < 20; ++i) f = filter.filter(Vec3(0, 0, 2), true, 0.0, false, 1e-3);
+  EXPECT_NEAR(f.z(), 2.0, 1e-12);  // and recovers once it keeps its rate
+}
+
 TEST(VirtualTime, TwoRunsGiveIdenticalSamples) {
   auto run = [] {
     ProgrammedDevice device([](double t) { return Vec3(0.02 * std::sin(3 * t), 0.01 * t, 0.005 - 0.01 * t); }, omni());
