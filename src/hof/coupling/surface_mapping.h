@@ -1,0 +1,49 @@
+#pragma once
+/// @file
+/// Tissue → surface: how the touchable/visual surface follows the simulated volume, and how a
+/// force on the surface goes back to the volume's nodes (the transpose of the same map).
+///  - by index: surface vertex i is volume node n(i) (the thesis' assumption; checked at
+///    build: the positions must coincide);
+///  - barycentric (SOFA's BarycentricMapping): each surface vertex is a fixed combination of
+///    the four nodes of the tetrahedron that contains it (or the nearest one).
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "hof/core/error.h"
+#include "hof/mesh/mesh.h"
+
+namespace hof::coupling {
+
+class SurfaceMapping {
+ public:
+  /// Identity by index: `surface_to_volume[i]` is the volume node of surface vertex i. Fails
+  /// (naming the first vertex) when a surface vertex is farther than `tolerance_m` from its node.
+  static Expected<SurfaceMapping> by_index(std::span<const Vec3> volume_nodes, std::span<const Vec3> surface_vertices,
+                                           std::span<const mesh::NodeIndex> surface_to_volume, double tolerance_m = 1e-9);
+
+  /// Barycentric: each surface vertex in the tetrahedron that contains it, or else the
+  /// nearest one (weights then extrapolate, as SOFA does for points outside).
+  static Expected<SurfaceMapping> barycentric(std::span<const Vec3> volume_nodes, std::span<const mesh::Tet> tets,
+                                              std::span<const Vec3> surface_vertices);
+
+  /// Surface vertex positions (or velocities) from volume values (3N flat vector).
+  void apply(std::span<const double> volume_values, std::span<Vec3> surface_values) const;
+  /// Adds a force acting on surface vertex v to the volume forces (3N flat), by the transpose.
+  void add_vertex_force(std::int32_t surface_vertex, const Vec3& force, std::span<double> volume_forces) const;
+
+  [[nodiscard]] std::size_t surface_vertex_count() const { return nodes_.size(); }
+  [[nodiscard]] bool is_identity() const { return identity_; }
+  /// The volume node carrying most weight for surface vertex v.
+  [[nodiscard]] std::int32_t dominant_node(std::int32_t surface_vertex) const;
+
+ private:
+  bool identity_{true};
+  std::vector<std::array<std::int32_t, 4>> nodes_;  // (V) volume nodes (identity: only [0])
+  std::vector<std::array<double, 4>> weights_;      // (V)
+};
+
+}  // namespace hof::coupling
