@@ -5,6 +5,7 @@
 #include <cstdio>
 
 #include "hof/app/mesh_commands.h"
+#include "hof/app/run_command.h"
 
 namespace {
 
@@ -66,6 +67,37 @@ void add_mesh_commands(CLI::App& app, int& status) {
   conv_cmd->callback([&] { status = hof::app::run_mesh_convert(conv); });
 }
 
+void add_run_commands(CLI::App& app, int& status) {
+  static hof::app::RunOptions run;
+  static double seconds = 0.0;
+  static long steps = 0;
+  static std::string device;
+  static std::string out;
+  CLI::App* run_cmd = app.add_subcommand("run", "Run a haptic session on a project (.hof) or SOFA scene (.scn)");
+  run_cmd->add_option("file", run.file, "Project (.hof) or SOFA scene (.scn)")->required()->check(CLI::ExistingFile);
+  run_cmd->add_flag("--headless", run.headless, "No window (the default: the GUI is not built yet)");
+  run_cmd->add_flag("--deterministic", run.deterministic, "Virtual time: loops in lock-step, identical output every run");
+  auto* seconds_opt = run_cmd->add_option("--seconds", seconds, "Length of the run in seconds (default 5)");
+  auto* steps_opt = run_cmd->add_option("--steps", steps, "Length of the run in simulation steps");
+  seconds_opt->excludes(steps_opt);
+  run_cmd->add_option("--device", device, "Device spec, e.g. scripted:poke, replay:FILE.csv, udp:5005, virtual-hand:poke");
+  run_cmd->add_option("--out", out, "Folder for telemetry.csv, summary.json, the final state (.vtu) and plots");
+  run_cmd->add_option("--telemetry-rate", run.telemetry_rate_hz, "Rows per second in telemetry.csv (0 = every haptic tick)");
+  run_cmd->add_flag("-q,--quiet", run.quiet, "No progress output");
+  run_cmd->callback([&, seconds_opt, steps_opt] {
+    if (seconds_opt->count()) run.seconds = seconds;
+    if (steps_opt->count()) run.steps = steps;
+    if (!device.empty()) run.device = device;
+    if (!out.empty()) run.out = out;
+    status = hof::app::run_session(run);
+  });
+
+  static hof::app::CheckOptions check;
+  CLI::App* check_cmd = app.add_subcommand("check", "Validate a project, scene or mesh and print every problem");
+  check_cmd->add_option("file", check.file, "File to check")->required();
+  check_cmd->callback([&] { status = hof::app::run_check(check); });
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -74,6 +106,7 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", "hof 0.1.0");
   int status = 0;
   add_mesh_commands(app, status);
+  add_run_commands(app, status);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,0 +1,267 @@
+#include "hof/app/run_command.h"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "hof/core/progress.h"
+#include "hof/coupling/session.h"
+#include "hof/haptics/device.h"
+#include "hof/mechanics/step.h"
+#include "hof/mesh/boundary.h"
+#include "hof/mesh/mesh_io.h"
+#include "hof/scene/project.h"
+#include "hof/scene/sofa_scene.h"
+
+namespace hof::app {
+
+namespace {
+
+int fail(const Error& e) {
+  std::fprintf(stderr, "hof: %s\n", e.to_string().c_str());
+  return 1;
+}
+int fail(const std::string& message) {
+  std::fprintf(stderr, "hof: %s\n", message.c_str());
+  return 1;
+}
+
+struct Loaded {
+  scene::HofProject project;
+  scene::SofaScene sofa;
+  std::filesystem::path scene_path;
+};
+
+Expected<Loaded> load(const std::filesystem::path& file) {
+  Loaded l;
+  const std::string ext = file.extension().string();
+  if (ext == ".hof") {
+    auto project = scene::read_project(file);
+    if (!project) return std::unexpected(project.error());
+    l.project = *project;
+    l.scene_path = file.parent_path() / l.project.mechanics_scene;
+  } else if (ext == ".scn") {
+    l.project.name = file.stem().string();
+    l.project.mechanics_scene = file.filename();
+    l.scene_path = file;
+  } else {
+    return make_error(ErrorCode::kUnsupported, "expected a .hof project or a .scn SOFA scene", file.string());
+  }
+  auto sofa = scene::read_sofa_scene(l.scene_path);
+  if (!sofa) return std::unexpected(sofa.error());
+  if (sofa->models.empty()) {
+    return make_error(ErrorCode::kInvalidArgument, "the scene has no simulated body (a node with an ODE solver and a MechanicalObject)",
+                      l.scene_path.string());
+  }
+  l.sofa = std::move(*sofa);
+  return l;
+}
+
+// The body of the session: the first model, with its visual mesh (barycentric) as the touchable
+// surface when it has one, else the boundary of its tetrahedra (shared nodes).
+Expected<coupling::SessionBody> make_body(const scene::SofaSceneModel& m) {
+  auto model = mechanics::build_model(m.config);
+  if (!model) return std::unexpected(model.error());
+  coupling::SessionBody body{m.config.name.empty() ? std::string("model") : m.config.name, std::move(*model), {}, {}};
+  if (m.visual_mesh && m.visual_barycentric) {
+    auto visual = mesh::read_mesh(*m.visual_mesh);
+    if (!visual) return std::unexpected(visual.error());
+    body.surface.vertices = visual->mesh.nodes;
+    body.surface.triangles = visual->mesh.triangles;
+    auto mapping = coupling::SurfaceMapping::barycentric(m.config.positions, m.config.tets, body.surface.vertices);
+    if (!mapping) return std::unexpected(mapping.error());
+    body.mapping = std::move(*mapping);
+  } else {
+    const mesh::BoundarySurface b = mesh::extract_boundary(m.config.positions, m.config.tets);
+    body.surface = b.surface;
+    auto mapping = coupling::SurfaceMapping::by_index(m.config.positions, b.surface.vertices, b.surface_to_volume);
+    if (!mapping) return std::unexpected(mapping.error());
+    body.mapping = std::move(*mapping);
+  }
+  if (body.surface.triangles.empty()) return make_error(ErrorCode::kInvalidMesh, fmt::format("model '{}' has no surface to touch", body.name));
+  return body;
+}
+
+std::string csv_number(double v) { return fmt::format("{:.9g}", v); }
+
+void write_plots(const std::filesystem::path& dir, const coupling::SessionReport& report, bool quiet) {
+  // Period histogram data (µs, count), then one gnuplot script for all plots, PNG and SVG.
+  {
+    std::ofstream h(dir / "haptic_period_histogram.dat");
+    const auto& bins = report.haptic_periods.bins();
+    for (std::size_t b = 0; b < bins.size(); ++b) {
+      if (bins[b]) h << b << " " << bins[b] << "\n";
+    }
+  }
+  std::ofstream gp(dir / "plots.gp");
+  gp << "set datafile separator ','\nset key top left\nset grid\n";
+  for (const char* terminal : {"pngcairo size 960,540", "svg size 960,540"}) {
+    const std::string ext = std::string(terminal).starts_with("png") ? "png" : "svg";
+    gp << "set terminal " << terminal << "\n";
+    gp << "set output 'force_over_time." << ext << "'\nset xlabel 'time (s)'\nset ylabel 'force (N)'\n"
+       << "plot 'telemetry.csv' every ::1 using 1:(sqrt($8**2+$9**2+$10**2)) with lines title '|F| sent to the device'\n";
+    gp << "set output 'force_vs_indentation." << ext << "'\nset xlabel 'indentation (mm)'\nset ylabel 'force (N)'\n"
+       << "plot 'telemetry.csv' every ::1 using ($11 > 0 ? $12*1000 : 1/0):(sqrt($8**2+$9**2+$10**2)) with points pt 7 ps 0.3 title 'in contact'\n";
+    gp << "set datafile separator whitespace\n";
+    gp << "set output 'haptic_period_histogram." << ext << "'\nset xlabel 'haptic period (µs)'\nset ylabel 'ticks'\nset logscale y\n"
+       << "plot 'haptic_period_histogram.dat' using 1:2 with impulses lw 2 title 'period'\nunset logscale y\n"
+       << "set datafile separator ','\n";
+  }
+  gp.close();
+  const std::string command = fmt::format("cd '{}' && gnuplot plots.gp 2>/dev/null", dir.string());
+  if (std::system(command.c_str()) != 0 && !quiet) {
+    std::fprintf(stderr, "hof: warning: gnuplot failed or is not installed; plots.gp is in %s\n", dir.c_str());
+  }
+}
+
+}  // namespace
+
+int run_session(const RunOptions& options) {
+  auto loaded = load(options.file);
+  if (!loaded) return fail(loaded.error());
+  for (const std::string& w : loaded->sofa.warnings) {
+    if (!options.quiet) std::fprintf(stderr, "hof: warning: %s\n", w.c_str());
+  }
+  const scene::SofaSceneModel& first = loaded->sofa.models.front();
+  auto body = make_body(first);
+  if (!body) return fail(body.error());
+  const std::string device_spec = options.device.value_or(loaded->project.device);
+  auto device = haptics::open_device(device_spec);
+  if (!device) return fail(device.error());
+  coupling::SessionConfig config = scene::session_config(loaded->project);
+  config.haptics.realtime_priority = !options.deterministic;
+  const std::string model_name = body->name;
+  const double dt = body->model.dt_s;
+  auto session = coupling::Session::make(std::move(*body), std::move(*device), config);
+  if (!session) return fail(session.error());
+
+  double seconds = options.seconds.value_or(5.0);
+  if (options.steps) seconds = static_cast<double>(*options.steps) * dt;
+  if (!(seconds > 0.0) || !std::isfinite(seconds)) return fail(fmt::format("run length must be > 0 s, got {}", seconds));
+
+  // Telemetry straight to the report folder.
+  std::FILE* telemetry = nullptr;
+  if (options.out) {
+    std::error_code ec;
+    std::filesystem::create_directories(*options.out, ec);
+    if (ec) return fail(Error{ErrorCode::kIo, "cannot create the report folder: " + ec.message(), options.out->string(), 0, -1});
+    telemetry = std::fopen((*options.out / "telemetry.csv").c_str(), "w");
+    if (!telemetry) return fail(Error{ErrorCode::kIo, "cannot write telemetry.csv", options.out->string(), 0, -1});
+    std::fputs("t,device_x,device_y,device_z,proxy_x,proxy_y,proxy_z,force_x,force_y,force_z,contact,penetration,period\n",
+               telemetry);
+  }
+  double next_row = 0.0;
+  auto on_sample = [&](const haptics::HapticSample& s) {
+    if (!telemetry) return;
+    if (options.telemetry_rate_hz > 0.0) {
+      if (s.time_s + 1e-12 < next_row) return;
+      next_row += 1.0 / options.telemetry_rate_hz;
+    }
+    std::fputs(fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{}\n", csv_number(s.time_s), csv_number(s.device.x()),
+                           csv_number(s.device.y()), csv_number(s.device.z()), csv_number(s.proxy.x()),
+                           csv_number(s.proxy.y()), csv_number(s.proxy.z()), csv_number(s.force.x()),
+                           csv_number(s.force.y()), csv_number(s.force.z()), s.contact ? 1 : 0,
+                           csv_number(s.penetration_m), csv_number(s.period_s))
+                   .c_str(),
+               telemetry);
+  };
+  const auto progress = make_terminal_progress(options.quiet);
+  const coupling::SessionReport report = options.deterministic ? (*session)->run_virtual(seconds, on_sample, progress)
+                                                               : (*session)->run_realtime(seconds, on_sample, progress);
+  if (telemetry) std::fclose(telemetry);
+
+  const auto& periods = report.haptic_periods;
+  nlohmann::json summary;
+  summary["file"] = options.file.string();
+  summary["mode"] = options.deterministic ? "virtual-time (deterministic)" : "real-time";
+  summary["device"] = device_spec;
+  summary["simulated_s"] = report.simulated_s;
+  summary["wall_s"] = report.wall_s;
+  summary["haptic"] = {{"ticks", report.haptic_ticks},
+                       {"rate_hz", periods.rate_hz()},
+                       {"nominal_period_s", periods.nominal_s()},
+                       {"period_p50_s", periods.quantile_s(0.5)},
+                       {"period_p99_s", periods.quantile_s(0.99)},
+                       {"period_max_s", periods.max_s()},
+                       {"overruns", periods.overruns()}};
+  summary["simulation"] = {{"steps", report.simulation_steps}, {"dt_s", dt}, {"steps_per_s", report.simulation_steps_per_s}};
+  summary["graphics_equivalent_fps"] = {
+      {"untouched", report.rate_untouched}, {"deforming", report.rate_deforming}, {"in_contact", report.rate_in_contact}};
+  summary["max_force_n"] = report.max_force_n;
+  summary["contact_time_s"] = report.contact_time_s;
+  summary["fall_through_events"] = report.fall_through_events;
+  summary["diverged"] = report.diverged;
+  if (report.diverged) summary["divergence"] = report.divergence;
+  summary["safety"] = {{"clamped_ticks", report.safety.clamped},
+                       {"rate_limited_ticks", report.safety.rate_limited},
+                       {"non_finite_ticks", report.safety.non_finite},
+                       {"watchdog_ticks", report.safety.watchdog}};
+  summary["models"] = nlohmann::json::array(
+      {{{"name", model_name}, {"nodes", (*session)->model().node_count()}, {"max_displacement_m", report.max_displacement_m}}});
+  summary["skipped_components"] = loaded->sofa.skipped;
+
+  if (options.out) {
+    std::ofstream(*options.out / "summary.json") << summary.dump(2) << "\n";
+    mesh::Mesh final_state;
+    const auto& state = (*session)->state();
+    for (std::size_t i = 0; i < (*session)->model().node_count(); ++i) {
+      final_state.nodes.push_back(state.position(static_cast<std::int32_t>(i)));
+    }
+    final_state.tets = (*session)->model().tets;
+    if (auto ok = mesh::write_vtu(final_state, *options.out / (model_name + ".vtu")); !ok) return fail(ok.error());
+    write_plots(*options.out, report, options.quiet);
+  }
+  if (!options.quiet) {
+    std::printf("%s: %.2f s simulated in %.2f s (%s)\n", options.file.c_str(), report.simulated_s, report.wall_s,
+                options.deterministic ? "virtual time" : "real time");
+    std::printf("  haptic      %lld ticks, %.0f Hz, period p50 %.1f us, p99 %.1f us, max %.1f us, %llu overruns\n",
+                static_cast<long long>(report.haptic_ticks), periods.rate_hz(), 1e6 * periods.quantile_s(0.5),
+                1e6 * periods.quantile_s(0.99), 1e6 * periods.max_s(), static_cast<unsigned long long>(periods.overruns()));
+    std::printf("  simulation  %lld steps, %.0f steps/s\n", static_cast<long long>(report.simulation_steps),
+                report.simulation_steps_per_s);
+    std::printf("  contact     %.3f s, max force %.3f N, fall-through events %lld, max displacement %.2f mm\n",
+                report.contact_time_s, report.max_force_n, static_cast<long long>(report.fall_through_events),
+                1e3 * report.max_displacement_m);
+    if (report.diverged) std::printf("  DIVERGED    %s\n", report.divergence.c_str());
+    if (options.out) std::printf("  report      %s (telemetry.csv, summary.json, %s.vtu, plots)\n", options.out->c_str(), model_name.c_str());
+  }
+  return report.diverged ? 2 : 0;
+}
+
+int run_check(const CheckOptions& options) {
+  const std::string ext = options.file.extension().string();
+  if (ext == ".hof" || ext == ".scn") {
+    auto loaded = load(options.file);
+    if (!loaded) return fail(loaded.error());
+    int problems = 0;
+    for (const auto& m : loaded->sofa.models) {
+      auto body = make_body(m);
+      if (!body) {
+        std::printf("%s\n", body.error().to_string().c_str());
+        ++problems;
+      } else {
+        std::printf("%s: model '%s': %zu nodes, %zu tetrahedra, %zu surface triangles\n", loaded->scene_path.c_str(),
+                    body->name.c_str(), body->model.node_count(), body->model.tets.size(), body->surface.triangles.size());
+      }
+    }
+    for (const auto& w : loaded->sofa.warnings) std::printf("warning: %s\n", w.c_str());
+    if (ext == ".hof") {
+      if (auto device = haptics::open_device(loaded->project.device); !device) {
+        std::printf("%s\n", device.error().to_string().c_str());
+        ++problems;
+      }
+    }
+    std::printf("%s\n", problems ? fmt::format("{} problem(s)", problems).c_str() : "ok");
+    return problems ? 1 : 0;
+  }
+  auto read = mesh::read_mesh(options.file);
+  if (!read) return fail(read.error());
+  std::printf("ok\n");
+  return 0;
+}
+
+}  // namespace hof::app

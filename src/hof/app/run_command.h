@@ -1,0 +1,31 @@
+#pragma once
+/// @file
+/// `hof run` (a haptic session on a project or SOFA scene, headless, writing a report) and
+/// `hof check` (validate a file and print every problem).
+
+#include <filesystem>
+#include <optional>
+#include <string>
+
+namespace hof::app {
+
+struct RunOptions {
+  std::filesystem::path file;             ///< .hof project or .scn SOFA scene
+  bool headless{true};
+  bool deterministic{false};              ///< virtual time, lock-step (reproducible)
+  std::optional<double> seconds;          ///< run length (default 5 s)
+  std::optional<long> steps;              ///< or a number of simulation steps
+  std::optional<std::string> device;      ///< overrides the project's device
+  std::optional<std::filesystem::path> out;  ///< report folder
+  double telemetry_rate_hz{0.0};          ///< 0 = every haptic tick
+  bool quiet{false};
+};
+
+int run_session(const RunOptions& options);
+
+struct CheckOptions {
+  std::filesystem::path file;
+};
+int run_check(const CheckOptions& options);
+
+}  // namespace hof::app

@@ -1,0 +1,251 @@
+#include "hof/scene/project.h"
+
+#include <fmt/format.h>
+
+#include <charconv>
+#include <fstream>
+#include <pugixml.hpp>
+#include <sstream>
+
+namespace hof::scene {
+
+namespace {
+
+std::string number(double v) {
+  char buffer[64];
+  const auto result = std::to_chars(buffer, buffer + sizeof buffer, v);
+  return std::string(buffer, result.ptr);
+}
+
+std::string vec(const Vec3& v) { return number(v.x()) + " " + number(v.y()) + " " + number(v.z()); }
+
+const char* renderer_name(haptics::RendererKind k) {
+  switch (k) {
+    case haptics::RendererKind::kPenalty: return "PenaltyRenderer";
+    case haptics::RendererKind::kGodObject: return "GodObjectRenderer";
+    case haptics::RendererKind::kRuspini: return "RuspiniRenderer";
+  }
+  return "RuspiniRenderer";
+}
+const char* face_name(collision::TouchableFace f) {
+  switch (f) {
+    case collision::TouchableFace::kFront: return "FRONT";
+    case collision::TouchableFace::kBack: return "BACK";
+    case collision::TouchableFace::kFrontAndBack: return "FRONT_AND_BACK";
+  }
+  return "FRONT";
+}
+const char* coupling_name(coupling::ContactCoupling c) {
+  return c == coupling::ContactCoupling::kClosestVertex ? "closest-vertex" : "barycentric";
+}
+const char* surface_name(haptics::SurfaceKind k) {
+  switch (k) {
+    case haptics::SurfaceKind::kSmooth: return "SmoothSurface";
+    case haptics::SurfaceKind::kFrictional: return "FrictionalSurface";
+    case haptics::SurfaceKind::kMagnetic: return "MagneticSurface";
+    case haptics::SurfaceKind::kZeroForce: return "ZeroForceSurface";
+  }
+  return "SmoothSurface";
+}
+
+// Line of a byte offset in the file text (for error messages).
+std::int64_t line_of(const std::string& text, std::ptrdiff_t offset) {
+  std::int64_t line = 1;
+  for (std::ptrdiff_t i = 0; i < offset && i < static_cast<std::ptrdiff_t>(text.size()); ++i) line += text[static_cast<std::size_t>(i)] == '\n';
+  return line;
+}
+
+struct Reader {
+  const std::string& text;
+  std::string file;
+  std::optional<Error> error;
+
+  Error at(const pugi::xml_node& node, std::string message) const {
+    return Error{ErrorCode::kParse, std::move(message), file, line_of(text, node.offset_debug()), -1};
+  }
+  bool fail(const pugi::xml_node& node, std::string message) {
+    if (!error) error = at(node, std::move(message));
+    return false;
+  }
+  double get(const pugi::xml_node& node, const char* name, double fallback) {
+    const pugi::xml_attribute a = node.attribute(name);
+    if (!a) return fallback;
+    double v = 0.0;
+    const std::string s = a.value();
+    const auto r = std::from_chars(s.data(), s.data() + s.size(), v);
+    if (r.ec != std::errc() || r.ptr != s.data() + s.size() || !std::isfinite(v)) {
+      fail(node, fmt::format("<{}> {}=\"{}\" is not a number", node.name(), name, s));
+      return fallback;
+    }
+    return v;
+  }
+  bool get_bool(const pugi::xml_node& node, const char* name, bool fallback) {
+    const pugi::xml_attribute a = node.attribute(name);
+    if (!a) return fallback;
+    const std::string s = a.value();
+    if (s == "true" || s == "1") return true;
+    if (s == "false" || s == "0") return false;
+    fail(node, fmt::format("<{}> {}=\"{}\" must be true or false", node.name(), name, s));
+    return fallback;
+  }
+  Vec3 get_vec(const pugi::xml_node& node, const char* name, const Vec3& fallback) {
+    const pugi::xml_attribute a = node.attribute(name);
+    if (!a) return fallback;
+    std::istringstream in(a.value());
+    Vec3 v;
+    if (!(in >> v.x() >> v.y() >> v.z()) || !v.allFinite()) {
+      fail(node, fmt::format("<{}> {}=\"{}\" must be three numbers", node.name(), name, a.value()));
+      return fallback;
+    }
+    return v;
+  }
+};
+
+}  // namespace
+
+std::string to_xml(const HofProject& p) {
+  std::string out;
+  out += "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
+  out += fmt::format("<hof version=\"1\" name=\"{}\">\n", p.name);
+  out += fmt::format("  <mechanics scene=\"{}\"/>\n", p.mechanics_scene.generic_string());
+  out += fmt::format(
+      "  <haptics device=\"{}\" hapticRate=\"{}\" renderer=\"{}\" proxyRadius=\"{}\" forceShading=\"{}\" "
+      "touchableFace=\"{}\" coupling=\"{}\">\n",
+      p.device, number(p.haptic_rate_hz), renderer_name(p.renderer), number(p.proxy_radius_m), p.force_shading ? "true" : "false",
+      face_name(p.touchable_face), coupling_name(p.coupling));
+  std::string calibration;
+  for (std::size_t i = 0; i < 16; ++i) calibration += (i ? " " : "") + number(p.position_calibration[i]);
+  out += fmt::format("    <calibration positionCalibration=\"{}\"/>\n", calibration);
+  const auto& s = p.surface;
+  out += fmt::format(
+      "    <surface type=\"{}\" stiffness=\"{}\" damping=\"{}\" useRelativeValues=\"{}\" staticFriction=\"{}\" "
+      "dynamicFriction=\"{}\" snapDistance=\"{}\"/>\n",
+      surface_name(s.kind), number(s.stiffness), number(s.damping_n_s_per_m), s.use_relative_values ? "true" : "false",
+      number(s.static_friction), number(s.dynamic_friction), number(s.snap_distance_m));
+  out += fmt::format("    <safety fadeIn=\"{}\" fadeOut=\"{}\" maxSnapshotAge=\"{}\" maxConsecutiveOverruns=\"{}\"/>\n",
+                     number(p.safety.fade_in_s), number(p.safety.fade_out_s), number(p.safety.max_snapshot_age_s),
+                     p.safety.max_consecutive_overruns);
+  out += "  </haptics>\n";
+  out += fmt::format("  <graphics viewpoint=\"{}\" lookAt=\"{}\" renderMode=\"{}\"/>\n", vec(p.graphics.viewpoint_m),
+                     vec(p.graphics.look_at_m), p.graphics.render_mode);
+  out += "</hof>\n";
+  return out;
+}
+
+Expected<HofProject> read_project(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return make_error(ErrorCode::kIo, "cannot open the project file", path.string());
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  const std::string text = buffer.str();
+  pugi::xml_document doc;
+  const pugi::xml_parse_result parsed = doc.load_buffer(text.data(), text.size());
+  if (!parsed) {
+    return std::unexpected(Error{ErrorCode::kParse, fmt::format("malformed XML: {}", parsed.description()), path.string(),
+                                 line_of(text, parsed.offset), -1});
+  }
+  Reader r{text, path.string(), std::nullopt};
+  const pugi::xml_node root = doc.child("hof");
+  if (!root) return make_error(ErrorCode::kParse, "not a HoF project: the root element must be <hof>", path.string(), 1);
+  HofProject p;
+  p.name = root.attribute("name").as_string("untitled");
+  const pugi::xml_node mechanics = root.child("mechanics");
+  if (!mechanics || !mechanics.attribute("scene")) {
+    return std::unexpected(r.at(mechanics ? mechanics : root, "the project needs <mechanics scene=\"FILE.scn\"/>"));
+  }
+  p.mechanics_scene = mechanics.attribute("scene").value();
+  if (const pugi::xml_node h = root.child("haptics")) {
+    p.device = h.attribute("device").as_string(p.device.c_str());
+    p.haptic_rate_hz = r.get(h, "hapticRate", p.haptic_rate_hz);
+    const std::string renderer = h.attribute("renderer").as_string(renderer_name(p.renderer));
+    if (renderer == "RuspiniRenderer") p.renderer = haptics::RendererKind::kRuspini;
+    else if (renderer == "GodObjectRenderer") p.renderer = haptics::RendererKind::kGodObject;
+    else if (renderer == "PenaltyRenderer") p.renderer = haptics::RendererKind::kPenalty;
+    else r.fail(h, fmt::format("unknown renderer \"{}\" (RuspiniRenderer, GodObjectRenderer, PenaltyRenderer)", renderer));
+    p.proxy_radius_m = r.get(h, "proxyRadius", p.proxy_radius_m);
+    p.force_shading = r.get_bool(h, "forceShading", p.force_shading);
+    const std::string face = h.attribute("touchableFace").as_string("FRONT");
+    if (face == "FRONT") p.touchable_face = collision::TouchableFace::kFront;
+    else if (face == "BACK") p.touchable_face = collision::TouchableFace::kBack;
+    else if (face == "FRONT_AND_BACK") p.touchable_face = collision::TouchableFace::kFrontAndBack;
+    else r.fail(h, fmt::format("unknown touchableFace \"{}\" (FRONT, BACK, FRONT_AND_BACK)", face));
+    const std::string coupling = h.attribute("coupling").as_string("barycentric");
+    if (coupling == "barycentric") p.coupling = coupling::ContactCoupling::kBarycentric;
+    else if (coupling == "closest-vertex") p.coupling = coupling::ContactCoupling::kClosestVertex;
+    else r.fail(h, fmt::format("unknown coupling \"{}\" (barycentric, closest-vertex)", coupling));
+    if (const pugi::xml_node c = h.child("calibration")) {
+      if (const pugi::xml_attribute a = c.attribute("positionCalibration")) {
+        std::istringstream values(a.value());
+        for (double& v : p.position_calibration) {
+          if (!(values >> v)) {
+            r.fail(c, "positionCalibration must be 16 numbers (a row-major 4x4 matrix)");
+            break;
+          }
+        }
+      }
+    }
+    if (const pugi::xml_node s = h.child("surface")) {
+      const std::string type = s.attribute("type").as_string("SmoothSurface");
+      if (type == "SmoothSurface") p.surface.kind = haptics::SurfaceKind::kSmooth;
+      else if (type == "FrictionalSurface") p.surface.kind = haptics::SurfaceKind::kFrictional;
+      else if (type == "MagneticSurface") p.surface.kind = haptics::SurfaceKind::kMagnetic;
+      else if (type == "ZeroForceSurface") p.surface.kind = haptics::SurfaceKind::kZeroForce;
+      else r.fail(s, fmt::format("unknown surface type \"{}\"", type));
+      p.surface.stiffness = r.get(s, "stiffness", p.surface.stiffness);
+      p.surface.damping_n_s_per_m = r.get(s, "damping", p.surface.damping_n_s_per_m);
+      p.surface.use_relative_values = r.get_bool(s, "useRelativeValues", p.surface.use_relative_values);
+      p.surface.static_friction = r.get(s, "staticFriction", p.surface.static_friction);
+      p.surface.dynamic_friction = r.get(s, "dynamicFriction", p.surface.dynamic_friction);
+      p.surface.snap_distance_m = r.get(s, "snapDistance", p.surface.snap_distance_m);
+      if (auto valid = haptics::validate(p.surface); !valid) r.fail(s, valid.error().message);
+    }
+    if (const pugi::xml_node s = h.child("safety")) {
+      p.safety.fade_in_s = r.get(s, "fadeIn", p.safety.fade_in_s);
+      p.safety.fade_out_s = r.get(s, "fadeOut", p.safety.fade_out_s);
+      p.safety.max_snapshot_age_s = r.get(s, "maxSnapshotAge", p.safety.max_snapshot_age_s);
+      p.safety.max_consecutive_overruns = static_cast<int>(r.get(s, "maxConsecutiveOverruns", p.safety.max_consecutive_overruns));
+    }
+  }
+  if (const pugi::xml_node g = root.child("graphics")) {
+    p.graphics.viewpoint_m = r.get_vec(g, "viewpoint", p.graphics.viewpoint_m);
+    p.graphics.look_at_m = r.get_vec(g, "lookAt", p.graphics.look_at_m);
+    p.graphics.render_mode = g.attribute("renderMode").as_string(p.graphics.render_mode.c_str());
+  }
+  if (r.error) return std::unexpected(*r.error);
+  if (!(p.haptic_rate_hz >= 100.0 && p.haptic_rate_hz <= 20000.0)) {
+    return std::unexpected(r.at(root.child("haptics"), fmt::format("hapticRate must be in [100, 20000] Hz, got {}", p.haptic_rate_hz)));
+  }
+  return p;
+}
+
+Expected<void> write_project(const HofProject& project, const std::filesystem::path& path) {
+  const std::filesystem::path temporary = path.string() + ".tmp";
+  {
+    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
+    if (!out) return make_error(ErrorCode::kIo, "cannot write the project file", temporary.string());
+    out << to_xml(project);
+    if (!out) return make_error(ErrorCode::kIo, "write failed (disk full?)", temporary.string());
+  }
+  std::error_code ec;
+  std::filesystem::rename(temporary, path, ec);
+  if (ec) return make_error(ErrorCode::kIo, fmt::format("cannot replace the project file: {}", ec.message()), path.string());
+  return {};
+}
+
+coupling::SessionConfig session_config(const HofProject& p) {
+  coupling::SessionConfig c;
+  c.coupling = p.coupling;
+  c.haptics.rate_hz = p.haptic_rate_hz;
+  c.haptics.renderer.kind = p.renderer;
+  c.haptics.renderer.proxy_radius_m = p.proxy_radius_m;
+  c.haptics.renderer.force_shading = p.force_shading;
+  c.haptics.renderer.touchable_face = p.touchable_face;
+  c.haptics.material = p.surface;
+  c.haptics.safety = p.safety;
+  for (int r = 0; r < 4; ++r) {
+    for (int k = 0; k < 4; ++k) c.haptics.calibration.position(r, k) = p.position_calibration[static_cast<std::size_t>(4 * r + k)];
+  }
+  return c;
+}
+
+}  // namespace hof::scene

@@ -1,0 +1,53 @@
+#pragma once
+/// @file
+/// HoF project files (`.hof`, XML; format in docs/project-format.md): which mechanics scene to
+/// simulate (a SOFA `.scn`, path relative to the project), the haptics setup (device,
+/// calibration, renderer, surface, coupling, safety, options) and the graphics setup
+/// (viewpoint, render mode). Every setting is written out, in a fixed order with shortest
+/// round-trip numbers, so save → load → save gives the same bytes.
+
+#include <array>
+#include <filesystem>
+#include <string>
+
+#include "hof/core/error.h"
+#include "hof/coupling/session.h"
+#include "hof/haptics/haptic_renderer.h"
+#include "hof/haptics/safety.h"
+#include "hof/haptics/surface_material.h"
+
+namespace hof::scene {
+
+struct GraphicsSetup {
+  Vec3 viewpoint_m{0.0, -0.45, 0.25};
+  Vec3 look_at_m{0.0, 0.0, 0.0};
+  std::string render_mode{"shaded"};  ///< shaded | wireframe | shaded+wireframe
+};
+
+struct HofProject {
+  std::string name{"untitled"};
+  std::filesystem::path mechanics_scene;  ///< as written in the file (relative to it)
+  std::string device{"scripted:poke"};    ///< device spec, see haptics::open_device
+  std::array<double, 16> position_calibration{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};  ///< row-major 4x4
+  double haptic_rate_hz{1000.0};
+  haptics::RendererKind renderer{haptics::RendererKind::kRuspini};
+  double proxy_radius_m{0.0025};
+  bool force_shading{true};
+  collision::TouchableFace touchable_face{collision::TouchableFace::kFront};
+  coupling::ContactCoupling coupling{coupling::ContactCoupling::kBarycentric};
+  haptics::SurfaceMaterial surface;
+  haptics::SafetyConfig safety;
+  GraphicsSetup graphics;
+};
+
+/// Reads a project. Errors name the file, line and attribute.
+[[nodiscard]] Expected<HofProject> read_project(const std::filesystem::path& path);
+/// The canonical XML text of a project.
+[[nodiscard]] std::string to_xml(const HofProject& project);
+/// Writes to_xml(project) to `path` (via a temporary file and a rename: never a half file).
+[[nodiscard]] Expected<void> write_project(const HofProject& project, const std::filesystem::path& path);
+
+/// The haptic-loop configuration a project describes.
+[[nodiscard]] coupling::SessionConfig session_config(const HofProject& project);
+
+}  // namespace hof::scene

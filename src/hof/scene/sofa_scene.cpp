@@ -1,0 +1,556 @@
+#include "hof/scene/sofa_scene.h"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <numbers>
+#include <sstream>
+
+#include "hof/mesh/mesh_io.h"
+#include "hof/scene/sofa_scene_reader.h"
+
+namespace hof::scene::detail {
+namespace {
+
+// 2008 aliases and today's renames (sofa-components.md). MeshLoader is decided by extension.
+const std::map<std::string, std::string, std::less<>>& alias_table() {
+  static const std::map<std::string, std::string, std::less<>> table{
+      {"EulerImplicit", "EulerImplicitSolver"},
+      {"ImplicitEulerSolver", "EulerImplicitSolver"},
+      {"ImplicitEuler", "EulerImplicitSolver"},
+      {"CGImplicit", "CGImplicitSolver"},
+      {"Euler", "EulerExplicitSolver"},
+      {"EulerSolver", "EulerExplicitSolver"},
+      {"RungeKutta4", "RungeKutta4Solver"},
+      {"CGSolver", "CGLinearSolver"},
+      {"ConjugateGradient", "CGLinearSolver"},
+      {"Mesh", "MeshTopology"},
+      {"FixedConstraint", "FixedProjectiveConstraint"},
+      {"PartialFixedConstraint", "PartialFixedProjectiveConstraint"},
+      {"TetrahedralCorotationalFEMForceField", "TetrahedronFEMForceField"},
+      {"MeshObjLoader", "MeshOBJLoader"},
+      {"VisualModel", "OglModel"},
+      {"VisualModelImpl", "OglModel"},
+      {"StiffSpringForceField", "SpringForceField"},
+  };
+  return table;
+}
+
+std::vector<std::string_view> tokens_of(std::string_view s) {
+  std::vector<std::string_view> out;
+  std::size_t i = 0;
+  while (i < s.size()) {
+    while (i < s.size() && (std::isspace(static_cast<unsigned char>(s[i])) || s[i] == ',')) ++i;
+    const std::size_t start = i;
+    while (i < s.size() && !std::isspace(static_cast<unsigned char>(s[i])) && s[i] != ',') ++i;
+    if (i > start) out.push_back(s.substr(start, i - start));
+  }
+  return out;
+}
+
+// Rotation of SOFA's MeshLoader `rotation` (degrees, Euler angles about x, then y, then z).
+Mat3 euler_xyz_deg(const Vec3& deg) {
+  const Vec3 r = deg * (std::numbers::pi / 180.0);
+  return (Eigen::AngleAxisd(r.z(), Vec3::UnitZ()) * Eigen::AngleAxisd(r.y(), Vec3::UnitY()) *
+          Eigen::AngleAxisd(r.x(), Vec3::UnitX()))
+      .toRotationMatrix();
+}
+
+}  // namespace
+
+bool is_ode_solver(std::string_view t) {
+  return t == "EulerImplicitSolver" || t == "CGImplicitSolver" || t == "EulerExplicitSolver" ||
+         t == "RungeKutta4Solver" || t == "StaticSolver";
+}
+bool is_linear_solver(std::string_view t) {
+  return t == "CGLinearSolver" || t == "SparseLDLSolver" || t == "EigenSimplicialLDLT";
+}
+bool is_loader(std::string_view t) {
+  return t == "MeshGmshLoader" || t == "MeshOBJLoader" || t == "MeshLoader" || t == "MeshSTLLoader" ||
+         t == "MeshOffLoader";
+}
+bool is_topology(std::string_view t) {
+  return t == "MeshTopology" || t == "TetrahedronSetTopologyContainer" || t == "TriangleSetTopologyContainer";
+}
+bool is_mapping(std::string_view t) { return t.ends_with("Mapping"); }
+
+std::string_view trim(std::string_view s) {
+  while (!s.empty() && std::isspace(static_cast<unsigned char>(s.front()))) s.remove_prefix(1);
+  while (!s.empty() && std::isspace(static_cast<unsigned char>(s.back()))) s.remove_suffix(1);
+  return s;
+}
+
+std::string lower(std::string s) {
+  std::ranges::transform(s, s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return s;
+}
+
+Expected<SofaScene> Reader::run() {
+  scene_.file = path_;
+  std::ifstream in(path_, std::ios::binary);
+  if (!in) return make_error(ErrorCode::kIo, fmt::format("cannot open scene '{}'", path_.string()), path_.string());
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  text_ = ss.str();
+  line_starts_.push_back(0);
+  for (std::size_t i = 0; i < text_.size(); ++i)
+    if (text_[i] == '\n') line_starts_.push_back(i + 1);
+
+  pugi::xml_document doc;
+  const pugi::xml_parse_result parsed =
+      doc.load_buffer(text_.data(), text_.size(), pugi::parse_default, pugi::encoding_utf8);
+  if (!parsed)
+    return fail(ErrorCode::kParse, line_of(parsed.offset), fmt::format("malformed XML: {}", parsed.description()));
+  const pugi::xml_node xml_root = doc.document_element();
+  if (std::string_view(xml_root.name()) != "Node")
+    return fail(ErrorCode::kParse, line_of(xml_root.offset_debug()),
+                fmt::format("the root element is <{}>, expected <Node>", xml_root.name()));
+
+  root_ = std::make_unique<SceneNode>();
+  if (auto r = build_node(xml_root, *root_); !r) return std::unexpected(r.error());
+  if (auto r = collect_models(*root_); !r) return std::unexpected(r.error());
+  list_skipped(*root_);
+  if (!scene_.skipped.empty()) {
+    std::string all;
+    for (const auto& s : scene_.skipped) all += (all.empty() ? "" : ", ") + s;
+    scene_.warnings.push_back(fmt::format("{}: {} component(s) not simulated by HoF and skipped: {}", path_.string(),
+                                          scene_.skipped.size(), all));
+  }
+  if (scene_.models.empty()) warn(root_->line, "no simulated model (a Node with an ODE solver and a MechanicalObject)");
+  return std::move(scene_);
+}
+
+// Builds the node tree: Node attributes inherit dt and gravity; `<Object type=X>` becomes X.
+Expected<void> Reader::build_node(const pugi::xml_node& xml, SceneNode& node) {
+  node.line = line_of(xml.offset_debug());
+  node.name = xml.attribute("name") ? xml.attribute("name").value() : "Node";
+  node.path = node.parent ? node.parent->path + "/" + node.name : node.name;
+  if (node.parent) {
+    node.dt_s = node.parent->dt_s;
+    node.gravity = node.parent->gravity;
+  }
+  for (const char* old_flag : {"showBehaviorModels", "showCollisionModels", "showMappings", "showForceFields"})
+    if (xml.attribute(old_flag)) legacy_ = true;
+  // dt and gravity are parsed through a stand-in component so errors read the same.
+  Component node_as_component;
+  node_as_component.type = node_as_component.written = "Node";
+  node_as_component.name = node.name;
+  node_as_component.line = node.line;
+  for (const pugi::xml_attribute& a : xml.attributes()) node_as_component.attrs.emplace_back(a.name(), a.value());
+  if (auto dt = number(node_as_component, "dt"); !dt) return std::unexpected(dt.error());
+  else if (*dt) node.dt_s = **dt;
+  if (auto g = vec3(node_as_component, "gravity"); !g) return std::unexpected(g.error());
+  else if (*g) node.gravity = **g;
+
+  for (const pugi::xml_node& child : xml.children()) {
+    if (child.type() != pugi::node_element) continue;
+    const std::string_view tag = child.name();
+    if (tag == "Node") {
+      auto sub = std::make_unique<SceneNode>();
+      sub->parent = &node;
+      if (auto r = build_node(child, *sub); !r) return r;
+      node.children.push_back(std::move(sub));
+      continue;
+    }
+    auto c = std::make_unique<Component>();
+    c->line = line_of(child.offset_debug());
+    if (tag == "Object") {
+      legacy_ = true;
+      if (!child.attribute("type"))
+        return fail(ErrorCode::kParse, c->line, "<Object> without a 'type' attribute");
+      c->written = child.attribute("type").value();
+    } else {
+      c->written = std::string(tag);
+    }
+    for (const pugi::xml_attribute& a : child.attributes()) {
+      if (tag == "Object" && std::string_view(a.name()) == "type") continue;
+      c->attrs.emplace_back(a.name(), a.value());
+    }
+    if (c->written == "EulerImplicit" || c->written == "CGImplicit" || c->written == "CGImplicitSolver" ||
+        c->written == "MeshLoader")
+      legacy_ = true;
+    const auto alias = alias_table().find(c->written);
+    c->type = alias != alias_table().end() ? alias->second : c->written;
+    if (const std::string* n = c->attr("name")) c->name = *n;
+    else if (const std::string* p = c->attr("pluginName")) c->name = *p;
+    else c->name = c->written;
+    c->node = &node;
+    c->index = node.components.size();
+    node.components.push_back(std::move(c));
+  }
+  return {};
+}
+
+// ---- attribute values -------------------------------------------------------------------------
+
+Expected<std::vector<double>> Reader::numbers(const Component& c, std::string_view key, const std::string& text) const {
+  std::vector<double> out;
+  for (std::string_view tok : tokens_of(text)) {
+    double v = 0.0;
+    const auto [ptr, ec] = std::from_chars(tok.data(), tok.data() + tok.size(), v);
+    if (ec != std::errc{} || ptr != tok.data() + tok.size() || !std::isfinite(v))
+      return fail(c, fmt::format("attribute {}: '{}' is not a number", key, tok));
+    out.push_back(v);
+  }
+  return out;
+}
+
+Expected<std::optional<double>> Reader::number(const Component& c, std::string_view key) const {
+  const std::string* text = c.attr(key);
+  if (!text) return std::optional<double>{};
+  auto v = numbers(c, key, *text);
+  if (!v) return std::unexpected(v.error());
+  if (v->empty()) return fail(c, fmt::format("attribute {}: empty, expected a number", key));
+  if (v->size() > 1 && std::ranges::any_of(*v, [&](double x) { return x != v->front(); }))
+    return fail(c, fmt::format("attribute {}: {} different values; HoF takes one value per component", key,
+                               v->size()),
+                ErrorCode::kUnsupported);
+  return std::optional<double>{v->front()};
+}
+
+Expected<std::optional<Vec3>> Reader::vec3(const Component& c, std::string_view key) const {
+  const std::string* text = c.attr(key);
+  if (!text) return std::optional<Vec3>{};
+  auto v = numbers(c, key, *text);
+  if (!v) return std::unexpected(v.error());
+  if (v->size() != 3) return fail(c, fmt::format("attribute {}: expected 3 numbers, got {}", key, v->size()));
+  return std::optional<Vec3>{Vec3((*v)[0], (*v)[1], (*v)[2])};
+}
+
+Expected<std::optional<std::vector<std::int32_t>>> Reader::indices(const Component& c, std::string_view key) const {
+  const std::string* text = c.attr(key);
+  if (!text) return std::optional<std::vector<std::int32_t>>{};
+  std::vector<std::int32_t> out;
+  for (std::string_view tok : tokens_of(*text)) {
+    std::int32_t v = 0;
+    const auto [ptr, ec] = std::from_chars(tok.data(), tok.data() + tok.size(), v);
+    if (ec != std::errc{} || ptr != tok.data() + tok.size() || v < 0)
+      return fail(c, fmt::format("attribute {}: '{}' is not an index", key, tok));
+    out.push_back(v);
+  }
+  return std::optional<std::vector<std::int32_t>>{std::move(out)};
+}
+
+Expected<std::optional<bool>> Reader::boolean(const Component& c, std::string_view key) const {
+  const std::string* text = c.attr(key);
+  if (!text) return std::optional<bool>{};
+  const std::string v = lower(std::string(trim(*text)));
+  if (v == "1" || v == "true") return std::optional<bool>{true};
+  if (v == "0" || v == "false") return std::optional<bool>{false};
+  return fail(c, fmt::format("attribute {}: '{}' is not a boolean (0/1/true/false)", key, *text));
+}
+
+// ---- links, files and geometry ----------------------------------------------------------------
+
+// "@a/b/name.field", "@../name", "@[-1].field", "@name": the component (and `field`, if any).
+// A single name is looked up in the node, then in its ancestors (SOFA's context lookup).
+Expected<Component*> Reader::resolve_link(const Component& from, std::string_view key, std::string_view link,
+                                          std::string& field) {
+  field.clear();
+  const auto unresolved = [&](std::string_view why) {
+    return fail(from, fmt::format("attribute {}: link '{}' does not resolve ({})", key, link, why));
+  };
+  std::string_view path = trim(link);
+  if (!path.starts_with('@')) return unresolved("a link starts with '@'");
+  path.remove_prefix(1);
+  SceneNode* node = from.node;
+  // Previous siblings: "[-k]".
+  if (path.starts_with('[')) {
+    const std::size_t close = path.find(']');
+    int k = 0;
+    if (close == std::string_view::npos ||
+        std::from_chars(path.data() + 1, path.data() + close, k).ec != std::errc{} || k >= 0)
+      return unresolved("expected [-k]");
+    std::string_view rest = path.substr(close + 1);
+    if (rest.starts_with('.')) field = std::string(rest.substr(1));
+    const auto target = static_cast<std::int64_t>(from.index) + k;
+    if (target < 0) return unresolved("no such previous component");
+    return node->components[static_cast<std::size_t>(target)].get();
+  }
+  std::vector<std::string_view> parts;
+  for (std::size_t start = 0;;) {
+    const std::size_t slash = path.find('/', start);
+    parts.push_back(path.substr(start, slash == std::string_view::npos ? std::string_view::npos : slash - start));
+    if (slash == std::string_view::npos) break;
+    start = slash + 1;
+  }
+  std::string_view last = parts.back();
+  parts.pop_back();
+  if (last != "." && last != "..") {
+    if (const std::size_t dot = last.find('.'); dot != std::string_view::npos) {
+      field = std::string(last.substr(dot + 1));
+      last = last.substr(0, dot);
+    }
+  }
+  for (std::string_view p : parts) {
+    if (p.empty() || p == ".") continue;
+    if (p == "..") {
+      if (!node->parent) return unresolved("'..' above the root node");
+      node = node->parent;
+      continue;
+    }
+    const auto it = std::ranges::find_if(node->children, [&](const auto& n) { return n->name == p; });
+    if (it == node->children.end()) return unresolved(fmt::format("no node '{}' in '{}'", p, node->path));
+    node = it->get();
+  }
+  for (SceneNode* n = node; n; n = parts.empty() ? n->parent : nullptr) {
+    for (auto& c : n->components)
+      if (c->name == last) return c.get();
+  }
+  return unresolved(fmt::format("no component '{}' in '{}'{}", last, node->path, parts.empty() ? " or above" : ""));
+}
+
+// A relative path is looked up in the scene's folder, then in each parent folder.
+Expected<fs::path> Reader::resolve_file(const Component& c, std::string_view key, const std::string& file) const {
+  const fs::path rel(std::string(trim(file)));
+  if (rel.empty()) return fail(c, fmt::format("attribute {} is empty", key));
+  std::error_code ec;
+  if (rel.is_absolute()) {
+    if (fs::is_regular_file(rel, ec)) return rel;
+    return fail(c, fmt::format("file '{}' not found", rel.string()), ErrorCode::kIo);
+  }
+  const fs::path first = fs::absolute(path_, ec).parent_path();
+  for (fs::path dir = first;; dir = dir.parent_path()) {
+    if (fs::is_regular_file(dir / rel, ec)) return dir / rel;
+    if (dir == dir.parent_path() || dir.empty()) break;
+  }
+  return fail(c, fmt::format("{} '{}' not found (tried {} and its parent folders)", key, rel.string(),
+                             (first / rel).string()),
+              ErrorCode::kIo);
+}
+
+Expected<const MeshData*> Reader::data_of(Component& c) {
+  if (const auto it = data_cache_.find(&c); it != data_cache_.end()) return &it->second;
+  if (in_progress_.contains(&c)) return fail(c, "links form a cycle");
+  in_progress_.insert(&c);
+  auto d = compute_data(c);
+  in_progress_.erase(&c);
+  if (!d) return std::unexpected(d.error());
+  c.used = true;
+  return &data_cache_.emplace(&c, std::move(*d)).first->second;
+}
+
+Expected<void> Reader::read_file_into(Component& c, std::string_view key, MeshData& d) {
+  auto file = resolve_file(c, key, *c.attr(key));
+  if (!file) return std::unexpected(file.error());
+  d.file = *file;
+  const std::string ext = lower(file->extension().string());
+  const auto located = [&](Error e) {
+    e.message = fmt::format("{}: {}", c.label(), e.message);
+    return std::unexpected(std::move(e));
+  };
+  if (ext == ".xs3") {
+    auto x = detail::read_xs3(*file);
+    if (!x) return located(x.error());
+    d.positions = x->positions;
+    d.has_positions = true;
+    d.xs3 = std::move(*x);
+    return {};
+  }
+  if (ext == ".mesh") {
+    auto m = detail::read_legacy_mesh(*file);
+    if (!m) return located(m.error());
+    d.tets = std::move(m->tets);
+    d.triangles = std::move(m->triangles);
+    d.has_tets = !d.tets.empty();
+    d.has_triangles = !d.triangles.empty();
+    return {};
+  }
+  // The visual OBJ is only named, never needed as geometry here; every other file is read.
+  auto m = mesh::read_mesh(*file);
+  if (!m) return located(m.error());
+  d.positions = std::move(m->mesh.nodes);
+  d.tets = std::move(m->mesh.tets);
+  d.triangles = std::move(m->mesh.triangles);
+  d.has_positions = true;
+  d.has_tets = !d.tets.empty();
+  d.has_triangles = !d.triangles.empty();
+  return {};
+}
+
+// Fills `d` from `key="@comp.field"` or from a literal list.
+Expected<void> Reader::read_field(Component& c, std::string_view key, std::string_view field, MeshData& d) {
+  const std::string& text = *c.attr(key);
+  if (trim(text).starts_with('@')) {
+    std::string linked_field;
+    auto target = resolve_link(c, key, text, linked_field);
+    if (!target) return std::unexpected(target.error());
+    auto t = data_of(**target);
+    if (!t) return std::unexpected(t.error());
+    const std::string f = linked_field.empty() ? std::string(key) : linked_field;
+    if (f == "position" || f == "positions" || f == "points" || f == "vertices" || f == "rest_position") {
+      if (!(*t)->has_positions) return fail(c, fmt::format("attribute {}: '{}' has no positions", key, text));
+      if (field != "position") return fail(c, fmt::format("attribute {}: links positions to {}", key, field));
+      d.positions = (*t)->positions;
+      d.has_positions = true;
+    } else if (f == "tetrahedra" || f == "tetras") {
+      if (field != "tetrahedra") return fail(c, fmt::format("attribute {}: links tetrahedra to {}", key, field));
+      d.tets = (*t)->tets;
+      d.has_tets = true;
+    } else if (f == "triangles") {
+      if (field != "triangles") return fail(c, fmt::format("attribute {}: links triangles to {}", key, field));
+      d.triangles = (*t)->triangles;
+      d.has_triangles = true;
+    } else {
+      return fail(c, fmt::format("attribute {}: link to data '{}' is not supported", key, f), ErrorCode::kUnsupported);
+    }
+    return {};
+  }
+  if (field == "position") {
+    auto v = numbers(c, key, text);
+    if (!v) return std::unexpected(v.error());
+    if (v->size() % 3 != 0) return fail(c, fmt::format("attribute {}: {} numbers, not a list of 3D points", key, v->size()));
+    d.positions.clear();
+    for (std::size_t i = 0; i < v->size(); i += 3) d.positions.emplace_back((*v)[i], (*v)[i + 1], (*v)[i + 2]);
+    d.has_positions = true;
+    return {};
+  }
+  auto idx = indices(c, key);
+  if (!idx) return std::unexpected(idx.error());
+  const std::size_t k = field == "tetrahedra" ? 4 : 3;
+  if ((*idx)->size() % k != 0) return fail(c, fmt::format("attribute {}: {} indices, not a multiple of {}", key, (*idx)->size(), k));
+  const auto& v = **idx;
+  if (k == 4) {
+    d.tets.clear();
+    for (std::size_t i = 0; i < v.size(); i += 4) d.tets.push_back({v[i], v[i + 1], v[i + 2], v[i + 3]});
+    d.has_tets = true;
+  } else {
+    d.triangles.clear();
+    for (std::size_t i = 0; i < v.size(); i += 3) d.triangles.push_back({v[i], v[i + 1], v[i + 2]});
+    d.has_triangles = true;
+  }
+  return {};
+}
+
+void fill_missing(MeshData& d, const MeshData& from) {
+  if (!d.has_positions && from.has_positions) {
+    d.positions = from.positions;
+    d.has_positions = true;
+    if (!d.xs3 && from.xs3) d.xs3 = from.xs3;
+  }
+  if (!d.has_tets && from.has_tets) {
+    d.tets = from.tets;
+    d.has_tets = true;
+  }
+  if (!d.has_triangles && from.has_triangles) {
+    d.triangles = from.triangles;
+    d.has_triangles = true;
+  }
+  if (!d.file && from.file) d.file = from.file;
+}
+
+// Geometry of a loader, topology or MechanicalObject: its own attributes, then `src`, then
+// (state and topology only) the topology and loader of its node, as SOFA's init does.
+Expected<MeshData> Reader::compute_data(Component& c) {
+  MeshData d;
+  const std::string* file = c.attr("filename");
+  const char* file_key = "filename";
+  if (!file && (file = c.attr("fileMesh"))) file_key = "fileMesh";
+  if (file && (is_loader(c.type) || is_topology(c.type) || c.type == "MechanicalObject" || c.type == "OglModel")) {
+    if (c.type == "OglModel" || c.type == "MeshOBJLoader") {
+      auto f = resolve_file(c, file_key, *file);  // visual surfaces are only named
+      if (!f) return std::unexpected(f.error());
+      d.file = *f;
+    } else if (auto r = read_file_into(c, file_key, d); !r) {
+      return std::unexpected(r.error());
+    }
+  }
+  if (c.attr("position")) {
+    if (auto r = read_field(c, "position", "position", d); !r) return std::unexpected(r.error());
+  }
+  for (const char* key : {"tetrahedra", "tetras"})
+    if (c.attr(key))
+      if (auto r = read_field(c, key, "tetrahedra", d); !r) return std::unexpected(r.error());
+  if (c.attr("triangles"))
+    if (auto r = read_field(c, "triangles", "triangles", d); !r) return std::unexpected(r.error());
+  if (const std::string* src = c.attr("src")) {
+    std::string field;
+    auto target = resolve_link(c, "src", *src, field);
+    if (!target) return std::unexpected(target.error());
+    auto t = data_of(**target);
+    if (!t) return std::unexpected(t.error());
+    fill_missing(d, **t);
+  }
+  // SOFA's MeshLoader transform: scale, then rotate, then translate.
+  if (is_loader(c.type) && d.has_positions) {
+    auto t = vec3(c, "translation");
+    auto r = vec3(c, "rotation");
+    auto s3 = vec3(c, "scale3d");
+    auto s = number(c, "scale");
+    if (!t) return std::unexpected(t.error());
+    if (!r) return std::unexpected(r.error());
+    if (!s3) return std::unexpected(s3.error());
+    if (!s) return std::unexpected(s.error());
+    Vec3 scale = s3->value_or(Vec3::Ones());
+    if (*s) scale *= **s;
+    const Mat3 rot = euler_xyz_deg(r->value_or(Vec3::Zero()));
+    const Vec3 shift = t->value_or(Vec3::Zero());
+    if (*t || *r || *s3 || *s)
+      for (Vec3& p : d.positions) p = rot * p.cwiseProduct(scale) + shift;
+  }
+  if (c.type == "MechanicalObject" || is_topology(c.type)) {
+    for (const char* key : {"translation", "rotation", "scale3d", "scale", "dx", "dy", "dz", "rx", "ry", "rz"})
+      if (c.attr(key)) warn(c.line, fmt::format("{}: attribute {} ignored (transform the loader instead)", c.label(), key));
+    const bool topo = is_topology(c.type);
+    for (auto& other : c.node->components) {
+      if (d.has_positions && (d.has_tets || !topo)) break;
+      if (other.get() == &c) continue;
+      if ((!topo && is_topology(other->type)) || is_loader(other->type)) {
+        if (other->type == "MeshOBJLoader" && !topo) continue;  // a surface loader feeds visuals
+        auto t = data_of(*other);
+        if (!t) return std::unexpected(t.error());
+        fill_missing(d, **t);
+      }
+    }
+  }
+  return d;
+}
+
+// ---- models -----------------------------------------------------------------------------------
+
+Expected<void> Reader::collect_models(SceneNode& node) {
+  Component* state = nullptr;
+  bool mapped = false;
+  bool own_solver = false;
+  bool geometry = false;
+  for (auto& c : node.components) {
+    if (c->type == "MechanicalObject" && !state) state = c.get();
+    mapped = mapped || is_mapping(c->type);
+    own_solver = own_solver || is_ode_solver(c->type);
+    geometry = geometry || is_topology(c->type) || (is_loader(c->type) && c->type != "MeshOBJLoader");
+  }
+  if (state) {
+    if (const std::string* tmpl = state->attr("template");
+        tmpl && !(*tmpl == "Vec3" || *tmpl == "Vec3d" || *tmpl == "Vec3f")) {
+      warn(state->line, fmt::format("{}: template {} is not simulated", state->label(), *tmpl));
+      state = nullptr;
+    }
+  }
+  bool solver_in_scope = own_solver;
+  for (SceneNode* n = node.parent; n && !solver_in_scope; n = n->parent)
+    solver_in_scope = std::ranges::any_of(n->components, [](const auto& c) { return is_ode_solver(c->type); });
+  if (!mapped && ((state && solver_in_scope) || (!state && own_solver && geometry))) {
+    auto model = make_model(node, state);
+    if (!model) return std::unexpected(model.error());
+    scene_.models.push_back(std::move(*model));
+  }
+  for (auto& child : node.children)
+    if (auto r = collect_models(*child); !r) return r;
+  return {};
+}
+
+void Reader::list_skipped(const SceneNode& node) {
+  for (const auto& c : node.components)
+    if (!c->used) scene_.skipped.push_back(c->label());
+  for (const auto& child : node.children) list_skipped(*child);
+}
+
+}  // namespace hof::scene::detail
+
+namespace hof::scene {
+
+Expected<SofaScene> read_sofa_scene(const std::filesystem::path& path) { return detail::Reader(path).run(); }
+
+}  // namespace hof::scene

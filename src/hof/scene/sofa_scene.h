@@ -1,0 +1,40 @@
+#pragma once
+/// @file
+/// SOFA scene files (`.scn`) in both syntaxes — 2008's `<Object type="…"/>` and today's tag
+/// names — for the components HoF's mechanics has, with the loaders that bring their data
+/// (MeshGmshLoader, MeshOBJLoader, MeshTopology/`Mesh` with a file, the old `MeshLoader`,
+/// `MechanicalObject filename=….xs3`), `@link` references and `src="@loader"`. Components
+/// HoF does not simulate (collision pipeline, RequiredPlugin, visual style, …) are listed in
+/// one warning and skipped; nothing the user wrote is silently lost (`skipped` names them).
+/// File paths resolve against the scene's folder, then its parent folders (SOFA's data path).
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "hof/core/error.h"
+#include "hof/mechanics/mechanical_model.h"
+
+namespace hof::scene {
+
+/// One simulated body: a SOFA node with an ODE solver and a mechanical state.
+struct SofaSceneModel {
+  std::string node_path;                          ///< e.g. "lroot/Liver"
+  mechanics::ModelConfig config;                  ///< ready for mechanics::build_model()
+  std::optional<std::filesystem::path> visual_mesh;  ///< OglModel file (resolved), if any
+  bool visual_barycentric{false};                 ///< a BarycentricMapping maps the volume to it
+};
+
+struct SofaScene {
+  std::filesystem::path file;
+  std::vector<SofaSceneModel> models;
+  std::vector<std::string> skipped;   ///< "TYPE 'name' (line N)" of every component not simulated
+  std::vector<std::string> warnings;  ///< "FILE:LINE: ..." notes (defaults assumed, aliases used)
+};
+
+/// Reads and validates a scene. Errors name the file, the line and the component
+/// (malformed XML, a missing mesh, a bad attribute value, an unresolved @link).
+[[nodiscard]] Expected<SofaScene> read_sofa_scene(const std::filesystem::path& path);
+
+}  // namespace hof::scene

@@ -1,0 +1,393 @@
+#include <algorithm>
+#include <cmath>
+
+#include "hof/scene/sofa_scene_reader.h"
+
+#include <array>
+
+// Maps the components of a model node to mechanics configs (SOFA names and defaults from
+// sofa-components.md).
+
+namespace hof::scene::detail {
+
+Expected<SofaSceneModel> Reader::make_model(SceneNode& node, Component* state) {
+  SofaSceneModel out;
+  out.node_path = node.path;
+  ModelConfig& m = out.config;
+  m.name = node.name;
+  m.dt_s = node.dt_s;
+  m.gravity_m_per_s2 = node.gravity;
+
+  // Geometry: the state (with its fallbacks), or the node's topology/loader.
+  const MeshData* geo = nullptr;
+  Component* source = state;
+  if (!source)
+    for (auto& c : node.components)
+      if (is_topology(c->type) || (is_loader(c->type) && c->type != "MeshOBJLoader")) {
+        source = c.get();
+        break;
+      }
+  auto d = data_of(*source);
+  if (!d) return std::unexpected(d.error());
+  geo = *d;
+  // Tetrahedra of the node's topology take precedence over the state's.
+  MeshData topo_data;
+  fill_missing(topo_data, *geo);
+  for (auto& c : node.components)
+    if (is_topology(c->type) && c.get() != source) {
+      auto t = data_of(*c);
+      if (!t) return std::unexpected(t.error());
+      if ((*t)->has_tets) {
+        topo_data.tets = (*t)->tets;
+        topo_data.has_tets = true;
+      }
+      break;
+    }
+  if (!geo->has_positions || geo->positions.empty())
+    return fail(*source, fmt::format("the model in node '{}' has no positions (no position, src or filename, and "
+                                     "no topology or loader with positions in the node)",
+                                     node.path));
+  m.positions = geo->positions;
+  if (geo->xs3 && std::ranges::any_of(geo->xs3->fixed, [](bool f) { return f; }))
+    warn(source->line, fmt::format("{}: 'fixed' flags of the Xsp file ignored (use a FixedProjectiveConstraint)",
+                                   source->label()));
+  m.tets = topo_data.tets;
+  if (m.tets.empty()) m.triangles = topo_data.triangles;
+  const auto n = static_cast<std::int64_t>(m.positions.size());
+  for (std::size_t t = 0; t < m.tets.size(); ++t)
+    for (std::int32_t i : m.tets[t])
+      if (i >= n)
+        return fail(*source, fmt::format("tetrahedron {} uses node {} but the model has {} nodes", t, i, n),
+                    ErrorCode::kInvalidMesh);
+  for (std::size_t t = 0; t < m.triangles.size(); ++t)
+    for (std::int32_t i : m.triangles[t])
+      if (i >= n)
+        return fail(*source, fmt::format("triangle {} uses node {} but the model has {} nodes", t, i, n),
+                    ErrorCode::kInvalidMesh);
+  if (state) state->used = true;
+
+  // Solvers: the nearest ODE solver (this node or above) and the linear solver beside it.
+  bool have_ode = false;
+  bool have_linear = false;
+  bool cg_embedded = false;
+  for (SceneNode* s = &node; s && !(have_ode && have_linear); s = s->parent) {
+    for (auto& c : s->components) {
+      if (!have_ode && is_ode_solver(c->type)) {
+        if (auto r = apply_ode(*c, m, cg_embedded); !r) return std::unexpected(r.error());
+        have_ode = true;
+        have_linear = have_linear || cg_embedded;
+      } else if (!have_linear && is_linear_solver(c->type)) {
+        if (auto r = apply_linear(*c, m); !r) return std::unexpected(r.error());
+        have_linear = true;
+      }
+    }
+  }
+  if (!have_linear && m.ode.kind != mechanics::OdeSolverKind::kEulerExplicit &&
+      m.ode.kind != mechanics::OdeSolverKind::kRungeKutta4)
+    warn(node.line, fmt::format("node '{}': no linear solver; CGLinearSolver defaults assumed", node.path));
+
+  // Mass, force fields, constraints of the node.
+  bool have_mass = false;
+  for (auto& c : node.components) {
+    const std::string& t = c->type;
+    if (t == "UniformMass" || t == "DiagonalMass" || t == "MeshMatrixMass") {
+      if (have_mass) {
+        warn(c->line, fmt::format("{}: a second mass in the node is ignored", c->label()));
+        continue;
+      }
+      if (auto r = apply_mass(*c, m, m.positions.size()); !r) return std::unexpected(r.error());
+      have_mass = true;
+    } else if (t == "TetrahedronFEMForceField" || t == "FastTetrahedralCorotationalForceField" ||
+               t == "MeshSpringForceField" || t == "ConstantForceField") {
+      if (auto r = apply_force_field(*c, m); !r) return std::unexpected(r.error());
+    } else if (t == "FixedProjectiveConstraint" || t == "PartialFixedProjectiveConstraint") {
+      if (auto r = apply_fixed(*c, m); !r) return std::unexpected(r.error());
+    } else if (t == "TetrahedronSetGeometryAlgorithms" || t == "TriangleSetGeometryAlgorithms") {
+      c->used = true;  // geometry helpers: HoF computes volumes itself
+    }
+  }
+  if (!have_mass) warn(node.line, fmt::format("node '{}': no mass; DiagonalMass massDensity=1 assumed", node.path));
+
+  if (auto r = apply_visual(node, out); !r) return std::unexpected(r.error());
+  return out;
+}
+
+Expected<void> Reader::apply_ode(Component& c, ModelConfig& m, bool& cg_embedded) {
+  using mechanics::OdeSolverKind;
+  c.used = true;
+  m.ode.name = c.name;
+  const std::string& t = c.type;
+  if (t == "EulerImplicitSolver" || t == "CGImplicitSolver") {
+    m.ode.kind = OdeSolverKind::kEulerImplicit;
+    // Before 2009 both Rayleigh coefficients defaulted to 0.1; today they default to 0.
+    const double def = (legacy_ || t == "CGImplicitSolver") ? 0.1 : 0.0;
+    auto rs = number(c, "rayleighStiffness");
+    auto rm = number(c, "rayleighMass");
+    if (!rs) return std::unexpected(rs.error());
+    if (!rm) return std::unexpected(rm.error());
+    m.ode.rayleigh_stiffness = rs->value_or(def);
+    m.ode.rayleigh_mass = rm->value_or(def);
+    if (def != 0.0 && (!*rs || !*rm))
+      warn(c.line, fmt::format("{}: 2008 syntax, Rayleigh defaults of the time assumed (rayleighStiffness={}, "
+                               "rayleighMass={})",
+                               c.label(), m.ode.rayleigh_stiffness, m.ode.rayleigh_mass));
+    if (c.written != c.type) warn(c.line, fmt::format("{}: read as {}", c.label(), c.type));
+    if (t == "CGImplicitSolver") {
+      // The 2008 solver embedded its conjugate gradient.
+      cg_embedded = true;
+      m.linear.kind = mechanics::LinearSolverKind::kConjugateGradient;
+      m.linear.name = c.name;
+      auto it = number(c, "iterations");
+      auto tol = number(c, "tolerance");
+      auto th = number(c, "threshold");
+      if (!it) return std::unexpected(it.error());
+      if (!tol) return std::unexpected(tol.error());
+      if (!th) return std::unexpected(th.error());
+      m.linear.iterations = static_cast<int>(it->value_or(25.0));
+      m.linear.tolerance = tol->value_or(1e-5);
+      m.linear.threshold = th->value_or(1e-5);
+    }
+  } else if (t == "EulerExplicitSolver") {
+    m.ode.kind = OdeSolverKind::kEulerExplicit;
+    auto s = boolean(c, "symplectic");
+    if (!s) return std::unexpected(s.error());
+    m.ode.symplectic = s->value_or(true);
+  } else if (t == "RungeKutta4Solver") {
+    m.ode.kind = OdeSolverKind::kRungeKutta4;
+  } else {  // StaticSolver
+    m.ode.kind = OdeSolverKind::kStatic;
+    auto it = number(c, "newton_iterations");
+    auto res = number(c, "absolute_residual_tolerance_threshold");
+    auto cor = number(c, "relative_correction_tolerance_threshold");
+    if (!it) return std::unexpected(it.error());
+    if (!res) return std::unexpected(res.error());
+    if (!cor) return std::unexpected(cor.error());
+    if (*it) m.ode.newton_iterations = static_cast<int>(**it);
+    if (*res) m.ode.newton_residual_tolerance_n = **res;
+    if (*cor) m.ode.newton_correction_tolerance = **cor;
+  }
+  return {};
+}
+
+Expected<void> Reader::apply_linear(Component& c, ModelConfig& m) {
+  c.used = true;
+  m.linear.name = c.name;
+  if (c.type != "CGLinearSolver") {
+    m.linear.kind = mechanics::LinearSolverKind::kSparseLdlt;
+    return {};
+  }
+  m.linear.kind = mechanics::LinearSolverKind::kConjugateGradient;
+  auto it = number(c, "iterations");
+  auto tol = number(c, "tolerance");
+  auto th = number(c, "threshold");
+  if (!it) return std::unexpected(it.error());
+  if (!tol) return std::unexpected(tol.error());
+  if (!th) return std::unexpected(th.error());
+  if (*it && (**it < 1 || **it != std::floor(**it)))
+    return fail(c, fmt::format("attribute iterations: {} is not a positive integer", **it), ErrorCode::kInvalidArgument);
+  m.linear.iterations = static_cast<int>(it->value_or(25.0));
+  m.linear.tolerance = tol->value_or(1e-5);
+  m.linear.threshold = th->value_or(1e-5);
+  return {};
+}
+
+Expected<void> Reader::apply_mass(Component& c, ModelConfig& m, std::size_t n) {
+  using mechanics::MassKind;
+  c.used = true;
+  m.mass.name = c.name;
+  auto vertex = number(c, "vertexMass");
+  auto total = number(c, "totalMass");
+  auto density = number(c, "massDensity");
+  if (!vertex) return std::unexpected(vertex.error());
+  if (!total) return std::unexpected(total.error());
+  if (!density) return std::unexpected(density.error());
+  if (c.type == "UniformMass") {
+    m.mass.kind = MassKind::kUniform;
+    m.mass.total_mass_kg = total->value_or(1.0);
+    if (*vertex) m.mass.vertex_mass_kg = **vertex;
+    return {};
+  }
+  if (c.type == "MeshMatrixMass") warn(c.line, fmt::format("{}: simulated as a lumped DiagonalMass", c.label()));
+  // DiagonalMass: masses from an Xsp file, else vertexMass > massDensity > totalMass.
+  const std::string* file = c.attr("filename");
+  if (!file) file = c.attr("fileMass");
+  if (file) {
+    auto path = resolve_file(c, c.attr("filename") ? "filename" : "fileMass", *file);
+    if (!path) return std::unexpected(path.error());
+    auto x = detail::read_xs3(*path);
+    if (!x) {
+      Error e = x.error();
+      e.message = fmt::format("{}: {}", c.label(), e.message);
+      return std::unexpected(std::move(e));
+    }
+    if (x->masses.size() != n)
+      return fail(c, fmt::format("'{}' has {} masses but the model has {} nodes", path->string(), x->masses.size(), n),
+                  ErrorCode::kInvalidMesh);
+    m.mass.kind = MassKind::kUniform;
+    const double first = x->masses.empty() ? 0.0 : x->masses.front();
+    if (std::ranges::all_of(x->masses, [&](double v) { return v == first; })) {
+      m.mass.vertex_mass_kg = first;
+    } else {
+      double sum = 0.0;
+      for (double v : x->masses) sum += v;
+      m.mass.total_mass_kg = sum;
+      warn(c.line, fmt::format("{}: per-node masses of '{}' differ; their total {} is spread uniformly", c.label(),
+                               path->filename().string(), sum));
+    }
+    return {};
+  }
+  if (*vertex) {
+    m.mass.kind = MassKind::kUniform;
+    m.mass.vertex_mass_kg = **vertex;
+    return {};
+  }
+  m.mass.kind = MassKind::kDiagonal;
+  if (*density) {
+    m.mass.mass_density_kg_per_m3 = **density;
+    if (*total) warn(c.line, fmt::format("{}: massDensity and totalMass both set; massDensity used", c.label()));
+  } else if (*total) {
+    m.mass.diagonal_total_mass_kg = **total;
+  }
+  return {};
+}
+
+Expected<void> Reader::apply_force_field(Component& c, ModelConfig& m) {
+  c.used = true;
+  mechanics::ForceFieldConfig ff;
+  ff.name = c.name;
+  if (c.type == "TetrahedronFEMForceField" || c.type == "FastTetrahedralCorotationalForceField") {
+    mechanics::TetrahedronFemConfig fem;
+    auto e = number(c, "youngModulus");
+    auto nu = number(c, "poissonRatio");
+    if (!e) return std::unexpected(e.error());
+    if (!nu) return std::unexpected(nu.error());
+    fem.young_modulus_pa = e->value_or(5000.0);
+    fem.poisson_ratio = nu->value_or(0.45);
+    const std::string method = c.attr("method") ? lower(std::string(trim(*c.attr("method")))) : std::string("large");
+    if (method == "small" || method == "none") fem.method = mechanics::FemMethod::kSmall;
+    else if (method == "large" || method == "qr") fem.method = mechanics::FemMethod::kLarge;
+    else if (method == "polar" || method == "polar2") fem.method = mechanics::FemMethod::kPolar;
+    else if (method == "svd") {
+      fem.method = mechanics::FemMethod::kPolar;
+      warn(c.line, fmt::format("{}: method svd simulated as polar (same rotation away from inversion)", c.label()));
+    } else {
+      return fail(c, fmt::format("attribute method: '{}' is not small, large, polar or svd", method));
+    }
+    if (c.written != c.type) warn(c.line, fmt::format("{}: read as TetrahedronFEMForceField", c.label()));
+    ff.tetrahedron_fem = fem;
+  } else if (c.type == "MeshSpringForceField") {
+    // HoF has one stiffness for all springs: the generic value, else that of the element kind.
+    mechanics::MeshSpringConfig s;
+    const bool tets = !m.tets.empty();
+    // A fixed table (GCC 12 misreads vector::insert of initializer lists at -O3).
+    static constexpr std::array<std::pair<const char*, const char*>, 5> kAll{{{"stiffness", "damping"},
+                                                                              {"tetrahedraStiffness", "tetrahedraDamping"},
+                                                                              {"tetrasStiffness", "tetrasDamping"},
+                                                                              {"trianglesStiffness", "trianglesDamping"},
+                                                                              {"linesStiffness", "linesDamping"}}};
+    std::vector<std::pair<const char*, const char*>> keys;
+    for (std::size_t i = 0; i < kAll.size(); ++i) {
+      if (tets || (i != 1 && i != 2)) keys.push_back(kAll[i]);
+    }
+    bool found = false;
+    for (const auto& [ks, kd] : keys) {
+      auto k = number(c, ks);
+      auto d = number(c, kd);
+      if (!k) return std::unexpected(k.error());
+      if (!d) return std::unexpected(d.error());
+      if (!found && (*k || *d)) {
+        s.stiffness_n_per_m = k->value_or(0.0);
+        s.damping_n_s_per_m = d->value_or(0.0);
+        found = true;
+      } else if (found && (*k || *d)) {
+        warn(c.line, fmt::format("{}: {}/{} ignored; one stiffness for all springs", c.label(), ks, kd));
+      }
+    }
+    ff.mesh_springs = s;
+  } else {  // ConstantForceField
+    mechanics::ConstantForceConfig f;
+    auto idx = indices(c, "indices");
+    if (!idx) return std::unexpected(idx.error());
+    if (*idx) f.indices = **idx;
+    else
+      for (std::int32_t i = 0; i < static_cast<std::int32_t>(m.positions.size()); ++i) f.indices.push_back(i);
+    const char* key = c.attr("forces") ? "forces" : "force";
+    if (const std::string* text = c.attr(key)) {
+      auto v = numbers(c, key, *text);
+      if (!v) return std::unexpected(v.error());
+      if (v->size() % 3 != 0 || v->empty()) return fail(c, fmt::format("attribute {}: not a list of 3D vectors", key));
+      for (std::size_t i = 0; i < v->size(); i += 3) f.forces.emplace_back((*v)[i], (*v)[i + 1], (*v)[i + 2]);
+    }
+    auto total = vec3(c, "totalForce");
+    if (!total) return std::unexpected(total.error());
+    f.total_force = *total;
+    for (std::int32_t i : f.indices)
+      if (i >= static_cast<std::int32_t>(m.positions.size()))
+        return fail(c, fmt::format("attribute indices: node {} out of range (the model has {} nodes)", i,
+                                   m.positions.size()),
+                    ErrorCode::kInvalidArgument);
+    ff.constant_force = std::move(f);
+  }
+  m.force_fields.push_back(std::move(ff));
+  return {};
+}
+
+Expected<void> Reader::apply_fixed(Component& c, ModelConfig& m) {
+  c.used = true;
+  mechanics::FixedConstraintConfig f;
+  f.name = c.name;
+  auto idx = indices(c, "indices");
+  auto all = boolean(c, "fixAll");
+  if (!idx) return std::unexpected(idx.error());
+  if (!all) return std::unexpected(all.error());
+  if (*idx) f.indices = **idx;
+  f.fix_all = all->value_or(false);
+  for (std::int32_t i : f.indices)
+    if (i >= static_cast<std::int32_t>(m.positions.size()))
+      return fail(c, fmt::format("attribute indices: node {} out of range (the model has {} nodes)", i,
+                                 m.positions.size()),
+                  ErrorCode::kInvalidArgument);
+  if (c.type == "PartialFixedProjectiveConstraint") {
+    if (const std::string* text = c.attr("fixedDirections")) {
+      auto v = numbers(c, "fixedDirections", *text);
+      if (!v) return std::unexpected(v.error());
+      if (v->size() != 3) return fail(c, "attribute fixedDirections: expected 3 flags");
+      for (std::size_t k = 0; k < 3; ++k) f.directions[k] = (*v)[k] != 0.0;
+    }
+  }
+  if (c.written != c.type) warn(c.line, fmt::format("{}: read as {}", c.label(), c.type));
+  m.fixed.push_back(std::move(f));
+  return {};
+}
+
+// A child node with an OglModel (file, or src to an OBJ loader) and a BarycentricMapping.
+Expected<void> Reader::apply_visual(SceneNode& node, SofaSceneModel& model) {
+  for (auto& child : node.children) {
+    Component* ogl = nullptr;
+    Component* mapping = nullptr;
+    for (auto& c : child->components) {
+      if (c->type == "OglModel" && !ogl) ogl = c.get();
+      if (c->type == "BarycentricMapping" && !mapping) mapping = c.get();
+    }
+    if (!ogl) continue;
+    if (model.visual_mesh) {
+      warn(ogl->line, fmt::format("{}: one visual model per body; this one is skipped", ogl->label()));
+      continue;
+    }
+    auto d = data_of(*ogl);
+    if (!d) return std::unexpected(d.error());
+    if (!(*d)->file) {
+      warn(ogl->line, fmt::format("{}: no file (filename, fileMesh or src to a loader); skipped", ogl->label()));
+      ogl->used = false;
+      continue;
+    }
+    model.visual_mesh = *(*d)->file;
+    if (mapping) {
+      mapping->used = true;
+      model.visual_barycentric = true;
+    }
+  }
+  return {};
+}
+
+}  // namespace hof::scene::detail

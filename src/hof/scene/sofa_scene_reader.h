@@ -1,0 +1,156 @@
+#pragma once
+/// @file
+/// Internals of the SOFA scene reader (hof::scene::detail): the scene graph as written, the
+/// geometry a loader/topology/state provides, and the Reader that turns them into models.
+/// sofa_scene.cpp builds the graph and resolves links and files; sofa_scene_model.cpp maps a
+/// model node's components to mechanics configs.
+
+#include <algorithm>
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <set>
+#include <string>
+#include <string_view>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+#include <fmt/format.h>
+#include <pugixml.hpp>
+
+#include "hof/scene/sofa_legacy_formats.h"
+#include "hof/scene/sofa_scene.h"
+
+namespace hof::scene::detail {
+
+namespace fs = std::filesystem;
+using mechanics::ModelConfig;
+
+// ---- the scene graph as written ---------------------------------------------------------------
+
+struct SceneNode;
+
+/// One component element (`<Foo …/>` or `<Object type="Foo" …/>`).
+struct Component {
+  std::string type;     ///< SOFA class name after the alias table
+  std::string written;  ///< the type as written in the file
+  std::string name;
+  std::vector<std::pair<std::string, std::string>> attrs;
+  std::int64_t line{0};
+  SceneNode* node{nullptr};
+  std::size_t index{0};  ///< position among the node's components
+  bool used{false};
+
+  [[nodiscard]] const std::string* attr(std::string_view key) const {
+    for (const auto& [k, v] : attrs)
+      if (k == key) return &v;
+    return nullptr;
+  }
+  [[nodiscard]] std::string label() const { return fmt::format("{} '{}' (line {})", written, name, line); }
+};
+
+/// One `<Node>`, with dt and gravity inherited from its parent unless set.
+struct SceneNode {
+  std::string name;
+  std::string path;
+  SceneNode* parent{nullptr};
+  std::vector<std::unique_ptr<Component>> components;
+  std::vector<std::unique_ptr<SceneNode>> children;
+  double dt_s{0.01};
+  Vec3 gravity{0.0, -9.81, 0.0};
+  std::int64_t line{0};
+};
+
+/// Geometry a loader, topology or state provides (a field is "set" when its flag is).
+struct MeshData {
+  std::vector<Vec3> positions;        ///< (N) scene units
+  std::vector<mesh::Tet> tets;        ///< (T)
+  std::vector<mesh::Tri> triangles;   ///< (F)
+  bool has_positions{false};
+  bool has_tets{false};
+  bool has_triangles{false};
+  std::optional<fs::path> file;       ///< resolved file the data came from
+  std::optional<Xs3File> xs3;         ///< the Xsp file, when positions came from one
+};
+
+/// SOFA component categories (after the alias table).
+[[nodiscard]] bool is_ode_solver(std::string_view type);
+[[nodiscard]] bool is_linear_solver(std::string_view type);
+[[nodiscard]] bool is_loader(std::string_view type);
+[[nodiscard]] bool is_topology(std::string_view type);
+[[nodiscard]] bool is_mapping(std::string_view type);
+/// `s` without surrounding blanks; `s` in lower case.
+[[nodiscard]] std::string_view trim(std::string_view s);
+[[nodiscard]] std::string lower(std::string s);
+/// Copies into `d` every field `from` has and `d` lacks.
+void fill_missing(MeshData& d, const MeshData& from);
+
+// ---- the reader -------------------------------------------------------------------------------
+
+/// Reads one scene file: graph → links/files → models. Single use: `Reader(path).run()`.
+class Reader {
+ public:
+  explicit Reader(fs::path path) : path_(std::move(path)) {}
+
+  Expected<SofaScene> run();
+
+ private:
+  // Errors and notes.
+  std::unexpected<Error> fail(ErrorCode code, std::int64_t line, std::string message) const {
+    return make_error(code, std::move(message), path_.string(), line);
+  }
+  std::unexpected<Error> fail(const Component& c, std::string message, ErrorCode code = ErrorCode::kParse) const {
+    return fail(code, c.line, fmt::format("{}: {}", c.label(), message));
+  }
+  void warn(std::int64_t line, std::string message) {
+    scene_.warnings.push_back(fmt::format("{}:{}: {}", path_.string(), line, message));
+  }
+  [[nodiscard]] std::int64_t line_of(std::ptrdiff_t offset) const {
+    if (offset < 0) return 0;
+    const auto it = std::ranges::upper_bound(line_starts_, static_cast<std::size_t>(offset));
+    return static_cast<std::int64_t>(it - line_starts_.begin());
+  }
+
+  // Building the graph.
+  Expected<void> build_node(const pugi::xml_node& xml, SceneNode& node);
+
+  // Attribute values.
+  Expected<std::vector<double>> numbers(const Component& c, std::string_view key, const std::string& text) const;
+  Expected<std::optional<double>> number(const Component& c, std::string_view key) const;
+  Expected<std::optional<Vec3>> vec3(const Component& c, std::string_view key) const;
+  Expected<std::optional<std::vector<std::int32_t>>> indices(const Component& c, std::string_view key) const;
+  Expected<std::optional<bool>> boolean(const Component& c, std::string_view key) const;
+
+  // Links and data.
+  Expected<Component*> resolve_link(const Component& from, std::string_view key, std::string_view link,
+                                    std::string& field);
+  Expected<fs::path> resolve_file(const Component& c, std::string_view key, const std::string& file) const;
+  Expected<const MeshData*> data_of(Component& c);
+  Expected<MeshData> compute_data(Component& c);
+  Expected<void> read_file_into(Component& c, std::string_view key, MeshData& d);
+  Expected<void> read_field(Component& c, std::string_view key, std::string_view field, MeshData& d);
+
+  // Models.
+  Expected<void> collect_models(SceneNode& node);
+  Expected<SofaSceneModel> make_model(SceneNode& node, Component* state);
+  Expected<void> apply_ode(Component& c, ModelConfig& m, bool& cg_embedded);
+  Expected<void> apply_linear(Component& c, ModelConfig& m);
+  Expected<void> apply_mass(Component& c, ModelConfig& m, std::size_t n);
+  Expected<void> apply_force_field(Component& c, ModelConfig& m);
+  Expected<void> apply_fixed(Component& c, ModelConfig& m);
+  Expected<void> apply_visual(SceneNode& node, SofaSceneModel& model);
+  void list_skipped(const SceneNode& node);
+
+  fs::path path_;
+  std::string text_;
+  std::vector<std::size_t> line_starts_;
+  bool legacy_{false};  ///< the file uses 2008 syntax (Object tags or 2008-only names)
+  std::unique_ptr<SceneNode> root_;
+  std::unordered_map<const Component*, MeshData> data_cache_;
+  std::set<const Component*> in_progress_;
+  SofaScene scene_;
+};
+
+}  // namespace hof::scene::detail

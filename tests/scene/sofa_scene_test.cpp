@@ -1,0 +1,297 @@
+// SOFA scene reader: the four anchor liver scenes (today's syntax, the tutorial, and two
+// 2008 versions) load into the expected configs, build and run; malformed scenes fail with
+// the file, the line and the component in the message.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <fstream>
+
+#include "hof/mechanics/step.h"
+#include "hof/scene/sofa_scene.h"
+
+namespace hof::scene {
+namespace {
+
+namespace fs = std::filesystem;
+using mechanics::FemMethod;
+using mechanics::LinearSolverKind;
+using mechanics::MassKind;
+using mechanics::OdeSolverKind;
+
+const std::string kAnchors = HOF_ANCHORS_DIR "/sofa";
+
+SofaScene load(const std::string& path) {
+  auto s = read_sofa_scene(path);
+  EXPECT_TRUE(s.has_value()) << (s ? "" : s.error().to_string());
+  return s ? std::move(*s) : SofaScene{};
+}
+
+bool contains(const std::vector<std::string>& v, std::string_view needle) {
+  return std::ranges::any_of(v, [&](const std::string& s) { return s.find(needle) != std::string::npos; });
+}
+
+// Builds the model and runs 10 steps; returns the largest displacement.
+double run_ten_steps(const mechanics::ModelConfig& config) {
+  auto model = mechanics::build_model(config);
+  EXPECT_TRUE(model.has_value()) << (model ? "" : model.error().message);
+  if (!model) return -1.0;
+  auto state = mechanics::make_state(*model);
+  for (int i = 0; i < 10; ++i) EXPECT_TRUE(mechanics::step(*model, state)) << "step " << i;
+  double max_disp = 0.0;
+  for (std::size_t i = 0; i < model->node_count(); ++i)
+    max_disp = std::max(max_disp, (state.position(static_cast<std::int32_t>(i)) - model->rest_positions[i]).norm());
+  EXPECT_TRUE(std::isfinite(max_disp));
+  return max_disp;
+}
+
+const mechanics::TetrahedronFemConfig& fem_of(const mechanics::ModelConfig& c) {
+  for (const auto& f : c.force_fields)
+    if (f.tetrahedron_fem) return *f.tetrahedron_fem;
+  ADD_FAILURE() << "no FEM force field";
+  static const mechanics::TetrahedronFemConfig none;
+  return none;
+}
+
+TEST(SofaScene, LiverScn) {
+  const SofaScene s = load(kAnchors + "/liver.scn");
+  ASSERT_EQ(s.models.size(), 1u);
+  const SofaSceneModel& model = s.models[0];
+  const auto& c = model.config;
+  EXPECT_EQ(model.node_path, "lroot/Liver");
+  EXPECT_EQ(c.positions.size(), 181u);
+  EXPECT_EQ(c.tets.size(), 596u);
+  EXPECT_DOUBLE_EQ(c.dt_s, 0.02);
+  EXPECT_EQ(c.gravity_m_per_s2, Vec3(0, -9.81, 0));
+  EXPECT_EQ(c.ode.kind, OdeSolverKind::kEulerImplicit);
+  EXPECT_EQ(c.ode.name, "cg_odesolver");
+  EXPECT_DOUBLE_EQ(c.ode.rayleigh_stiffness, 0.1);
+  EXPECT_DOUBLE_EQ(c.ode.rayleigh_mass, 0.1);
+  EXPECT_EQ(c.linear.kind, LinearSolverKind::kConjugateGradient);
+  EXPECT_EQ(c.linear.iterations, 25);
+  EXPECT_DOUBLE_EQ(c.linear.tolerance, 1e-9);
+  EXPECT_DOUBLE_EQ(c.linear.threshold, 1e-9);
+  ASSERT_EQ(c.force_fields.size(), 1u);
+  EXPECT_EQ(c.force_fields[0].name, "FEM");
+  EXPECT_DOUBLE_EQ(fem_of(c).young_modulus_pa, 3000.0);
+  EXPECT_DOUBLE_EQ(fem_of(c).poisson_ratio, 0.3);
+  EXPECT_EQ(fem_of(c).method, FemMethod::kLarge);
+  EXPECT_EQ(c.mass.kind, MassKind::kDiagonal);
+  EXPECT_DOUBLE_EQ(c.mass.mass_density_kg_per_m3, 1.0);
+  ASSERT_EQ(c.fixed.size(), 1u);
+  EXPECT_EQ(c.fixed[0].indices, (std::vector<std::int32_t>{3, 39, 64}));
+  ASSERT_TRUE(model.visual_mesh.has_value());
+  EXPECT_EQ(model.visual_mesh->filename(), "liver-smooth.obj");
+  EXPECT_TRUE(fs::exists(*model.visual_mesh));
+  EXPECT_TRUE(model.visual_barycentric);
+  EXPECT_TRUE(contains(s.skipped, "CollisionPipeline 'CollisionPipeline' (line 18)"));
+  EXPECT_TRUE(contains(s.skipped, "RequiredPlugin"));
+  EXPECT_TRUE(contains(s.skipped, "SphereCollisionModel 'CollisionModel'"));
+  EXPECT_TRUE(contains(s.skipped, "SphereLoader"));
+  EXPECT_FALSE(contains(s.skipped, "LiverSurface"));  // used by the OglModel
+  EXPECT_FALSE(contains(s.skipped, "'dofs'"));
+  EXPECT_TRUE(contains(s.warnings, "not simulated by HoF and skipped"));
+  EXPECT_GT(run_ten_steps(c), 0.0);
+}
+
+TEST(SofaScene, TutorialForceFieldLiverFem) {
+  const SofaScene s = load(kAnchors + "/TutorialForceFieldLiverFEM.scn");
+  ASSERT_EQ(s.models.size(), 1u);
+  const auto& c = s.models[0].config;
+  EXPECT_EQ(c.positions.size(), 181u);
+  EXPECT_EQ(c.tets.size(), 596u);
+  EXPECT_DOUBLE_EQ(fem_of(c).young_modulus_pa, 50.0);
+  EXPECT_DOUBLE_EQ(fem_of(c).poisson_ratio, 0.45);
+  EXPECT_EQ(c.mass.kind, MassKind::kUniform);
+  EXPECT_DOUBLE_EQ(c.mass.total_mass_kg, 1.0);
+  EXPECT_FALSE(c.mass.vertex_mass_kg.has_value());
+  EXPECT_EQ(c.fixed[0].indices, (std::vector<std::int32_t>{3, 39, 64}));
+  EXPECT_TRUE(s.models[0].visual_barycentric);
+  EXPECT_EQ(s.models[0].visual_mesh->filename(), "liver-smooth.obj");
+  EXPECT_TRUE(contains(s.skipped, "VisualStyle"));
+  EXPECT_GT(run_ten_steps(c), 0.0);
+}
+
+TEST(SofaScene, History2008ObjectSyntaxWithMeshAndXs3) {
+  const SofaScene s = load(kAnchors + "/history/2008-07-30_14f43fd649/liver.scn");
+  ASSERT_EQ(s.models.size(), 1u);
+  const auto& c = s.models[0].config;
+  EXPECT_EQ(c.positions.size(), 181u);  // from BehaviorModels/liver.xs3
+  EXPECT_EQ(c.tets.size(), 597u);       // from mesh/liver.mesh
+  EXPECT_DOUBLE_EQ(c.dt_s, 0.02);
+  EXPECT_EQ(c.ode.kind, OdeSolverKind::kEulerImplicit);
+  EXPECT_DOUBLE_EQ(c.ode.rayleigh_stiffness, 0.1);  // 2008 defaults
+  EXPECT_DOUBLE_EQ(c.ode.rayleigh_mass, 0.1);
+  EXPECT_TRUE(contains(s.warnings, "Rayleigh defaults"));
+  EXPECT_EQ(c.linear.iterations, 25);
+  EXPECT_DOUBLE_EQ(c.linear.tolerance, 1e-9);
+  EXPECT_DOUBLE_EQ(fem_of(c).young_modulus_pa, 500.0);
+  EXPECT_DOUBLE_EQ(fem_of(c).poisson_ratio, 0.3);
+  EXPECT_EQ(c.mass.kind, MassKind::kUniform);  // xs3 masses, all 0.05
+  ASSERT_TRUE(c.mass.vertex_mass_kg.has_value());
+  EXPECT_DOUBLE_EQ(*c.mass.vertex_mass_kg, 0.05);
+  EXPECT_EQ(c.fixed[0].indices, (std::vector<std::int32_t>{3, 39, 64}));
+  EXPECT_TRUE(s.models[0].visual_barycentric);
+  EXPECT_EQ(s.models[0].visual_mesh->filename(), "liver-smooth.obj");
+  EXPECT_TRUE(contains(s.skipped, "Sphere 'CollisionModel'"));
+  EXPECT_GT(run_ten_steps(c), 0.0);
+}
+
+TEST(SofaScene, History2008MeshLoader) {
+  const SofaScene s = load(kAnchors + "/history/2008-10-17_ceddbfd360/liver.scn");
+  ASSERT_EQ(s.models.size(), 1u);
+  const auto& c = s.models[0].config;
+  EXPECT_EQ(c.positions.size(), 181u);
+  EXPECT_EQ(c.tets.size(), 596u);
+  EXPECT_DOUBLE_EQ(c.ode.rayleigh_stiffness, 0.1);
+  EXPECT_DOUBLE_EQ(fem_of(c).young_modulus_pa, 500.0);
+  EXPECT_EQ(c.mass.kind, MassKind::kDiagonal);
+  EXPECT_DOUBLE_EQ(c.mass.mass_density_kg_per_m3, 1.0);
+  EXPECT_TRUE(s.models[0].visual_barycentric);
+  EXPECT_GT(run_ten_steps(c), 0.0);
+}
+
+// ---- small scenes written to a temporary folder ------------------------------------------------
+
+class SofaSceneFiles : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           fmt_name(::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::create_directories(dir_);
+    // One tetrahedron as a Gmsh v2 file.
+    write("tet.msh",
+          "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n4\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n$EndNodes\n"
+          "$Elements\n1\n1 4 2 0 1 1 2 3 4\n$EndElements\n");
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  static std::string fmt_name(const char* test) { return std::string("hof_sofa_scene_") + test; }
+  fs::path write(const std::string& name, const std::string& text) {
+    std::ofstream(dir_ / name) << text;
+    return dir_ / name;
+  }
+  Error read_error(const std::string& scene) {
+    auto s = read_sofa_scene(write("scene.scn", scene));
+    EXPECT_FALSE(s.has_value());
+    return s ? Error{} : s.error();
+  }
+  fs::path dir_;
+};
+
+TEST_F(SofaSceneFiles, MalformedXmlReportsTheLine) {
+  const Error e = read_error("<Node name=\"root\">\n  <EulerImplicitSolver/>\n  <MechanicalObject position=\"0 0 0\"\n"
+                             "  <UniformMass/>\n</Node>\n");
+  EXPECT_EQ(e.code, ErrorCode::kParse);
+  EXPECT_EQ(e.line, 4);
+  EXPECT_NE(e.message.find("malformed XML"), std::string::npos) << e.message;
+  EXPECT_NE(e.file.find("scene.scn"), std::string::npos);
+}
+
+TEST_F(SofaSceneFiles, MissingMeshNamesThePath) {
+  const Error e = read_error("<Node name=\"root\">\n<Node name=\"body\">\n  <EulerImplicitSolver/>\n"
+                             "  <MeshGmshLoader name=\"loader\" filename=\"nowhere/missing.msh\"/>\n"
+                             "  <MechanicalObject src=\"@loader\"/>\n</Node>\n</Node>\n");
+  EXPECT_EQ(e.code, ErrorCode::kIo);
+  EXPECT_EQ(e.line, 4);
+  EXPECT_NE(e.message.find("MeshGmshLoader 'loader'"), std::string::npos) << e.message;
+  EXPECT_NE(e.message.find((dir_ / "nowhere/missing.msh").string()), std::string::npos) << e.message;
+}
+
+TEST_F(SofaSceneFiles, BadNumberNamesTheAttribute) {
+  const Error e = read_error("<Node name=\"root\">\n  <EulerImplicitSolver/>\n  <MeshGmshLoader name=\"l\" filename=\"tet.msh\"/>\n"
+                             "  <MechanicalObject src=\"@l\"/>\n"
+                             "  <TetrahedronFEMForceField name=\"FEM\" youngModulus=\"3e3x\"/>\n</Node>\n");
+  EXPECT_EQ(e.line, 5);
+  EXPECT_NE(e.message.find("TetrahedronFEMForceField 'FEM'"), std::string::npos) << e.message;
+  EXPECT_NE(e.message.find("youngModulus"), std::string::npos) << e.message;
+  EXPECT_NE(e.message.find("'3e3x'"), std::string::npos) << e.message;
+}
+
+TEST_F(SofaSceneFiles, UnknownLinkIsAnError) {
+  const Error e = read_error("<Node name=\"root\">\n  <EulerImplicitSolver/>\n  <MeshGmshLoader name=\"l\" filename=\"tet.msh\"/>\n"
+                             "  <MechanicalObject name=\"dofs\" position=\"@nothere.position\"/>\n</Node>\n");
+  EXPECT_EQ(e.line, 4);
+  EXPECT_NE(e.message.find("MechanicalObject 'dofs'"), std::string::npos) << e.message;
+  EXPECT_NE(e.message.find("@nothere.position"), std::string::npos) << e.message;
+}
+
+TEST_F(SofaSceneFiles, FixedIndexOutOfRange) {
+  const Error e = read_error("<Node name=\"root\">\n  <EulerImplicitSolver/>\n  <MeshGmshLoader name=\"l\" filename=\"tet.msh\"/>\n"
+                             "  <MechanicalObject src=\"@l\"/>\n  <FixedProjectiveConstraint indices=\"0 4\"/>\n</Node>\n");
+  EXPECT_EQ(e.line, 5);
+  EXPECT_NE(e.message.find("node 4 out of range"), std::string::npos) << e.message;
+}
+
+TEST_F(SofaSceneFiles, ModelWithoutPositions) {
+  const Error e = read_error("<Node name=\"root\">\n  <EulerImplicitSolver/>\n  <MechanicalObject name=\"dofs\"/>\n</Node>\n");
+  EXPECT_EQ(e.line, 3);
+  EXPECT_NE(e.message.find("no positions"), std::string::npos) << e.message;
+}
+
+TEST_F(SofaSceneFiles, LinksLoaderTransformAndSolvers) {
+  auto s = read_sofa_scene(write(
+      "scene.scn",
+      "<Node name=\"root\" dt=\"0.005\" gravity=\"0 0 -9.81\">\n"
+      "  <Node name=\"body\">\n"
+      "    <StaticSolver newton_iterations=\"3\"/>\n"
+      "    <SparseLDLSolver name=\"ldl\"/>\n"
+      "    <MeshGmshLoader name=\"l\" filename=\"tet.msh\" translation=\"1 2 3\" rotation=\"0 0 90\" scale=\"2\"/>\n"
+      "    <TetrahedronSetTopologyContainer name=\"topo\" tetrahedra=\"@l.tetrahedra\"/>\n"
+      "    <MechanicalObject name=\"dofs\" position=\"@l.position\"/>\n"
+      "    <UniformMass vertexMass=\"0.5\"/>\n"
+      "    <MeshSpringForceField name=\"springs\" tetrasStiffness=\"100\" tetrasDamping=\"1\"/>\n"
+      "    <ConstantForceField indices=\"1\" forces=\"0 0 1\"/>\n"
+      "    <PartialFixedConstraint indices=\"0 2 3\" fixedDirections=\"1 1 1\"/>\n"
+      "    <PartialFixedProjectiveConstraint indices=\"1\" fixedDirections=\"0 1 1\"/>\n"
+      "  </Node>\n"
+      "</Node>\n"));
+  ASSERT_TRUE(s.has_value()) << s.error().to_string();
+  ASSERT_EQ(s->models.size(), 1u);
+  const auto& c = s->models[0].config;
+  EXPECT_DOUBLE_EQ(c.dt_s, 0.005);  // inherited
+  EXPECT_EQ(c.gravity_m_per_s2, Vec3(0, 0, -9.81));
+  EXPECT_EQ(c.ode.kind, OdeSolverKind::kStatic);
+  EXPECT_EQ(c.ode.newton_iterations, 3);
+  EXPECT_EQ(c.linear.kind, LinearSolverKind::kSparseLdlt);
+  ASSERT_EQ(c.positions.size(), 4u);
+  // Node 2 (1,0,0): scaled to (2,0,0), turned 90° about z to (0,2,0), moved to (1,4,3).
+  EXPECT_NEAR((c.positions[1] - Vec3(1, 4, 3)).norm(), 0.0, 1e-12);
+  EXPECT_EQ(c.tets.size(), 1u);
+  EXPECT_EQ(c.mass.kind, MassKind::kUniform);
+  EXPECT_DOUBLE_EQ(*c.mass.vertex_mass_kg, 0.5);
+  ASSERT_EQ(c.force_fields.size(), 2u);
+  EXPECT_DOUBLE_EQ(c.force_fields[0].mesh_springs->stiffness_n_per_m, 100.0);
+  EXPECT_DOUBLE_EQ(c.force_fields[0].mesh_springs->damping_n_s_per_m, 1.0);
+  EXPECT_EQ(c.force_fields[1].constant_force->forces.at(0), Vec3(0, 0, 1));
+  ASSERT_EQ(c.fixed.size(), 2u);
+  EXPECT_EQ(c.fixed[1].directions, (std::array<bool, 3>{false, true, true}));
+  EXPECT_TRUE(s->skipped.empty());
+  EXPECT_TRUE(mechanics::build_model(c).has_value());
+}
+
+TEST_F(SofaSceneFiles, CgImplicitOf2008IsImplicitEulerWithCg) {
+  auto s = read_sofa_scene(write(
+      "scene.scn",
+      "<Node name=\"root\" dt=\"0.02\">\n"
+      "  <Object type=\"CGImplicit\" iterations=\"10\"/>\n"
+      "  <Object type=\"Mesh\" name=\"m\" filename=\"tet.msh\"/>\n"
+      "  <Object type=\"MechanicalObject\"/>\n"
+      "  <Object type=\"UniformMass\" totalMass=\"2\"/>\n"
+      "  <Object type=\"FixedConstraint\" fixAll=\"1\"/>\n"
+      "</Node>\n"));
+  ASSERT_TRUE(s.has_value()) << s.error().to_string();
+  ASSERT_EQ(s->models.size(), 1u);
+  const auto& c = s->models[0].config;
+  EXPECT_EQ(c.ode.kind, OdeSolverKind::kEulerImplicit);
+  EXPECT_DOUBLE_EQ(c.ode.rayleigh_stiffness, 0.1);
+  EXPECT_DOUBLE_EQ(c.ode.rayleigh_mass, 0.1);
+  EXPECT_EQ(c.linear.kind, LinearSolverKind::kConjugateGradient);
+  EXPECT_EQ(c.linear.iterations, 10);
+  EXPECT_DOUBLE_EQ(c.linear.tolerance, 1e-5);
+  EXPECT_EQ(c.tets.size(), 1u);
+  EXPECT_TRUE(c.fixed.at(0).fix_all);
+  EXPECT_TRUE(contains(s->warnings, "Rayleigh defaults"));
+}
+
+}  // namespace
+}  // namespace hof::scene
