@@ -1,20 +1,15 @@
 #!/usr/bin/env bash
-# The main job. Does all set-up on a fresh Debian 12 machine, builds `hof`, then generates
-# the bundled standard liver models (simple, coarse, medium, fine) into out/models/ and prints
-# their statistics. Usage: scripts/run.sh [OUT_DIR]
+# The main job. Does all set-up on a fresh Debian 12 machine, builds `hof`, then runs a
+# headless haptic session on the bundled medium liver (a scripted poke into mesh-spring
+# tissue, the thesis' settings) and writes its report to out/report/ (telemetry, summary,
+# final state, plots). Deterministic (virtual time): the same report every run.
+# Usage: scripts/run.sh [PROJECT.hof] [OUT_DIR]   (the GUI is a later issue)
 set -euo pipefail
 cd "$(dirname "$0")/.."
-out=${1:-out}
+project=${1:-examples/liver-palpation-medium.hof}
+out=${2:-out/report}
 bash scripts/install-deps.sh
 cmake --preset release >/dev/null
 cmake --build --preset release --target hof
-hof=build/release/bin/hof
-mkdir -p "$out/models"
-for resolution in simple coarse medium fine; do
-  "$hof" mesh generate liver --resolution "$resolution" -o "$out/models/liver-$resolution.msh"
-done
-for resolution in simple coarse medium fine; do
-  "$hof" mesh info "$out/models/liver-$resolution.msh"
-  echo
-done
-echo "Models (Gmsh v4.1 volume + OBJ surface) are in $out/models/"
+build/release/bin/hof run "$project" --headless --deterministic --seconds 3 --out "$out"
+echo "Report: $out/summary.json, $out/telemetry.csv, plots $out/*.png"
