@@ -5,6 +5,7 @@
 #include <cstdio>
 
 #include "hof/app/mesh_commands.h"
+#include "hof/app/bench_command.h"
 #include "hof/app/run_command.h"
 
 namespace {
@@ -91,6 +92,15 @@ void add_run_commands(CLI::App& app, int& status) {
     if (!out.empty()) run.out = out;
     status = hof::app::run_session(run);
   });
+
+  static hof::app::BenchOptions bench;
+  CLI::App* bench_cmd = app.add_subcommand(
+      "bench", "Time the mechanics of a scene as fast as it goes (compare with runSofa -g batch -n N)");
+  bench_cmd->add_option("--scene", bench.scene, "Project (.hof) or SOFA scene (.scn)")->required()->check(CLI::ExistingFile);
+  bench_cmd->add_option("--steps", bench.steps, "Simulation steps to time")->capture_default_str();
+  bench_cmd->add_option("--threads", bench.threads, "Threads (0 = all cores)")->capture_default_str();
+  bench_cmd->add_flag("--json", bench.json, "Print the figures as JSON");
+  bench_cmd->callback([&] { status = hof::app::run_bench(bench); });
 
   static hof::app::CheckOptions check;
   CLI::App* check_cmd = app.add_subcommand("check", "Validate a project, scene or mesh and print every problem");
