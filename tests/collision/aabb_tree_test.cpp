@@ -1,6 +1,3 @@
-// (GCC cannot see that the replaced operator new uses malloc.)
-#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
-
 // AabbTree: analytic single-triangle and unit-cube cases, then the tree against brute force
 // (and against an independent distance formula) on the SOFA liver, the generated liver and
 // a triangle soup; refit, leaf sizes, triangles_near, degenerate input, and queries and refit
@@ -9,6 +6,8 @@
 #include "hof/collision/aabb_tree.h"
 
 #include <gtest/gtest.h>
+
+#include "support/allocation_counter.h"
 
 #include <algorithm>
 #include <atomic>
@@ -22,31 +21,6 @@
 #include "hof/mesh/liver_generator.h"
 #include "hof/mesh/mesh_io.h"
 
-namespace {
-std::atomic<long> g_allocations{0};
-}
-
-void* operator new(std::size_t size) {
-  g_allocations.fetch_add(1, std::memory_order_relaxed);
-  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t size) { return operator new(size); }
-void* operator new(std::size_t size, std::align_val_t align) {
-  g_allocations.fetch_add(1, std::memory_order_relaxed);
-  const auto a = static_cast<std::size_t>(align);
-  if (void* p = std::aligned_alloc(a, (size + a - 1) / a * a)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t size, std::align_val_t align) { return operator new(size, align); }
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
-void operator delete(void* p, std::align_val_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::align_val_t) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
 
 namespace hof::collision {
 namespace {
@@ -556,7 +530,7 @@ TEST(AabbTreeQueries, QueriesAndRefitAllocateNothing) {
     for (Vec3& p : points) p = q.next();
     std::vector<std::int32_t> out(64);
     double sink = 0.0;
-    const long before = g_allocations.load();
+    const long before = hof::testing::allocation_count();
     for (std::size_t i = 0; i + 1 < points.size(); ++i) {
       const Vec3& a = points[i];
       const Vec3& b = points[i + 1];
@@ -566,7 +540,7 @@ TEST(AabbTreeQueries, QueriesAndRefitAllocateNothing) {
       sink += static_cast<double>(tree.triangles_near(a, 0.01, out));
     }
     sink += tree.refit(view(moved)) ? 1.0 : 0.0;
-    EXPECT_EQ(g_allocations.load() - before, 0);
+    EXPECT_EQ(hof::testing::allocation_count() - before, 0);
     EXPECT_TRUE(std::isfinite(sink));
   }
 }

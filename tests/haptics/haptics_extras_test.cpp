@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include "support/allocation_counter.h"
+
 #include <atomic>
 #include <cstdlib>
 #include <new>
@@ -10,21 +12,7 @@
 #include "haptics_test_support.h"
 #include "hof/haptics/haptic_loop.h"
 
-#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
 
-namespace {
-std::atomic<long> g_allocations{0};
-}
-void* operator new(std::size_t size) {
-  g_allocations.fetch_add(1, std::memory_order_relaxed);
-  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t size) { return operator new(size); }
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
 
 namespace hof::haptics {
 namespace {
@@ -113,12 +101,12 @@ TEST(HapticTick, AllocatesNothing) {
     loop.effects().viscosities.push_back(ViscosityEffect{});
     HapticSample sample;
     for (int i = 0; i < 100; ++i) loop.tick(i * 1e-3);
-    const long before = g_allocations.load();
+    const long before = hof::testing::allocation_count();
     for (int i = 100; i < 2000; ++i) {
       loop.tick(i * 1e-3);
       loop.telemetry().pop(sample);
     }
-    EXPECT_EQ(g_allocations.load() - before, 0) << "renderer " << static_cast<int>(kind);
+    EXPECT_EQ(hof::testing::allocation_count() - before, 0) << "renderer " << static_cast<int>(kind);
   }
 }
 

@@ -1,10 +1,9 @@
-// (GCC cannot see that the replaced operator new uses malloc.)
-#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
-
 // A mechanics step allocates no memory once the state is made (MuJoCo/Drake practice: the
 // hot loop runs from storage sized up front). Counted by replacing global operator new.
 
 #include <gtest/gtest.h>
+
+#include "support/allocation_counter.h"
 
 #include <atomic>
 #include <cstdlib>
@@ -13,31 +12,6 @@
 #include "hof/mechanics/step.h"
 #include "hof/mesh/liver_generator.h"
 
-namespace {
-std::atomic<long> g_allocations{0};
-}
-
-void* operator new(std::size_t size) {
-  g_allocations.fetch_add(1, std::memory_order_relaxed);
-  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t size) { return operator new(size); }
-void* operator new(std::size_t size, std::align_val_t align) {
-  g_allocations.fetch_add(1, std::memory_order_relaxed);
-  const auto a = static_cast<std::size_t>(align);
-  if (void* p = std::aligned_alloc(a, (size + a - 1) / a * a)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t size, std::align_val_t align) { return operator new(size, align); }
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
-void operator delete(void* p, std::align_val_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::align_val_t) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
 
 namespace hof::mechanics {
 namespace {
@@ -82,17 +56,17 @@ TEST(NoAllocation, StepsAllocateNothingAfterMakeState) {
     ASSERT_TRUE(model) << model.error().to_string();
     MechanicalState state = make_state(*model);
     for (int i = 0; i < 3; ++i) ASSERT_TRUE(step(*model, state));  // warm-up (thread pool start)
-    const long before = g_allocations.load();
+    const long before = hof::testing::allocation_count();
     for (int i = 0; i < 5; ++i) ASSERT_TRUE(step(*model, state)) << c.name << ": " << state.divergence.reason;
-    EXPECT_EQ(g_allocations.load() - before, 0) << c.name;
+    EXPECT_EQ(hof::testing::allocation_count() - before, 0) << c.name;
   }
 }
 
 TEST(NoAllocation, TheCounterCounts) {
-  const long before = g_allocations.load();
+  const long before = hof::testing::allocation_count();
   auto* p = new std::vector<int>(100);
   delete p;
-  EXPECT_GE(g_allocations.load() - before, 2);
+  EXPECT_GE(hof::testing::allocation_count() - before, 2);
 }
 
 }  // namespace

@@ -101,9 +101,7 @@ bool Session::proxy_inside(const Vec3& p) const {
   return total / (4.0 * std::numbers::pi) > 0.5;
 }
 
-namespace {
-
-struct StateTimer {
+struct Session::StateTimer {
   double untouched_s{0}, deforming_s{0}, contact_s{0};
   std::int64_t untouched{0}, deforming{0}, contact{0};
   void add(bool in_contact, bool moving, double seconds) {
@@ -121,7 +119,20 @@ struct StateTimer {
   static double rate(std::int64_t n, double s) { return s > 0.0 ? static_cast<double>(n) / s : 0.0; }
 };
 
-}  // namespace
+void Session::finish_report(SessionReport& report, const StateTimer& timer, double wall_s) const {
+  report.wall_s = wall_s;
+  report.simulated_s = static_cast<double>(report.simulation_steps) * body_.model.dt_s;
+  report.simulation_steps_per_s = wall_s > 0.0 ? static_cast<double>(report.simulation_steps) / wall_s : 0.0;
+  report.rate_untouched = StateTimer::rate(timer.untouched, timer.untouched_s);
+  report.rate_deforming = StateTimer::rate(timer.deforming, timer.deforming_s);
+  report.rate_in_contact = StateTimer::rate(timer.contact, timer.contact_s);
+  report.haptic_periods = loop_->period_stats();
+  report.safety = loop_->safety_counters();
+  for (std::size_t i = 0; i < body_.model.node_count(); ++i) {
+    report.max_displacement_m = std::max(report.max_displacement_m,
+                                         (state_.position(static_cast<std::int32_t>(i)) - body_.model.rest_positions[i]).norm());
+  }
+}
 
 SessionReport Session::run_virtual(double seconds, const std::function<void(const haptics::HapticSample&)>& on_sample,
                                    const ProgressSink& progress) {
@@ -162,18 +173,7 @@ SessionReport Session::run_virtual(double seconds, const std::function<void(cons
     if (progress && (s % 16 == 0 || s + 1 == steps)) progress("haptic session (virtual time)", static_cast<double>(s + 1) / static_cast<double>(steps));
   }
   report.haptic_ticks = tick;
-  report.simulated_s = static_cast<double>(report.simulation_steps) * dt;
-  report.wall_s = seconds_between(start, Clock::now());
-  report.simulation_steps_per_s = report.wall_s > 0.0 ? static_cast<double>(report.simulation_steps) / report.wall_s : 0.0;
-  report.rate_untouched = StateTimer::rate(timer.untouched, timer.untouched_s);
-  report.rate_deforming = StateTimer::rate(timer.deforming, timer.deforming_s);
-  report.rate_in_contact = StateTimer::rate(timer.contact, timer.contact_s);
-  report.haptic_periods = loop_->period_stats();
-  report.safety = loop_->safety_counters();
-  for (std::size_t i = 0; i < body_.model.node_count(); ++i) {
-    report.max_displacement_m = std::max(report.max_displacement_m,
-                                         (state_.position(static_cast<std::int32_t>(i)) - body_.model.rest_positions[i]).norm());
-  }
+  finish_report(report, timer, seconds_between(start, Clock::now()));
   return report;
 }
 
@@ -223,18 +223,7 @@ SessionReport Session::run_realtime(double seconds, const std::function<void(con
   }
   if (progress) progress("haptic session (real time)", 1.0);
   report.haptic_ticks = static_cast<std::int64_t>(loop_->ticks());
-  report.wall_s = seconds_between(start, Clock::now());
-  report.simulated_s = static_cast<double>(report.simulation_steps) * dt;
-  report.simulation_steps_per_s = report.wall_s > 0.0 ? static_cast<double>(report.simulation_steps) / report.wall_s : 0.0;
-  report.rate_untouched = StateTimer::rate(timer.untouched, timer.untouched_s);
-  report.rate_deforming = StateTimer::rate(timer.deforming, timer.deforming_s);
-  report.rate_in_contact = StateTimer::rate(timer.contact, timer.contact_s);
-  report.haptic_periods = loop_->period_stats();
-  report.safety = loop_->safety_counters();
-  for (std::size_t i = 0; i < body_.model.node_count(); ++i) {
-    report.max_displacement_m = std::max(report.max_displacement_m,
-                                         (state_.position(static_cast<std::int32_t>(i)) - body_.model.rest_positions[i]).norm());
-  }
+  finish_report(report, timer, seconds_between(start, Clock::now()));
   return report;
 }
 

@@ -85,6 +85,9 @@ class Session {
 
  private:
   Session(SessionBody body, std::unique_ptr<haptics::Device> device, const SessionConfig& config);
+  struct StateTimer;  // wall time per state (untouched, deforming, in contact)
+  // Rates, periods, safety counters and displacement, common to both run modes.
+  void finish_report(SessionReport& report, const StateTimer& timer, double wall_s) const;
   // Turns the accumulated contact of the last ticks into external forces on the tissue.
   void apply_contact_forces();
   // Maps the volume to the surface and publishes a snapshot.

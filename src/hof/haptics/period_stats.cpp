@@ -29,7 +29,7 @@ double PeriodStats::quantile_s(double q) const {
   std::uint64_t seen = 0;
   for (std::size_t b = 0; b < bins_.size(); ++b) {
     seen += bins_[b];
-    if (seen >= std::max<std::uint64_t>(target, 1)) return (static_cast<double>(b) + 0.5) * kBinWidth;
+    if (seen >= std::max<std::uint64_t>(target, 1)) return std::min((static_cast<double>(b) + 0.5) * kBinWidth, max_s_);
   }
   return max_s_;
 }
