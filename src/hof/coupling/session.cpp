@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <Eigen/LU>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <numbers>
@@ -52,6 +54,30 @@ void Session::publish_surface(double time_s) {
   body_.mapping.apply({state_.v.data(), static_cast<std::size_t>(state_.v.size())}, surface_velocities_);
   haptics::SurfaceSnapshot& slot = surfaces_.write_slot();
   haptics::update_snapshot(slot, surface_positions_, surface_velocities_, time_s);
+  slot.local.valid = false;
+  if (config_.coupling == ContactCoupling::kCompliance && last_triangle_ >= 0 && contact_ticks_since_publish_ > 0) {
+    // The contact point's compliance at the current state (Saupin, Duriez & Cotin 2008).
+    const mesh::Tri& tri = body_.surface.triangles[static_cast<std::size_t>(last_triangle_)];
+    const std::array<std::int32_t, 3> vertices{tri[0], tri[1], tri[2]};
+    const std::array<double, 3> bary{last_barycentric_[0], last_barycentric_[1], last_barycentric_[2]};
+    std::array<std::int32_t, 12> nodes{};
+    std::array<double, 12> weights{};
+    const std::size_t count = body_.mapping.point_weights(vertices, bary, nodes, weights);
+    Mat3 compliance;
+    if (mechanics::compute_point_compliance(body_.model, state_, std::span(nodes.data(), count),
+                                            std::span(weights.data(), count), compliance)) {
+      const Eigen::FullPivLU<Mat3> lu(compliance);
+      if (lu.isInvertible()) {
+        slot.local.valid = true;
+        slot.local.triangle = last_triangle_;
+        slot.local.barycentric = last_barycentric_;
+        slot.local.compliance = compliance;
+        slot.local.stiffness = lu.inverse();
+        slot.local.applied_force = last_reaction_;
+      }
+    }
+  }
+  contact_ticks_since_publish_ = 0;
   surfaces_.publish();
 }
 
@@ -64,15 +90,18 @@ void Session::accumulate(const haptics::HapticSample& s) {
   if (!s.contact || s.triangle < 0) return;
   reaction_sum_ -= s.force;  // the tissue feels the opposite of what the hand feels
   ++contact_ticks_;
+  ++contact_ticks_since_publish_;
   last_triangle_ = s.triangle;
   last_barycentric_ = s.barycentric;
 }
 
 void Session::apply_contact_forces() {
   state_.external_force.setZero();
+  last_reaction_.setZero();
   if (contact_ticks_ > 0 && last_triangle_ >= 0) {
     // Average over the step's ticks (the force acted only during the contact ticks).
     const Vec3 reaction = reaction_sum_ / static_cast<double>(std::max(ticks_since_step_, 1));
+    last_reaction_ = reaction;
     const mesh::Tri& tri = body_.surface.triangles[static_cast<std::size_t>(last_triangle_)];
     std::span<double> forces{state_.external_force.data(), static_cast<std::size_t>(state_.external_force.size())};
     if (config_.coupling == ContactCoupling::kClosestVertex) {

@@ -28,7 +28,13 @@
 
 namespace hof::coupling {
 
-enum class ContactCoupling : std::uint8_t { kClosestVertex, kBarycentric };
+enum class ContactCoupling : std::uint8_t {
+  kClosestVertex,  ///< the thesis: the force on the contact triangle's nearest vertex
+  kBarycentric,    ///< spread over the contact triangle by the contact point's weights
+  /// barycentric forces, and with every step the contact point's 3x3 compliance from the
+  /// FEM state goes to the haptic loop, which renders the tissue's own reaction at 1 kHz
+  kCompliance,
+};
 
 struct SessionConfig {
   haptics::HapticLoopConfig haptics;  ///< rate, renderer, surface, safety, calibration
@@ -105,8 +111,10 @@ class Session {
   // Contact accumulated since the last simulation step.
   Vec3 reaction_sum_{Vec3::Zero()};
   int contact_ticks_{0};
+  int contact_ticks_since_publish_{0};
   int ticks_since_step_{0};
   std::int32_t last_triangle_{-1};
+  Vec3 last_reaction_{Vec3::Zero()};  // force applied on the tissue in the last step
   Vec3 last_barycentric_{Vec3::Zero()};
   Vec3 last_proxy_{Vec3::Zero()};
   bool last_proxy_valid_{false};

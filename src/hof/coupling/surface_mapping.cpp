@@ -100,6 +100,22 @@ void SurfaceMapping::add_vertex_force(std::int32_t surface_vertex, const Vec3& f
   }
 }
 
+std::size_t SurfaceMapping::point_weights(std::span<const std::int32_t> surface_vertices,
+                                         std::span<const double> surface_weights, std::span<std::int32_t> nodes,
+                                         std::span<double> weights) const {
+  std::size_t count = 0;
+  for (std::size_t v = 0; v < surface_vertices.size(); ++v) {
+    const auto& n = nodes_[static_cast<std::size_t>(surface_vertices[v])];
+    const auto& w = weights_[static_cast<std::size_t>(surface_vertices[v])];
+    for (int k = 0; k < (identity_ ? 1 : 4) && count < nodes.size(); ++k) {
+      nodes[count] = n[k];
+      weights[count] = surface_weights[v] * w[k];
+      ++count;
+    }
+  }
+  return count;
+}
+
 std::int32_t SurfaceMapping::dominant_node(std::int32_t surface_vertex) const {
   const auto& w = weights_[static_cast<std::size_t>(surface_vertex)];
   int best = 0;

@@ -37,6 +37,11 @@ class SurfaceMapping {
 
   [[nodiscard]] std::size_t surface_vertex_count() const { return nodes_.size(); }
   [[nodiscard]] bool is_identity() const { return identity_; }
+  /// Volume nodes and weights of a point of the surface given as weights over surface vertices
+  /// (e.g. a contact triangle's barycentric point); writes up to 12 pairs, returns the count.
+  std::size_t point_weights(std::span<const std::int32_t> surface_vertices, std::span<const double> surface_weights,
+                            std::span<std::int32_t> nodes, std::span<double> weights) const;
+
   /// The volume node carrying most weight for surface vertex v.
   [[nodiscard]] std::int32_t dominant_node(std::int32_t surface_vertex) const;
 

@@ -43,7 +43,23 @@ const ContactState& HapticRenderer::update(const Vec3& device_position, const Ve
     update_proxy(device_position, surface, surface_changed, dt);
   }
   compute_force(device_position, device_velocity);
+  apply_local_model(device_position, surface);
   return contact_;
+}
+
+void HapticRenderer::apply_local_model(const Vec3& device, const SurfaceSnapshot& surface) {
+  // Compliance coupling: the tissue's reaction to the indentation of its force-free surface.
+  const LocalContactModel& local = surface.local;
+  if (!local.valid || !contact_.in_contact || material_.kind == SurfaceKind::kZeroForce) return;
+  if (local.triangle < 0 || static_cast<std::size_t>(local.triangle) >= surface.triangles.size()) return;
+  const Vec3 free_point = surface.point(local.triangle, local.barycentric) - local.compliance * local.applied_force;
+  const Vec3 indentation = free_point - device;
+  if (!(indentation.dot(surface.face_normal(local.triangle)) > 0.0)) {
+    contact_.force.setZero();
+    return;
+  }
+  const Vec3 force = local.stiffness * indentation;
+  if (force.allFinite()) contact_.force = force;
 }
 
 void HapticRenderer::update_penalty(const Vec3& device, const SurfaceSnapshot& surface) {

@@ -86,6 +86,7 @@ class HapticRenderer {
   void anchor_to_surface(const SurfaceSnapshot& surface);
   void apply_friction(const Vec3& device, const Vec3& frictionless, const SurfaceSnapshot& surface, double dt);
   void compute_force(const Vec3& device, const Vec3& device_velocity);
+  void apply_local_model(const Vec3& device, const SurfaceSnapshot& surface);
 
   RendererConfig config_;
   SurfaceMaterial material_;

@@ -14,6 +14,18 @@
 
 namespace hof::haptics {
 
+/// The tissue's local linear response at the current contact, computed by the simulation
+/// with each snapshot (compliance coupling): the haptic loop then renders the tissue's own
+/// reaction, F = K (p_free − device), at 1 kHz instead of a rigid-wall spring.
+struct LocalContactModel {
+  bool valid{false};
+  std::int32_t triangle{-1};             ///< contact triangle of the snapshot
+  Vec3 barycentric{Vec3::Zero()};        ///< contact point in it
+  Mat3 compliance{Mat3::Zero()};         ///< C, m/N
+  Mat3 stiffness{Mat3::Zero()};          ///< K = C⁻¹, N/m
+  Vec3 applied_force{Vec3::Zero()};      ///< force the simulation applied there (on the tissue), N
+};
+
 struct SurfaceSnapshot {
   std::vector<Vec3> vertices;         ///< (V) world frame, m
   std::vector<Vec3> velocities;       ///< (V) m/s
@@ -25,6 +37,7 @@ struct SurfaceSnapshot {
   double refit_s{0.0};                ///< time spent refitting this snapshot's tree
   /// Geometry that never changes (no simulation behind it): never considered stale.
   bool is_static{false};
+  LocalContactModel local;            ///< compliance coupling (invalid otherwise)
 
   [[nodiscard]] collision::TriangleMeshView view() const { return {vertices, triangles}; }
   /// Point of triangle `t` at barycentric weights `w`.

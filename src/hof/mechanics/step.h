@@ -7,6 +7,8 @@
 #include "hof/mechanics/mechanical_model.h"
 #include "hof/mechanics/mechanical_state.h"
 
+#include <span>
+
 namespace hof::mechanics {
 
 /// Advances `state` by one time step of model.dt_s. Returns false when the model has diverged
@@ -23,6 +25,16 @@ bool step(const MechanicalModel& model, MechanicalState& state);
 /// external), with fixed nodes' entries set to zero. Also refreshes per-field element data.
 void compute_forces(const MechanicalModel& model, MechanicalState& state, const Eigen::VectorXd& x,
                     const Eigen::VectorXd& v, Eigen::VectorXd& f);
+
+/// The 3x3 compliance of the body at a point (m/N): how far the point moves per newton
+/// applied there, other forces fixed, from the stiffness linearised at the current state with
+/// the fixed nodes held — the local contact model the haptic loop renders at 1 kHz
+/// (Saupin, Duriez & Cotin, ISBMS 2008). The point is Σ weights[k]·x[nodes[k]]. Solved by
+/// block-Jacobi-preconditioned CG to 1e-10 relative residual in the state's scratch (call it
+/// between steps; no allocation). Returns false when the body is not held (singular
+/// stiffness) or the solve fails.
+bool compute_point_compliance(const MechanicalModel& model, MechanicalState& state,
+                              std::span<const std::int32_t> nodes, std::span<const double> weights, Mat3& compliance);
 
 /// Largest residual force on a free node (N): how far from static equilibrium the state is.
 [[nodiscard]] double max_residual_force(const MechanicalModel& model, MechanicalState& state);

@@ -36,7 +36,12 @@ const char* face_name(collision::TouchableFace f) {
   return "FRONT";
 }
 const char* coupling_name(coupling::ContactCoupling c) {
-  return c == coupling::ContactCoupling::kClosestVertex ? "closest-vertex" : "barycentric";
+  switch (c) {
+    case coupling::ContactCoupling::kClosestVertex: return "closest-vertex";
+    case coupling::ContactCoupling::kBarycentric: return "barycentric";
+    case coupling::ContactCoupling::kCompliance: return "compliance";
+  }
+  return "barycentric";
 }
 const char* surface_name(haptics::SurfaceKind k) {
   switch (k) {
@@ -172,7 +177,8 @@ Expected<HofProject> read_project(const std::filesystem::path& path) {
     const std::string coupling = h.attribute("coupling").as_string("barycentric");
     if (coupling == "barycentric") p.coupling = coupling::ContactCoupling::kBarycentric;
     else if (coupling == "closest-vertex") p.coupling = coupling::ContactCoupling::kClosestVertex;
-    else r.fail(h, fmt::format("unknown coupling \"{}\" (barycentric, closest-vertex)", coupling));
+    else if (coupling == "compliance") p.coupling = coupling::ContactCoupling::kCompliance;
+    else r.fail(h, fmt::format("unknown coupling \"{}\" (barycentric, closest-vertex, compliance)", coupling));
     if (const pugi::xml_node c = h.child("calibration")) {
       if (const pugi::xml_attribute a = c.attribute("positionCalibration")) {
         std::istringstream values(a.value());
