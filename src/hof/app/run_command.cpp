@@ -16,6 +16,7 @@
 #include "hof/mesh/mesh_io.h"
 #include "hof/scene/project.h"
 #include "hof/scene/sofa_scene.h"
+#include "hof/scene/x3d_scene.h"
 
 namespace hof::app {
 
@@ -257,6 +258,20 @@ int run_check(const CheckOptions& options) {
     }
     std::printf("%s\n", problems ? fmt::format("{} problem(s)", problems).c_str() : "ok");
     return problems ? 1 : 0;
+  }
+  if (ext == ".x3d") {
+    auto x3d = scene::read_x3d_scene(options.file);
+    if (!x3d) return fail(x3d.error());
+    std::size_t touchable = 0, triangles = 0;
+    for (const auto& shape : x3d->shapes) {
+      touchable += shape.touchable ? 1 : 0;
+      triangles += shape.mesh_W.triangles.size();
+    }
+    std::printf("%s: %zu shapes (%zu touchable, %zu triangles), %zu devices\n", options.file.c_str(), x3d->shapes.size(),
+                touchable, triangles, x3d->devices.size());
+    for (const auto& w : x3d->warnings) std::printf("warning: %s\n", w.c_str());
+    std::printf("ok\n");
+    return 0;
   }
   auto read = mesh::read_mesh(options.file);
   if (!read) return fail(read.error());
