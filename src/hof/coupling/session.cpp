@@ -73,7 +73,11 @@ void Session::publish_surface(double time_s) {
         slot.local.barycentric = last_barycentric_;
         slot.local.compliance = compliance;
         slot.local.stiffness = lu.inverse();
-        slot.local.applied_force = last_reaction_;
+        // The load that holds the tissue in its current shape at that point (minus its
+        // elastic force), rather than the force last applied: the local model then stays
+        // consistent with the simulated shape even while the simulation is still settling.
+        slot.local.applied_force =
+            -mechanics::point_elastic_force(body_.model, state_, std::span(nodes.data(), count), std::span(weights.data(), count));
       }
     }
   }
@@ -186,6 +190,8 @@ SessionReport Session::run_virtual(double seconds, const std::function<void(cons
         if (on_sample) on_sample(sample);
       }
     }
+    // Fall-through: the proxy against the surface the haptic loop rendered on.
+    if (last_proxy_valid_ && proxy_inside(last_proxy_)) ++report.fall_through_events;
     const auto step_start = Clock::now();
     apply_contact_forces();
     if (!mechanics::step(body_.model, state_)) {
@@ -197,7 +203,6 @@ SessionReport Session::run_virtual(double seconds, const std::function<void(cons
     publish_surface(static_cast<double>(s + 1) * dt);
     const double moving = state_.v.size() ? state_.v.cwiseAbs().maxCoeff() : 0.0;
     timer.add(contact_this_step, moving > 1e-4, seconds_between(step_start, Clock::now()));
-    if (last_proxy_valid_ && proxy_inside(last_proxy_)) ++report.fall_through_events;
     ++report.simulation_steps;
     if (progress && (s % 16 == 0 || s + 1 == steps)) progress("haptic session (virtual time)", static_cast<double>(s + 1) / static_cast<double>(steps));
   }
@@ -227,6 +232,7 @@ SessionReport Session::run_realtime(double seconds, const std::function<void(con
       if (sample.contact) report.contact_time_s += loop_->nominal_period_s();
       if (on_sample) on_sample(sample);
     }
+    if (last_proxy_valid_ && proxy_inside(last_proxy_)) ++report.fall_through_events;
     const auto step_start = Clock::now();
     apply_contact_forces();
     if (!mechanics::step(body_.model, state_)) {
@@ -238,7 +244,6 @@ SessionReport Session::run_realtime(double seconds, const std::function<void(con
     publish_surface(seconds_between(start, Clock::now()));
     const double moving = state_.v.size() ? state_.v.cwiseAbs().maxCoeff() : 0.0;
     timer.add(contact_this_step, moving > 1e-4, seconds_between(step_start, Clock::now()));
-    if (last_proxy_valid_ && proxy_inside(last_proxy_)) ++report.fall_through_events;
     ++report.simulation_steps;
     if (progress && s % 16 == 0) progress("haptic session (real time)", std::min(1.0, elapsed / seconds));
     // Fixed-rate simulation: sleep to the next step unless it is already late.

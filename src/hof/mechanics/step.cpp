@@ -122,6 +122,22 @@ bool compute_point_compliance(const MechanicalModel& model, MechanicalState& sta
   return compliance.allFinite();
 }
 
+Vec3 point_elastic_force(const MechanicalModel& model, MechanicalState& state, std::span<const std::int32_t> nodes,
+                         std::span<const double> weights) {
+  Eigen::VectorXd& f = state.work.k1x;
+  f.setZero();
+  for (std::size_t k = 0; k < model.force_fields.size(); ++k) {
+    model.force_fields[k]->add_force(state.x, state.v, state.field_states[k], f);
+  }
+  Vec3 total = Vec3::Zero();
+  for (std::size_t i = 0; i < nodes.size(); ++i) {
+    bool seen = false;  // a node listed twice counts once
+    for (std::size_t j = 0; j < i; ++j) seen = seen || nodes[j] == nodes[i];
+    if (!seen && weights[i] > 1e-12) total += f.segment<3>(3 * static_cast<Eigen::Index>(nodes[i]));
+  }
+  return total;
+}
+
 double max_residual_force(const MechanicalModel& model, MechanicalState& state) {
   compute_forces(model, state, state.x, state.v, state.f);
   double worst = 0.0;

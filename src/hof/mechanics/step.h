@@ -36,6 +36,12 @@ void compute_forces(const MechanicalModel& model, MechanicalState& state, const 
 bool compute_point_compliance(const MechanicalModel& model, MechanicalState& state,
                               std::span<const std::int32_t> nodes, std::span<const double> weights, Mat3& compliance);
 
+/// The elastic force the body exerts at a point (N): the force fields' forces (no gravity, no
+/// external input) summed over the nodes that carry the point (`weights` > 0). For a body
+/// held still by a load at that point, it is minus that load. Scratch only; no allocation.
+Vec3 point_elastic_force(const MechanicalModel& model, MechanicalState& state, std::span<const std::int32_t> nodes,
+                         std::span<const double> weights);
+
 /// Largest residual force on a free node (N): how far from static equilibrium the state is.
 [[nodiscard]] double max_residual_force(const MechanicalModel& model, MechanicalState& state);
 
