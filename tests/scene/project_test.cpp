@@ -1,4 +1,5 @@
 #include "hof/scene/project.h"
+#include "hof/scene/sofa_scene.h"
 
 #include <gtest/gtest.h>
 
@@ -59,6 +60,62 @@ TEST(Project, ErrorsNameTheFileLineAndAttribute) {
   p = read_project(dir / "broken.hof");
   ASSERT_FALSE(p);
   EXPECT_NE(p.error().message.find("malformed XML"), std::string::npos);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(Project, InlineSceneRoundTripsAndLoads) {
+  const auto dir = std::filesystem::temp_directory_path() / "hof_project_inline";
+  std::filesystem::create_directories(dir);
+  const std::string mesh = HOF_SOURCE_DIR "/data/models/liver-simple.msh";
+  std::ofstream(dir / "inline.hof") << "<hof name=\"inline\">\n  <mechanics>\n    <Node name=\"root\" dt=\"0.01\" gravity=\"0 0 0\">\n"
+                                       "      <Node name=\"Liver\">\n        <EulerImplicitSolver/>\n        <CGLinearSolver/>\n"
+                                       "        <MeshGmshLoader name=\"l\" filename=\"" << mesh << "\"/>\n"
+                                       "        <MechanicalObject src=\"@l\"/>\n        <UniformMass totalMass=\"1\"/>\n"
+                                       "        <MeshSpringForceField stiffness=\"100\"/>\n        <FixedConstraint indices=\"0 1 2\"/>\n"
+                                       "      </Node>\n    </Node>\n  </mechanics>\n</hof>\n";
+  auto p = read_project(dir / "inline.hof");
+  ASSERT_TRUE(p) << p.error().to_string();
+  EXPECT_TRUE(p->mechanics_scene.empty());
+  ASSERT_TRUE(write_project(*p, dir / "a.hof"));
+  auto again = read_project(dir / "a.hof");
+  ASSERT_TRUE(again);
+  ASSERT_TRUE(write_project(*again, dir / "b.hof"));
+  EXPECT_EQ(bytes(dir / "a.hof"), bytes(dir / "b.hof"));
+  auto scene = read_sofa_scene(scene_file(*again, dir / "a.hof"));
+  ASSERT_TRUE(scene) << scene.error().to_string();
+  ASSERT_EQ(scene->models.size(), 1u);
+  EXPECT_EQ(scene->models[0].config.positions.size(), 192u);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(Project, ThesisAppendixFormatIsRead) {
+  // The thesis' appendix project (well-formed: its listing closes <hof> twice), 2008 syntax.
+  const auto dir = std::filesystem::temp_directory_path() / "hof_project_thesis";
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "thesis.hof")
+      << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<hof>\n  <sofa>\n    <sg>\n"
+         "      <Node name=\"root\" dt=\"0.02\" showBehaviorModels=\"0\" gravity=\"0 0 0\">\n"
+         "        <Object type=\"CGImplicit\" iterations=\"5\"/>\n"
+         "        <Object type=\"MeshTopology\" name=\"mesh\" filename=\"" HOF_SOURCE_DIR "/data/models/liver-coarse.msh\" />\n"
+         "        <Object type=\"MechanicalObject\" name=\"mechanics\" template=\"Vec3d\" />\n"
+         "        <Object type=\"FixedConstraint\" name=\"fixed\" indices=\"11 86 87 124 128\"/>\n"
+         "        <Object type=\"ExternalForceField\" name=\"extforce\" force=\"0 0 0\" />\n"
+         "        <Object type=\"MeshSpringForceField\" name=\"spring\" stiffness=\"1000\" damping=\"5\" />\n"
+         "        <Object type=\"UniformMass\" name=\"mass\" totalMass=\"1000\"/>\n"
+         "      </Node>\n    </sg>\n  </sofa>\n"
+         "  <h3d>\n    <graphics fullscreen=\"no\" mirrored=\"no\" renderMode=\"MONO\"/>\n"
+         "    <haptics showTime=\"no\"><device filename=\"DeviceFalcon.x3d\"/></haptics>\n  </h3d>\n</hof>\n";
+  auto p = read_project(dir / "thesis.hof");
+  ASSERT_TRUE(p) << p.error().to_string();
+  auto scene = read_sofa_scene(scene_file(*p, dir / "thesis.hof"));
+  ASSERT_TRUE(scene) << scene.error().to_string();
+  ASSERT_EQ(scene->models.size(), 1u);
+  const auto& c = scene->models[0].config;
+  EXPECT_EQ(c.positions.size(), 677u);
+  EXPECT_EQ(c.ode.kind, mechanics::OdeSolverKind::kEulerImplicit);
+  EXPECT_EQ(c.linear.iterations, 5);
+  ASSERT_EQ(c.force_fields.size(), 1u);
+  EXPECT_EQ(c.force_fields[0].mesh_springs->stiffness_n_per_m, 1000.0);
   std::filesystem::remove_all(dir);
 }
 

@@ -21,7 +21,7 @@ int run_bench(const BenchOptions& options) {
       std::fprintf(stderr, "hof: %s\n", project.error().to_string().c_str());
       return 1;
     }
-    scene_path = options.scene.parent_path() / project->mechanics_scene;
+    scene_path = scene::scene_file(*project, options.scene);
   }
   auto sofa = scene::read_sofa_scene(scene_path);
   if (!sofa) {

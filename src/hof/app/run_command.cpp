@@ -44,7 +44,7 @@ Expected<Loaded> load(const std::filesystem::path& file) {
     auto project = scene::read_project(file);
     if (!project) return std::unexpected(project.error());
     l.project = *project;
-    l.scene_path = file.parent_path() / l.project.mechanics_scene;
+    l.scene_path = scene::scene_file(l.project, file);
   } else if (ext == ".scn") {
     l.project.name = file.stem().string();
     l.project.mechanics_scene = file.filename();

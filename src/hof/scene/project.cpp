@@ -112,7 +112,11 @@ std::string to_xml(const HofProject& p) {
   std::string out;
   out += "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
   out += fmt::format("<hof version=\"1\" name=\"{}\">\n", p.name);
-  out += fmt::format("  <mechanics scene=\"{}\"/>\n", p.mechanics_scene.generic_string());
+  if (!p.mechanics_inline.empty()) {
+    out += "  <mechanics>\n" + p.mechanics_inline + "  </mechanics>\n";
+  } else {
+    out += fmt::format("  <mechanics scene=\"{}\"/>\n", p.mechanics_scene.generic_string());
+  }
   out += fmt::format(
       "  <haptics device=\"{}\" hapticRate=\"{}\" renderer=\"{}\" proxyRadius=\"{}\" forceShading=\"{}\" "
       "touchableFace=\"{}\" coupling=\"{}\">\n",
@@ -155,10 +159,20 @@ Expected<HofProject> read_project(const std::filesystem::path& path) {
   HofProject p;
   p.name = root.attribute("name").as_string("untitled");
   const pugi::xml_node mechanics = root.child("mechanics");
-  if (!mechanics || !mechanics.attribute("scene")) {
-    return std::unexpected(r.at(mechanics ? mechanics : root, "the project needs <mechanics scene=\"FILE.scn\"/>"));
+  // The scene inline as a SOFA node tree (ours: <mechanics><Node>; the thesis' appendix:
+  // <sofa><sg><Node>), or in a separate file.
+  pugi::xml_node inline_scene = mechanics.child("Node");
+  if (!inline_scene) inline_scene = root.child("sofa").child("sg").child("Node");
+  if (inline_scene) {
+    std::ostringstream xml;
+    inline_scene.print(xml, "  ", pugi::format_indent, pugi::encoding_utf8, 2);
+    p.mechanics_inline = xml.str();
+  } else if (mechanics && mechanics.attribute("scene")) {
+    p.mechanics_scene = mechanics.attribute("scene").value();
+  } else {
+    return std::unexpected(r.at(mechanics ? mechanics : root,
+                                "the project needs <mechanics scene=\"FILE.scn\"/> or a scene inline in <mechanics>"));
   }
-  p.mechanics_scene = mechanics.attribute("scene").value();
   if (const pugi::xml_node h = root.child("haptics")) {
     p.device = h.attribute("device").as_string(p.device.c_str());
     p.haptic_rate_hz = r.get(h, "hapticRate", p.haptic_rate_hz);
@@ -236,6 +250,10 @@ Expected<void> write_project(const HofProject& project, const std::filesystem::p
   std::filesystem::rename(temporary, path, ec);
   if (ec) return make_error(ErrorCode::kIo, fmt::format("cannot replace the project file: {}", ec.message()), path.string());
   return {};
+}
+
+std::filesystem::path scene_file(const HofProject& project, const std::filesystem::path& project_file) {
+  return project.mechanics_inline.empty() ? project_file.parent_path() / project.mechanics_scene : project_file;
 }
 
 coupling::SessionConfig session_config(const HofProject& p) {

@@ -26,7 +26,10 @@ struct GraphicsSetup {
 
 struct HofProject {
   std::string name{"untitled"};
-  std::filesystem::path mechanics_scene;  ///< as written in the file (relative to it)
+  std::filesystem::path mechanics_scene;  ///< as written in the file (relative to it); empty when inline
+  /// The scene written inside <mechanics> (a SOFA node tree), kept as XML text; the thesis'
+  /// appendix format (<hof><sofa><sg>) is read into it too.
+  std::string mechanics_inline;
   std::string device{"scripted:poke"};    ///< device spec, see haptics::open_device
   std::array<double, 16> position_calibration{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};  ///< row-major 4x4
   double haptic_rate_hz{1000.0};
@@ -46,6 +49,9 @@ struct HofProject {
 [[nodiscard]] std::string to_xml(const HofProject& project);
 /// Writes to_xml(project) to `path` (via a temporary file and a rename: never a half file).
 [[nodiscard]] Expected<void> write_project(const HofProject& project, const std::filesystem::path& path);
+
+/// The SOFA scene file of a project: the project file itself when the scene is inline.
+[[nodiscard]] std::filesystem::path scene_file(const HofProject& project, const std::filesystem::path& project_file);
 
 /// The haptic-loop configuration a project describes.
 [[nodiscard]] coupling::SessionConfig session_config(const HofProject& project);

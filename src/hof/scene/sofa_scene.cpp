@@ -103,7 +103,17 @@ Expected<SofaScene> Reader::run() {
       doc.load_buffer(text_.data(), text_.size(), pugi::parse_default, pugi::encoding_utf8);
   if (!parsed)
     return fail(ErrorCode::kParse, line_of(parsed.offset), fmt::format("malformed XML: {}", parsed.description()));
-  const pugi::xml_node xml_root = doc.document_element();
+  pugi::xml_node xml_root = doc.document_element();
+  // A HoF project carries its scene inline: <hof><mechanics><Node …>, or, in the thesis'
+  // appendix format, <hof><sofa><sg><Node …>.
+  if (std::string_view(xml_root.name()) == "hof") {
+    pugi::xml_node inner = xml_root.child("mechanics").child("Node");
+    if (!inner) inner = xml_root.child("sofa").child("sg").child("Node");
+    if (!inner)
+      return fail(ErrorCode::kParse, line_of(xml_root.offset_debug()),
+                  "the project has no inline scene (<mechanics><Node> or <sofa><sg><Node>)");
+    xml_root = inner;
+  }
   if (std::string_view(xml_root.name()) != "Node")
     return fail(ErrorCode::kParse, line_of(xml_root.offset_debug()),
                 fmt::format("the root element is <{}>, expected <Node>", xml_root.name()));
