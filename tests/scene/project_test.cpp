@@ -28,6 +28,11 @@ TEST(Project, SaveLoadSaveIsByteIdentical) {
   p.surface.stiffness = 0.1 + 0.2;  // not exactly representable: shortest round trip must hold
   p.position_calibration[0] = 3.0;
   p.graphics.viewpoint_m = Vec3(0.1, -0.4, 1.0 / 3.0);
+  p.effects.springs.push_back(haptics::SpringEffect{Vec3(0.01, 0.02, 0.03), 150.0, 0.02, 0.03, 0.5, false});
+  p.effects.viscosities.push_back(haptics::ViscosityEffect{});
+  p.effects.constants.push_back(haptics::ConstantForceEffect{Vec3(0, 0, -0.5)});
+  p.use_bound_tree = false;
+  p.max_triangles_in_leaf = 4;
   ASSERT_TRUE(write_project(p, dir / "a.hof"));
   auto loaded = read_project(dir / "a.hof");
   ASSERT_TRUE(loaded) << loaded.error().to_string();
@@ -36,6 +41,11 @@ TEST(Project, SaveLoadSaveIsByteIdentical) {
   EXPECT_EQ(loaded->surface.stiffness, 0.1 + 0.2);
   EXPECT_EQ(loaded->graphics.viewpoint_m, p.graphics.viewpoint_m);
   EXPECT_EQ(loaded->renderer, haptics::RendererKind::kGodObject);
+  ASSERT_EQ(loaded->effects.springs.size(), 1u);
+  EXPECT_EQ(loaded->effects.springs[0].spring_constant_n_per_m, 150.0);
+  EXPECT_EQ(loaded->effects.constants[0].force_n, Vec3(0, 0, -0.5));
+  EXPECT_FALSE(loaded->use_bound_tree);
+  EXPECT_EQ(loaded->max_triangles_in_leaf, 4);
   std::filesystem::remove_all(dir);
 }
 

@@ -26,10 +26,11 @@ Session::Session(SessionBody body, std::unique_ptr<haptics::Device> device, cons
       device_(std::move(device)),
       config_(config),
       state_(mechanics::make_state(body_.model)),
-      surfaces_(haptics::make_snapshot(body_.surface)) {
+      surfaces_(haptics::make_snapshot(body_.surface, config.tree)) {
   surface_positions_.assign(body_.surface.vertices.size(), Vec3::Zero());
   surface_velocities_.assign(body_.surface.vertices.size(), Vec3::Zero());
   loop_ = std::make_unique<haptics::HapticLoop>(*device_, surfaces_, config_.haptics);
+  loop_->effects() = config_.effects;
 }
 
 Expected<std::unique_ptr<Session>> Session::make(SessionBody body, std::unique_ptr<haptics::Device> device,

@@ -39,6 +39,8 @@ enum class ContactCoupling : std::uint8_t {
 struct SessionConfig {
   haptics::HapticLoopConfig haptics;  ///< rate, renderer, surface, safety, calibration
   ContactCoupling coupling{ContactCoupling::kBarycentric};
+  haptics::ForceEffects effects;      ///< H3D force effects added to the contact force
+  collision::AabbTreeOptions tree;    ///< the surface's bound tree (H3D useBoundTree, maxTrianglesInLeaf)
 };
 
 /// The body: its mechanics and the touchable surface that follows it.

@@ -134,6 +134,26 @@ std::string to_xml(const HofProject& p) {
   out += fmt::format("    <safety fadeIn=\"{}\" fadeOut=\"{}\" maxSnapshotAge=\"{}\" maxConsecutiveOverruns=\"{}\"/>\n",
                      number(p.safety.fade_in_s), number(p.safety.fade_out_s), number(p.safety.max_snapshot_age_s),
                      p.safety.max_consecutive_overruns);
+  out += fmt::format("    <options useBoundTree=\"{}\" maxTrianglesInLeaf=\"{}\"/>\n", p.use_bound_tree ? "true" : "false",
+                     p.max_triangles_in_leaf);
+  out += fmt::format("    <stylus radius=\"{}\" length=\"{}\"/>\n", number(p.stylus_radius_m), number(p.stylus_length_m));
+  if (p.effects.springs.empty() && p.effects.viscosities.empty() && p.effects.constants.empty()) {
+    out += "    <effects/>\n";
+  } else {
+    out += "    <effects>\n";
+    for (const auto& e : p.effects.springs) {
+      out += fmt::format(
+          "      <SpringEffect position=\"{}\" springConstant=\"{}\" startDistance=\"{}\" escapeDistance=\"{}\" damping=\"{}\"/>\n",
+          vec(e.position_m), number(e.spring_constant_n_per_m), number(e.start_distance_m), number(e.escape_distance_m),
+          number(e.damping_n_s_per_m));
+    }
+    for (const auto& e : p.effects.viscosities) {
+      out += fmt::format("      <ViscosityEffect viscosity=\"{}\" radius=\"{}\" dampingFactor=\"{}\" enabled=\"{}\"/>\n",
+                         number(e.viscosity_pa_s), number(e.radius_m), number(e.damping_factor), e.enabled ? "true" : "false");
+    }
+    for (const auto& e : p.effects.constants) out += fmt::format("      <ForceField force=\"{}\"/>\n", vec(e.force_n));
+    out += "    </effects>\n";
+  }
   out += "  </haptics>\n";
   out += fmt::format("  <graphics viewpoint=\"{}\" lookAt=\"{}\" renderMode=\"{}\"/>\n", vec(p.graphics.viewpoint_m),
                      vec(p.graphics.look_at_m), p.graphics.render_mode);
@@ -219,6 +239,37 @@ Expected<HofProject> read_project(const std::filesystem::path& path) {
       p.surface.snap_distance_m = r.get(s, "snapDistance", p.surface.snap_distance_m);
       if (auto valid = haptics::validate(p.surface); !valid) r.fail(s, valid.error().message);
     }
+    if (const pugi::xml_node o = h.child("options")) {
+      p.use_bound_tree = r.get_bool(o, "useBoundTree", p.use_bound_tree);
+      p.max_triangles_in_leaf = static_cast<int>(r.get(o, "maxTrianglesInLeaf", p.max_triangles_in_leaf));
+    }
+    if (const pugi::xml_node st = h.child("stylus")) {
+      p.stylus_radius_m = r.get(st, "radius", p.stylus_radius_m);
+      p.stylus_length_m = r.get(st, "length", p.stylus_length_m);
+    }
+    for (const pugi::xml_node e : h.child("effects").children()) {
+      const std::string type = e.name();
+      if (type == "SpringEffect") {
+        haptics::SpringEffect spring;
+        spring.position_m = r.get_vec(e, "position", spring.position_m);
+        spring.spring_constant_n_per_m = r.get(e, "springConstant", spring.spring_constant_n_per_m);
+        spring.start_distance_m = r.get(e, "startDistance", spring.start_distance_m);
+        spring.escape_distance_m = r.get(e, "escapeDistance", spring.escape_distance_m);
+        spring.damping_n_s_per_m = r.get(e, "damping", spring.damping_n_s_per_m);
+        p.effects.springs.push_back(spring);
+      } else if (type == "ViscosityEffect") {
+        haptics::ViscosityEffect viscosity;
+        viscosity.viscosity_pa_s = r.get(e, "viscosity", viscosity.viscosity_pa_s);
+        viscosity.radius_m = r.get(e, "radius", viscosity.radius_m);
+        viscosity.damping_factor = r.get(e, "dampingFactor", viscosity.damping_factor);
+        viscosity.enabled = r.get_bool(e, "enabled", viscosity.enabled);
+        p.effects.viscosities.push_back(viscosity);
+      } else if (type == "ForceField") {
+        p.effects.constants.push_back(haptics::ConstantForceEffect{r.get_vec(e, "force", Vec3::Zero())});
+      } else if (e.type() == pugi::node_element) {
+        r.fail(e, fmt::format("unknown force effect <{}> (SpringEffect, ViscosityEffect, ForceField)", type));
+      }
+    }
     if (const pugi::xml_node s = h.child("safety")) {
       p.safety.fade_in_s = r.get(s, "fadeIn", p.safety.fade_in_s);
       p.safety.fade_out_s = r.get(s, "fadeOut", p.safety.fade_out_s);
@@ -266,6 +317,9 @@ coupling::SessionConfig session_config(const HofProject& p) {
   c.haptics.renderer.touchable_face = p.touchable_face;
   c.haptics.material = p.surface;
   c.haptics.safety = p.safety;
+  c.effects = p.effects;
+  c.tree.use_bound_tree = p.use_bound_tree;
+  c.tree.max_triangles_in_leaf = p.max_triangles_in_leaf;
   for (int r = 0; r < 4; ++r) {
     for (int k = 0; k < 4; ++k) c.haptics.calibration.position(r, k) = p.position_calibration[static_cast<std::size_t>(4 * r + k)];
   }

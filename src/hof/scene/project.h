@@ -12,6 +12,7 @@
 
 #include "hof/core/error.h"
 #include "hof/coupling/session.h"
+#include "hof/haptics/force_effects.h"
 #include "hof/haptics/haptic_renderer.h"
 #include "hof/haptics/safety.h"
 #include "hof/haptics/surface_material.h"
@@ -40,6 +41,11 @@ struct HofProject {
   coupling::ContactCoupling coupling{coupling::ContactCoupling::kBarycentric};
   haptics::SurfaceMaterial surface;
   haptics::SafetyConfig safety;
+  haptics::ForceEffects effects;          ///< H3D SpringEffect, ViscosityEffect, ForceField
+  bool use_bound_tree{true};              ///< H3D HapticsOptions.useBoundTree
+  int max_triangles_in_leaf{1};           ///< H3D GeometryBoundTreeOptions.maxTrianglesInLeaf
+  double stylus_radius_m{0.0025};         ///< drawn stylus tip (graphics)
+  double stylus_length_m{0.1};
   GraphicsSetup graphics;
 };
 
