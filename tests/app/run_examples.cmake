@@ -42,3 +42,17 @@ execute_process(COMMAND ${HOF} run ${WORK}/bad.hof --deterministic --quiet RESUL
 if(rc EQUAL 0 OR NOT err MATCHES "bad.hof:3")
   message(FATAL_ERROR "bad project not reported with its line (rc=${rc}): ${err}")
 endif()
+
+# An H3D X3D scene: its DeformableShape is driven by the mechanics (springs on its triangles).
+execute_process(COMMAND ${HOF} run ${ANCHORS}/h3d/examples/All/DeformableShape.x3d --deterministic --seconds 3
+                        --device "scripted:poke,start=0;0;0.1,direction=0;0;-1,approach=0.1,depth=0.01,speed=0.05,hold=0.2"
+                        --quiet --out ${WORK}/x3d RESULT_VARIABLE rc ERROR_VARIABLE err)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "hof run DeformableShape.x3d failed (${rc}): ${err}")
+endif()
+file(READ ${WORK}/x3d/summary.json summary)
+string(JSON contact GET "${summary}" contact_time_s)
+string(JSON moved GET "${summary}" models 0 max_displacement_m)
+if(contact LESS_EQUAL 0 OR moved LESS_EQUAL 0.001)
+  message(FATAL_ERROR "the X3D deformable shape was not touched and deformed: contact ${contact} s, moved ${moved} m")
+endif()

@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -37,6 +39,84 @@ struct Loaded {
   std::filesystem::path scene_path;
 };
 
+// An X3D scene with H3D nodes: its DeformableShape (else its first touchable shape) becomes
+// the simulated body — the thesis' surface model: springs on the triangle edges (the
+// MeshSpringForceField it recommends), uniform mass, the open border held (or, for a closed
+// surface, its lowest tenth) — driven by the mechanics instead of H3D's CoordinateDeformer.
+// The surface, renderer and calibration come from the scene's Appearance and DeviceInfo.
+Expected<Loaded> load_x3d(const std::filesystem::path& file) {
+  auto x3d = scene::read_x3d_scene(file);
+  if (!x3d) return std::unexpected(x3d.error());
+  const scene::X3dShape* chosen = nullptr;
+  for (const auto& shape : x3d->shapes) {
+    if (!shape.touchable || shape.mesh_W.triangles.empty()) continue;
+    if (!chosen || (shape.deformable && !chosen->deformable)) chosen = &shape;
+  }
+  if (!chosen) return make_error(ErrorCode::kInvalidArgument, "the scene has no touchable shape (a Shape whose Appearance has a surface)", file.string());
+  Loaded l;
+  l.project.name = file.stem().string();
+  l.project.surface = chosen->surface;
+  if (!chosen->solid) l.project.touchable_face = collision::TouchableFace::kFrontAndBack;  // X3D solid='false' 
+  if (!x3d->devices.empty()) {
+    const scene::X3dDevice& device = x3d->devices.front();
+    l.project.position_calibration = device.position_calibration;
+    if (device.renderer && device.renderer->kind) {
+      l.project.renderer = *device.renderer->kind;
+      l.project.proxy_radius_m = device.renderer->proxy_radius_m;
+    }
+  }
+  l.scene_path = file;
+  scene::SofaSceneModel model;
+  model.node_path = chosen->def.empty() ? std::string("shape") : chosen->def;
+  mechanics::ModelConfig& c = model.config;
+  c.name = model.node_path;
+  c.positions = chosen->mesh_W.vertices;
+  c.triangles = chosen->mesh_W.triangles;
+  c.mass.kind = mechanics::MassKind::kUniform;
+  c.mass.total_mass_kg = 0.1;
+  c.gravity_m_per_s2 = Vec3::Zero();
+  mechanics::ForceFieldConfig springs;
+  springs.name = "springs";
+  springs.mesh_springs = mechanics::MeshSpringConfig{100.0, 0.5};
+  c.force_fields.push_back(springs);
+  // Hold the open border; a closed surface is held by its lowest tenth.
+  std::vector<std::int32_t> held;
+  {
+    std::vector<std::array<std::int32_t, 2>> edges;
+    for (const mesh::Tri& t : c.triangles) {
+      for (int k = 0; k < 3; ++k) edges.push_back({std::min(t[k], t[(k + 1) % 3]), std::max(t[k], t[(k + 1) % 3])});
+    }
+    std::sort(edges.begin(), edges.end());
+    for (std::size_t i = 0; i < edges.size();) {
+      std::size_t j = i + 1;
+      while (j < edges.size() && edges[j] == edges[i]) ++j;
+      if (j - i == 1) held.insert(held.end(), edges[i].begin(), edges[i].end());
+      i = j;
+    }
+    std::sort(held.begin(), held.end());
+    held.erase(std::unique(held.begin(), held.end()), held.end());
+    if (held.empty()) {
+      double lo = c.positions.front().y(), hi = lo;
+      for (const Vec3& p : c.positions) {
+        lo = std::min(lo, p.y());
+        hi = std::max(hi, p.y());
+      }
+      for (std::size_t i = 0; i < c.positions.size(); ++i) {
+        if (c.positions[i].y() <= lo + 0.1 * (hi - lo)) held.push_back(static_cast<std::int32_t>(i));
+      }
+    }
+  }
+  c.fixed.push_back(mechanics::FixedConstraintConfig{"border", held, std::nullopt, false, {true, true, true}});
+  c.ode.rayleigh_mass = c.ode.rayleigh_stiffness = 0.1;
+  c.linear.iterations = 25;
+  c.dt_s = 0.01;
+  l.sofa.file = file;
+  l.sofa.models.push_back(std::move(model));
+  l.sofa.skipped = x3d->unsupported;
+  l.sofa.warnings = x3d->warnings;
+  return l;
+}
+
 Expected<Loaded> load(const std::filesystem::path& file) {
   Loaded l;
   const std::string ext = file.extension().string();
@@ -49,8 +129,10 @@ Expected<Loaded> load(const std::filesystem::path& file) {
     l.project.name = file.stem().string();
     l.project.mechanics_scene = file.filename();
     l.scene_path = file;
+  } else if (ext == ".x3d") {
+    return load_x3d(file);
   } else {
-    return make_error(ErrorCode::kUnsupported, "expected a .hof project or a .scn SOFA scene", file.string());
+    return make_error(ErrorCode::kUnsupported, "expected a .hof project, a .scn SOFA scene or an .x3d scene", file.string());
   }
   auto sofa = scene::read_sofa_scene(l.scene_path);
   if (!sofa) return std::unexpected(sofa.error());
@@ -76,6 +158,15 @@ Expected<coupling::SessionBody> make_body(const scene::SofaSceneModel& m) {
     auto mapping = coupling::SurfaceMapping::barycentric(m.config.positions, m.config.tets, body.surface.vertices);
     if (!mapping) return std::unexpected(mapping.error());
     body.mapping = std::move(*mapping);
+  } else if (m.config.tets.empty()) {
+    // A surface model (springs on triangles): the surface is the model itself.
+    body.surface.vertices = m.config.positions;
+    body.surface.triangles = m.config.triangles;
+    std::vector<mesh::NodeIndex> identity(m.config.positions.size());
+    for (std::size_t i = 0; i < identity.size(); ++i) identity[i] = static_cast<mesh::NodeIndex>(i);
+    auto mapping = coupling::SurfaceMapping::by_index(m.config.positions, body.surface.vertices, identity);
+    if (!mapping) return std::unexpected(mapping.error());
+    body.mapping = std::move(*mapping);
   } else {
     const mesh::BoundarySurface b = mesh::extract_boundary(m.config.positions, m.config.tets);
     body.surface = b.surface;
@@ -98,24 +189,40 @@ void write_plots(const std::filesystem::path& dir, const coupling::SessionReport
       if (bins[b]) h << b << " " << bins[b] << "\n";
     }
   }
-  std::ofstream gp(dir / "plots.gp");
-  gp << "set datafile separator ','\nset key top left\nset grid\n";
-  for (const char* terminal : {"pngcairo size 960,540", "svg size 960,540"}) {
-    const std::string ext = std::string(terminal).starts_with("png") ? "png" : "svg";
-    gp << "set terminal " << terminal << "\n";
-    gp << "set output 'force_over_time." << ext << "'\nset xlabel 'time (s)'\nset ylabel 'force (N)'\n"
-       << "plot 'telemetry.csv' every ::1 using 1:(sqrt($8**2+$9**2+$10**2)) with lines title '|F| sent to the device'\n";
-    gp << "set output 'force_vs_indentation." << ext << "'\nset xlabel 'indentation (mm)'\nset ylabel 'force (N)'\n"
-       << "plot 'telemetry.csv' every ::1 using ($11 > 0 ? $12*1000 : 1/0):(sqrt($8**2+$9**2+$10**2)) with points pt 7 ps 0.3 title 'in contact'\n";
-    gp << "set datafile separator whitespace\n";
-    gp << "set output 'haptic_period_histogram." << ext << "'\nset xlabel 'haptic period (µs)'\nset ylabel 'ticks'\nset logscale y\n"
-       << "plot 'haptic_period_histogram.dat' using 1:2 with impulses lw 2 title 'period'\nunset logscale y\n"
-       << "set datafile separator ','\n";
+  // One small gnuplot script per plot, so that a plot with no data (no contact, say) does not
+  // stop the others; plots.gp collects them for the user.
+  struct Plot {
+    const char* name;
+    const char* body;
+  };
+  const Plot plots[] = {
+      {"force_over_time",
+       "set datafile separator ','\nset xlabel 'time (s)'\nset ylabel 'force (N)'\n"
+       "plot 'telemetry.csv' every ::1 using 1:(sqrt($8**2+$9**2+$10**2)) with lines title '|F| sent to the device'\n"},
+      {"force_vs_indentation",
+       "set datafile separator ','\nset xlabel 'indentation (mm)'\nset ylabel 'force (N)'\n"
+       "plot 'telemetry.csv' every ::1 using ($11 > 0 ? $12*1000 : 1/0):(sqrt($8**2+$9**2+$10**2)) with points pt 7 ps 0.3 title 'in contact'\n"},
+      {"haptic_period_histogram",
+       "set xlabel 'haptic period (us)'\nset ylabel 'ticks'\nset logscale y\n"
+       "plot 'haptic_period_histogram.dat' using 1:2 with impulses lw 2 title 'period'\n"},
+  };
+  std::ofstream all(dir / "plots.gp");
+  std::string failed;
+  for (const Plot& plot : plots) {
+    for (const char* ext : {"png", "svg"}) {
+      const std::string script = fmt::format("set terminal {} size 960,540\nset output '{}.{}'\nset grid\nset key top left\n{}",
+                                             std::string(ext) == "png" ? "pngcairo" : "svg", plot.name, ext, plot.body);
+      all << script << "\n";
+      const std::filesystem::path file = dir / fmt::format("{}.{}.gp", plot.name, ext);
+      std::ofstream(file) << script;
+      const std::string command = fmt::format("cd '{}' && gnuplot '{}' 2>/dev/null", dir.string(), file.filename().string());
+      if (std::system(command.c_str()) != 0 && std::string(ext) == "png") failed += std::string(failed.empty() ? "" : ", ") + plot.name;
+      std::filesystem::remove(file);
+    }
   }
-  gp.close();
-  const std::string command = fmt::format("cd '{}' && gnuplot plots.gp 2>/dev/null", dir.string());
-  if (std::system(command.c_str()) != 0 && !quiet) {
-    std::fprintf(stderr, "hof: warning: gnuplot failed or is not installed; plots.gp is in %s\n", dir.c_str());
+  if (!failed.empty() && !quiet) {
+    std::fprintf(stderr, "hof: note: no plot for %s (no data, or gnuplot missing); plots.gp is in %s\n", failed.c_str(),
+                 dir.c_str());
   }
 }
 

@@ -10,6 +10,7 @@
 #include <thread>
 
 #include "hof/mechanics/step.h"
+#include "hof/mesh/surface_check.h"
 
 namespace hof::coupling {
 
@@ -30,6 +31,7 @@ Session::Session(SessionBody body, std::unique_ptr<haptics::Device> device, cons
   surface_positions_.assign(body_.surface.vertices.size(), Vec3::Zero());
   surface_velocities_.assign(body_.surface.vertices.size(), Vec3::Zero());
   loop_ = std::make_unique<haptics::HapticLoop>(*device_, surfaces_, config_.haptics);
+  surface_closed_ = mesh::check_surface(body_.surface).closed_manifold();
   loop_->effects() = config_.effects;
 }
 
@@ -125,6 +127,8 @@ void Session::apply_contact_forces() {
 }
 
 bool Session::proxy_inside(const Vec3& p) const {
+  // "Inside" only means something for a closed surface (an open sheet has no inside).
+  if (!surface_closed_) return false;
   // Generalised winding number of the current surface at p (Van Oosterom & Strackee 1983).
   double total = 0.0;
   for (const mesh::Tri& t : body_.surface.triangles) {

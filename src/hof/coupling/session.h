@@ -64,7 +64,7 @@ struct SessionReport {
   double rate_untouched{0.0}, rate_deforming{0.0}, rate_in_contact{0.0};
   double max_force_n{0.0};
   double contact_time_s{0.0};
-  std::int64_t fall_through_events{0};      ///< simulation steps whose proxy was inside the surface
+  std::int64_t fall_through_events{0};      ///< simulation steps whose proxy was inside the (closed) surface
   bool diverged{false};
   std::string divergence;
   double max_displacement_m{0.0};
@@ -120,6 +120,7 @@ class Session {
   Vec3 last_barycentric_{Vec3::Zero()};
   Vec3 last_proxy_{Vec3::Zero()};
   bool last_proxy_valid_{false};
+  bool surface_closed_{false};  // fall-through is counted only for closed surfaces
 };
 
 }  // namespace hof::coupling
