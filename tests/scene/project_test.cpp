@@ -114,7 +114,7 @@ TEST(Project, ThesisAppendixFormatIsRead) {
          "        <Object type=\"UniformMass\" name=\"mass\" totalMass=\"1000\"/>\n"
          "      </Node>\n    </sg>\n  </sofa>\n"
          "  <h3d>\n    <graphics fullscreen=\"no\" mirrored=\"no\" renderMode=\"MONO\"/>\n"
-         "    <haptics showTime=\"no\"><device filename=\"DeviceFalcon.x3d\"/></haptics>\n  </h3d>\n</hof>\n";
+         "    <haptics showTime=\"no\"><device filename=\"" HOF_ANCHORS_DIR "/h3d/settings/common/device/FalconDevice\"/></haptics>\n  </h3d>\n</hof>\n";
   auto p = read_project(dir / "thesis.hof");
   ASSERT_TRUE(p) << p.error().to_string();
   auto scene = read_sofa_scene(scene_file(*p, dir / "thesis.hof"));
@@ -126,6 +126,10 @@ TEST(Project, ThesisAppendixFormatIsRead) {
   EXPECT_EQ(c.linear.iterations, 5);
   ASSERT_EQ(c.force_fields.size(), 1u);
   EXPECT_EQ(c.force_fields[0].mesh_springs->stiffness_n_per_m, 1000.0);
+  // The <h3d> device file (H3D's stock Falcon settings) gives the calibration diag(3, 3, 3, 1).
+  EXPECT_EQ(p->position_calibration[0], 3.0);
+  EXPECT_EQ(p->position_calibration[5], 3.0);
+  EXPECT_EQ(p->position_calibration[15], 1.0);
   std::filesystem::remove_all(dir);
 }
 

@@ -65,6 +65,8 @@ Expected<Loaded> load_x3d(const std::filesystem::path& file) {
       l.project.proxy_radius_m = device.renderer->proxy_radius_m;
     }
   }
+  l.project.effects = x3d->force_effects;
+  if (!x3d->viewpoints.empty()) l.project.graphics.viewpoint_m = x3d->viewpoints.front().position;
   l.scene_path = file;
   scene::SofaSceneModel model;
   model.node_path = chosen->def.empty() ? std::string("shape") : chosen->def;

@@ -1,5 +1,7 @@
 #include "hof/scene/project.h"
 
+#include "hof/scene/x3d_scene.h"
+
 #include <fmt/format.h>
 
 #include <charconv>
@@ -275,6 +277,30 @@ Expected<HofProject> read_project(const std::filesystem::path& path) {
       p.safety.fade_out_s = r.get(s, "fadeOut", p.safety.fade_out_s);
       p.safety.max_snapshot_age_s = r.get(s, "maxSnapshotAge", p.safety.max_snapshot_age_s);
       p.safety.max_consecutive_overruns = static_cast<int>(r.get(s, "maxConsecutiveOverruns", p.safety.max_consecutive_overruns));
+    }
+  }
+  // The thesis' appendix project: <h3d><haptics><device filename="DeviceX.x3d"/>…
+  // <graphics><viewpoint filename="…x3d"/>. The device file gives the calibration and the
+  // renderer; the viewpoint file the camera. (Stylus and geometry files: the stylus is drawn
+  // by HoF, the touchable surface comes from the simulated body.)
+  if (const pugi::xml_node h3d = root.child("h3d")) {
+    const std::filesystem::path folder = path.parent_path();
+    if (const char* device = h3d.child("haptics").child("device").attribute("filename").as_string(nullptr)) {
+      auto x3d = read_x3d_scene(folder / device);
+      if (!x3d) return std::unexpected(x3d.error());
+      if (!x3d->devices.empty()) {
+        const X3dDevice& d = x3d->devices.front();
+        p.position_calibration = d.position_calibration;
+        if (d.renderer && d.renderer->kind) {
+          p.renderer = *d.renderer->kind;
+          p.proxy_radius_m = d.renderer->proxy_radius_m;
+        }
+      }
+    }
+    if (const char* viewpoint = h3d.child("graphics").child("viewpoint").attribute("filename").as_string(nullptr)) {
+      auto x3d = read_x3d_scene(folder / viewpoint);
+      if (!x3d) return std::unexpected(x3d.error());
+      if (!x3d->viewpoints.empty()) p.graphics.viewpoint_m = x3d->viewpoints.front().position;
     }
   }
   if (const pugi::xml_node g = root.child("graphics")) {
