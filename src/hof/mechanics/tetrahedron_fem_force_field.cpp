@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include "hof/mechanics/tet_rest_geometry.h"
+
 #include <Eigen/SVD>
 #include <cmath>
 
@@ -63,38 +65,12 @@ Expected<std::unique_ptr<TetrahedronFemForceField>> TetrahedronFemForceField::ma
   field->lame_ = lame_parameters(config.young_modulus_pa, config.poisson_ratio);
   field->elements_.reserve(tets.size());
   for (std::size_t t = 0; t < tets.size(); ++t) {
+    auto rest = tet_rest_geometry(rest_positions, tets[t], t, who);
+    if (!rest) return std::unexpected(rest.error());
     Element e{};
-    e.nodes = tets[t];
-    for (std::int32_t n : e.nodes) {
-      if (n < 0 || static_cast<std::size_t>(n) >= rest_positions.size()) {
-        return make_error(ErrorCode::kInvalidMesh,
-                          fmt::format("{}: tetrahedron {} refers to node {} of {}", who, t, n, rest_positions.size()));
-      }
-    }
-    const Vec3& p0 = rest_positions[e.nodes[0]];
-    Mat3 dm;
-    dm.col(0) = rest_positions[e.nodes[1]] - p0;
-    dm.col(1) = rest_positions[e.nodes[2]] - p0;
-    dm.col(2) = rest_positions[e.nodes[3]] - p0;
-    const double det = dm.determinant();
-    const double scale = dm.colwise().norm().maxCoeff();
-    if (!(std::abs(det) > 1e-12 * scale * scale * scale)) {
-      return make_error(ErrorCode::kInvalidMesh,
-                        fmt::format("{}: tetrahedron {} (nodes {} {} {} {}) is degenerate at rest (volume {:.3g} m^3)",
-                                    who, t, e.nodes[0], e.nodes[1], e.nodes[2], e.nodes[3], det / 6.0));
-    }
-    if (det < 0.0) {
-      // An inverted rest element: reorder it rather than refuse the mesh (many files use the
-      // opposite orientation convention). The physics does not depend on node order.
-      std::swap(e.nodes[2], e.nodes[3]);
-      dm.col(1).swap(dm.col(2));
-    }
-    e.volume = std::abs(det) / 6.0;
-    const Mat3 dm_inv = dm.inverse();
-    e.gradients[1] = dm_inv.row(0).transpose();
-    e.gradients[2] = dm_inv.row(1).transpose();
-    e.gradients[3] = dm_inv.row(2).transpose();
-    e.gradients[0] = -(e.gradients[1] + e.gradients[2] + e.gradients[3]);
+    e.nodes = rest->nodes;
+    e.volume = rest->volume;
+    e.gradients = rest->gradients;
     e.rest_frame_transposed =
         triangle_frame(rest_positions[e.nodes[0]], rest_positions[e.nodes[1]], rest_positions[e.nodes[2]]).transpose();
     field->elements_.push_back(e);
