@@ -3,6 +3,7 @@
 /// What every tetrahedral force field precomputes at rest: the (positively ordered) nodes,
 /// the rest volume and the shape-function gradients b_i (F = Σ x_i b_iᵀ).
 
+#include <Eigen/Core>
 #include <array>
 #include <cstdint>
 #include <string>
@@ -25,5 +26,20 @@ struct TetRestGeometry {
 /// element and its nodes: a node out of range, a degenerate element.
 [[nodiscard]] Expected<TetRestGeometry> tet_rest_geometry(const std::vector<Vec3>& rest_positions, const mesh::Tet& tet,
                                                           std::size_t index, const std::string& who);
+
+/// Position of node n in a flat 3N vector.
+[[nodiscard]] inline Vec3 node(const Eigen::VectorXd& x, std::int32_t n) {
+  return x.segment<3>(3 * static_cast<Eigen::Index>(n));
+}
+
+/// Deformation gradient F = Σ_i x_i b_iᵀ of an element with `nodes` and rest `gradients`,
+/// using Σ b_i = 0 to work with edge vectors.
+template <class Element>
+[[nodiscard]] Mat3 deformation_gradient(const Element& e, const Eigen::VectorXd& x) {
+  const Vec3 x0 = node(x, e.nodes[0]);
+  return (node(x, e.nodes[1]) - x0) * e.gradients[1].transpose() +
+         (node(x, e.nodes[2]) - x0) * e.gradients[2].transpose() +
+         (node(x, e.nodes[3]) - x0) * e.gradients[3].transpose();
+}
 
 }  // namespace hof::mechanics

@@ -25,17 +25,6 @@ Mat3 triangle_frame(const Vec3& p0, const Vec3& p1, const Vec3& p2) {
   return frame;
 }
 
-Vec3 node(const Eigen::VectorXd& x, std::int32_t n) { return x.segment<3>(3 * static_cast<Eigen::Index>(n)); }
-
-// Deformation gradient F = Σ_i x_i b_iᵀ, using Σ b_i = 0 to work with edge vectors.
-template <class Element>
-Mat3 deformation_gradient(const Element& e, const Eigen::VectorXd& x) {
-  const Vec3 x0 = node(x, e.nodes[0]);
-  return (node(x, e.nodes[1]) - x0) * e.gradients[1].transpose() +
-         (node(x, e.nodes[2]) - x0) * e.gradients[2].transpose() +
-         (node(x, e.nodes[3]) - x0) * e.gradients[3].transpose();
-}
-
 }  // namespace
 
 Lame lame_parameters(double young_modulus_pa, double poisson_ratio) {
