@@ -49,27 +49,12 @@ void BlockSparseMatrix::set_zero() {
   });
 }
 
-namespace {
-
-// Single-precision blocks are stored compact: 9 floats, column-major. A column is loaded as
-// four floats starting at its first entry; the fourth lane then holds the next column's (or
-// block's) first entry, which only ever reaches the discarded fourth lane of the sum.
-constexpr std::int64_t kSingleStride = 9;
-
-#if defined(__AVX2__) && defined(__FMA__)
-inline __m256d load_column(const double* a) { return _mm256_loadu_pd(a); }
-inline __m256d load_column(const float* a) { return _mm256_cvtps_pd(_mm_loadu_ps(a)); }
-
-#endif
-
-}  // namespace
-
-// y = A x over block rows [r0, r1) for values of type T (double, or float widened on load).
+// y = A x over block rows [r0, r1), double precision, padded column-major blocks.
 // Six independent accumulators (three columns × two blocks) keep the fused multiply-adds
 // from waiting on each other: the loop is bound by loads, not by FMA latency.
-template <class T, std::int64_t kStride, std::int64_t kColumn>
-static void multiply_block_rows(const std::int64_t* row_start, const std::int32_t* columns, const T* values, const double* xs,
-                   double* ys, std::size_t r0, std::size_t r1) {
+static void multiply_block_rows(const std::int64_t* row_start, const std::int32_t* columns, const double* values,
+                                const double* xs, double* ys, std::size_t r0, std::size_t r1) {
+  constexpr std::int64_t kStride = BlockSparseMatrix::kBlockStride;
   for (std::size_t r = r0; r < r1; ++r) {
     std::int64_t s = row_start[r];
     const std::int64_t end = row_start[r + 1];
@@ -77,22 +62,22 @@ static void multiply_block_rows(const std::int64_t* row_start, const std::int32_
     __m256d a0 = _mm256_setzero_pd(), a1 = _mm256_setzero_pd(), a2 = _mm256_setzero_pd();
     __m256d b0 = _mm256_setzero_pd(), b1 = _mm256_setzero_pd(), b2 = _mm256_setzero_pd();
     for (; s + 1 < end; s += 2) {
-      const T* a = values + kStride * s;
+      const double* a = values + kStride * s;
       const double* xa = xs + 3 * static_cast<std::int64_t>(columns[s]);
       const double* xb = xs + 3 * static_cast<std::int64_t>(columns[s + 1]);
-      a0 = _mm256_fmadd_pd(load_column(a), _mm256_broadcast_sd(xa), a0);
-      a1 = _mm256_fmadd_pd(load_column(a + kColumn), _mm256_broadcast_sd(xa + 1), a1);
-      a2 = _mm256_fmadd_pd(load_column(a + 2 * kColumn), _mm256_broadcast_sd(xa + 2), a2);
-      b0 = _mm256_fmadd_pd(load_column(a + kStride), _mm256_broadcast_sd(xb), b0);
-      b1 = _mm256_fmadd_pd(load_column(a + kStride + kColumn), _mm256_broadcast_sd(xb + 1), b1);
-      b2 = _mm256_fmadd_pd(load_column(a + kStride + 2 * kColumn), _mm256_broadcast_sd(xb + 2), b2);
+      a0 = _mm256_fmadd_pd(_mm256_loadu_pd(a), _mm256_broadcast_sd(xa), a0);
+      a1 = _mm256_fmadd_pd(_mm256_loadu_pd(a + 4), _mm256_broadcast_sd(xa + 1), a1);
+      a2 = _mm256_fmadd_pd(_mm256_loadu_pd(a + 8), _mm256_broadcast_sd(xa + 2), a2);
+      b0 = _mm256_fmadd_pd(_mm256_loadu_pd(a + kStride), _mm256_broadcast_sd(xb), b0);
+      b1 = _mm256_fmadd_pd(_mm256_loadu_pd(a + kStride + 4), _mm256_broadcast_sd(xb + 1), b1);
+      b2 = _mm256_fmadd_pd(_mm256_loadu_pd(a + kStride + 8), _mm256_broadcast_sd(xb + 2), b2);
     }
     if (s < end) {
-      const T* a = values + kStride * s;
+      const double* a = values + kStride * s;
       const double* xa = xs + 3 * static_cast<std::int64_t>(columns[s]);
-      a0 = _mm256_fmadd_pd(load_column(a), _mm256_broadcast_sd(xa), a0);
-      a1 = _mm256_fmadd_pd(load_column(a + kColumn), _mm256_broadcast_sd(xa + 1), a1);
-      a2 = _mm256_fmadd_pd(load_column(a + 2 * kColumn), _mm256_broadcast_sd(xa + 2), a2);
+      a0 = _mm256_fmadd_pd(_mm256_loadu_pd(a), _mm256_broadcast_sd(xa), a0);
+      a1 = _mm256_fmadd_pd(_mm256_loadu_pd(a + 4), _mm256_broadcast_sd(xa + 1), a1);
+      a2 = _mm256_fmadd_pd(_mm256_loadu_pd(a + 8), _mm256_broadcast_sd(xa + 2), a2);
     }
     const __m256d sum = _mm256_add_pd(_mm256_add_pd(_mm256_add_pd(a0, b0), _mm256_add_pd(a1, b1)), _mm256_add_pd(a2, b2));
     alignas(32) double out[4];
@@ -103,11 +88,11 @@ static void multiply_block_rows(const std::int64_t* row_start, const std::int32_
 #else
     double y0 = 0.0, y1 = 0.0, y2 = 0.0;
     for (; s < end; ++s) {
-      const T* a = values + kStride * s;
+      const double* a = values + kStride * s;
       const double* xc = xs + 3 * static_cast<std::int64_t>(columns[s]);
-      y0 += double(a[0]) * xc[0] + double(a[kColumn]) * xc[1] + double(a[2 * kColumn]) * xc[2];
-      y1 += double(a[1]) * xc[0] + double(a[kColumn + 1]) * xc[1] + double(a[2 * kColumn + 1]) * xc[2];
-      y2 += double(a[2]) * xc[0] + double(a[kColumn + 2]) * xc[1] + double(a[2 * kColumn + 2]) * xc[2];
+      y0 += a[0] * xc[0] + a[4] * xc[1] + a[8] * xc[2];
+      y1 += a[1] * xc[0] + a[5] * xc[1] + a[9] * xc[2];
+      y2 += a[2] * xc[0] + a[6] * xc[1] + a[10] * xc[2];
     }
     ys[3 * r] = y0;
     ys[3 * r + 1] = y1;
@@ -116,7 +101,6 @@ static void multiply_block_rows(const std::int64_t* row_start, const std::int32_
   }
 }
 
-
 void BlockSparseMatrix::multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const {
   const std::int64_t* rows = row_start_.data();
   const std::int32_t* cols = columns_.data();
@@ -124,43 +108,101 @@ void BlockSparseMatrix::multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y) c
   const double* xs = x.data();
   double* ys = y.data();
   parallel_chunks(static_cast<std::size_t>(block_rows()), 256,
-                  [=](std::size_t r0, std::size_t r1) { multiply_block_rows<double, kBlockStride, 4>(rows, cols, v, xs, ys, r0, r1); });
+                  [=](std::size_t r0, std::size_t r1) { multiply_block_rows(rows, cols, v, xs, ys, r0, r1); });
 }
 
 void BlockSparseMatrix::multiply_rows(const Eigen::VectorXd& x, Eigen::VectorXd& y, std::size_t first,
                                       std::size_t last) const {
-  multiply_block_rows<double, kBlockStride, 4>(row_start_.data(), columns_.data(), values_.data(), x.data(), y.data(),
-                                               first, last);
+  multiply_block_rows(row_start_.data(), columns_.data(), values_.data(), x.data(), y.data(), first, last);
 }
 
-void BlockSparseMatrix::multiply_single_rows(const Eigen::VectorXd& x, Eigen::VectorXd& y, std::size_t first,
-                                             std::size_t last) const {
-  multiply_block_rows<float, kSingleStride, 3>(row_start_.data(), columns_.data(), values_single_.data(), x.data(),
-                                               y.data(), first, last);
+void BlockSparseMatrix::prepare_single_precision() {
+  const auto rows = static_cast<std::size_t>(block_rows());
+  pair_start_.assign(rows + 1, 0);
+  pair_columns_.clear();
+  pair_slots_.clear();
+  for (std::size_t r = 0; r < rows; ++r) {
+    for (std::int64_t s = row_start_[r]; s < row_start_[r + 1]; ++s) {
+      pair_columns_.push_back(columns_[s]);
+      pair_slots_.push_back(s);
+    }
+    if ((row_start_[r + 1] - row_start_[r]) % 2 != 0) {
+      pair_columns_.push_back(static_cast<std::int32_t>(r));  // any valid column: the block is zero
+      pair_slots_.push_back(-1);
+    }
+    pair_start_[r + 1] = static_cast<std::int64_t>(pair_columns_.size() / 2);
+  }
+  values_single_.assign(pair_columns_.size() * 12, 0.0f);
 }
 
 void BlockSparseMatrix::update_single_precision() {
-  const auto blocks = static_cast<std::size_t>(block_count());
-  values_single_.resize(blocks * kSingleStride + 4, 0.0f);  // tail: the last column's 4th lane
-  parallel_chunks(blocks, 2048, [&](std::size_t b, std::size_t e) {
+  if (values_single_.size() != pair_columns_.size() * 12 || pair_columns_.empty()) prepare_single_precision();
+  const std::size_t pairs = pair_columns_.size() / 2;
+  parallel_chunks(pairs, 1024, [&](std::size_t b, std::size_t e) {
     for (std::size_t k = b; k < e; ++k) {
-      const double* from = values_.data() + kBlockStride * static_cast<std::int64_t>(k);
-      float* to = values_single_.data() + kSingleStride * static_cast<std::int64_t>(k);
-      for (int q = 0; q < 3; ++q) {
-        for (int i = 0; i < 3; ++i) to[3 * q + i] = static_cast<float>(from[4 * q + i]);
+      float* to = values_single_.data() + 24 * k;
+      for (int half = 0; half < 2; ++half) {
+        const std::int64_t slot = pair_slots_[2 * k + static_cast<std::size_t>(half)];
+        for (int q = 0; q < 3; ++q) {
+          for (int i = 0; i < 4; ++i) {
+            // Lane 3 of each column is padding (zero in the double blocks too).
+            to[8 * q + 4 * half + i] = slot < 0 ? 0.0f : static_cast<float>(values_[kBlockStride * slot + 4 * q + i]);
+          }
+        }
       }
     }
   });
 }
 
-void BlockSparseMatrix::multiply_single(const Eigen::VectorXd& x, Eigen::VectorXd& y) const {
-  const std::int64_t* rows = row_start_.data();
-  const std::int32_t* cols = columns_.data();
-  const float* v = values_single_.data();
-  const double* xs = x.data();
-  double* ys = y.data();
-  parallel_chunks(static_cast<std::size_t>(block_rows()), 256,
-                  [=](std::size_t r0, std::size_t r1) { multiply_block_rows<float, kSingleStride, 3>(rows, cols, v, xs, ys, r0, r1); });
+void BlockSparseMatrix::round_to_single(const double* x, float* x4, std::size_t first, std::size_t last) {
+  for (std::size_t n = first; n < last; ++n) {
+    x4[4 * n] = static_cast<float>(x[3 * n]);
+    x4[4 * n + 1] = static_cast<float>(x[3 * n + 1]);
+    x4[4 * n + 2] = static_cast<float>(x[3 * n + 2]);
+    x4[4 * n + 3] = 0.0f;
+  }
+}
+
+void BlockSparseMatrix::multiply_single_rows(const float* x4, double* y, std::size_t first, std::size_t last) const {
+  const std::int64_t* pair_start = pair_start_.data();
+  const std::int32_t* cols = pair_columns_.data();
+  const float* values = values_single_.data();
+  for (std::size_t r = first; r < last; ++r) {
+#if defined(__AVX2__) && defined(__FMA__)
+    // Lanes 0–3 accumulate the pair's first block, lanes 4–7 its second; column q of both
+    // is multiplied by component q of their x, broadcast within each half.
+    __m256 acc0 = _mm256_setzero_ps(), acc1 = _mm256_setzero_ps(), acc2 = _mm256_setzero_ps();
+    for (std::int64_t k = pair_start[r]; k < pair_start[r + 1]; ++k) {
+      const float* v = values + 24 * k;
+      const __m256 xs = _mm256_set_m128(_mm_loadu_ps(x4 + 4 * static_cast<std::int64_t>(cols[2 * k + 1])),
+                                        _mm_loadu_ps(x4 + 4 * static_cast<std::int64_t>(cols[2 * k])));
+      acc0 = _mm256_fmadd_ps(_mm256_load_ps(v), _mm256_permute_ps(xs, 0x00), acc0);
+      acc1 = _mm256_fmadd_ps(_mm256_load_ps(v + 8), _mm256_permute_ps(xs, 0x55), acc1);
+      acc2 = _mm256_fmadd_ps(_mm256_load_ps(v + 16), _mm256_permute_ps(xs, 0xAA), acc2);
+    }
+    const __m256 sum8 = _mm256_add_ps(_mm256_add_ps(acc0, acc1), acc2);
+    const __m128 sum4 = _mm_add_ps(_mm256_castps256_ps128(sum8), _mm256_extractf128_ps(sum8, 1));
+    alignas(16) float out[4];
+    _mm_store_ps(out, sum4);
+    y[3 * r] = out[0];
+    y[3 * r + 1] = out[1];
+    y[3 * r + 2] = out[2];
+#else
+    float sum[3] = {0.0f, 0.0f, 0.0f};
+    for (std::int64_t k = pair_start[r]; k < pair_start[r + 1]; ++k) {
+      const float* v = values + 24 * k;
+      for (int half = 0; half < 2; ++half) {
+        const float* xc = x4 + 4 * static_cast<std::int64_t>(cols[2 * k + half]);
+        for (int i = 0; i < 3; ++i) {
+          sum[i] += v[4 * half + i] * xc[0] + v[8 + 4 * half + i] * xc[1] + v[16 + 4 * half + i] * xc[2];
+        }
+      }
+    }
+    y[3 * r] = sum[0];
+    y[3 * r + 1] = sum[1];
+    y[3 * r + 2] = sum[2];
+#endif
+  }
 }
 
 Eigen::MatrixXd BlockSparseMatrix::to_dense() const {

@@ -11,6 +11,7 @@
 /// the conjugate-gradient solve fast.
 
 #include <Eigen/Core>
+#include <Eigen/StdVector>
 #include <cstdint>
 #include <utility>
 #include <vector>
@@ -59,15 +60,23 @@ class BlockSparseMatrix {
   /// y = A x (parallel over block rows; each row is summed in column order: deterministic).
   void multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const;
 
-  /// Copies the values to single precision for multiply_single (the conjugate-gradient
-  /// product: half the memory traffic, and a matrix of this size then stays in cache).
+  /// Single-precision copy for the conjugate-gradient product. The copy stores each block
+  /// row's blocks in pairs, a pair's columns interleaved so that one 8-float register holds
+  /// the same column of both blocks: the product then does two blocks per fused multiply-add
+  /// with no conversions, half the instructions of a double-precision product, and the copy
+  /// (36–48 bytes a block) stays in the core's cache for livers up to ~10k tetrahedra.
+  /// prepare_single_precision() lays the copy out (once, it allocates);
+  /// update_single_precision() refreshes its values (each step, it does not).
+  void prepare_single_precision();
   void update_single_precision();
-  /// y = A x with the single-precision copy of the values (accumulated in double).
-  void multiply_single(const Eigen::VectorXd& x, Eigen::VectorXd& y) const;
+  /// Rounds x (3 per node) into the padded single-precision layout the product reads
+  /// (4 per node, the fourth zero), for nodes [first, last).
+  static void round_to_single(const double* x, float* x4, std::size_t first, std::size_t last);
+  /// Rows [first, last) of y = A x with the single-precision copy; x4 from round_to_single.
+  void multiply_single_rows(const float* x4, double* y, std::size_t first, std::size_t last) const;
 
-  /// Rows [first, last) of y = A x (double or single-precision values).
+  /// Rows [first, last) of y = A x.
   void multiply_rows(const Eigen::VectorXd& x, Eigen::VectorXd& y, std::size_t first, std::size_t last) const;
-  void multiply_single_rows(const Eigen::VectorXd& x, Eigen::VectorXd& y, std::size_t first, std::size_t last) const;
 
   /// Dense copy, for tests and small problems.
   [[nodiscard]] Eigen::MatrixXd to_dense() const;
@@ -77,7 +86,12 @@ class BlockSparseMatrix {
   std::vector<std::int32_t> columns_;       // (blocks) column of each slot, sorted per row
   std::vector<std::int64_t> diagonal_;      // (rows) slot of the diagonal block
   std::vector<double> values_;              // (12*blocks) column-major padded 3x3 blocks
-  std::vector<float> values_single_;        // same layout, single precision (CG only)
+  // Single-precision copy: per block row, its blocks in pairs (an odd row ends with a zero
+  // block), 24 floats a pair: column q of both blocks in floats [8q, 8q+8).
+  std::vector<std::int64_t> pair_start_;    // (rows+1) first pair of each block row
+  std::vector<std::int32_t> pair_columns_;  // (2*pairs) block column of each pair member
+  std::vector<std::int64_t> pair_slots_;    // (2*pairs) source slot, -1 for padding
+  std::vector<float, Eigen::aligned_allocator<float>> values_single_;
 };
 
 }  // namespace hof::mechanics

@@ -61,6 +61,16 @@ class ForceField {
   /// K += scale · (−∂f/∂x), linearised at the positions of the last add_force.
   virtual void add_stiffness(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const = 0;
 
+  /// K = scale · (−∂f/∂x), overwriting every block of the matrix, for a field whose couplings
+  /// cover the whole pattern: the caller then need not clear the matrix first. Returns false,
+  /// writing nothing, when the field cannot (the caller clears and calls add_stiffness).
+  virtual bool set_stiffness(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const {
+    (void)state;
+    (void)scale;
+    (void)k;
+    return false;
+  }
+
   /// Whether add_stiffness adds anything (constant forces do not).
   [[nodiscard]] virtual bool has_stiffness() const { return true; }
 

@@ -38,12 +38,19 @@ void project(const MechanicalModel& model, Eigen::VectorXd& vector) {
 
 void assemble_system(const MechanicalModel& model, MechanicalState& state, double mass_coeff, double stiffness_coeff) {
   BlockSparseMatrix& a = state.work.system;
-  a.set_zero();
+  // The first field that covers the whole pattern sets the values (no clearing pass).
+  bool initialised = false;
   for (std::size_t k = 0; k < model.force_fields.size(); ++k) {
-    if (model.force_fields[k]->has_stiffness()) {
-      model.force_fields[k]->add_stiffness(state.field_states[k], stiffness_coeff, a);
+    const ForceField& field = *model.force_fields[k];
+    if (!field.has_stiffness()) continue;
+    if (!initialised) {
+      initialised = true;
+      if (field.set_stiffness(state.field_states[k], stiffness_coeff, a)) continue;
+      a.set_zero();
     }
+    field.add_stiffness(state.field_states[k], stiffness_coeff, a);
   }
+  if (!initialised) a.set_zero();
   for (std::size_t n = 0; n < model.node_count(); ++n) {
     a.block(a.diagonal_slot(static_cast<std::int32_t>(n))).diagonal().array() += mass_coeff * model.node_mass_kg[n];
   }
@@ -68,7 +75,7 @@ bool uses_single_precision(const MechanicalModel& model) {
 
 void prepare_linear_solver(const MechanicalModel& model, MechanicalState& state) {
   SolverWorkspace& w = state.work;
-  if (model.needs_matrix) w.system.update_single_precision();  // sizes the copy once
+  if (model.needs_matrix) w.system.prepare_single_precision();
   if (model.linear.kind != LinearSolverKind::kSparseLdlt || !model.needs_matrix) return;
   // CSC copy of the block matrix. Each triplet carries its block-storage index + 1 as its
   // value, which gives the map from CSC storage back to block storage after compression.
@@ -141,11 +148,17 @@ bool solve_ldlt(MechanicalState& state, const Eigen::VectorXd& b, Eigen::VectorX
 // below), or after `iterations`. Optional block-Jacobi preconditioning (inverse 3x3 diagonal
 // blocks). Each iteration makes three passes over fixed node chunks — (Ap, pᵀAp), (x, r, z
 // updates with rᵀz and rᵀr), (p update) — with per-chunk partial sums added in chunk order,
-// so the result does not depend on the number of threads.
+// so the result does not depend on the number of threads. With mixed precision the product
+// reads p rounded to single precision, which the passes that write p also write.
+//
+// The passes are task loops (TBB), not one team of threads with barriers between them: a
+// team is faster by a few microseconds per pass on an idle machine but stalls at every
+// barrier when the machine is oversubscribed and one of its threads is descheduled, while a
+// task loop lets the running threads take over the waiting chunks.
 bool solve_cg(const MechanicalModel& model, MechanicalState& state, const Eigen::VectorXd& b, Eigen::VectorXd& x) {
   SolverWorkspace& w = state.work;
   const LinearSolverConfig& cfg = model.linear;
-  BlockSparseMatrix& a = w.system;
+  const BlockSparseMatrix& a = w.system;
   const bool precondition = cfg.block_jacobi;
   const bool single = cfg.mixed_precision;
   const std::size_t nodes = model.node_count();
@@ -171,13 +184,6 @@ bool solve_cg(const MechanicalModel& model, MechanicalState& state, const Eigen:
         },
         /*min_parallel=*/(kParallelThreshold / 3 + kChunk - 1) / kChunk);
   };
-  if (precondition) {
-    over_chunks([&](std::size_t, std::size_t d0, std::size_t d1) {
-      for (std::size_t n = d0 / 3; n < d1 / 3; ++n) {
-        w.block_jacobi[n] = a.block(a.diagonal_slot(static_cast<std::int32_t>(n))).inverse();
-      }
-    });
-  }
 
   double* xs = x.data();
   double* rs = w.r.data();
@@ -185,6 +191,13 @@ bool solve_cg(const MechanicalModel& model, MechanicalState& state, const Eigen:
   double* ps = w.p.data();
   double* aps = w.ap.data();
   const double* bs = b.data();
+  Mat3* jacobi = w.block_jacobi.data();
+  float* p_single = w.p_single.data();
+  auto apply_preconditioner = [&](std::size_t d0, std::size_t d1) {
+    for (std::size_t n = d0 / 3; n < d1 / 3; ++n) {
+      Eigen::Map<Eigen::Vector3d>(zs + 3 * n) = jacobi[n] * Eigen::Map<const Eigen::Vector3d>(rs + 3 * n);
+    }
+  };
 
   // r = b, z = M⁻¹ r, p = z, x = 0; |b|² and rᵀz.
   over_chunks([&](std::size_t c, std::size_t d0, std::size_t d1) {
@@ -196,13 +209,15 @@ bool solve_cg(const MechanicalModel& model, MechanicalState& state, const Eigen:
     }
     if (precondition) {
       for (std::size_t n = d0 / 3; n < d1 / 3; ++n) {
-        Eigen::Map<Eigen::Vector3d>(zs + 3 * n) = w.block_jacobi[n] * Eigen::Map<const Eigen::Vector3d>(rs + 3 * n);
+        jacobi[n] = a.block(a.diagonal_slot(static_cast<std::int32_t>(n))).inverse();
       }
+      apply_preconditioner(d0, d1);
     }
     for (std::size_t d = d0; d < d1; ++d) {
       ps[d] = zs[d];
       rz += rs[d] * zs[d];
     }
+    if (single) BlockSparseMatrix::round_to_single(ps, p_single, d0 / 3, d1 / 3);
     part0[c] = bb;
     part1[c] = rz;
   });
@@ -212,7 +227,6 @@ bool solve_cg(const MechanicalModel& model, MechanicalState& state, const Eigen:
   state.stats.linear_residual = 0.0;
   if (!(b_norm2 > 0.0)) return std::isfinite(b_norm2);
 
-  const auto& row_start = a.row_start();
   double r_norm2 = b_norm2;
   double first_curvature = 0.0;
   int iteration = 0;
@@ -220,13 +234,12 @@ bool solve_cg(const MechanicalModel& model, MechanicalState& state, const Eigen:
     if (r_norm2 / b_norm2 <= cfg.tolerance) break;
     // Ap and pᵀAp.
     over_chunks([&](std::size_t c, std::size_t d0, std::size_t d1) {
-      if (single) a.multiply_single_rows(w.p, w.ap, d0 / 3, d1 / 3);
+      if (single) a.multiply_single_rows(p_single, aps, d0 / 3, d1 / 3);
       else a.multiply_rows(w.p, w.ap, d0 / 3, d1 / 3);
       double pap = 0.0;
       for (std::size_t d = d0; d < d1; ++d) pap += ps[d] * aps[d];
       part0[c] = pap;
     });
-    (void)row_start;
     const double curvature = sum(part0);
     // SOFA compares pᵀAp with `threshold` in absolute terms, which in its unit-free scenes
     // means "the denominator vanished". In SI units (kg, m) pᵀAp is legitimately tiny, so
@@ -243,9 +256,7 @@ bool solve_cg(const MechanicalModel& model, MechanicalState& state, const Eigen:
         rr += rs[d] * rs[d];
       }
       if (precondition) {
-        for (std::size_t n = d0 / 3; n < d1 / 3; ++n) {
-          Eigen::Map<Eigen::Vector3d>(zs + 3 * n) = w.block_jacobi[n] * Eigen::Map<const Eigen::Vector3d>(rs + 3 * n);
-        }
+        apply_preconditioner(d0, d1);
         for (std::size_t d = d0; d < d1; ++d) rz += rs[d] * zs[d];
       } else {
         rz = rr;
@@ -259,6 +270,7 @@ bool solve_cg(const MechanicalModel& model, MechanicalState& state, const Eigen:
     rho = rho_next;
     over_chunks([&](std::size_t, std::size_t d0, std::size_t d1) {
       for (std::size_t d = d0; d < d1; ++d) ps[d] = zs[d] + beta * ps[d];
+      if (single) BlockSparseMatrix::round_to_single(ps, p_single, d0 / 3, d1 / 3);
     });
   }
   state.stats.linear_iterations = iteration;

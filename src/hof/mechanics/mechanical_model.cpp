@@ -217,6 +217,7 @@ MechanicalState make_state(const MechanicalModel& model) {
     *vec = Eigen::VectorXd::Zero(dofs);
   }
   w.partials.assign(1024, 0.0);
+  w.p_single.assign(4 * model.node_count() + 4, 0.0f);
   w.block_jacobi.assign(model.node_count(), Mat3::Identity());
   if (model.needs_matrix) {
     w.system = model.pattern;

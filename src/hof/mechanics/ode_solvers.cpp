@@ -106,8 +106,7 @@ bool implicit_euler_step(const MechanicalModel& model, MechanicalState& state) {
   t0 = Clock::now();
   // Right-hand side without a separate K: with A = (1 + h r_M) M + h (h + r_K) K,
   //   h f − h (h + r_K) K v − h r_M M v  =  h f + M v − A v.
-  if (uses_single_precision(model)) w.system.multiply_single(state.v, w.ap);
-  else w.system.multiply(state.v, w.ap);
+  w.system.multiply(state.v, w.ap);
   apply_mass(model, state.v, w.b);
   w.b += h * state.f - w.ap;
   project(model, w.b);

@@ -5,9 +5,12 @@
 #include "hof/mechanics/tet_rest_geometry.h"
 
 #include <Eigen/SVD>
+#include <algorithm>
 #include <cmath>
+#include <tuple>
 
 #include "hof/mechanics/parallel.h"
+#include "hof/mechanics/simd_lanes.h"
 
 namespace hof::mechanics {
 
@@ -68,28 +71,70 @@ Expected<std::unique_ptr<TetrahedronFemForceField>> TetrahedronFemForceField::ma
   node_lists.reserve(field->elements_.size());
   for (const Element& e : field->elements_) node_lists.push_back(e.nodes);
   field->incidence_ = make_node_incidence<4>(node_lists, rest_positions.size());
-  field->incidences_.reserve(field->incidence_.entries.size());
-  for (std::int32_t entry : field->incidence_.entries) {
-    const Element& e = field->elements_[static_cast<std::size_t>(entry >> 2)];
-    const int i = entry & 3;
-    Incidence inc{};
-    inc.gradient = e.gradients[i];
-    inc.lambda_volume = field->lame_.lambda * e.volume;
-    inc.mu_volume = field->lame_.mu * e.volume;
-    for (int j = 0; j < 4; ++j) inc.mu_dots[j] = inc.mu_volume * e.gradients[i].dot(e.gradients[j]);
-    inc.slots.fill(-1);
-    inc.element = entry >> 2;
-    inc.corner = i;
-    field->incidences_.push_back(inc);
+
+  // Element groups for the `large` pass.
+  const std::size_t element_count = field->elements_.size();
+  field->groups_.resize((element_count + simd::kLanes - 1) / simd::kLanes);
+  for (std::size_t g = 0; g < field->groups_.size(); ++g) {
+    ElementGroup& group = field->groups_[g];
+    for (int lane = 0; lane < simd::kLanes; ++lane) {
+      const std::size_t index = simd::kLanes * g + static_cast<std::size_t>(lane);
+      const bool padding = index >= element_count;
+      const Element& e = field->elements_[padding ? 0 : index];
+      for (int c = 0; c < 4; ++c) group.nodes[c][lane] = e.nodes[c];
+      for (int j = 1; j < 4; ++j) {
+        const Vec3 local = e.rest_frame_transposed * e.gradients[j];
+        for (int q = 0; q < 3; ++q) group.rest_gradients[3 * (j - 1) + q][lane] = local[q];
+      }
+      group.volume[lane] = padding ? 0.0 : e.volume;
+      group.root_volume[lane] = padding ? 0.0 : std::sqrt(e.volume);
+    }
+  }
+
+  // Node pairs coupled by the elements, each with the corners that couple them.
+  struct Term {
+    std::int32_t row, col, entry_row, entry_col;
+  };
+  std::vector<Term> terms;
+  terms.reserve(6 * element_count);
+  for (std::size_t e = 0; e < element_count; ++e) {
+    const auto& n = field->elements_[e].nodes;
+    const auto base = static_cast<std::int32_t>(4 * e);
+    for (int i = 0; i < 4; ++i) {
+      for (int j = i + 1; j < 4; ++j) {
+        if (n[i] < n[j]) terms.push_back({n[i], n[j], base + i, base + j});
+        else terms.push_back({n[j], n[i], base + j, base + i});
+      }
+    }
+  }
+  std::sort(terms.begin(), terms.end(), [](const Term& a, const Term& b) {
+    return std::tie(a.row, a.col, a.entry_row) < std::tie(b.row, b.col, b.entry_row);
+  });
+  field->edge_terms_.reserve(terms.size());
+  for (std::size_t t = 0; t < terms.size(); ++t) {
+    if (t == 0 || terms[t].row != terms[t - 1].row || terms[t].col != terms[t - 1].col) {
+      const auto at = static_cast<std::int32_t>(t);
+      field->edges_.push_back({-1, -1, at, at});
+    }
+    field->edge_terms_.push_back({terms[t].entry_row, terms[t].entry_col});
+    ++field->edges_.back().last;
   }
   return field;
 }
 
 ForceFieldState TetrahedronFemForceField::make_state() const {
   ForceFieldState s;
-  s.rotations.assign(elements_.size(), Mat3::Identity());
-  s.element_matrices.assign(elements_.size(), Mat3::Zero());  // −V R σ per element
-  s.element_scalars.assign(16 * elements_.size(), 0.0);       // c_i = R b_i, padded to 4
+  // element_scalars: per element corner (4·element + corner, padded to whole groups), the
+  // rotated scaled gradient c̃ = √V R b (four lanes, the fourth zero), then after all of them
+  // the corner's elastic force (same layout). At rest R = I.
+  const std::size_t padded = simd::kLanes * groups_.size();
+  s.element_scalars.assign(2 * 16 * padded, 0.0);
+  for (std::size_t e = 0; e < elements_.size(); ++e) {
+    const double root_volume = std::sqrt(elements_[e].volume);
+    for (int i = 0; i < 4; ++i) {
+      for (int q = 0; q < 3; ++q) s.element_scalars[16 * e + 4 * i + q] = root_volume * elements_[e].gradients[i][q];
+    }
+  }
   return s;
 }
 
@@ -102,23 +147,30 @@ void TetrahedronFemForceField::collect_couplings(std::vector<std::pair<std::int3
 }
 
 void TetrahedronFemForceField::bind(const BlockSparseMatrix& pattern) {
-  for (Incidence& inc : incidences_) {
-    const Element& e = elements_[static_cast<std::size_t>(inc.element)];
-    for (int j = 0; j < 4; ++j) {
-      inc.slots[j] = static_cast<std::int32_t>(pattern.slot(e.nodes[inc.corner], e.nodes[j]));
-    }
+  for (EdgeBlocks& edge : edges_) {
+    const auto& term = edge_terms_[static_cast<std::size_t>(edge.first)];
+    const std::int32_t row = elements_[static_cast<std::size_t>(term[0] >> 2)].nodes[term[0] & 3];
+    const std::int32_t col = elements_[static_cast<std::size_t>(term[1] >> 2)].nodes[term[1] & 3];
+    edge.slot_ij = static_cast<std::int32_t>(pattern.slot(row, col));
+    edge.slot_ji = static_cast<std::int32_t>(pattern.slot(col, row));
   }
+  const std::size_t nodes = incidence_.start.size() - 1;
+  diagonal_slots_.resize(nodes);
+  std::int64_t covered = 0;
+  for (std::size_t n = 0; n < nodes; ++n) {
+    diagonal_slots_[n] = static_cast<std::int32_t>(pattern.diagonal_slot(static_cast<std::int32_t>(n)));
+  }
+  covered = static_cast<std::int64_t>(nodes) + 2 * static_cast<std::int64_t>(edges_.size());
+  covers_pattern_ = covered == pattern.block_count() && static_cast<std::int32_t>(nodes) == pattern.block_rows();
 }
 
-Mat3 TetrahedronFemForceField::rotation(const Element& e, const Mat3& f, const Eigen::VectorXd& x,
-                                        Eigen::Quaterniond& warm_start) const {
+Mat3 TetrahedronFemForceField::rotation(const Element& e, const Mat3& f, const Eigen::VectorXd& x) const {
   switch (config_.method) {
     case FemMethod::kSmall:
       return Mat3::Identity();
     case FemMethod::kLarge:
       return triangle_frame(node(x, e.nodes[0]), node(x, e.nodes[1]), node(x, e.nodes[2])) * e.rest_frame_transposed;
     case FemMethod::kPolar: {
-      (void)warm_start;
       // Polar decomposition F = R S by Higham's scaled Newton iteration
       // X ← ½(γX + X⁻ᵀ/γ), γ = (‖X⁻¹‖_F/‖X‖_F)^½ (Higham, "Computing the polar decomposition
       // with applications", SIAM J. Sci. Stat. Comput. 7(4), 1986): quadratic convergence,
@@ -147,95 +199,252 @@ Mat3 TetrahedronFemForceField::rotation(const Element& e, const Mat3& f, const E
   return Mat3::Identity();
 }
 
-void TetrahedronFemForceField::add_force(const Eigen::VectorXd& x, const Eigen::VectorXd& /*v*/,
-                                         ForceFieldState& state, Eigen::VectorXd& f) const {
+// The co-rotational element (Müller et al. 2002; Nesme et al. 2005) in the element's frame:
+// with R = G H (G the current QR frame of the first three nodes, H the rest one transposed),
+// M = Gᵀ F Hᵀ = Σ_j e'_j b'_jᵀ where e'_j = Gᵀ(x_j − x_0) and b'_j = H b_j. The strain
+// ε' = sym(M) − I and stress σ' = λ tr(ε') I + 2μ ε' are those of the unrotated element seen
+// in the rest frame (H ε Hᵀ, H σ Hᵀ: the linear isotropic law commutes with rotations), so
+// the nodal forces are f_i = −V R σ b_i = −V G σ' b'_i, and the rotated gradients
+// R b_i = G b'_i. In the current frame e'_1 = (|e_1|, 0, 0) and e'_2 = (·, ·, 0), which saves
+// a third of the products. Four elements per pass, one per lane.
+void TetrahedronFemForceField::element_pass_large(const Eigen::VectorXd& x, ForceFieldState& state) const {
+  using simd::Lanes;
+  const double* xs = x.data();
+  const Lanes lambda = simd::splat(lame_.lambda);
+  const Lanes two_mu = simd::splat(2.0 * lame_.mu);
+  const Lanes one = simd::splat(1.0);
+  double* stiffness_vectors = state.element_scalars.data();
+  double* corner_forces = stiffness_vectors + 16 * simd::kLanes * groups_.size();
+  parallel_chunks(
+      groups_.size(), 16,
+      [&](std::size_t begin, std::size_t end) {
+        for (std::size_t g = begin; g < end; ++g) {
+          const ElementGroup& group = groups_[g];
+          Lanes px[4], py[4], pz[4];
+          for (int c = 0; c < 4; ++c) {
+            const double* p0 = xs + 3 * static_cast<std::int64_t>(group.nodes[c][0]);
+            const double* p1 = xs + 3 * static_cast<std::int64_t>(group.nodes[c][1]);
+            const double* p2 = xs + 3 * static_cast<std::int64_t>(group.nodes[c][2]);
+            const double* p3 = xs + 3 * static_cast<std::int64_t>(group.nodes[c][3]);
+            px[c] = Lanes{p0[0], p1[0], p2[0], p3[0]};
+            py[c] = Lanes{p0[1], p1[1], p2[1], p3[1]};
+            pz[c] = Lanes{p0[2], p1[2], p2[2], p3[2]};
+          }
+          const Lanes e1x = px[1] - px[0], e1y = py[1] - py[0], e1z = pz[1] - pz[0];
+          const Lanes e2x = px[2] - px[0], e2y = py[2] - py[0], e2z = pz[2] - pz[0];
+          const Lanes e3x = px[3] - px[0], e3y = py[3] - py[0], e3z = pz[3] - pz[0];
+          // Current frame G = [a b c]: a along e1, c normal to (e1, e2), b = c × a.
+          const Lanes length1 = simd::sqrt(e1x * e1x + e1y * e1y + e1z * e1z);
+          const Lanes inverse1 = one / length1;
+          const Lanes ax = e1x * inverse1, ay = e1y * inverse1, az = e1z * inverse1;
+          Lanes cx = ay * e2z - az * e2y, cy = az * e2x - ax * e2z, cz = ax * e2y - ay * e2x;
+          const Lanes inverse_c = one / simd::sqrt(cx * cx + cy * cy + cz * cz);
+          cx *= inverse_c;
+          cy *= inverse_c;
+          cz *= inverse_c;
+          const Lanes bx = cy * az - cz * ay, by = cz * ax - cx * az, bz = cx * ay - cy * ax;
+          // Edge vectors in the frame.
+          const Lanes e2a = ax * e2x + ay * e2y + az * e2z, e2b = bx * e2x + by * e2y + bz * e2z;
+          const Lanes e3a = ax * e3x + ay * e3y + az * e3z, e3b = bx * e3x + by * e3y + bz * e3z;
+          const Lanes e3c = cx * e3x + cy * e3y + cz * e3z;
+          Lanes g1[3], g2[3], g3[3];
+          for (int q = 0; q < 3; ++q) {
+            g1[q] = simd::load(group.rest_gradients[q]);
+            g2[q] = simd::load(group.rest_gradients[3 + q]);
+            g3[q] = simd::load(group.rest_gradients[6 + q]);
+          }
+          // M rows: M_0 = |e1| b'_1 + e2a b'_2 + e3a b'_3, M_1 = e2b b'_2 + e3b b'_3, M_2 = e3c b'_3.
+          Lanes m[3][3];
+          for (int q = 0; q < 3; ++q) {
+            m[0][q] = length1 * g1[q] + e2a * g2[q] + e3a * g3[q];
+            m[1][q] = e2b * g2[q] + e3b * g3[q];
+            m[2][q] = e3c * g3[q];
+          }
+          const Lanes s00 = m[0][0] - one, s11 = m[1][1] - one, s22 = m[2][2] - one;
+          const Lanes pressure = lambda * (s00 + s11 + s22);
+          const Lanes half_two_mu = 0.5 * two_mu;
+          const Lanes t00 = pressure + two_mu * s00, t11 = pressure + two_mu * s11, t22 = pressure + two_mu * s22;
+          const Lanes t01 = half_two_mu * (m[0][1] + m[1][0]);
+          const Lanes t02 = half_two_mu * (m[0][2] + m[2][0]);
+          const Lanes t12 = half_two_mu * (m[1][2] + m[2][1]);
+          const Lanes volume = simd::load(group.volume);
+          const Lanes root_volume = simd::load(group.root_volume);
+          const Lanes minus_volume = -volume;
+          Lanes force[4][3], gradient[4][3];
+          for (int q = 0; q < 3; ++q) force[0][q] = gradient[0][q] = simd::splat(0.0);
+          const Lanes* rest[3] = {g1, g2, g3};
+          for (int j = 0; j < 3; ++j) {
+            const Lanes* r = rest[j];
+            // σ' b'_j, then −V G (σ' b'_j); √V G b'_j.
+            const Lanes s0 = t00 * r[0] + t01 * r[1] + t02 * r[2];
+            const Lanes s1 = t01 * r[0] + t11 * r[1] + t12 * r[2];
+            const Lanes s2 = t02 * r[0] + t12 * r[1] + t22 * r[2];
+            Lanes* f = force[j + 1];
+            f[0] = minus_volume * (ax * s0 + bx * s1 + cx * s2);
+            f[1] = minus_volume * (ay * s0 + by * s1 + cy * s2);
+            f[2] = minus_volume * (az * s0 + bz * s1 + cz * s2);
+            Lanes* c = gradient[j + 1];
+            c[0] = root_volume * (ax * r[0] + bx * r[1] + cx * r[2]);
+            c[1] = root_volume * (ay * r[0] + by * r[1] + cy * r[2]);
+            c[2] = root_volume * (az * r[0] + bz * r[1] + cz * r[2]);
+            for (int q = 0; q < 3; ++q) {
+              force[0][q] -= f[q];
+              gradient[0][q] -= c[q];
+            }
+          }
+          double* forces_out = corner_forces + 16 * simd::kLanes * g;
+          double* gradients_out = stiffness_vectors + 16 * simd::kLanes * g;
+          for (int i = 0; i < 4; ++i) {
+            Lanes per_element[4];
+            simd::transpose_xyz(force[i][0], force[i][1], force[i][2], per_element);
+            for (int lane = 0; lane < simd::kLanes; ++lane) simd::store(forces_out + 16 * lane + 4 * i, per_element[lane]);
+            simd::transpose_xyz(gradient[i][0], gradient[i][1], gradient[i][2], per_element);
+            for (int lane = 0; lane < simd::kLanes; ++lane) simd::store(gradients_out + 16 * lane + 4 * i, per_element[lane]);
+          }
+        }
+      },
+      /*min_parallel=*/64);
+}
+
+// Any rotation (small: R = I; polar), one element at a time, same outputs.
+void TetrahedronFemForceField::element_pass_general(const Eigen::VectorXd& x, ForceFieldState& state) const {
   const double lambda = lame_.lambda;
   const double mu = lame_.mu;
-  // Element pass: rotation and the stress term −V R σ of each element, independently.
+  double* stiffness_vectors = state.element_scalars.data();
+  double* corner_forces = stiffness_vectors + 16 * simd::kLanes * groups_.size();
   parallel_chunks(
       elements_.size(), 64,
       [&](std::size_t begin, std::size_t end) {
         for (std::size_t index = begin; index < end; ++index) {
           const Element& e = elements_[index];
           const Mat3 deformation = deformation_gradient(e, x);
-          Eigen::Quaterniond unused = Eigen::Quaterniond::Identity();
-          const Mat3 r = rotation(e, deformation, x, unused);
-          state.rotations[index] = r;
+          const Mat3 r = rotation(e, deformation, x);
           // Linear law in the element's unrotated frame: ε = sym(RᵀF) − I,
           // σ = λ tr(ε) I + 2μ ε; nodal forces f_i = −V R σ b_i.
           const Mat3 unrotated = r.transpose() * deformation;
           const Mat3 strain = 0.5 * (unrotated + unrotated.transpose()) - Mat3::Identity();
           const Mat3 stress = lambda * strain.trace() * Mat3::Identity() + 2.0 * mu * strain;
-          state.element_matrices[index].noalias() = -e.volume * (r * stress);
-          // Rotated gradients for the stiffness, padded to four lanes for the row pass.
-          double* c = state.element_scalars.data() + 16 * index;
+          const Mat3 force_map = -e.volume * (r * stress);
+          const double root_volume = std::sqrt(e.volume);
           for (int i = 0; i < 4; ++i) {
-            const Vec3 ci = r * e.gradients[i];
-            c[4 * i] = ci.x();
-            c[4 * i + 1] = ci.y();
-            c[4 * i + 2] = ci.z();
-            c[4 * i + 3] = 0.0;
+            Eigen::Map<Vec3>(corner_forces + 16 * index + 4 * i) = force_map * e.gradients[i];
+            Eigen::Map<Vec3>(stiffness_vectors + 16 * index + 4 * i) = root_volume * (r * e.gradients[i]);
           }
         }
       },
       /*min_parallel=*/256);
-  // Node pass: each node gathers f_i = Σ (−V R σ) b_i over its elements, in a fixed order.
-  // The element terms are the only random reads: fetch them a few incidences ahead.
-  constexpr std::int32_t kAhead = 6;
+}
+
+void TetrahedronFemForceField::add_force(const Eigen::VectorXd& x, const Eigen::VectorXd& /*v*/,
+                                         ForceFieldState& state, Eigen::VectorXd& f) const {
+  if (config_.method == FemMethod::kLarge) element_pass_large(x, state);
+  else element_pass_general(x, state);
+  // Node pass: each node gathers its corners' forces over its elements, in a fixed order.
+  const double* corner_forces = state.element_scalars.data() + 16 * simd::kLanes * groups_.size();
+  const std::int32_t* entries = incidence_.entries.data();
   parallel_chunks(
       incidence_.start.size() - 1, 128,
       [&](std::size_t begin, std::size_t end) {
-        const std::int32_t last = incidence_.start[end];
         for (std::size_t n = begin; n < end; ++n) {
-          Vec3 sum = Vec3::Zero();
+          simd::Lanes sum = simd::splat(0.0);
           for (std::int32_t k = incidence_.start[n]; k < incidence_.start[n + 1]; ++k) {
-            if (k + kAhead < last) __builtin_prefetch(&state.element_matrices[incidences_[k + kAhead].element]);
-            const Incidence& inc = incidences_[k];
-            sum.noalias() += state.element_matrices[inc.element] * inc.gradient;
+            sum += simd::load(corner_forces + 4 * static_cast<std::int64_t>(entries[k]));
           }
-          f.segment<3>(3 * static_cast<Eigen::Index>(n)) += sum;
+          const auto i = 3 * static_cast<Eigen::Index>(n);
+          f[i] += sum[0];
+          f[i + 1] += sum[1];
+          f[i + 2] += sum[2];
         }
       },
       /*min_parallel=*/512);
 }
 
-void TetrahedronFemForceField::add_stiffness(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const {
+// Stiffness blocks from the rotated scaled gradients c̃ = √V R b of the last force pass:
+// K_ij = Σ_e λ c̃_i c̃_jᵀ + μ c̃_j c̃_iᵀ + μ (c̃_i · c̃_j) I (the element stiffness of the
+// linear law, rotated: R K_e Rᵀ, Müller et al. 2002), with Σ over the elements sharing i and
+// j. Each block is summed in registers and written once: diagonal blocks by node, the pairs
+// (i, j) and (j, i) together by edge (K_ji = K_ijᵀ: with A = Σ c̃_i c̃_jᵀ and B = Σ c̃_j c̃_iᵀ,
+// K_ij = λA + μB + μd I and K_ji = λB + μA + μd I). Rows never share a writer: no atomics,
+// and a fixed summation order.
+template <bool kAdd>
+void TetrahedronFemForceField::write_stiffness(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const {
+  using simd::Lanes;
   double* values = k.values();
-  const double* rotated = state.element_scalars.data();
-  // Row pass: each block row (node i) gathers, from every element using node i, the rotated
-  // element stiffness blocks R K_e Rᵀ (i, j) = V (λ c_i c_jᵀ + μ c_j c_iᵀ + μ (b_i·b_j) I)
-  // with c = R b. One thread per row: no write conflicts, fixed summation order. Blocks are
-  // stored as padded columns, so column q gets λV c_i c_j[q] + μV c_j c_i[q] in four lanes.
-  constexpr std::int32_t kAhead = 6;
+  const double* c = state.element_scalars.data();
+  const double lambda = scale * lame_.lambda;
+  const double mu = scale * lame_.mu;
+  auto write = [values](std::int64_t slot, const Lanes& col0, const Lanes& col1, const Lanes& col2) {
+    double* block = values + BlockSparseMatrix::kBlockStride * slot;
+    if constexpr (kAdd) {
+      simd::store(block, simd::load(block) + col0);
+      simd::store(block + 4, simd::load(block + 4) + col1);
+      simd::store(block + 8, simd::load(block + 8) + col2);
+    } else {
+      simd::store(block, col0);
+      simd::store(block + 4, col1);
+      simd::store(block + 8, col2);
+    }
+  };
+  const std::int32_t* entries = incidence_.entries.data();
   parallel_chunks(
-      incidence_.start.size() - 1, 64,
+      diagonal_slots_.size(), 128,
       [&](std::size_t begin, std::size_t end) {
-        const std::int32_t last = incidence_.start[end];
-        for (std::int32_t at = incidence_.start[begin]; at < last; ++at) {
-          if (at + kAhead < last) {
-            const double* ahead = rotated + 16 * static_cast<std::int64_t>(incidences_[at + kAhead].element);
-            __builtin_prefetch(ahead);
-            __builtin_prefetch(ahead + 8);
+        for (std::size_t n = begin; n < end; ++n) {
+          // Σ (λ + μ) c̃ c̃ᵀ + μ |c̃|² I.
+          Lanes a0 = simd::splat(0.0), a1 = a0, a2 = a0, dot = a0;
+          for (std::int32_t at = incidence_.start[n]; at < incidence_.start[n + 1]; ++at) {
+            const double* pi = c + 4 * static_cast<std::int64_t>(entries[at]);
+            const Lanes ci = simd::load(pi);
+            a0 += ci * simd::broadcast(pi);
+            a1 += ci * simd::broadcast(pi + 1);
+            a2 += ci * simd::broadcast(pi + 2);
+            dot += ci * ci;
           }
-          const Incidence& inc = incidences_[at];
-          const double* c = rotated + 16 * static_cast<std::int64_t>(inc.element);
-          const Eigen::Map<const Eigen::Vector4d> ci(c + 4 * inc.corner);
-          const Eigen::Vector4d wl_ci = (scale * inc.lambda_volume) * ci;
-          const Eigen::Vector3d wm_ci = (scale * inc.mu_volume) * ci.head<3>();
-          for (int j = 0; j < 4; ++j) {
-            const Eigen::Map<const Eigen::Vector4d> cj(c + 4 * j);
-            double* block = values + BlockSparseMatrix::kBlockStride * inc.slots[j];
-            for (int q = 0; q < 3; ++q) {
-              Eigen::Map<Eigen::Vector4d>(block + 4 * q) += wl_ci * cj[q] + cj * wm_ci[q];
-            }
-            const double diagonal = scale * inc.mu_dots[j];
-            block[0] += diagonal;
-            block[5] += diagonal;
-            block[10] += diagonal;
-          }
+          const double d = mu * (dot[0] + dot[1] + dot[2]);
+          const double lm = lambda + mu;
+          write(diagonal_slots_[n], lm * a0 + Lanes{d, 0.0, 0.0, 0.0}, lm * a1 + Lanes{0.0, d, 0.0, 0.0},
+                lm * a2 + Lanes{0.0, 0.0, d, 0.0});
         }
       },
-      /*min_parallel=*/256);
+      /*min_parallel=*/512);
+  parallel_chunks(
+      edges_.size(), 512,
+      [&](std::size_t begin, std::size_t end) {
+        for (std::size_t index = begin; index < end; ++index) {
+          const EdgeBlocks& edge = edges_[index];
+          Lanes a0 = simd::splat(0.0), a1 = a0, a2 = a0, b0 = a0, b1 = a0, b2 = a0, dot = a0;
+          for (std::int32_t t = edge.first; t < edge.last; ++t) {
+            const auto& term = edge_terms_[static_cast<std::size_t>(t)];
+            const double* pi = c + 4 * static_cast<std::int64_t>(term[0]);
+            const double* pj = c + 4 * static_cast<std::int64_t>(term[1]);
+            const Lanes ci = simd::load(pi);
+            const Lanes cj = simd::load(pj);
+            a0 += ci * simd::broadcast(pj);
+            a1 += ci * simd::broadcast(pj + 1);
+            a2 += ci * simd::broadcast(pj + 2);
+            b0 += cj * simd::broadcast(pi);
+            b1 += cj * simd::broadcast(pi + 1);
+            b2 += cj * simd::broadcast(pi + 2);
+            dot += ci * cj;
+          }
+          const double d = mu * (dot[0] + dot[1] + dot[2]);
+          write(edge.slot_ij, lambda * a0 + mu * b0 + Lanes{d, 0.0, 0.0, 0.0}, lambda * a1 + mu * b1 + Lanes{0.0, d, 0.0, 0.0},
+                lambda * a2 + mu * b2 + Lanes{0.0, 0.0, d, 0.0});
+          write(edge.slot_ji, lambda * b0 + mu * a0 + Lanes{d, 0.0, 0.0, 0.0}, lambda * b1 + mu * a1 + Lanes{0.0, d, 0.0, 0.0},
+                lambda * b2 + mu * a2 + Lanes{0.0, 0.0, d, 0.0});
+        }
+      },
+      /*min_parallel=*/1024);
+}
+
+void TetrahedronFemForceField::add_stiffness(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const {
+  write_stiffness<true>(state, scale, k);
+}
+
+bool TetrahedronFemForceField::set_stiffness(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const {
+  if (!covers_pattern_) return false;
+  write_stiffness<false>(state, scale, k);
+  return true;
 }
 
 double TetrahedronFemForceField::potential_energy(const Eigen::VectorXd& x, const ForceFieldState& /*state*/) const {
@@ -243,8 +452,7 @@ double TetrahedronFemForceField::potential_energy(const Eigen::VectorXd& x, cons
   for (std::size_t index = 0; index < elements_.size(); ++index) {
     const Element& e = elements_[index];
     const Mat3 deformation = deformation_gradient(e, x);
-    Eigen::Quaterniond unused = Eigen::Quaterniond::Identity();
-    const Mat3 r = rotation(e, deformation, x, unused);
+    const Mat3 r = rotation(e, deformation, x);
     const Mat3 unrotated = r.transpose() * deformation;
     const Mat3 strain = 0.5 * (unrotated + unrotated.transpose()) - Mat3::Identity();
     // W = μ ε:ε + λ/2 (tr ε)² per unit volume.

@@ -57,6 +57,7 @@ class TetrahedronFemForceField final : public ForceField {
   void add_force(const Eigen::VectorXd& x, const Eigen::VectorXd& v, ForceFieldState& state,
                  Eigen::VectorXd& f) const override;
   void add_stiffness(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const override;
+  bool set_stiffness(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const override;
   [[nodiscard]] double potential_energy(const Eigen::VectorXd& x, const ForceFieldState& state) const override;
   [[nodiscard]] std::int64_t find_invalid_element(const Eigen::VectorXd& x) const override;
 
@@ -70,29 +71,42 @@ class TetrahedronFemForceField final : public ForceField {
     std::array<Vec3, 4> gradients;       // shape-function gradients b_i at rest, 1/m
     Mat3 rest_frame_transposed;          // QR frame of the rest element, transposed
   };
+  // Four elements side by side for the `large` element pass (one SIMD lane each). Groups are
+  // padded with copies of element 0 whose volume is zero, so they produce nothing.
+  struct ElementGroup {
+    std::int32_t nodes[4][4];         // [corner][lane]
+    double rest_gradients[9][4];      // H b_j, j = 1..3, in the rest QR frame: [3(j−1)+q][lane]
+    double volume[4];                 // V, zero for padding
+    double root_volume[4];            // √V
+  };
+  // One block pair (i, j), i < j, of the stiffness: the slots of (i, j) and (j, i) and the
+  // element corners that couple the two nodes, terms [first, last).
+  struct EdgeBlocks {
+    std::int32_t slot_ij;
+    std::int32_t slot_ji;
+    std::int32_t first;
+    std::int32_t last;
+  };
 
   TetrahedronFemForceField() = default;
   // Rotation of element e at positions x (identity for `small`).
-  Mat3 rotation(const Element& e, const Mat3& deformation_gradient, const Eigen::VectorXd& x,
-                Eigen::Quaterniond& warm_start) const;
+  Mat3 rotation(const Element& e, const Mat3& deformation_gradient, const Eigen::VectorXd& x) const;
+  // Per-element pass: corner forces and rotated scaled gradients into `state`.
+  void element_pass_large(const Eigen::VectorXd& x, ForceFieldState& state) const;
+  void element_pass_general(const Eigen::VectorXd& x, ForceFieldState& state) const;
+  template <bool kAdd>
+  void write_stiffness(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const;
 
   TetrahedronFemConfig config_;
   Lame lame_{};
   std::vector<Element> elements_;
-  // Compact copies for the gather passes, which visit elements in node order.
+  std::vector<ElementGroup> groups_;
+  // Per node, the element corners that use it (entry = 4·element + corner), for the gathers.
   NodeIncidence incidence_;
-  // Per incidence (node n's use of element e at corner i), in incidence order, so that the
-  // gather passes stream through them: only the element's per-step data is fetched at random.
-  struct Incidence {
-    Vec3 gradient;                     // b_i
-    double lambda_volume;              // λ V
-    std::array<double, 4> mu_dots;     // μ V (b_i · b_j)
-    std::array<std::int32_t, 4> slots; // matrix slot of block (i, j)
-    std::int32_t element;
-    std::int32_t corner;
-    double mu_volume;                  // μ V
-  };
-  std::vector<Incidence> incidences_;
+  std::vector<EdgeBlocks> edges_;                      // sorted by (i, j)
+  std::vector<std::array<std::int32_t, 2>> edge_terms_;  // (entry of i, entry of j)
+  std::vector<std::int32_t> diagonal_slots_;           // per node
+  bool covers_pattern_{false};                         // every block of the pattern is ours
 };
 
 }  // namespace hof::mechanics

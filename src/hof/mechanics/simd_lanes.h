@@ -1,0 +1,67 @@
+#pragma once
+/// @file
+/// Four doubles processed as one value (GCC vector extension): element loops run four
+/// elements at a time with the same code the scalar version would have. With AVX the type is
+/// one register; without it GCC splits each operation in two SSE2 halves.
+
+#if defined(__AVX__)
+#include <immintrin.h>
+#endif
+#include <cmath>
+#include <cstring>
+
+// Returning 32-byte vectors changes the ABI between AVX and non-AVX code; these helpers are
+// inline and never cross a library boundary.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wpsabi"
+
+namespace hof::mechanics::simd {
+
+using Lanes = double __attribute__((vector_size(32)));
+inline constexpr int kLanes = 4;
+
+[[nodiscard]] inline Lanes splat(double v) { return Lanes{v, v, v, v}; }
+
+[[nodiscard]] inline Lanes sqrt(Lanes v) {
+#if defined(__AVX__)
+  return _mm256_sqrt_pd(v);
+#else
+  return Lanes{std::sqrt(v[0]), std::sqrt(v[1]), std::sqrt(v[2]), std::sqrt(v[3])};
+#endif
+}
+
+/// Four consecutive doubles from any (8-byte aligned) address.
+[[nodiscard]] inline Lanes load(const double* p) {
+  Lanes v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+inline void store(double* p, Lanes v) { std::memcpy(p, &v, sizeof v); }
+
+/// One double from memory in all four lanes (a plain load with AVX, no shuffle).
+[[nodiscard]] inline Lanes broadcast(const double* p) {
+#if defined(__AVX__)
+  return _mm256_broadcast_sd(p);
+#else
+  return splat(*p);
+#endif
+}
+
+/// Lanes (x_k, y_k, z_k, 0) of element k from the x, y, z lanes of four elements: the 4x4
+/// transpose, for storing per-element vectors with whole-register writes.
+inline void transpose_xyz(Lanes x, Lanes y, Lanes z, Lanes out[4]) {
+  using Mask = long long __attribute__((vector_size(32)));
+  const Lanes zero = splat(0.0);
+  const Lanes xy_even = __builtin_shuffle(x, y, Mask{0, 4, 2, 6});     // x0 y0 x2 y2
+  const Lanes xy_odd = __builtin_shuffle(x, y, Mask{1, 5, 3, 7});      // x1 y1 x3 y3
+  const Lanes z0_even = __builtin_shuffle(z, zero, Mask{0, 4, 2, 6});  // z0 0 z2 0
+  const Lanes z0_odd = __builtin_shuffle(z, zero, Mask{1, 5, 3, 7});   // z1 0 z3 0
+  out[0] = __builtin_shuffle(xy_even, z0_even, Mask{0, 1, 4, 5});
+  out[1] = __builtin_shuffle(xy_odd, z0_odd, Mask{0, 1, 4, 5});
+  out[2] = __builtin_shuffle(xy_even, z0_even, Mask{2, 3, 6, 7});
+  out[3] = __builtin_shuffle(xy_odd, z0_odd, Mask{2, 3, 6, 7});
+}
+
+}  // namespace hof::mechanics::simd
+
+#pragma GCC diagnostic pop
