@@ -7,6 +7,7 @@
 #endif
 
 #include "hof/mechanics/parallel.h"
+#include "hof/mechanics/simd_lanes.h"
 
 namespace hof::mechanics {
 
@@ -133,6 +134,16 @@ void BlockSparseMatrix::prepare_single_precision() {
     pair_start_[r + 1] = static_cast<std::int64_t>(pair_columns_.size() / 2);
   }
   values_single_.assign(pair_columns_.size() * 12, 0.0f);
+  single_offset_.assign(columns_.size(), 0);
+  for (std::size_t k = 0; k < pair_slots_.size(); ++k) {
+    if (pair_slots_[k] >= 0) single_offset_[static_cast<std::size_t>(pair_slots_[k])] = static_cast<std::int64_t>(24 * (k / 2) + 4 * (k % 2));
+  }
+}
+
+void BlockSparseMatrix::multiply_single(const float* x4, Eigen::VectorXd& y) const {
+  double* ys = y.data();
+  parallel_chunks(static_cast<std::size_t>(block_rows()), 256,
+                  [=, this](std::size_t r0, std::size_t r1) { multiply_single_rows(x4, ys, r0, r1); });
 }
 
 void BlockSparseMatrix::update_single_precision() {
@@ -143,11 +154,10 @@ void BlockSparseMatrix::update_single_precision() {
       float* to = values_single_.data() + 24 * k;
       for (int half = 0; half < 2; ++half) {
         const std::int64_t slot = pair_slots_[2 * k + static_cast<std::size_t>(half)];
+        if (slot < 0) continue;  // padding stays zero
         for (int q = 0; q < 3; ++q) {
-          for (int i = 0; i < 4; ++i) {
-            // Lane 3 of each column is padding (zero in the double blocks too).
-            to[8 * q + 4 * half + i] = slot < 0 ? 0.0f : static_cast<float>(values_[kBlockStride * slot + 4 * q + i]);
-          }
+          // Lane 3 of each column is padding (zero in the double blocks too).
+          simd::store_single(to + 8 * q + 4 * half, simd::load(values_.data() + kBlockStride * slot + 4 * q));
         }
       }
     }

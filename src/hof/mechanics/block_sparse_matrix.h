@@ -74,6 +74,14 @@ class BlockSparseMatrix {
   static void round_to_single(const double* x, float* x4, std::size_t first, std::size_t last);
   /// Rows [first, last) of y = A x with the single-precision copy; x4 from round_to_single.
   void multiply_single_rows(const float* x4, double* y, std::size_t first, std::size_t last) const;
+  /// y = A x with the single-precision copy (parallel over block rows).
+  void multiply_single(const float* x4, Eigen::VectorXd& y) const;
+  /// The single-precision block at `slot`: entry (i, q) at [8q + i]. For assembling straight
+  /// into the copy (the double values are then not kept).
+  [[nodiscard]] float* single_block(std::int64_t slot) { return values_single_.data() + single_offset_[slot]; }
+  [[nodiscard]] const float* single_block(std::int64_t slot) const { return values_single_.data() + single_offset_[slot]; }
+  /// Row stride of a single-precision block's columns.
+  static constexpr std::int64_t kSingleColumnStride = 8;
 
   /// Rows [first, last) of y = A x.
   void multiply_rows(const Eigen::VectorXd& x, Eigen::VectorXd& y, std::size_t first, std::size_t last) const;
@@ -91,6 +99,7 @@ class BlockSparseMatrix {
   std::vector<std::int64_t> pair_start_;    // (rows+1) first pair of each block row
   std::vector<std::int32_t> pair_columns_;  // (2*pairs) block column of each pair member
   std::vector<std::int64_t> pair_slots_;    // (2*pairs) source slot, -1 for padding
+  std::vector<std::int64_t> single_offset_; // (blocks) first float of each slot's block
   std::vector<float, Eigen::aligned_allocator<float>> values_single_;
 };
 

@@ -71,6 +71,15 @@ class ForceField {
     return false;
   }
 
+  /// As set_stiffness, into the matrix's single-precision copy only (the double values are
+  /// left stale): for the mixed-precision conjugate-gradient solve, half the memory written.
+  virtual bool set_stiffness_single(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const {
+    (void)state;
+    (void)scale;
+    (void)k;
+    return false;
+  }
+
   /// Whether add_stiffness adds anything (constant forces do not).
   [[nodiscard]] virtual bool has_stiffness() const { return true; }
 

@@ -6,22 +6,30 @@
 #include <cmath>
 
 #include "hof/mechanics/parallel.h"
+#include "hof/mechanics/simd_lanes.h"
 
 namespace hof::mechanics::detail {
 
 namespace {
 constexpr std::size_t kVectorChunk = 4096;
+
+// Σ a[d]·b[d] over [d0, d1) in four interleaved partial sums (independent add chains: the
+// loop is not bound by the adder's latency), combined in a fixed order: deterministic.
+double dot_range(const double* a, const double* b, std::size_t d0, std::size_t d1) {
+  simd::Lanes sum = simd::splat(0.0);
+  std::size_t d = d0;
+  for (; d + 4 <= d1; d += 4) sum += simd::load(a + d) * simd::load(b + d);
+  double tail = 0.0;
+  for (; d < d1; ++d) tail += a[d] * b[d];
+  return ((sum[0] + sum[1]) + (sum[2] + sum[3])) + tail;
+}
 }
 
 double dot(const Eigen::VectorXd& a, const Eigen::VectorXd& b, std::vector<double>& partials) {
   const double* pa = a.data();
   const double* pb = b.data();
   return deterministic_sum(static_cast<std::size_t>(a.size()), kVectorChunk, partials,
-                           [&](std::size_t begin, std::size_t end) {
-                             double s = 0.0;
-                             for (std::size_t i = begin; i < end; ++i) s += pa[i] * pb[i];
-                             return s;
-                           });
+                           [&](std::size_t begin, std::size_t end) { return dot_range(pa, pb, begin, end); });
 }
 
 void axpy(double alpha, const Eigen::VectorXd& x, Eigen::VectorXd& y) {
@@ -36,7 +44,52 @@ void project(const MechanicalModel& model, Eigen::VectorXd& vector) {
   for (std::int32_t d : model.fixed_dofs) vector[d] = 0.0;
 }
 
-void assemble_system(const MechanicalModel& model, MechanicalState& state, double mass_coeff, double stiffness_coeff) {
+namespace {
+
+// The single-precision copy alone, when one field's stiffness covers the whole pattern.
+bool assemble_single_only(const MechanicalModel& model, MechanicalState& state, double mass_coeff,
+                          double stiffness_coeff) {
+  const ForceField* only = nullptr;
+  std::size_t only_index = 0;
+  for (std::size_t k = 0; k < model.force_fields.size(); ++k) {
+    if (!model.force_fields[k]->has_stiffness()) continue;
+    if (only != nullptr) return false;
+    only = model.force_fields[k].get();
+    only_index = k;
+  }
+  BlockSparseMatrix& a = state.work.system;
+  if (only == nullptr || !only->set_stiffness_single(state.field_states[only_index], stiffness_coeff, a)) return false;
+  constexpr std::int64_t kColumn = BlockSparseMatrix::kSingleColumnStride;
+  for (std::size_t n = 0; n < model.node_count(); ++n) {
+    float* block = a.single_block(a.diagonal_slot(static_cast<std::int32_t>(n)));
+    const auto mass = static_cast<float>(mass_coeff * model.node_mass_kg[n]);
+    for (int q = 0; q < 3; ++q) block[kColumn * q + q] += mass;
+  }
+  // Fixed degrees of freedom: identity rows and columns (projection P A P + (I − P)).
+  const auto& row_start = a.row_start();
+  const auto& columns = a.columns();
+  for (std::int32_t d : model.fixed_dofs) {
+    const std::int32_t n = d / 3;
+    const int axis = d % 3;
+    for (std::int64_t s = row_start[n]; s < row_start[n + 1]; ++s) {
+      float* row_block = a.single_block(s);
+      for (int q = 0; q < 3; ++q) row_block[kColumn * q + axis] = 0.0f;
+      float* column_block = a.single_block(a.slot(columns[s], n));
+      for (int i = 0; i < 3; ++i) column_block[kColumn * axis + i] = 0.0f;
+    }
+    a.single_block(a.diagonal_slot(n))[kColumn * axis + axis] = 1.0f;
+  }
+  return true;
+}
+
+}  // namespace
+
+void assemble_system(const MechanicalModel& model, MechanicalState& state, double mass_coeff, double stiffness_coeff,
+                     AssemblyTarget target) {
+  if (target == AssemblyTarget::kSolver && uses_single_precision(model) &&
+      assemble_single_only(model, state, mass_coeff, stiffness_coeff)) {
+    return;
+  }
   BlockSparseMatrix& a = state.work.system;
   // The first field that covers the whole pattern sets the values (no clearing pass).
   bool initialised = false;
@@ -201,22 +254,29 @@ bool solve_cg(const MechanicalModel& model, MechanicalState& state, const Eigen:
 
   // r = b, z = M⁻¹ r, p = z, x = 0; |b|² and rᵀz.
   over_chunks([&](std::size_t c, std::size_t d0, std::size_t d1) {
-    double bb = 0.0, rz = 0.0;
     for (std::size_t d = d0; d < d1; ++d) {
       xs[d] = 0.0;
       rs[d] = bs[d];
-      bb += bs[d] * bs[d];
     }
+    const double bb = dot_range(bs, bs, d0, d1);
     if (precondition) {
       for (std::size_t n = d0 / 3; n < d1 / 3; ++n) {
-        jacobi[n] = a.block(a.diagonal_slot(static_cast<std::int32_t>(n))).inverse();
+        const std::int64_t slot = a.diagonal_slot(static_cast<std::int32_t>(n));
+        if (single) {
+          const float* block = a.single_block(slot);
+          Mat3 diagonal;
+          for (int q = 0; q < 3; ++q) {
+            for (int i = 0; i < 3; ++i) diagonal(i, q) = block[BlockSparseMatrix::kSingleColumnStride * q + i];
+          }
+          jacobi[n] = diagonal.inverse();
+        } else {
+          jacobi[n] = a.block(slot).inverse();
+        }
       }
       apply_preconditioner(d0, d1);
     }
-    for (std::size_t d = d0; d < d1; ++d) {
-      ps[d] = zs[d];
-      rz += rs[d] * zs[d];
-    }
+    for (std::size_t d = d0; d < d1; ++d) ps[d] = zs[d];
+    const double rz = dot_range(rs, zs, d0, d1);
     if (single) BlockSparseMatrix::round_to_single(ps, p_single, d0 / 3, d1 / 3);
     part0[c] = bb;
     part1[c] = rz;
@@ -236,9 +296,7 @@ bool solve_cg(const MechanicalModel& model, MechanicalState& state, const Eigen:
     over_chunks([&](std::size_t c, std::size_t d0, std::size_t d1) {
       if (single) a.multiply_single_rows(p_single, aps, d0 / 3, d1 / 3);
       else a.multiply_rows(w.p, w.ap, d0 / 3, d1 / 3);
-      double pap = 0.0;
-      for (std::size_t d = d0; d < d1; ++d) pap += ps[d] * aps[d];
-      part0[c] = pap;
+      part0[c] = dot_range(ps, aps, d0, d1);
     });
     const double curvature = sum(part0);
     // SOFA compares pᵀAp with `threshold` in absolute terms, which in its unit-free scenes
@@ -249,17 +307,15 @@ bool solve_cg(const MechanicalModel& model, MechanicalState& state, const Eigen:
     const double alpha = rho / curvature;
     // x += αp, r −= αAp, z = M⁻¹r; rᵀz and rᵀr.
     over_chunks([&](std::size_t c, std::size_t d0, std::size_t d1) {
-      double rr = 0.0, rz = 0.0;
       for (std::size_t d = d0; d < d1; ++d) {
         xs[d] += alpha * ps[d];
         rs[d] -= alpha * aps[d];
-        rr += rs[d] * rs[d];
       }
+      const double rr = dot_range(rs, rs, d0, d1);
+      double rz = rr;
       if (precondition) {
         apply_preconditioner(d0, d1);
-        for (std::size_t d = d0; d < d1; ++d) rz += rs[d] * zs[d];
-      } else {
-        rz = rr;
+        rz = dot_range(rs, zs, d0, d1);
       }
       part1[c] = rr;
       part2[c] = rz;

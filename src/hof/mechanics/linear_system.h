@@ -11,9 +11,17 @@
 
 namespace hof::mechanics::detail {
 
+/// What assemble_system must fill.
+enum class AssemblyTarget : std::uint8_t {
+  kSolver,  ///< what the model's linear solver reads (only the single-precision copy, when
+            ///< the mixed-precision CG allows it: the double values are then stale)
+  kDouble,  ///< the double values (and the single copy when the solver uses it)
+};
+
 /// A = mass_coeff·M + stiffness_coeff·K into state.work.system, K linearised where the force
 /// fields last evaluated forces.
-void assemble_system(const MechanicalModel& model, MechanicalState& state, double mass_coeff, double stiffness_coeff);
+void assemble_system(const MechanicalModel& model, MechanicalState& state, double mass_coeff, double stiffness_coeff,
+                     AssemblyTarget target = AssemblyTarget::kSolver);
 
 /// Whether the CG product uses the single-precision copy of A (made by assemble_system).
 bool uses_single_precision(const MechanicalModel& model);

@@ -106,7 +106,15 @@ bool implicit_euler_step(const MechanicalModel& model, MechanicalState& state) {
   t0 = Clock::now();
   // Right-hand side without a separate K: with A = (1 + h r_M) M + h (h + r_K) K,
   //   h f − h (h + r_K) K v − h r_M M v  =  h f + M v − A v.
-  w.system.multiply(state.v, w.ap);
+  if (uses_single_precision(model)) {
+    const std::size_t nodes = model.node_count();
+    parallel_chunks(nodes, 1024, [&](std::size_t b, std::size_t e) {
+      BlockSparseMatrix::round_to_single(state.v.data(), w.p_single.data(), b, e);
+    });
+    w.system.multiply_single(w.p_single.data(), w.ap);
+  } else {
+    w.system.multiply(state.v, w.ap);
+  }
   apply_mass(model, state.v, w.b);
   w.b += h * state.f - w.ap;
   project(model, w.b);

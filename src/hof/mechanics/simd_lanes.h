@@ -38,6 +38,15 @@ inline constexpr int kLanes = 4;
 }
 inline void store(double* p, Lanes v) { std::memcpy(p, &v, sizeof v); }
 
+/// The four lanes rounded to single precision, stored at p.
+inline void store_single(float* p, Lanes v) {
+#if defined(__AVX__)
+  _mm_storeu_ps(p, _mm256_cvtpd_ps(v));
+#else
+  for (int i = 0; i < 4; ++i) p[i] = static_cast<float>(v[i]);
+#endif
+}
+
 /// One double from memory in all four lanes (a plain load with AVX, no shuffle).
 [[nodiscard]] inline Lanes broadcast(const double* p) {
 #if defined(__AVX__)

@@ -68,7 +68,7 @@ bool compute_point_compliance(const MechanicalModel& model, MechanicalState& sta
   SolverWorkspace& w = state.work;
   // Linearise at the current state (refreshes element rotations), K alone, fixed dofs held.
   compute_forces(model, state, state.x, state.v, w.xt);
-  detail::assemble_system(model, state, 0.0, 1.0);
+  detail::assemble_system(model, state, 0.0, 1.0, detail::AssemblyTarget::kDouble);
   const BlockSparseMatrix& k = w.system;
   for (std::size_t n = 0; n < model.node_count(); ++n) {
     w.block_jacobi[n] = k.block(k.diagonal_slot(static_cast<std::int32_t>(n))).inverse();

@@ -361,21 +361,28 @@ void TetrahedronFemForceField::add_force(const Eigen::VectorXd& x, const Eigen::
 
 // Stiffness blocks from the rotated scaled gradients c̃ = √V R b of the last force pass:
 // K_ij = Σ_e λ c̃_i c̃_jᵀ + μ c̃_j c̃_iᵀ + μ (c̃_i · c̃_j) I (the element stiffness of the
-// linear law, rotated: R K_e Rᵀ, Müller et al. 2002), with Σ over the elements sharing i and
-// j. Each block is summed in registers and written once: diagonal blocks by node, the pairs
-// (i, j) and (j, i) together by edge (K_ji = K_ijᵀ: with A = Σ c̃_i c̃_jᵀ and B = Σ c̃_j c̃_iᵀ,
-// K_ij = λA + μB + μd I and K_ji = λB + μA + μd I). Rows never share a writer: no atomics,
-// and a fixed summation order.
-template <bool kAdd>
+// linear law, rotated: R K_e Rᵀ, Müller et al. 2002), Σ over the elements sharing nodes i
+// and j. With A = Σ c̃_i c̃_jᵀ that is K_ij = λA + μAᵀ + μ tr(A) I, and K_ji = K_ijᵀ: one
+// 3x3 sum per node pair, three multiply-adds per element, gives both blocks. Each block is
+// summed in registers and written once: diagonal blocks by node, the pairs (i, j) and (j, i)
+// together by edge. Rows never share a writer: no atomics, and a fixed summation order.
+template <TetrahedronFemForceField::Target kTarget>
 void TetrahedronFemForceField::write_stiffness(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const {
   using simd::Lanes;
   double* values = k.values();
   const double* c = state.element_scalars.data();
-  const double lambda = scale * lame_.lambda;
-  const double mu = scale * lame_.mu;
-  auto write = [values](std::int64_t slot, const Lanes& col0, const Lanes& col1, const Lanes& col2) {
+  const Lanes lambda = simd::splat(scale * lame_.lambda);
+  const Lanes mu = simd::splat(scale * lame_.mu);
+  auto write = [values, &k](std::int64_t slot, const Lanes& col0, const Lanes& col1, const Lanes& col2) {
+    if constexpr (kTarget == Target::kSetSingle) {
+      float* block = k.single_block(slot);
+      simd::store_single(block, col0);
+      simd::store_single(block + BlockSparseMatrix::kSingleColumnStride, col1);
+      simd::store_single(block + 2 * BlockSparseMatrix::kSingleColumnStride, col2);
+      return;
+    }
     double* block = values + BlockSparseMatrix::kBlockStride * slot;
-    if constexpr (kAdd) {
+    if constexpr (kTarget == Target::kAddDouble) {
       simd::store(block, simd::load(block) + col0);
       simd::store(block + 4, simd::load(block + 4) + col1);
       simd::store(block + 8, simd::load(block + 8) + col2);
@@ -385,65 +392,72 @@ void TetrahedronFemForceField::write_stiffness(const ForceFieldState& state, dou
       simd::store(block + 8, col2);
     }
   };
+  // A's columns a0..a2 (lane 3 zero) to the blocks λA + μAᵀ + μ tr(A) I and its transpose.
+  auto blocks = [&](const Lanes& a0, const Lanes& a1, const Lanes& a2, std::int64_t slot_ij, std::int64_t slot_ji) {
+    Lanes at[4];
+    simd::transpose_xyz(a0, a1, a2, at);
+    const double trace = a0[0] + a1[1] + a2[2];
+    const double d = mu[0] * trace;
+    const Lanes d0{d, 0.0, 0.0, 0.0}, d1{0.0, d, 0.0, 0.0}, d2{0.0, 0.0, d, 0.0};
+    write(slot_ij, lambda * a0 + mu * at[0] + d0, lambda * a1 + mu * at[1] + d1, lambda * a2 + mu * at[2] + d2);
+    if (slot_ji >= 0) write(slot_ji, lambda * at[0] + mu * a0 + d0, lambda * at[1] + mu * a1 + d1, lambda * at[2] + mu * a2 + d2);
+  };
   const std::int32_t* entries = incidence_.entries.data();
+  const std::int32_t* starts = incidence_.start.data();
+  const std::int32_t* diagonal_slots = diagonal_slots_.data();
   parallel_chunks(
       diagonal_slots_.size(), 128,
       [&](std::size_t begin, std::size_t end) {
         for (std::size_t n = begin; n < end; ++n) {
-          // Σ (λ + μ) c̃ c̃ᵀ + μ |c̃|² I.
-          Lanes a0 = simd::splat(0.0), a1 = a0, a2 = a0, dot = a0;
-          for (std::int32_t at = incidence_.start[n]; at < incidence_.start[n + 1]; ++at) {
+          // A = Σ c̃ c̃ᵀ (symmetric): K_ii = (λ + μ) A + μ tr(A) I.
+          Lanes a0 = simd::splat(0.0), a1 = a0, a2 = a0;
+          for (std::int32_t at = starts[n]; at < starts[n + 1]; ++at) {
             const double* pi = c + 4 * static_cast<std::int64_t>(entries[at]);
             const Lanes ci = simd::load(pi);
             a0 += ci * simd::broadcast(pi);
             a1 += ci * simd::broadcast(pi + 1);
             a2 += ci * simd::broadcast(pi + 2);
-            dot += ci * ci;
           }
-          const double d = mu * (dot[0] + dot[1] + dot[2]);
-          const double lm = lambda + mu;
-          write(diagonal_slots_[n], lm * a0 + Lanes{d, 0.0, 0.0, 0.0}, lm * a1 + Lanes{0.0, d, 0.0, 0.0},
-                lm * a2 + Lanes{0.0, 0.0, d, 0.0});
+          blocks(a0, a1, a2, diagonal_slots[n], -1);
         }
       },
       /*min_parallel=*/512);
+  const EdgeBlocks* edges = edges_.data();
+  const std::array<std::int32_t, 2>* terms = edge_terms_.data();
   parallel_chunks(
       edges_.size(), 512,
       [&](std::size_t begin, std::size_t end) {
         for (std::size_t index = begin; index < end; ++index) {
-          const EdgeBlocks& edge = edges_[index];
-          Lanes a0 = simd::splat(0.0), a1 = a0, a2 = a0, b0 = a0, b1 = a0, b2 = a0, dot = a0;
+          const EdgeBlocks& edge = edges[index];
+          Lanes a0 = simd::splat(0.0), a1 = a0, a2 = a0;
           for (std::int32_t t = edge.first; t < edge.last; ++t) {
-            const auto& term = edge_terms_[static_cast<std::size_t>(t)];
-            const double* pi = c + 4 * static_cast<std::int64_t>(term[0]);
-            const double* pj = c + 4 * static_cast<std::int64_t>(term[1]);
+            const double* pi = c + 4 * static_cast<std::int64_t>(terms[t][0]);
+            const double* pj = c + 4 * static_cast<std::int64_t>(terms[t][1]);
             const Lanes ci = simd::load(pi);
-            const Lanes cj = simd::load(pj);
             a0 += ci * simd::broadcast(pj);
             a1 += ci * simd::broadcast(pj + 1);
             a2 += ci * simd::broadcast(pj + 2);
-            b0 += cj * simd::broadcast(pi);
-            b1 += cj * simd::broadcast(pi + 1);
-            b2 += cj * simd::broadcast(pi + 2);
-            dot += ci * cj;
           }
-          const double d = mu * (dot[0] + dot[1] + dot[2]);
-          write(edge.slot_ij, lambda * a0 + mu * b0 + Lanes{d, 0.0, 0.0, 0.0}, lambda * a1 + mu * b1 + Lanes{0.0, d, 0.0, 0.0},
-                lambda * a2 + mu * b2 + Lanes{0.0, 0.0, d, 0.0});
-          write(edge.slot_ji, lambda * b0 + mu * a0 + Lanes{d, 0.0, 0.0, 0.0}, lambda * b1 + mu * a1 + Lanes{0.0, d, 0.0, 0.0},
-                lambda * b2 + mu * a2 + Lanes{0.0, 0.0, d, 0.0});
+          blocks(a0, a1, a2, edge.slot_ij, edge.slot_ji);
         }
       },
       /*min_parallel=*/1024);
 }
 
 void TetrahedronFemForceField::add_stiffness(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const {
-  write_stiffness<true>(state, scale, k);
+  write_stiffness<Target::kAddDouble>(state, scale, k);
 }
 
 bool TetrahedronFemForceField::set_stiffness(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const {
   if (!covers_pattern_) return false;
-  write_stiffness<false>(state, scale, k);
+  write_stiffness<Target::kSetDouble>(state, scale, k);
+  return true;
+}
+
+bool TetrahedronFemForceField::set_stiffness_single(const ForceFieldState& state, double scale,
+                                                    BlockSparseMatrix& k) const {
+  if (!covers_pattern_) return false;
+  write_stiffness<Target::kSetSingle>(state, scale, k);
   return true;
 }
 

@@ -58,6 +58,7 @@ class TetrahedronFemForceField final : public ForceField {
                  Eigen::VectorXd& f) const override;
   void add_stiffness(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const override;
   bool set_stiffness(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const override;
+  bool set_stiffness_single(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const override;
   [[nodiscard]] double potential_energy(const Eigen::VectorXd& x, const ForceFieldState& state) const override;
   [[nodiscard]] std::int64_t find_invalid_element(const Eigen::VectorXd& x) const override;
 
@@ -94,7 +95,8 @@ class TetrahedronFemForceField final : public ForceField {
   // Per-element pass: corner forces and rotated scaled gradients into `state`.
   void element_pass_large(const Eigen::VectorXd& x, ForceFieldState& state) const;
   void element_pass_general(const Eigen::VectorXd& x, ForceFieldState& state) const;
-  template <bool kAdd>
+  enum class Target : std::uint8_t { kAddDouble, kSetDouble, kSetSingle };
+  template <Target kTarget>
   void write_stiffness(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const;
 
   TetrahedronFemConfig config_;
