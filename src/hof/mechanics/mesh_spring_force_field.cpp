@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "hof/mechanics/parallel.h"
+#include "hof/mechanics/simd_lanes.h"
 
 #include "hof/mesh/boundary.h"
 
@@ -42,7 +43,17 @@ Expected<std::unique_ptr<MeshSpringForceField>> MeshSpringForceField::make(
       return make_error(ErrorCode::kInvalidMesh,
                         fmt::format("{}: nodes {} and {} coincide at rest (zero-length spring)", who, e[0], e[1]));
     }
-    field->springs_.push_back({{e[0], e[1]}, length, {-1, -1, -1, -1}});
+    field->springs_.push_back({{e[0], e[1]}, length, {-1, -1}});
+  }
+  field->groups_.resize((field->springs_.size() + simd::kLanes - 1) / simd::kLanes);
+  for (std::size_t g = 0; g < field->groups_.size(); ++g) {
+    for (int lane = 0; lane < simd::kLanes; ++lane) {
+      const std::size_t index = simd::kLanes * g + static_cast<std::size_t>(lane);
+      const Spring& spring = field->springs_[index < field->springs_.size() ? index : 0];
+      field->groups_[g].first[lane] = spring.nodes[0];
+      field->groups_[g].second[lane] = spring.nodes[1];
+      field->groups_[g].rest_length[lane] = spring.rest_length;
+    }
   }
   std::vector<std::array<std::int32_t, 2>> node_lists;
   node_lists.reserve(field->springs_.size());
@@ -51,12 +62,13 @@ Expected<std::unique_ptr<MeshSpringForceField>> MeshSpringForceField::make(
   return field;
 }
 
+// Per spring (padded to whole groups), 12 doubles: the force on its first node (f, 0), the
+// stiffness block K_s = w u uᵀ + t I as (w u, t) and (u, 0).
+constexpr std::size_t kRecord = 12;
+
 ForceFieldState MeshSpringForceField::make_state() const {
-  // element_matrices[s]: the spring's stiffness block −∂f_i/∂x_i at the last positions;
-  // element_scalars[3s..3s+2]: the force on its first node.
   ForceFieldState s;
-  s.element_matrices.assign(springs_.size(), Mat3::Zero());
-  s.element_scalars.assign(3 * springs_.size(), 0.0);
+  s.element_scalars.assign(kRecord * simd::kLanes * groups_.size(), 0.0);
   return s;
 }
 
@@ -67,76 +79,158 @@ void MeshSpringForceField::collect_couplings(std::vector<std::pair<std::int32_t,
 void MeshSpringForceField::bind(const BlockSparseMatrix& pattern) {
   for (Spring& s : springs_) {
     const auto [i, j] = s.nodes;
-    s.slots = {static_cast<std::int32_t>(pattern.slot(i, i)), static_cast<std::int32_t>(pattern.slot(i, j)),
-               static_cast<std::int32_t>(pattern.slot(j, i)), static_cast<std::int32_t>(pattern.slot(j, j))};
+    s.slots = {static_cast<std::int32_t>(pattern.slot(i, j)), static_cast<std::int32_t>(pattern.slot(j, i))};
   }
+  const std::size_t nodes = incidence_.start.size() - 1;
+  diagonal_slots_.resize(nodes);
+  for (std::size_t n = 0; n < nodes; ++n) {
+    diagonal_slots_[n] = static_cast<std::int32_t>(pattern.diagonal_slot(static_cast<std::int32_t>(n)));
+  }
+  covers_pattern_ = static_cast<std::int64_t>(nodes + 2 * springs_.size()) == pattern.block_count() &&
+                    static_cast<std::int32_t>(nodes) == pattern.block_rows();
 }
 
 void MeshSpringForceField::add_force(const Eigen::VectorXd& x, const Eigen::VectorXd& v, ForceFieldState& state,
                                      Eigen::VectorXd& f) const {
-  const double k = config_.stiffness_n_per_m;
-  const double c = config_.damping_n_s_per_m;
-  // Spring pass: tension and stiffness block of each spring, independently.
+  using simd::Lanes;
+  const Lanes k = simd::splat(config_.stiffness_n_per_m);
+  const Lanes c = simd::splat(config_.damping_n_s_per_m);
+  const Lanes zero = simd::splat(0.0);
+  const double* xs = x.data();
+  const double* vs = v.data();
+  double* records = state.element_scalars.data();
+  // Spring pass, four springs at a time: tension and stiffness block of each.
   parallel_chunks(
-      springs_.size(), 256,
+      groups_.size(), 64,
       [&](std::size_t begin, std::size_t end) {
-        for (std::size_t index = begin; index < end; ++index) {
-          const Spring& s = springs_[index];
-          const Eigen::Index i = 3 * static_cast<Eigen::Index>(s.nodes[0]);
-          const Eigen::Index j = 3 * static_cast<Eigen::Index>(s.nodes[1]);
-          const Vec3 d = x.segment<3>(j) - x.segment<3>(i);
-          const double length = d.norm();
-          Eigen::Map<Vec3> force_on_first(state.element_scalars.data() + 3 * index);
-          if (!(length > 0.0)) {
-            force_on_first.setZero();
-            state.element_matrices[index] = k * Mat3::Identity();
-            continue;
+        for (std::size_t g = begin; g < end; ++g) {
+          const SpringGroup& group = groups_[g];
+          Lanes d[3], dv[3];
+          for (int q = 0; q < 3; ++q) {
+            d[q] = Lanes{xs[3 * group.second[0] + q] - xs[3 * group.first[0] + q],
+                         xs[3 * group.second[1] + q] - xs[3 * group.first[1] + q],
+                         xs[3 * group.second[2] + q] - xs[3 * group.first[2] + q],
+                         xs[3 * group.second[3] + q] - xs[3 * group.first[3] + q]};
+            dv[q] = Lanes{vs[3 * group.second[0] + q] - vs[3 * group.first[0] + q],
+                          vs[3 * group.second[1] + q] - vs[3 * group.first[1] + q],
+                          vs[3 * group.second[2] + q] - vs[3 * group.first[2] + q],
+                          vs[3 * group.second[3] + q] - vs[3 * group.first[3] + q]};
           }
-          const Vec3 u = d / length;
-          const double tension = k * (length - s.rest_length) + c * (v.segment<3>(j) - v.segment<3>(i)).dot(u);
-          force_on_first = tension * u;
+          const Lanes length = simd::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+          const auto stretched = length > zero;  // a collapsed spring has no direction
+          const Lanes inverse = stretched ? 1.0 / length : zero;
+          const Lanes u[3] = {d[0] * inverse, d[1] * inverse, d[2] * inverse};
+          const Lanes rest = simd::load(group.rest_length);
+          const Lanes tension = k * (length - rest) + c * (dv[0] * u[0] + dv[1] * u[1] + dv[2] * u[2]);
           // −∂f_i/∂x_i = k u uᵀ + k (1 − l0/l)(I − u uᵀ). The transverse term is negative for
           // a compressed spring; it is clamped at zero so that the system matrix stays
-          // positive definite (Choi & Ko, "Stable but responsive cloth", SIGGRAPH 2002).
-          const Mat3 uu = u * u.transpose();
-          const double transverse = std::max(0.0, k * (1.0 - s.rest_length / length));
-          state.element_matrices[index] = (k - transverse) * uu + transverse * Mat3::Identity();
+          // positive definite (Choi & Ko, "Stable but responsive cloth", SIGGRAPH 2002). A
+          // collapsed spring resists equally in all directions (k I).
+          const Lanes clamped = k * (1.0 - rest * inverse);
+          const Lanes transverse = stretched ? (clamped > zero ? clamped : zero) : k;
+          const Lanes along = k - transverse;
+          Lanes force[4], weighted[4], direction[4];
+          simd::transpose_xyz(tension * u[0], tension * u[1], tension * u[2], force);
+          simd::transpose_xyz(along * u[0], along * u[1], along * u[2], weighted);
+          simd::transpose_xyz(u[0], u[1], u[2], direction);
+          double* out = records + kRecord * simd::kLanes * g;
+          for (int lane = 0; lane < simd::kLanes; ++lane) {
+            double* record = out + kRecord * static_cast<std::size_t>(lane);
+            simd::store(record, force[lane]);
+            simd::store(record + 4, weighted[lane]);
+            record[7] = transverse[lane];
+            simd::store(record + 8, direction[lane]);
+          }
         }
       },
-      /*min_parallel=*/1024);
+      /*min_parallel=*/256);
   // Node pass: each node gathers its springs' forces in a fixed order.
+  const std::int32_t* entries = incidence_.entries.data();
+  const std::int32_t* starts = incidence_.start.data();
   parallel_chunks(
       incidence_.start.size() - 1, 256,
       [&](std::size_t begin, std::size_t end) {
         for (std::size_t n = begin; n < end; ++n) {
-          Vec3 sum = Vec3::Zero();
-          for (std::int32_t entry : incidence_.of(n)) {
-            const Eigen::Map<const Vec3> force_on_first(state.element_scalars.data() + 3 * (entry >> 1));
+          Lanes sum = zero;
+          for (std::int32_t at = starts[n]; at < starts[n + 1]; ++at) {
+            const std::int32_t entry = entries[at];
+            const Lanes force_on_first = simd::load(records + kRecord * static_cast<std::size_t>(entry >> 1));
             if (entry & 1) sum -= force_on_first;
             else sum += force_on_first;
           }
-          f.segment<3>(3 * static_cast<Eigen::Index>(n)) += sum;
+          const auto i = 3 * static_cast<Eigen::Index>(n);
+          f[i] += sum[0];
+          f[i + 1] += sum[1];
+          f[i + 2] += sum[2];
         }
       },
       /*min_parallel=*/1024);
 }
 
-void MeshSpringForceField::add_stiffness(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const {
-  // Row pass: node n adds +K_s to its diagonal block and −K_s to the block of the other end.
+// Diagonal blocks gather Σ K_s over the node's springs; each spring's off-diagonal pair
+// (i, j), (j, i) is −K_s (symmetric), written once. No atomics, fixed summation order.
+template <StiffnessTarget kTarget>
+void MeshSpringForceField::write_stiffness(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const {
+  using simd::Lanes;
+  const double* records = state.element_scalars.data();
+  const std::int32_t* entries = incidence_.entries.data();
+  const std::int32_t* starts = incidence_.start.data();
+  // Columns of w u uᵀ + t I from a record.
+  auto add_block = [](const double* record, Lanes& a0, Lanes& a1, Lanes& a2, double& t) {
+    const Lanes wu = simd::load(record + 4);
+    a0 += wu * simd::broadcast(record + 8);
+    a1 += wu * simd::broadcast(record + 9);
+    a2 += wu * simd::broadcast(record + 10);
+    t += record[7];
+  };
+  auto finish = [](Lanes& a0, Lanes& a1, Lanes& a2, double t, double factor) {
+    a0 = factor * (a0 + Lanes{t, 0.0, 0.0, 0.0});
+    a1 = factor * (a1 + Lanes{0.0, t, 0.0, 0.0});
+    a2 = factor * (a2 + Lanes{0.0, 0.0, t, 0.0});
+  };
   parallel_chunks(
-      incidence_.start.size() - 1, 256,
+      diagonal_slots_.size(), 256,
       [&](std::size_t begin, std::size_t end) {
         for (std::size_t n = begin; n < end; ++n) {
-          for (std::int32_t entry : incidence_.of(n)) {
-            const Spring& s = springs_[static_cast<std::size_t>(entry >> 1)];
-            const Mat3 block = scale * state.element_matrices[static_cast<std::size_t>(entry >> 1)];
-            const bool second = (entry & 1) != 0;
-            k.block(second ? s.slots[3] : s.slots[0]) += block;
-            k.block(second ? s.slots[2] : s.slots[1]) -= block;
+          Lanes a0 = simd::splat(0.0), a1 = a0, a2 = a0;
+          double t = 0.0;
+          for (std::int32_t at = starts[n]; at < starts[n + 1]; ++at) {
+            add_block(records + kRecord * static_cast<std::size_t>(entries[at] >> 1), a0, a1, a2, t);
           }
+          finish(a0, a1, a2, t, scale);
+          write_block<kTarget>(k, diagonal_slots_[n], a0, a1, a2);
         }
       },
       /*min_parallel=*/1024);
+  parallel_chunks(
+      springs_.size(), 1024,
+      [&](std::size_t begin, std::size_t end) {
+        for (std::size_t index = begin; index < end; ++index) {
+          Lanes a0 = simd::splat(0.0), a1 = a0, a2 = a0;
+          double t = 0.0;
+          add_block(records + kRecord * index, a0, a1, a2, t);
+          finish(a0, a1, a2, t, -scale);
+          write_block<kTarget>(k, springs_[index].slots[0], a0, a1, a2);
+          write_block<kTarget>(k, springs_[index].slots[1], a0, a1, a2);
+        }
+      },
+      /*min_parallel=*/2048);
+}
+
+void MeshSpringForceField::add_stiffness(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const {
+  write_stiffness<StiffnessTarget::kAddDouble>(state, scale, k);
+}
+
+bool MeshSpringForceField::set_stiffness(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const {
+  if (!covers_pattern_) return false;
+  write_stiffness<StiffnessTarget::kSetDouble>(state, scale, k);
+  return true;
+}
+
+bool MeshSpringForceField::set_stiffness_single(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const {
+  if (!covers_pattern_) return false;
+  write_stiffness<StiffnessTarget::kSetSingle>(state, scale, k);
+  return true;
 }
 
 double MeshSpringForceField::potential_energy(const Eigen::VectorXd& x, const ForceFieldState&) const {

@@ -12,6 +12,7 @@
 #include "hof/core/error.h"
 #include "hof/mechanics/node_incidence.h"
 #include "hof/mechanics/force_field.h"
+#include "hof/mechanics/stiffness_writer.h"
 #include "hof/mesh/mesh.h"
 
 namespace hof::mechanics {
@@ -35,6 +36,8 @@ class MeshSpringForceField final : public ForceField {
   void add_force(const Eigen::VectorXd& x, const Eigen::VectorXd& v, ForceFieldState& state,
                  Eigen::VectorXd& f) const override;
   void add_stiffness(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const override;
+  bool set_stiffness(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const override;
+  bool set_stiffness_single(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const override;
   [[nodiscard]] double potential_energy(const Eigen::VectorXd& x, const ForceFieldState& state) const override;
   [[nodiscard]] ForceFieldState make_state() const override;
 
@@ -44,13 +47,25 @@ class MeshSpringForceField final : public ForceField {
   struct Spring {
     std::array<std::int32_t, 2> nodes;
     double rest_length;
-    std::array<std::int32_t, 4> slots;  // (i,i) (i,j) (j,i) (j,j)
+    std::array<std::int32_t, 2> slots;  // (i,j) (j,i)
+  };
+  // Four springs side by side for the spring pass (one SIMD lane each); padded with copies
+  // of spring 0 whose results are never read.
+  struct SpringGroup {
+    std::int32_t first[4];
+    std::int32_t second[4];
+    double rest_length[4];
   };
   MeshSpringForceField() = default;
+  template <StiffnessTarget kTarget>
+  void write_stiffness(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const;
 
   MeshSpringConfig config_;
   std::vector<Spring> springs_;
+  std::vector<SpringGroup> groups_;
   NodeIncidence incidence_;  // spring·2 + end
+  std::vector<std::int32_t> diagonal_slots_;
+  bool covers_pattern_{false};  // the pattern is the springs' node pairs and the diagonal
 };
 
 }  // namespace hof::mechanics

@@ -366,31 +366,14 @@ void TetrahedronFemForceField::add_force(const Eigen::VectorXd& x, const Eigen::
 // 3x3 sum per node pair, three multiply-adds per element, gives both blocks. Each block is
 // summed in registers and written once: diagonal blocks by node, the pairs (i, j) and (j, i)
 // together by edge. Rows never share a writer: no atomics, and a fixed summation order.
-template <TetrahedronFemForceField::Target kTarget>
+template <StiffnessTarget kTarget>
 void TetrahedronFemForceField::write_stiffness(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const {
   using simd::Lanes;
-  double* values = k.values();
   const double* c = state.element_scalars.data();
   const Lanes lambda = simd::splat(scale * lame_.lambda);
   const Lanes mu = simd::splat(scale * lame_.mu);
-  auto write = [values, &k](std::int64_t slot, const Lanes& col0, const Lanes& col1, const Lanes& col2) {
-    if constexpr (kTarget == Target::kSetSingle) {
-      float* block = k.single_block(slot);
-      simd::store_single(block, col0);
-      simd::store_single(block + BlockSparseMatrix::kSingleColumnStride, col1);
-      simd::store_single(block + 2 * BlockSparseMatrix::kSingleColumnStride, col2);
-      return;
-    }
-    double* block = values + BlockSparseMatrix::kBlockStride * slot;
-    if constexpr (kTarget == Target::kAddDouble) {
-      simd::store(block, simd::load(block) + col0);
-      simd::store(block + 4, simd::load(block + 4) + col1);
-      simd::store(block + 8, simd::load(block + 8) + col2);
-    } else {
-      simd::store(block, col0);
-      simd::store(block + 4, col1);
-      simd::store(block + 8, col2);
-    }
+  auto write = [&k](std::int64_t slot, const Lanes& col0, const Lanes& col1, const Lanes& col2) {
+    write_block<kTarget>(k, slot, col0, col1, col2);
   };
   // A's columns a0..a2 (lane 3 zero) to the blocks λA + μAᵀ + μ tr(A) I and its transpose.
   auto blocks = [&](const Lanes& a0, const Lanes& a1, const Lanes& a2, std::int64_t slot_ij, std::int64_t slot_ji) {
@@ -445,19 +428,19 @@ void TetrahedronFemForceField::write_stiffness(const ForceFieldState& state, dou
 }
 
 void TetrahedronFemForceField::add_stiffness(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const {
-  write_stiffness<Target::kAddDouble>(state, scale, k);
+  write_stiffness<StiffnessTarget::kAddDouble>(state, scale, k);
 }
 
 bool TetrahedronFemForceField::set_stiffness(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const {
   if (!covers_pattern_) return false;
-  write_stiffness<Target::kSetDouble>(state, scale, k);
+  write_stiffness<StiffnessTarget::kSetDouble>(state, scale, k);
   return true;
 }
 
 bool TetrahedronFemForceField::set_stiffness_single(const ForceFieldState& state, double scale,
                                                     BlockSparseMatrix& k) const {
   if (!covers_pattern_) return false;
-  write_stiffness<Target::kSetSingle>(state, scale, k);
+  write_stiffness<StiffnessTarget::kSetSingle>(state, scale, k);
   return true;
 }
 

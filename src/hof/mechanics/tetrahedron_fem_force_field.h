@@ -17,6 +17,7 @@
 #include "hof/core/error.h"
 #include "hof/mechanics/node_incidence.h"
 #include "hof/mechanics/force_field.h"
+#include "hof/mechanics/stiffness_writer.h"
 #include "hof/mesh/mesh.h"
 
 namespace hof::mechanics {
@@ -95,8 +96,7 @@ class TetrahedronFemForceField final : public ForceField {
   // Per-element pass: corner forces and rotated scaled gradients into `state`.
   void element_pass_large(const Eigen::VectorXd& x, ForceFieldState& state) const;
   void element_pass_general(const Eigen::VectorXd& x, ForceFieldState& state) const;
-  enum class Target : std::uint8_t { kAddDouble, kSetDouble, kSetSingle };
-  template <Target kTarget>
+  template <StiffnessTarget kTarget>
   void write_stiffness(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const;
 
   TetrahedronFemConfig config_;
