@@ -199,10 +199,15 @@ bool solve_ldlt(MechanicalState& state, const Eigen::VectorXd& b, Eigen::VectorX
 // Conjugate gradients with SOFA's CGLinearSolver stopping rules: stop when |r|²/|b|² falls
 // below `tolerance`, or when the curvature pᵀAp falls below `threshold` (relative, see
 // below), or after `iterations`. Optional block-Jacobi preconditioning (inverse 3x3 diagonal
-// blocks). Each iteration makes three passes over fixed node chunks — (Ap, pᵀAp), (x, r, z
-// updates with rᵀz and rᵀr), (p update) — with per-chunk partial sums added in chunk order,
-// so the result does not depend on the number of threads. With mixed precision the product
-// reads p rounded to single precision, which the passes that write p also write.
+// blocks).
+//
+// Two passes over fixed node chunks per iteration, with per-chunk partial sums added in
+// chunk order (the result does not depend on the number of threads):
+//   A: x += αp, r −= αAp, z = M⁻¹r, with rᵀr and rᵀz;
+//   B: Az, then p = z + βp and Ap = Az + βAp (the product of the new direction by
+//      linearity, so p need not be complete before the product starts), with pᵀAp.
+// The textbook order needs a third pass (the p update) and a third wait. With mixed
+// precision the product reads z rounded to single precision, written by pass A.
 //
 // The passes are task loops (TBB), not one team of threads with barriers between them: a
 // team is faster by a few microseconds per pass on an idle machine but stalls at every
@@ -240,19 +245,26 @@ bool solve_cg(const MechanicalModel& model, MechanicalState& state, const Eigen:
 
   double* xs = x.data();
   double* rs = w.r.data();
+  const Eigen::VectorXd& z = precondition ? w.z : w.r;
   double* zs = precondition ? w.z.data() : w.r.data();
   double* ps = w.p.data();
   double* aps = w.ap.data();
+  double* azs = w.az.data();
   const double* bs = b.data();
   Mat3* jacobi = w.block_jacobi.data();
-  float* p_single = w.p_single.data();
+  float* z_single = w.p_single.data();
   auto apply_preconditioner = [&](std::size_t d0, std::size_t d1) {
     for (std::size_t n = d0 / 3; n < d1 / 3; ++n) {
       Eigen::Map<Eigen::Vector3d>(zs + 3 * n) = jacobi[n] * Eigen::Map<const Eigen::Vector3d>(rs + 3 * n);
     }
   };
+  // Az over the rows of [d0, d1).
+  auto multiply_z = [&](std::size_t d0, std::size_t d1) {
+    if (single) a.multiply_single_rows(z_single, azs, d0 / 3, d1 / 3);
+    else a.multiply_rows(z, w.az, d0 / 3, d1 / 3);
+  };
 
-  // r = b, z = M⁻¹ r, p = z, x = 0; |b|² and rᵀz.
+  // r = b, z = M⁻¹ r, x = 0; |b|² and rᵀz.
   over_chunks([&](std::size_t c, std::size_t d0, std::size_t d1) {
     for (std::size_t d = d0; d < d1; ++d) {
       xs[d] = 0.0;
@@ -275,11 +287,9 @@ bool solve_cg(const MechanicalModel& model, MechanicalState& state, const Eigen:
       }
       apply_preconditioner(d0, d1);
     }
-    for (std::size_t d = d0; d < d1; ++d) ps[d] = zs[d];
-    const double rz = dot_range(rs, zs, d0, d1);
-    if (single) BlockSparseMatrix::round_to_single(ps, p_single, d0 / 3, d1 / 3);
+    if (single) BlockSparseMatrix::round_to_single(zs, z_single, d0 / 3, d1 / 3);
     part0[c] = bb;
-    part1[c] = rz;
+    part1[c] = dot_range(rs, zs, d0, d1);
   });
   const double b_norm2 = sum(part0);
   double rho = sum(part1);
@@ -287,17 +297,23 @@ bool solve_cg(const MechanicalModel& model, MechanicalState& state, const Eigen:
   state.stats.linear_residual = 0.0;
   if (!(b_norm2 > 0.0)) return std::isfinite(b_norm2);
 
+  // Pass B with β = 0: p = z, Ap = Az; pᵀAp.
+  auto direction_pass = [&](double beta) {
+    over_chunks([&](std::size_t c, std::size_t d0, std::size_t d1) {
+      multiply_z(d0, d1);
+      for (std::size_t d = d0; d < d1; ++d) {
+        ps[d] = zs[d] + beta * ps[d];
+        aps[d] = azs[d] + beta * aps[d];
+      }
+      part0[c] = dot_range(ps, aps, d0, d1);
+    });
+  };
   double r_norm2 = b_norm2;
   double first_curvature = 0.0;
   int iteration = 0;
+  if (cfg.iterations > 0 && b_norm2 / b_norm2 > cfg.tolerance) direction_pass(0.0);
   for (; iteration < cfg.iterations; ++iteration) {
     if (r_norm2 / b_norm2 <= cfg.tolerance) break;
-    // Ap and pᵀAp.
-    over_chunks([&](std::size_t c, std::size_t d0, std::size_t d1) {
-      if (single) a.multiply_single_rows(p_single, aps, d0 / 3, d1 / 3);
-      else a.multiply_rows(w.p, w.ap, d0 / 3, d1 / 3);
-      part0[c] = dot_range(ps, aps, d0, d1);
-    });
     const double curvature = sum(part0);
     // SOFA compares pᵀAp with `threshold` in absolute terms, which in its unit-free scenes
     // means "the denominator vanished". In SI units (kg, m) pᵀAp is legitimately tiny, so
@@ -305,7 +321,7 @@ bool solve_cg(const MechanicalModel& model, MechanicalState& state, const Eigen:
     if (iteration == 0) first_curvature = std::abs(curvature);
     if (!(std::abs(curvature) > cfg.threshold * first_curvature) || !(first_curvature > 0.0)) break;
     const double alpha = rho / curvature;
-    // x += αp, r −= αAp, z = M⁻¹r; rᵀz and rᵀr.
+    // Pass A: x += αp, r −= αAp, z = M⁻¹r; rᵀr and rᵀz.
     over_chunks([&](std::size_t c, std::size_t d0, std::size_t d1) {
       for (std::size_t d = d0; d < d1; ++d) {
         xs[d] += alpha * ps[d];
@@ -317,17 +333,15 @@ bool solve_cg(const MechanicalModel& model, MechanicalState& state, const Eigen:
         apply_preconditioner(d0, d1);
         rz = dot_range(rs, zs, d0, d1);
       }
+      if (single) BlockSparseMatrix::round_to_single(zs, z_single, d0 / 3, d1 / 3);
       part1[c] = rr;
       part2[c] = rz;
     });
     r_norm2 = sum(part1);
     const double rho_next = sum(part2);
-    const double beta = rho_next / rho;
+    // The next direction is needed only if another iteration follows.
+    if (iteration + 1 < cfg.iterations && r_norm2 / b_norm2 > cfg.tolerance) direction_pass(rho_next / rho);
     rho = rho_next;
-    over_chunks([&](std::size_t, std::size_t d0, std::size_t d1) {
-      for (std::size_t d = d0; d < d1; ++d) ps[d] = zs[d] + beta * ps[d];
-      if (single) BlockSparseMatrix::round_to_single(ps, p_single, d0 / 3, d1 / 3);
-    });
   }
   state.stats.linear_iterations = iteration;
   state.stats.linear_residual = r_norm2 / b_norm2;
