@@ -28,6 +28,19 @@ Mat3 triangle_frame(const Vec3& p0, const Vec3& p1, const Vec3& p2) {
   return frame;
 }
 
+// f[n] += Σ of the four-lane vectors at 4·entry over node n's entries, nodes [first, last).
+void gather_corner_vectors(const double* __restrict vectors, const std::int32_t* __restrict starts,
+                           const std::int32_t* __restrict entries, std::size_t first, std::size_t last,
+                           double* __restrict f) {
+  for (std::size_t n = first; n < last; ++n) {
+    simd::Lanes sum = simd::splat(0.0);
+    for (std::int32_t k = starts[n]; k < starts[n + 1]; ++k) sum += simd::load(vectors + 4 * static_cast<std::int64_t>(entries[k]));
+    f[3 * n] += sum[0];
+    f[3 * n + 1] += sum[1];
+    f[3 * n + 2] += sum[2];
+  }
+}
+
 }  // namespace
 
 Lame lame_parameters(double young_modulus_pa, double poisson_ratio) {
@@ -207,101 +220,106 @@ Mat3 TetrahedronFemForceField::rotation(const Element& e, const Mat3& f, const E
 // the nodal forces are f_i = −V R σ b_i = −V G σ' b'_i, and the rotated gradients
 // R b_i = G b'_i. In the current frame e'_1 = (|e_1|, 0, 0) and e'_2 = (·, ·, 0), which saves
 // a third of the products. Four elements per pass, one per lane.
-void TetrahedronFemForceField::element_pass_large(const Eigen::VectorXd& x, ForceFieldState& state) const {
+void TetrahedronFemForceField::large_groups(const ElementGroup* __restrict groups, std::size_t begin, std::size_t end,
+                                            const double* __restrict xs, double lambda_scalar, double two_mu_scalar,
+                                            double* __restrict stiffness_vectors, double* __restrict corner_forces) {
   using simd::Lanes;
-  const double* xs = x.data();
-  const Lanes lambda = simd::splat(lame_.lambda);
-  const Lanes two_mu = simd::splat(2.0 * lame_.mu);
+  const Lanes lambda = simd::splat(lambda_scalar);
+  const Lanes two_mu = simd::splat(two_mu_scalar);
   const Lanes one = simd::splat(1.0);
+  for (std::size_t g = begin; g < end; ++g) {
+    const ElementGroup& group = groups[g];
+    Lanes px[4], py[4], pz[4];
+    for (int c = 0; c < 4; ++c) {
+      const double* p0 = xs + 3 * static_cast<std::int64_t>(group.nodes[c][0]);
+      const double* p1 = xs + 3 * static_cast<std::int64_t>(group.nodes[c][1]);
+      const double* p2 = xs + 3 * static_cast<std::int64_t>(group.nodes[c][2]);
+      const double* p3 = xs + 3 * static_cast<std::int64_t>(group.nodes[c][3]);
+      px[c] = Lanes{p0[0], p1[0], p2[0], p3[0]};
+      py[c] = Lanes{p0[1], p1[1], p2[1], p3[1]};
+      pz[c] = Lanes{p0[2], p1[2], p2[2], p3[2]};
+    }
+    const Lanes e1x = px[1] - px[0], e1y = py[1] - py[0], e1z = pz[1] - pz[0];
+    const Lanes e2x = px[2] - px[0], e2y = py[2] - py[0], e2z = pz[2] - pz[0];
+    const Lanes e3x = px[3] - px[0], e3y = py[3] - py[0], e3z = pz[3] - pz[0];
+    // Current frame G = [a b c]: a along e1, c normal to (e1, e2), b = c × a.
+    const Lanes length1 = simd::sqrt(e1x * e1x + e1y * e1y + e1z * e1z);
+    const Lanes inverse1 = one / length1;
+    const Lanes ax = e1x * inverse1, ay = e1y * inverse1, az = e1z * inverse1;
+    Lanes cx = ay * e2z - az * e2y, cy = az * e2x - ax * e2z, cz = ax * e2y - ay * e2x;
+    const Lanes inverse_c = one / simd::sqrt(cx * cx + cy * cy + cz * cz);
+    cx *= inverse_c;
+    cy *= inverse_c;
+    cz *= inverse_c;
+    const Lanes bx = cy * az - cz * ay, by = cz * ax - cx * az, bz = cx * ay - cy * ax;
+    // Edge vectors in the frame.
+    const Lanes e2a = ax * e2x + ay * e2y + az * e2z, e2b = bx * e2x + by * e2y + bz * e2z;
+    const Lanes e3a = ax * e3x + ay * e3y + az * e3z, e3b = bx * e3x + by * e3y + bz * e3z;
+    const Lanes e3c = cx * e3x + cy * e3y + cz * e3z;
+    Lanes g1[3], g2[3], g3[3];
+    for (int q = 0; q < 3; ++q) {
+      g1[q] = simd::load(group.rest_gradients[q]);
+      g2[q] = simd::load(group.rest_gradients[3 + q]);
+      g3[q] = simd::load(group.rest_gradients[6 + q]);
+    }
+    // M rows: M_0 = |e1| b'_1 + e2a b'_2 + e3a b'_3, M_1 = e2b b'_2 + e3b b'_3, M_2 = e3c b'_3.
+    Lanes m[3][3];
+    for (int q = 0; q < 3; ++q) {
+      m[0][q] = length1 * g1[q] + e2a * g2[q] + e3a * g3[q];
+      m[1][q] = e2b * g2[q] + e3b * g3[q];
+      m[2][q] = e3c * g3[q];
+    }
+    const Lanes s00 = m[0][0] - one, s11 = m[1][1] - one, s22 = m[2][2] - one;
+    const Lanes pressure = lambda * (s00 + s11 + s22);
+    const Lanes half_two_mu = 0.5 * two_mu;
+    const Lanes t00 = pressure + two_mu * s00, t11 = pressure + two_mu * s11, t22 = pressure + two_mu * s22;
+    const Lanes t01 = half_two_mu * (m[0][1] + m[1][0]);
+    const Lanes t02 = half_two_mu * (m[0][2] + m[2][0]);
+    const Lanes t12 = half_two_mu * (m[1][2] + m[2][1]);
+    const Lanes volume = simd::load(group.volume);
+    const Lanes root_volume = simd::load(group.root_volume);
+    const Lanes minus_volume = -volume;
+    Lanes force[4][3], gradient[4][3];
+    for (int q = 0; q < 3; ++q) force[0][q] = gradient[0][q] = simd::splat(0.0);
+    const Lanes* rest[3] = {g1, g2, g3};
+    for (int j = 0; j < 3; ++j) {
+      const Lanes* r = rest[j];
+      // σ' b'_j, then −V G (σ' b'_j); √V G b'_j.
+      const Lanes s0 = t00 * r[0] + t01 * r[1] + t02 * r[2];
+      const Lanes s1 = t01 * r[0] + t11 * r[1] + t12 * r[2];
+      const Lanes s2 = t02 * r[0] + t12 * r[1] + t22 * r[2];
+      Lanes* f = force[j + 1];
+      f[0] = minus_volume * (ax * s0 + bx * s1 + cx * s2);
+      f[1] = minus_volume * (ay * s0 + by * s1 + cy * s2);
+      f[2] = minus_volume * (az * s0 + bz * s1 + cz * s2);
+      Lanes* c = gradient[j + 1];
+      c[0] = root_volume * (ax * r[0] + bx * r[1] + cx * r[2]);
+      c[1] = root_volume * (ay * r[0] + by * r[1] + cy * r[2]);
+      c[2] = root_volume * (az * r[0] + bz * r[1] + cz * r[2]);
+      for (int q = 0; q < 3; ++q) {
+        force[0][q] -= f[q];
+        gradient[0][q] -= c[q];
+      }
+    }
+    double* forces_out = corner_forces + 16 * simd::kLanes * g;
+    double* gradients_out = stiffness_vectors + 16 * simd::kLanes * g;
+    for (int i = 0; i < 4; ++i) {
+      Lanes per_element[4];
+      simd::transpose_xyz(force[i][0], force[i][1], force[i][2], per_element);
+      for (int lane = 0; lane < simd::kLanes; ++lane) simd::store(forces_out + 16 * lane + 4 * i, per_element[lane]);
+      simd::transpose_xyz(gradient[i][0], gradient[i][1], gradient[i][2], per_element);
+      for (int lane = 0; lane < simd::kLanes; ++lane) simd::store(gradients_out + 16 * lane + 4 * i, per_element[lane]);
+    }
+  }
+}
+
+void TetrahedronFemForceField::element_pass_large(const Eigen::VectorXd& x, ForceFieldState& state) const {
   double* stiffness_vectors = state.element_scalars.data();
   double* corner_forces = stiffness_vectors + 16 * simd::kLanes * groups_.size();
   parallel_chunks(
       groups_.size(), 16,
       [&](std::size_t begin, std::size_t end) {
-        for (std::size_t g = begin; g < end; ++g) {
-          const ElementGroup& group = groups_[g];
-          Lanes px[4], py[4], pz[4];
-          for (int c = 0; c < 4; ++c) {
-            const double* p0 = xs + 3 * static_cast<std::int64_t>(group.nodes[c][0]);
-            const double* p1 = xs + 3 * static_cast<std::int64_t>(group.nodes[c][1]);
-            const double* p2 = xs + 3 * static_cast<std::int64_t>(group.nodes[c][2]);
-            const double* p3 = xs + 3 * static_cast<std::int64_t>(group.nodes[c][3]);
-            px[c] = Lanes{p0[0], p1[0], p2[0], p3[0]};
-            py[c] = Lanes{p0[1], p1[1], p2[1], p3[1]};
-            pz[c] = Lanes{p0[2], p1[2], p2[2], p3[2]};
-          }
-          const Lanes e1x = px[1] - px[0], e1y = py[1] - py[0], e1z = pz[1] - pz[0];
-          const Lanes e2x = px[2] - px[0], e2y = py[2] - py[0], e2z = pz[2] - pz[0];
-          const Lanes e3x = px[3] - px[0], e3y = py[3] - py[0], e3z = pz[3] - pz[0];
-          // Current frame G = [a b c]: a along e1, c normal to (e1, e2), b = c × a.
-          const Lanes length1 = simd::sqrt(e1x * e1x + e1y * e1y + e1z * e1z);
-          const Lanes inverse1 = one / length1;
-          const Lanes ax = e1x * inverse1, ay = e1y * inverse1, az = e1z * inverse1;
-          Lanes cx = ay * e2z - az * e2y, cy = az * e2x - ax * e2z, cz = ax * e2y - ay * e2x;
-          const Lanes inverse_c = one / simd::sqrt(cx * cx + cy * cy + cz * cz);
-          cx *= inverse_c;
-          cy *= inverse_c;
-          cz *= inverse_c;
-          const Lanes bx = cy * az - cz * ay, by = cz * ax - cx * az, bz = cx * ay - cy * ax;
-          // Edge vectors in the frame.
-          const Lanes e2a = ax * e2x + ay * e2y + az * e2z, e2b = bx * e2x + by * e2y + bz * e2z;
-          const Lanes e3a = ax * e3x + ay * e3y + az * e3z, e3b = bx * e3x + by * e3y + bz * e3z;
-          const Lanes e3c = cx * e3x + cy * e3y + cz * e3z;
-          Lanes g1[3], g2[3], g3[3];
-          for (int q = 0; q < 3; ++q) {
-            g1[q] = simd::load(group.rest_gradients[q]);
-            g2[q] = simd::load(group.rest_gradients[3 + q]);
-            g3[q] = simd::load(group.rest_gradients[6 + q]);
-          }
-          // M rows: M_0 = |e1| b'_1 + e2a b'_2 + e3a b'_3, M_1 = e2b b'_2 + e3b b'_3, M_2 = e3c b'_3.
-          Lanes m[3][3];
-          for (int q = 0; q < 3; ++q) {
-            m[0][q] = length1 * g1[q] + e2a * g2[q] + e3a * g3[q];
-            m[1][q] = e2b * g2[q] + e3b * g3[q];
-            m[2][q] = e3c * g3[q];
-          }
-          const Lanes s00 = m[0][0] - one, s11 = m[1][1] - one, s22 = m[2][2] - one;
-          const Lanes pressure = lambda * (s00 + s11 + s22);
-          const Lanes half_two_mu = 0.5 * two_mu;
-          const Lanes t00 = pressure + two_mu * s00, t11 = pressure + two_mu * s11, t22 = pressure + two_mu * s22;
-          const Lanes t01 = half_two_mu * (m[0][1] + m[1][0]);
-          const Lanes t02 = half_two_mu * (m[0][2] + m[2][0]);
-          const Lanes t12 = half_two_mu * (m[1][2] + m[2][1]);
-          const Lanes volume = simd::load(group.volume);
-          const Lanes root_volume = simd::load(group.root_volume);
-          const Lanes minus_volume = -volume;
-          Lanes force[4][3], gradient[4][3];
-          for (int q = 0; q < 3; ++q) force[0][q] = gradient[0][q] = simd::splat(0.0);
-          const Lanes* rest[3] = {g1, g2, g3};
-          for (int j = 0; j < 3; ++j) {
-            const Lanes* r = rest[j];
-            // σ' b'_j, then −V G (σ' b'_j); √V G b'_j.
-            const Lanes s0 = t00 * r[0] + t01 * r[1] + t02 * r[2];
-            const Lanes s1 = t01 * r[0] + t11 * r[1] + t12 * r[2];
-            const Lanes s2 = t02 * r[0] + t12 * r[1] + t22 * r[2];
-            Lanes* f = force[j + 1];
-            f[0] = minus_volume * (ax * s0 + bx * s1 + cx * s2);
-            f[1] = minus_volume * (ay * s0 + by * s1 + cy * s2);
-            f[2] = minus_volume * (az * s0 + bz * s1 + cz * s2);
-            Lanes* c = gradient[j + 1];
-            c[0] = root_volume * (ax * r[0] + bx * r[1] + cx * r[2]);
-            c[1] = root_volume * (ay * r[0] + by * r[1] + cy * r[2]);
-            c[2] = root_volume * (az * r[0] + bz * r[1] + cz * r[2]);
-            for (int q = 0; q < 3; ++q) {
-              force[0][q] -= f[q];
-              gradient[0][q] -= c[q];
-            }
-          }
-          double* forces_out = corner_forces + 16 * simd::kLanes * g;
-          double* gradients_out = stiffness_vectors + 16 * simd::kLanes * g;
-          for (int i = 0; i < 4; ++i) {
-            Lanes per_element[4];
-            simd::transpose_xyz(force[i][0], force[i][1], force[i][2], per_element);
-            for (int lane = 0; lane < simd::kLanes; ++lane) simd::store(forces_out + 16 * lane + 4 * i, per_element[lane]);
-            simd::transpose_xyz(gradient[i][0], gradient[i][1], gradient[i][2], per_element);
-            for (int lane = 0; lane < simd::kLanes; ++lane) simd::store(gradients_out + 16 * lane + 4 * i, per_element[lane]);
-          }
-        }
+        large_groups(groups_.data(), begin, end, x.data(), lame_.lambda, 2.0 * lame_.mu, stiffness_vectors, corner_forces);
       },
       /*min_parallel=*/64);
 }
@@ -341,20 +359,10 @@ void TetrahedronFemForceField::add_force(const Eigen::VectorXd& x, const Eigen::
   else element_pass_general(x, state);
   // Node pass: each node gathers its corners' forces over its elements, in a fixed order.
   const double* corner_forces = state.element_scalars.data() + 16 * simd::kLanes * groups_.size();
-  const std::int32_t* entries = incidence_.entries.data();
   parallel_chunks(
       incidence_.start.size() - 1, 128,
       [&](std::size_t begin, std::size_t end) {
-        for (std::size_t n = begin; n < end; ++n) {
-          simd::Lanes sum = simd::splat(0.0);
-          for (std::int32_t k = incidence_.start[n]; k < incidence_.start[n + 1]; ++k) {
-            sum += simd::load(corner_forces + 4 * static_cast<std::int64_t>(entries[k]));
-          }
-          const auto i = 3 * static_cast<Eigen::Index>(n);
-          f[i] += sum[0];
-          f[i + 1] += sum[1];
-          f[i + 2] += sum[2];
-        }
+        gather_corner_vectors(corner_forces, incidence_.start.data(), incidence_.entries.data(), begin, end, f.data());
       },
       /*min_parallel=*/512);
 }
@@ -366,63 +374,87 @@ void TetrahedronFemForceField::add_force(const Eigen::VectorXd& x, const Eigen::
 // 3x3 sum per node pair, three multiply-adds per element, gives both blocks. Each block is
 // summed in registers and written once: diagonal blocks by node, the pairs (i, j) and (j, i)
 // together by edge. Rows never share a writer: no atomics, and a fixed summation order.
+namespace {
+
+// A's columns a0..a2 (lane 3 zero) to the blocks λA + μAᵀ + μ tr(A) I at slot_ij and its
+// transpose at slot_ji (when ≥ 0).
+template <StiffnessTarget kTarget>
+void write_pair(BlockSparseMatrix& k, simd::Lanes a0, simd::Lanes a1, simd::Lanes a2, double lambda, double mu,
+                std::int64_t slot_ij, std::int64_t slot_ji) {
+  using simd::Lanes;
+  Lanes at[4];
+  simd::transpose_xyz(a0, a1, a2, at);
+  const double d = mu * (a0[0] + a1[1] + a2[2]);
+  const Lanes d0{d, 0.0, 0.0, 0.0}, d1{0.0, d, 0.0, 0.0}, d2{0.0, 0.0, d, 0.0};
+  write_block<kTarget>(k, slot_ij, lambda * a0 + mu * at[0] + d0, lambda * a1 + mu * at[1] + d1,
+                       lambda * a2 + mu * at[2] + d2);
+  if (slot_ji >= 0) {
+    write_block<kTarget>(k, slot_ji, lambda * at[0] + mu * a0 + d0, lambda * at[1] + mu * a1 + d1,
+                         lambda * at[2] + mu * a2 + d2);
+  }
+}
+
+// The loops below are functions of their own with plain pointers, so that the compiler
+// keeps their addresses in registers (inside the task-loop lambdas it spilled them).
+
+// Diagonal blocks of nodes [first, last): A = Σ c̃ c̃ᵀ over the node's corners.
+template <StiffnessTarget kTarget>
+void fill_diagonal_blocks(const double* __restrict c, const std::int32_t* __restrict starts,
+                          const std::int32_t* __restrict entries, const std::int32_t* __restrict slots, std::size_t first,
+                          std::size_t last, double lambda, double mu, BlockSparseMatrix& k) {
+  using simd::Lanes;
+  for (std::size_t n = first; n < last; ++n) {
+    Lanes a0 = simd::splat(0.0), a1 = a0, a2 = a0;
+    for (std::int32_t at = starts[n]; at < starts[n + 1]; ++at) {
+      const double* pi = c + 4 * static_cast<std::int64_t>(entries[at]);
+      const Lanes ci = simd::load(pi);
+      a0 += ci * simd::broadcast(pi);
+      a1 += ci * simd::broadcast(pi + 1);
+      a2 += ci * simd::broadcast(pi + 2);
+    }
+    write_pair<kTarget>(k, a0, a1, a2, lambda, mu, slots[n], -1);
+  }
+}
+
+// Off-diagonal block pairs of edges [first, last): A = Σ c̃_i c̃_jᵀ over the shared elements.
+template <StiffnessTarget kTarget, class Edge>
+void fill_edge_blocks(const double* __restrict c, const Edge* __restrict edges,
+                      const std::array<std::int32_t, 2>* __restrict terms, std::size_t first, std::size_t last,
+                      double lambda, double mu, BlockSparseMatrix& k) {
+  using simd::Lanes;
+  for (std::size_t index = first; index < last; ++index) {
+    const Edge& edge = edges[index];
+    Lanes a0 = simd::splat(0.0), a1 = a0, a2 = a0;
+    for (std::int32_t t = edge.first; t < edge.last; ++t) {
+      const double* pi = c + 4 * static_cast<std::int64_t>(terms[t][0]);
+      const double* pj = c + 4 * static_cast<std::int64_t>(terms[t][1]);
+      const Lanes ci = simd::load(pi);
+      a0 += ci * simd::broadcast(pj);
+      a1 += ci * simd::broadcast(pj + 1);
+      a2 += ci * simd::broadcast(pj + 2);
+    }
+    write_pair<kTarget>(k, a0, a1, a2, lambda, mu, edge.slot_ij, edge.slot_ji);
+  }
+}
+
+}  // namespace
+
 template <StiffnessTarget kTarget>
 void TetrahedronFemForceField::write_stiffness(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const {
-  using simd::Lanes;
   const double* c = state.element_scalars.data();
-  const Lanes lambda = simd::splat(scale * lame_.lambda);
-  const Lanes mu = simd::splat(scale * lame_.mu);
-  auto write = [&k](std::int64_t slot, const Lanes& col0, const Lanes& col1, const Lanes& col2) {
-    write_block<kTarget>(k, slot, col0, col1, col2);
-  };
-  // A's columns a0..a2 (lane 3 zero) to the blocks λA + μAᵀ + μ tr(A) I and its transpose.
-  auto blocks = [&](const Lanes& a0, const Lanes& a1, const Lanes& a2, std::int64_t slot_ij, std::int64_t slot_ji) {
-    Lanes at[4];
-    simd::transpose_xyz(a0, a1, a2, at);
-    const double trace = a0[0] + a1[1] + a2[2];
-    const double d = mu[0] * trace;
-    const Lanes d0{d, 0.0, 0.0, 0.0}, d1{0.0, d, 0.0, 0.0}, d2{0.0, 0.0, d, 0.0};
-    write(slot_ij, lambda * a0 + mu * at[0] + d0, lambda * a1 + mu * at[1] + d1, lambda * a2 + mu * at[2] + d2);
-    if (slot_ji >= 0) write(slot_ji, lambda * at[0] + mu * a0 + d0, lambda * at[1] + mu * a1 + d1, lambda * at[2] + mu * a2 + d2);
-  };
-  const std::int32_t* entries = incidence_.entries.data();
-  const std::int32_t* starts = incidence_.start.data();
-  const std::int32_t* diagonal_slots = diagonal_slots_.data();
+  const double lambda = scale * lame_.lambda;
+  const double mu = scale * lame_.mu;
   parallel_chunks(
       diagonal_slots_.size(), 128,
       [&](std::size_t begin, std::size_t end) {
-        for (std::size_t n = begin; n < end; ++n) {
-          // A = Σ c̃ c̃ᵀ (symmetric): K_ii = (λ + μ) A + μ tr(A) I.
-          Lanes a0 = simd::splat(0.0), a1 = a0, a2 = a0;
-          for (std::int32_t at = starts[n]; at < starts[n + 1]; ++at) {
-            const double* pi = c + 4 * static_cast<std::int64_t>(entries[at]);
-            const Lanes ci = simd::load(pi);
-            a0 += ci * simd::broadcast(pi);
-            a1 += ci * simd::broadcast(pi + 1);
-            a2 += ci * simd::broadcast(pi + 2);
-          }
-          blocks(a0, a1, a2, diagonal_slots[n], -1);
-        }
+        fill_diagonal_blocks<kTarget>(c, incidence_.start.data(), incidence_.entries.data(), diagonal_slots_.data(), begin,
+                                      end, lambda, mu, k);
       },
       /*min_parallel=*/512);
-  const EdgeBlocks* edges = edges_.data();
-  const std::array<std::int32_t, 2>* terms = edge_terms_.data();
   parallel_chunks(
       edges_.size(), 512,
       [&](std::size_t begin, std::size_t end) {
-        for (std::size_t index = begin; index < end; ++index) {
-          const EdgeBlocks& edge = edges[index];
-          Lanes a0 = simd::splat(0.0), a1 = a0, a2 = a0;
-          for (std::int32_t t = edge.first; t < edge.last; ++t) {
-            const double* pi = c + 4 * static_cast<std::int64_t>(terms[t][0]);
-            const double* pj = c + 4 * static_cast<std::int64_t>(terms[t][1]);
-            const Lanes ci = simd::load(pi);
-            a0 += ci * simd::broadcast(pj);
-            a1 += ci * simd::broadcast(pj + 1);
-            a2 += ci * simd::broadcast(pj + 2);
-          }
-          blocks(a0, a1, a2, edge.slot_ij, edge.slot_ji);
-        }
+        fill_edge_blocks<kTarget>(c, edges_.data(), edge_terms_.data(), begin, end, lambda, mu, k);
       },
       /*min_parallel=*/1024);
 }

@@ -95,6 +95,9 @@ class TetrahedronFemForceField final : public ForceField {
   Mat3 rotation(const Element& e, const Mat3& deformation_gradient, const Eigen::VectorXd& x) const;
   // Per-element pass: corner forces and rotated scaled gradients into `state`.
   void element_pass_large(const Eigen::VectorXd& x, ForceFieldState& state) const;
+  // Groups [begin, end) of the `large` pass (plain pointers keep the loop in registers).
+  static void large_groups(const ElementGroup* groups, std::size_t begin, std::size_t end, const double* xs,
+                           double lambda, double two_mu, double* stiffness_vectors, double* corner_forces);
   void element_pass_general(const Eigen::VectorXd& x, ForceFieldState& state) const;
   template <StiffnessTarget kTarget>
   void write_stiffness(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const;
