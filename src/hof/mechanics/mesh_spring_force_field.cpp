@@ -62,9 +62,76 @@ Expected<std::unique_ptr<MeshSpringForceField>> MeshSpringForceField::make(
   return field;
 }
 
+namespace {
+
 // Per spring (padded to whole groups), 12 doubles: the force on its first node (f, 0), the
 // stiffness block K_s = w u uᵀ + t I as (w u, t) and (u, 0).
 constexpr std::size_t kRecord = 12;
+
+// The loops below are functions of their own with plain pointers, so that the compiler
+// keeps their addresses in registers (inside the task-loop lambdas it spilled them).
+
+// f[n] += Σ ± force on the spring's first node, nodes [first, last).
+void gather_spring_forces(const double* __restrict records, const std::int32_t* __restrict starts,
+                          const std::int32_t* __restrict entries, std::size_t first, std::size_t last,
+                          double* __restrict f) {
+  for (std::size_t n = first; n < last; ++n) {
+    simd::Lanes sum = simd::splat(0.0);
+    for (std::int32_t at = starts[n]; at < starts[n + 1]; ++at) {
+      const std::int32_t entry = entries[at];
+      const simd::Lanes force_on_first = simd::load(records + kRecord * static_cast<std::size_t>(entry >> 1));
+      if (entry & 1) sum -= force_on_first;
+      else sum += force_on_first;
+    }
+    f[3 * n] += sum[0];
+    f[3 * n + 1] += sum[1];
+    f[3 * n + 2] += sum[2];
+  }
+}
+
+// Adds the columns of w u uᵀ + t I of a record.
+inline void add_spring_block(const double* record, simd::Lanes& a0, simd::Lanes& a1, simd::Lanes& a2, double& t) {
+  const simd::Lanes wu = simd::load(record + 4);
+  a0 += wu * simd::broadcast(record + 8);
+  a1 += wu * simd::broadcast(record + 9);
+  a2 += wu * simd::broadcast(record + 10);
+  t += record[7];
+}
+
+template <StiffnessTarget kTarget>
+void write_spring_block(BlockSparseMatrix& k, std::int64_t slot, simd::Lanes a0, simd::Lanes a1, simd::Lanes a2, double t,
+                        double factor) {
+  write_block<kTarget>(k, slot, factor * (a0 + simd::Lanes{t, 0.0, 0.0, 0.0}), factor * (a1 + simd::Lanes{0.0, t, 0.0, 0.0}),
+                       factor * (a2 + simd::Lanes{0.0, 0.0, t, 0.0}));
+}
+
+template <StiffnessTarget kTarget>
+void fill_spring_diagonal(const double* __restrict records, const std::int32_t* __restrict starts,
+                          const std::int32_t* __restrict entries, const std::int32_t* __restrict slots, std::size_t first,
+                          std::size_t last, double scale, BlockSparseMatrix& k) {
+  for (std::size_t n = first; n < last; ++n) {
+    simd::Lanes a0 = simd::splat(0.0), a1 = a0, a2 = a0;
+    double t = 0.0;
+    for (std::int32_t at = starts[n]; at < starts[n + 1]; ++at) {
+      add_spring_block(records + kRecord * static_cast<std::size_t>(entries[at] >> 1), a0, a1, a2, t);
+    }
+    write_spring_block<kTarget>(k, slots[n], a0, a1, a2, t, scale);
+  }
+}
+
+template <StiffnessTarget kTarget, class Spring>
+void fill_spring_pairs(const double* __restrict records, const Spring* __restrict springs, std::size_t first,
+                       std::size_t last, double factor, BlockSparseMatrix& k) {
+  for (std::size_t index = first; index < last; ++index) {
+    simd::Lanes a0 = simd::splat(0.0), a1 = a0, a2 = a0;
+    double t = 0.0;
+    add_spring_block(records + kRecord * index, a0, a1, a2, t);
+    write_spring_block<kTarget>(k, springs[index].slots[0], a0, a1, a2, t, factor);
+    write_spring_block<kTarget>(k, springs[index].slots[1], a0, a1, a2, t, factor);
+  }
+}
+
+}  // namespace
 
 ForceFieldState MeshSpringForceField::make_state() const {
   ForceFieldState s;
@@ -90,12 +157,56 @@ void MeshSpringForceField::bind(const BlockSparseMatrix& pattern) {
                     static_cast<std::int32_t>(nodes) == pattern.block_rows();
 }
 
+void MeshSpringForceField::spring_groups(const SpringGroup* __restrict groups, std::size_t begin, std::size_t end,
+                                         const double* __restrict xs, const double* __restrict vs, double stiffness,
+                                         double damping, double* __restrict records) {
+  using simd::Lanes;
+  const Lanes k = simd::splat(stiffness);
+  const Lanes c = simd::splat(damping);
+  const Lanes zero = simd::splat(0.0);
+  for (std::size_t g = begin; g < end; ++g) {
+    const SpringGroup& group = groups[g];
+    Lanes d[3], dv[3];
+    for (int q = 0; q < 3; ++q) {
+      d[q] = Lanes{xs[3 * group.second[0] + q] - xs[3 * group.first[0] + q],
+                   xs[3 * group.second[1] + q] - xs[3 * group.first[1] + q],
+                   xs[3 * group.second[2] + q] - xs[3 * group.first[2] + q],
+                   xs[3 * group.second[3] + q] - xs[3 * group.first[3] + q]};
+      dv[q] = Lanes{vs[3 * group.second[0] + q] - vs[3 * group.first[0] + q],
+                    vs[3 * group.second[1] + q] - vs[3 * group.first[1] + q],
+                    vs[3 * group.second[2] + q] - vs[3 * group.first[2] + q],
+                    vs[3 * group.second[3] + q] - vs[3 * group.first[3] + q]};
+    }
+    const Lanes length = simd::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    const auto stretched = length > zero;  // a collapsed spring has no direction
+    const Lanes inverse = stretched ? 1.0 / length : zero;
+    const Lanes u[3] = {d[0] * inverse, d[1] * inverse, d[2] * inverse};
+    const Lanes rest = simd::load(group.rest_length);
+    const Lanes tension = k * (length - rest) + c * (dv[0] * u[0] + dv[1] * u[1] + dv[2] * u[2]);
+    // −∂f_i/∂x_i = k u uᵀ + k (1 − l0/l)(I − u uᵀ). The transverse term is negative for
+    // a compressed spring; it is clamped at zero so that the system matrix stays
+    // positive definite (Choi & Ko, "Stable but responsive cloth", SIGGRAPH 2002). A
+    // collapsed spring resists equally in all directions (k I).
+    const Lanes clamped = k * (1.0 - rest * inverse);
+    const Lanes transverse = stretched ? (clamped > zero ? clamped : zero) : k;
+    const Lanes along = k - transverse;
+    Lanes force[4], weighted[4], direction[4];
+    simd::transpose_xyz(tension * u[0], tension * u[1], tension * u[2], force);
+    simd::transpose_xyz(along * u[0], along * u[1], along * u[2], weighted);
+    simd::transpose_xyz(u[0], u[1], u[2], direction);
+    double* out = records + kRecord * simd::kLanes * g;
+    for (int lane = 0; lane < simd::kLanes; ++lane) {
+      double* record = out + kRecord * static_cast<std::size_t>(lane);
+      simd::store(record, force[lane]);
+      simd::store(record + 4, weighted[lane]);
+      record[7] = transverse[lane];
+      simd::store(record + 8, direction[lane]);
+    }
+  }
+}
+
 void MeshSpringForceField::add_force(const Eigen::VectorXd& x, const Eigen::VectorXd& v, ForceFieldState& state,
                                      Eigen::VectorXd& f) const {
-  using simd::Lanes;
-  const Lanes k = simd::splat(config_.stiffness_n_per_m);
-  const Lanes c = simd::splat(config_.damping_n_s_per_m);
-  const Lanes zero = simd::splat(0.0);
   const double* xs = x.data();
   const double* vs = v.data();
   double* records = state.element_scalars.data();
@@ -103,66 +214,14 @@ void MeshSpringForceField::add_force(const Eigen::VectorXd& x, const Eigen::Vect
   parallel_chunks(
       groups_.size(), 64,
       [&](std::size_t begin, std::size_t end) {
-        for (std::size_t g = begin; g < end; ++g) {
-          const SpringGroup& group = groups_[g];
-          Lanes d[3], dv[3];
-          for (int q = 0; q < 3; ++q) {
-            d[q] = Lanes{xs[3 * group.second[0] + q] - xs[3 * group.first[0] + q],
-                         xs[3 * group.second[1] + q] - xs[3 * group.first[1] + q],
-                         xs[3 * group.second[2] + q] - xs[3 * group.first[2] + q],
-                         xs[3 * group.second[3] + q] - xs[3 * group.first[3] + q]};
-            dv[q] = Lanes{vs[3 * group.second[0] + q] - vs[3 * group.first[0] + q],
-                          vs[3 * group.second[1] + q] - vs[3 * group.first[1] + q],
-                          vs[3 * group.second[2] + q] - vs[3 * group.first[2] + q],
-                          vs[3 * group.second[3] + q] - vs[3 * group.first[3] + q]};
-          }
-          const Lanes length = simd::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-          const auto stretched = length > zero;  // a collapsed spring has no direction
-          const Lanes inverse = stretched ? 1.0 / length : zero;
-          const Lanes u[3] = {d[0] * inverse, d[1] * inverse, d[2] * inverse};
-          const Lanes rest = simd::load(group.rest_length);
-          const Lanes tension = k * (length - rest) + c * (dv[0] * u[0] + dv[1] * u[1] + dv[2] * u[2]);
-          // −∂f_i/∂x_i = k u uᵀ + k (1 − l0/l)(I − u uᵀ). The transverse term is negative for
-          // a compressed spring; it is clamped at zero so that the system matrix stays
-          // positive definite (Choi & Ko, "Stable but responsive cloth", SIGGRAPH 2002). A
-          // collapsed spring resists equally in all directions (k I).
-          const Lanes clamped = k * (1.0 - rest * inverse);
-          const Lanes transverse = stretched ? (clamped > zero ? clamped : zero) : k;
-          const Lanes along = k - transverse;
-          Lanes force[4], weighted[4], direction[4];
-          simd::transpose_xyz(tension * u[0], tension * u[1], tension * u[2], force);
-          simd::transpose_xyz(along * u[0], along * u[1], along * u[2], weighted);
-          simd::transpose_xyz(u[0], u[1], u[2], direction);
-          double* out = records + kRecord * simd::kLanes * g;
-          for (int lane = 0; lane < simd::kLanes; ++lane) {
-            double* record = out + kRecord * static_cast<std::size_t>(lane);
-            simd::store(record, force[lane]);
-            simd::store(record + 4, weighted[lane]);
-            record[7] = transverse[lane];
-            simd::store(record + 8, direction[lane]);
-          }
-        }
+        spring_groups(groups_.data(), begin, end, xs, vs, config_.stiffness_n_per_m, config_.damping_n_s_per_m, records);
       },
       /*min_parallel=*/256);
   // Node pass: each node gathers its springs' forces in a fixed order.
-  const std::int32_t* entries = incidence_.entries.data();
-  const std::int32_t* starts = incidence_.start.data();
   parallel_chunks(
       incidence_.start.size() - 1, 256,
       [&](std::size_t begin, std::size_t end) {
-        for (std::size_t n = begin; n < end; ++n) {
-          Lanes sum = zero;
-          for (std::int32_t at = starts[n]; at < starts[n + 1]; ++at) {
-            const std::int32_t entry = entries[at];
-            const Lanes force_on_first = simd::load(records + kRecord * static_cast<std::size_t>(entry >> 1));
-            if (entry & 1) sum -= force_on_first;
-            else sum += force_on_first;
-          }
-          const auto i = 3 * static_cast<Eigen::Index>(n);
-          f[i] += sum[0];
-          f[i + 1] += sum[1];
-          f[i + 2] += sum[2];
-        }
+        gather_spring_forces(records, incidence_.start.data(), incidence_.entries.data(), begin, end, f.data());
       },
       /*min_parallel=*/1024);
 }
@@ -171,48 +230,18 @@ void MeshSpringForceField::add_force(const Eigen::VectorXd& x, const Eigen::Vect
 // (i, j), (j, i) is −K_s (symmetric), written once. No atomics, fixed summation order.
 template <StiffnessTarget kTarget>
 void MeshSpringForceField::write_stiffness(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const {
-  using simd::Lanes;
   const double* records = state.element_scalars.data();
-  const std::int32_t* entries = incidence_.entries.data();
-  const std::int32_t* starts = incidence_.start.data();
-  // Columns of w u uᵀ + t I from a record.
-  auto add_block = [](const double* record, Lanes& a0, Lanes& a1, Lanes& a2, double& t) {
-    const Lanes wu = simd::load(record + 4);
-    a0 += wu * simd::broadcast(record + 8);
-    a1 += wu * simd::broadcast(record + 9);
-    a2 += wu * simd::broadcast(record + 10);
-    t += record[7];
-  };
-  auto finish = [](Lanes& a0, Lanes& a1, Lanes& a2, double t, double factor) {
-    a0 = factor * (a0 + Lanes{t, 0.0, 0.0, 0.0});
-    a1 = factor * (a1 + Lanes{0.0, t, 0.0, 0.0});
-    a2 = factor * (a2 + Lanes{0.0, 0.0, t, 0.0});
-  };
   parallel_chunks(
       diagonal_slots_.size(), 256,
       [&](std::size_t begin, std::size_t end) {
-        for (std::size_t n = begin; n < end; ++n) {
-          Lanes a0 = simd::splat(0.0), a1 = a0, a2 = a0;
-          double t = 0.0;
-          for (std::int32_t at = starts[n]; at < starts[n + 1]; ++at) {
-            add_block(records + kRecord * static_cast<std::size_t>(entries[at] >> 1), a0, a1, a2, t);
-          }
-          finish(a0, a1, a2, t, scale);
-          write_block<kTarget>(k, diagonal_slots_[n], a0, a1, a2);
-        }
+        fill_spring_diagonal<kTarget>(records, incidence_.start.data(), incidence_.entries.data(), diagonal_slots_.data(),
+                                      begin, end, scale, k);
       },
       /*min_parallel=*/1024);
   parallel_chunks(
       springs_.size(), 1024,
       [&](std::size_t begin, std::size_t end) {
-        for (std::size_t index = begin; index < end; ++index) {
-          Lanes a0 = simd::splat(0.0), a1 = a0, a2 = a0;
-          double t = 0.0;
-          add_block(records + kRecord * index, a0, a1, a2, t);
-          finish(a0, a1, a2, t, -scale);
-          write_block<kTarget>(k, springs_[index].slots[0], a0, a1, a2);
-          write_block<kTarget>(k, springs_[index].slots[1], a0, a1, a2);
-        }
+        fill_spring_pairs<kTarget>(records, springs_.data(), begin, end, -scale, k);
       },
       /*min_parallel=*/2048);
 }

@@ -57,6 +57,9 @@ class MeshSpringForceField final : public ForceField {
     double rest_length[4];
   };
   MeshSpringForceField() = default;
+  // Groups [begin, end) of the spring pass (plain pointers keep the loop in registers).
+  static void spring_groups(const SpringGroup* groups, std::size_t begin, std::size_t end, const double* xs,
+                            const double* vs, double stiffness, double damping, double* records);
   template <StiffnessTarget kTarget>
   void write_stiffness(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const;
 
