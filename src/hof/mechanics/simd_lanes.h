@@ -56,6 +56,12 @@ inline void store_single(float* p, Lanes v) {
 #endif
 }
 
+/// v with lane 3 set to zero.
+[[nodiscard]] inline Lanes clear_lane3(Lanes v) {
+  using Mask = long long __attribute__((vector_size(32)));
+  return __builtin_shuffle(v, splat(0.0), Mask{0, 1, 2, 4});
+}
+
 /// Lanes (x_k, y_k, z_k, 0) of element k from the x, y, z lanes of four elements: the 4x4
 /// transpose, for storing per-element vectors with whole-register writes.
 inline void transpose_xyz(Lanes x, Lanes y, Lanes z, Lanes out[4]) {

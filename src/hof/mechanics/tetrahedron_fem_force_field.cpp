@@ -28,13 +28,29 @@ Mat3 triangle_frame(const Vec3& p0, const Vec3& p1, const Vec3& p2) {
   return frame;
 }
 
-// f[n] += Σ of the four-lane vectors at 4·entry over node n's entries, nodes [first, last).
+// Per element, three doubles per corner (its rotated scaled gradient c̃, or its force): the
+// record of corner entry (4·element + corner) starts at 3·entry. Loads take four doubles,
+// the fourth being the next corner's first (ignored: only lanes 0–2 are used), so each
+// array ends with a padding of four.
+constexpr std::size_t kCornerStride = 3;
+constexpr std::size_t kElementStride = 4 * kCornerStride;
+constexpr std::size_t kArrayPadding = 4;
+
+// f[n] += Σ of the vectors at 3·entry over node n's entries (lanes 0–2), nodes [first, last).
+// The records read by the gathers are scattered over arrays of several megabytes at 40k
+// tetrahedra: fetch them this many entries ahead.
+constexpr std::int32_t kPrefetchAhead = 12;
+
 void gather_corner_vectors(const double* __restrict vectors, const std::int32_t* __restrict starts,
                            const std::int32_t* __restrict entries, std::size_t first, std::size_t last,
                            double* __restrict f) {
+  const std::int32_t end = starts[last];
   for (std::size_t n = first; n < last; ++n) {
     simd::Lanes sum = simd::splat(0.0);
-    for (std::int32_t k = starts[n]; k < starts[n + 1]; ++k) sum += simd::load(vectors + 4 * static_cast<std::int64_t>(entries[k]));
+    for (std::int32_t k = starts[n]; k < starts[n + 1]; ++k) {
+      if (k + kPrefetchAhead < end) __builtin_prefetch(vectors + kCornerStride * static_cast<std::size_t>(entries[k + kPrefetchAhead]));
+      sum += simd::load(vectors + kCornerStride * static_cast<std::size_t>(entries[k]));
+    }
     f[3 * n] += sum[0];
     f[3 * n + 1] += sum[1];
     f[3 * n + 2] += sum[2];
@@ -137,15 +153,15 @@ Expected<std::unique_ptr<TetrahedronFemForceField>> TetrahedronFemForceField::ma
 
 ForceFieldState TetrahedronFemForceField::make_state() const {
   ForceFieldState s;
-  // element_scalars: per element corner (4·element + corner, padded to whole groups), the
-  // rotated scaled gradient c̃ = √V R b (four lanes, the fourth zero), then after all of them
-  // the corner's elastic force (same layout). At rest R = I.
+  // element_scalars: per element corner (padded to whole groups), the rotated scaled
+  // gradient c̃ = √V R b, then after all of them the corner's elastic force (same layout,
+  // see kCornerStride). At rest R = I.
   const std::size_t padded = simd::kLanes * groups_.size();
-  s.element_scalars.assign(2 * 16 * padded, 0.0);
+  s.element_scalars.assign(2 * (kElementStride * padded + kArrayPadding), 0.0);
   for (std::size_t e = 0; e < elements_.size(); ++e) {
     const double root_volume = std::sqrt(elements_[e].volume);
     for (int i = 0; i < 4; ++i) {
-      for (int q = 0; q < 3; ++q) s.element_scalars[16 * e + 4 * i + q] = root_volume * elements_[e].gradients[i][q];
+      for (int q = 0; q < 3; ++q) s.element_scalars[kElementStride * e + kCornerStride * i + q] = root_volume * elements_[e].gradients[i][q];
     }
   }
   return s;
@@ -301,21 +317,31 @@ void TetrahedronFemForceField::large_groups(const ElementGroup* __restrict group
         gradient[0][q] -= c[q];
       }
     }
-    double* forces_out = corner_forces + 16 * simd::kLanes * g;
-    double* gradients_out = stiffness_vectors + 16 * simd::kLanes * g;
-    for (int i = 0; i < 4; ++i) {
-      Lanes per_element[4];
-      simd::transpose_xyz(force[i][0], force[i][1], force[i][2], per_element);
-      for (int lane = 0; lane < simd::kLanes; ++lane) simd::store(forces_out + 16 * lane + 4 * i, per_element[lane]);
-      simd::transpose_xyz(gradient[i][0], gradient[i][1], gradient[i][2], per_element);
-      for (int lane = 0; lane < simd::kLanes; ++lane) simd::store(gradients_out + 16 * lane + 4 * i, per_element[lane]);
-    }
+    // Corner by corner within each element, four doubles at a time: each store's fourth
+    // lane is overwritten by the next corner's. The last corner of the group's last element
+    // is stored as three doubles: the next double belongs to the next group, which another
+    // thread may be writing.
+    auto store_group = [](Lanes (&v)[4][3], double* out) {
+      Lanes per_corner[4][4];
+      for (int i = 0; i < 4; ++i) simd::transpose_xyz(v[i][0], v[i][1], v[i][2], per_corner[i]);
+      for (int lane = 0; lane < simd::kLanes; ++lane) {
+        double* element = out + kElementStride * static_cast<std::size_t>(lane);
+        for (int i = 0; i < 3; ++i) simd::store(element + kCornerStride * i, per_corner[i][lane]);
+        if (lane + 1 < simd::kLanes) {
+          simd::store(element + 3 * kCornerStride, per_corner[3][lane]);
+        } else {
+          for (int q = 0; q < 3; ++q) element[3 * kCornerStride + q] = per_corner[3][lane][q];
+        }
+      }
+    };
+    store_group(force, corner_forces + kElementStride * simd::kLanes * g);
+    store_group(gradient, stiffness_vectors + kElementStride * simd::kLanes * g);
   }
 }
 
 void TetrahedronFemForceField::element_pass_large(const Eigen::VectorXd& x, ForceFieldState& state) const {
   double* stiffness_vectors = state.element_scalars.data();
-  double* corner_forces = stiffness_vectors + 16 * simd::kLanes * groups_.size();
+  double* corner_forces = stiffness_vectors + kElementStride * simd::kLanes * groups_.size() + kArrayPadding;
   parallel_chunks(
       groups_.size(), 16,
       [&](std::size_t begin, std::size_t end) {
@@ -329,7 +355,7 @@ void TetrahedronFemForceField::element_pass_general(const Eigen::VectorXd& x, Fo
   const double lambda = lame_.lambda;
   const double mu = lame_.mu;
   double* stiffness_vectors = state.element_scalars.data();
-  double* corner_forces = stiffness_vectors + 16 * simd::kLanes * groups_.size();
+  double* corner_forces = stiffness_vectors + kElementStride * simd::kLanes * groups_.size() + kArrayPadding;
   parallel_chunks(
       elements_.size(), 64,
       [&](std::size_t begin, std::size_t end) {
@@ -345,8 +371,8 @@ void TetrahedronFemForceField::element_pass_general(const Eigen::VectorXd& x, Fo
           const Mat3 force_map = -e.volume * (r * stress);
           const double root_volume = std::sqrt(e.volume);
           for (int i = 0; i < 4; ++i) {
-            Eigen::Map<Vec3>(corner_forces + 16 * index + 4 * i) = force_map * e.gradients[i];
-            Eigen::Map<Vec3>(stiffness_vectors + 16 * index + 4 * i) = root_volume * (r * e.gradients[i]);
+            Eigen::Map<Vec3>(corner_forces + kElementStride * index + kCornerStride * i) = force_map * e.gradients[i];
+            Eigen::Map<Vec3>(stiffness_vectors + kElementStride * index + kCornerStride * i) = root_volume * (r * e.gradients[i]);
           }
         }
       },
@@ -358,7 +384,8 @@ void TetrahedronFemForceField::add_force(const Eigen::VectorXd& x, const Eigen::
   if (config_.method == FemMethod::kLarge) element_pass_large(x, state);
   else element_pass_general(x, state);
   // Node pass: each node gathers its corners' forces over its elements, in a fixed order.
-  const double* corner_forces = state.element_scalars.data() + 16 * simd::kLanes * groups_.size();
+  const double* corner_forces =
+      state.element_scalars.data() + kElementStride * simd::kLanes * groups_.size() + kArrayPadding;
   parallel_chunks(
       incidence_.start.size() - 1, 128,
       [&](std::size_t begin, std::size_t end) {
@@ -382,6 +409,11 @@ template <StiffnessTarget kTarget>
 void write_pair(BlockSparseMatrix& k, simd::Lanes a0, simd::Lanes a1, simd::Lanes a2, double lambda, double mu,
                 std::int64_t slot_ij, std::int64_t slot_ji) {
   using simd::Lanes;
+  // Lane 3 of the sums holds products of the neighbouring record's values: clear it, the
+  // blocks' padding stays zero.
+  a0 = simd::clear_lane3(a0);
+  a1 = simd::clear_lane3(a1);
+  a2 = simd::clear_lane3(a2);
   Lanes at[4];
   simd::transpose_xyz(a0, a1, a2, at);
   const double d = mu * (a0[0] + a1[1] + a2[2]);
@@ -403,10 +435,12 @@ void fill_diagonal_blocks(const double* __restrict c, const std::int32_t* __rest
                           const std::int32_t* __restrict entries, const std::int32_t* __restrict slots, std::size_t first,
                           std::size_t last, double lambda, double mu, BlockSparseMatrix& k) {
   using simd::Lanes;
+  const std::int32_t end = starts[last];
   for (std::size_t n = first; n < last; ++n) {
     Lanes a0 = simd::splat(0.0), a1 = a0, a2 = a0;
     for (std::int32_t at = starts[n]; at < starts[n + 1]; ++at) {
-      const double* pi = c + 4 * static_cast<std::int64_t>(entries[at]);
+      if (at + kPrefetchAhead < end) __builtin_prefetch(c + kCornerStride * static_cast<std::size_t>(entries[at + kPrefetchAhead]));
+      const double* pi = c + kCornerStride * static_cast<std::size_t>(entries[at]);
       const Lanes ci = simd::load(pi);
       a0 += ci * simd::broadcast(pi);
       a1 += ci * simd::broadcast(pi + 1);
@@ -422,12 +456,19 @@ void fill_edge_blocks(const double* __restrict c, const Edge* __restrict edges,
                       const std::array<std::int32_t, 2>* __restrict terms, std::size_t first, std::size_t last,
                       double lambda, double mu, BlockSparseMatrix& k) {
   using simd::Lanes;
+  const std::int32_t end = last > first ? edges[last - 1].last : 0;
   for (std::size_t index = first; index < last; ++index) {
     const Edge& edge = edges[index];
     Lanes a0 = simd::splat(0.0), a1 = a0, a2 = a0;
     for (std::int32_t t = edge.first; t < edge.last; ++t) {
-      const double* pi = c + 4 * static_cast<std::int64_t>(terms[t][0]);
-      const double* pj = c + 4 * static_cast<std::int64_t>(terms[t][1]);
+      if (t + kPrefetchAhead < end) {
+        // Both corners' records are in the same element's 96 bytes: two lines at most.
+        const double* ahead = c + kCornerStride * static_cast<std::size_t>(terms[t + kPrefetchAhead][0] & ~3);
+        __builtin_prefetch(ahead);
+        __builtin_prefetch(ahead + 8);
+      }
+      const double* pi = c + kCornerStride * static_cast<std::size_t>(terms[t][0]);
+      const double* pj = c + kCornerStride * static_cast<std::size_t>(terms[t][1]);
       const Lanes ci = simd::load(pi);
       a0 += ci * simd::broadcast(pj);
       a1 += ci * simd::broadcast(pj + 1);
