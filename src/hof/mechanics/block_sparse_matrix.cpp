@@ -181,16 +181,36 @@ void BlockSparseMatrix::multiply_single_rows(const float* x4, double* y, std::si
 #if defined(__AVX2__) && defined(__FMA__)
     // Lanes 0–3 accumulate the pair's first block, lanes 4–7 its second; column q of both
     // is multiplied by component q of their x, broadcast within each half.
+    // Two pairs per iteration into separate sums: rows are short (six or seven pairs), so
+    // single chains of multiply-adds would leave the loop waiting on their latency.
     __m256 acc0 = _mm256_setzero_ps(), acc1 = _mm256_setzero_ps(), acc2 = _mm256_setzero_ps();
-    for (std::int64_t k = pair_start[r]; k < pair_start[r + 1]; ++k) {
+    __m256 bcc0 = _mm256_setzero_ps(), bcc1 = _mm256_setzero_ps(), bcc2 = _mm256_setzero_ps();
+    auto pair_x = [&](std::int64_t k) {
+      return _mm256_set_m128(_mm_loadu_ps(x4 + 4 * static_cast<std::int64_t>(cols[2 * k + 1])),
+                             _mm_loadu_ps(x4 + 4 * static_cast<std::int64_t>(cols[2 * k])));
+    };
+    std::int64_t k = pair_start[r];
+    const std::int64_t end = pair_start[r + 1];
+    for (; k + 1 < end; k += 2) {
       const float* v = values + 24 * k;
-      const __m256 xs = _mm256_set_m128(_mm_loadu_ps(x4 + 4 * static_cast<std::int64_t>(cols[2 * k + 1])),
-                                        _mm_loadu_ps(x4 + 4 * static_cast<std::int64_t>(cols[2 * k])));
-      acc0 = _mm256_fmadd_ps(_mm256_load_ps(v), _mm256_permute_ps(xs, 0x00), acc0);
-      acc1 = _mm256_fmadd_ps(_mm256_load_ps(v + 8), _mm256_permute_ps(xs, 0x55), acc1);
-      acc2 = _mm256_fmadd_ps(_mm256_load_ps(v + 16), _mm256_permute_ps(xs, 0xAA), acc2);
+      const __m256 xa = pair_x(k);
+      const __m256 xb = pair_x(k + 1);
+      acc0 = _mm256_fmadd_ps(_mm256_load_ps(v), _mm256_permute_ps(xa, 0x00), acc0);
+      acc1 = _mm256_fmadd_ps(_mm256_load_ps(v + 8), _mm256_permute_ps(xa, 0x55), acc1);
+      acc2 = _mm256_fmadd_ps(_mm256_load_ps(v + 16), _mm256_permute_ps(xa, 0xAA), acc2);
+      bcc0 = _mm256_fmadd_ps(_mm256_load_ps(v + 24), _mm256_permute_ps(xb, 0x00), bcc0);
+      bcc1 = _mm256_fmadd_ps(_mm256_load_ps(v + 32), _mm256_permute_ps(xb, 0x55), bcc1);
+      bcc2 = _mm256_fmadd_ps(_mm256_load_ps(v + 40), _mm256_permute_ps(xb, 0xAA), bcc2);
     }
-    const __m256 sum8 = _mm256_add_ps(_mm256_add_ps(acc0, acc1), acc2);
+    if (k < end) {
+      const float* v = values + 24 * k;
+      const __m256 xa = pair_x(k);
+      acc0 = _mm256_fmadd_ps(_mm256_load_ps(v), _mm256_permute_ps(xa, 0x00), acc0);
+      acc1 = _mm256_fmadd_ps(_mm256_load_ps(v + 8), _mm256_permute_ps(xa, 0x55), acc1);
+      acc2 = _mm256_fmadd_ps(_mm256_load_ps(v + 16), _mm256_permute_ps(xa, 0xAA), acc2);
+    }
+    const __m256 sum8 = _mm256_add_ps(_mm256_add_ps(_mm256_add_ps(acc0, bcc0), _mm256_add_ps(acc1, bcc1)),
+                                      _mm256_add_ps(acc2, bcc2));
     const __m128 sum4 = _mm_add_ps(_mm256_castps256_ps128(sum8), _mm256_extractf128_ps(sum8, 1));
     alignas(16) float out[4];
     _mm_store_ps(out, sum4);
