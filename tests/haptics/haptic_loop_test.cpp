@@ -135,15 +135,30 @@ TEST(Safety, RepeatedOverrunsFadeTheForceOut) {
   config.fade_out_s = 0.01;
   config.max_consecutive_overruns = 5;
   SafetyFilter filter(omni(), config);
-  EXPECT_NEAR(filter.filter(Vec3(0, 0, 2), true, 0.0, false, 1e-3).z(), 2.0, 1e-12);
+  EXPECT_NEAR(filter.filter(Vec3(0, 0, 2), SafetyFilter::Reading::kValid, 0.0, false, 1e-3).z(), 2.0, 1e-12);
   Vec3 f = Vec3::Zero();
-  for (int i = 0; i < 4; ++i) f = filter.filter(Vec3(0, 0, 2), true, 0.0, true, 1e-3);
+  for (int i = 0; i < 4; ++i) f = filter.filter(Vec3(0, 0, 2), SafetyFilter::Reading::kValid, 0.0, true, 1e-3);
   EXPECT_NEAR(f.z(), 2.0, 1e-12);  // a few late ticks are tolerated
-  for (int i = 0; i < 20; ++i) f = filter.filter(Vec3(0, 0, 2), true, 0.0, true, 1e-3);
+  for (int i = 0; i < 20; ++i) f = filter.filter(Vec3(0, 0, 2), SafetyFilter::Reading::kValid, 0.0, true, 1e-3);
   EXPECT_EQ(f, Vec3::Zero());  // a loop that keeps overrunning fades to zero
   EXPECT_GT(filter.counters().watchdog, 0u);
-  for (int i = 0; i < 20; ++i) f = filter.filter(Vec3(0, 0, 2), true, 0.0, false, 1e-3);
+  for (int i = 0; i < 20; ++i) f = filter.filter(Vec3(0, 0, 2), SafetyFilter::Reading::kValid, 0.0, false, 1e-3);
   EXPECT_NEAR(f.z(), 2.0, 1e-12);  // and recovers once it keeps its rate
+}
+
+TEST(Safety, MissingReadingsAreCountedApartFromNonFiniteOnes) {
+  SafetyConfig config;
+  config.fade_in_s = 0.0;
+  config.fade_out_s = 0.0;
+  SafetyFilter filter(omni(), config);
+  EXPECT_EQ(filter.filter(Vec3(0, 0, 2), SafetyFilter::Reading::kMissing, 0.0, false, 1e-3), Vec3::Zero());
+  EXPECT_EQ(filter.counters().no_reading, 1u);
+  EXPECT_EQ(filter.counters().non_finite, 0u);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(filter.filter(Vec3(0, 0, 2), SafetyFilter::Reading::kNonFinite, 0.0, false, 1e-3), Vec3::Zero());
+  EXPECT_EQ(filter.filter(Vec3(nan, 0, 2), SafetyFilter::Reading::kValid, 0.0, false, 1e-3), Vec3::Zero());
+  EXPECT_EQ(filter.counters().non_finite, 2u);
+  EXPECT_EQ(filter.counters().no_reading, 1u);
 }
 
 TEST(VirtualTime, TwoRunsGiveIdenticalSamples) {

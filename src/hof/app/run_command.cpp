@@ -309,6 +309,7 @@ int run_session(const RunOptions& options) {
   summary["safety"] = {{"clamped_ticks", report.safety.clamped},
                        {"rate_limited_ticks", report.safety.rate_limited},
                        {"non_finite_ticks", report.safety.non_finite},
+                       {"no_reading_ticks", report.safety.no_reading},
                        {"watchdog_ticks", report.safety.watchdog}};
   summary["models"] = nlohmann::json::array(
       {{{"name", model_name}, {"nodes", (*session)->model().node_count()}, {"max_displacement_m", report.max_displacement_m}}});

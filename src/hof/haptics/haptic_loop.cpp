@@ -90,7 +90,10 @@ void HapticLoop::tick_impl(double time_s, double period_s, bool overrun) {
   const double age = !have_surface_ ? std::numeric_limits<double>::infinity()
                      : surface.is_static ? 0.0
                                          : time_s - surface.time_s;
-  const Vec3 sent = safety_.filter(requested, valid, age, overrun, dt);
+  const SafetyFilter::Reading reading_state = !reading.valid ? SafetyFilter::Reading::kMissing
+                                              : valid        ? SafetyFilter::Reading::kValid
+                                                             : SafetyFilter::Reading::kNonFinite;
+  const Vec3 sent = safety_.filter(requested, reading_state, age, overrun, dt);
   device_.write_force(world_to_device_ * sent, Vec3::Zero());
 
   // Publish.

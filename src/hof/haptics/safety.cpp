@@ -13,13 +13,17 @@ void SafetyFilter::reset() {
   last_.setZero();
 }
 
-Vec3 SafetyFilter::filter(const Vec3& requested, bool reading_valid, double snapshot_age_s, bool overrunning,
+Vec3 SafetyFilter::filter(const Vec3& requested, Reading reading, double snapshot_age_s, bool overrunning,
                           double dt) {
   if (!(dt > 0.0) || !std::isfinite(dt)) dt = 1e-3;
   consecutive_overruns_ = overrunning ? consecutive_overruns_ + 1 : 0;
   Vec3 force = requested;
   bool fault = false;
-  if (!reading_valid || !force.allFinite()) {
+  if (reading == Reading::kMissing) {
+    ++counters_.no_reading;
+    force.setZero();
+    fault = true;
+  } else if (reading == Reading::kNonFinite || !force.allFinite()) {
     ++counters_.non_finite;
     force.setZero();
     fault = true;

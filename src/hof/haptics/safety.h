@@ -27,6 +27,7 @@ struct SafetyConfig {
 /// Counters of what the filter had to do (read by reports; written by the haptic thread).
 struct SafetyCounters {
   std::uint64_t non_finite{0};   ///< ticks with a NaN/Inf force or reading
+  std::uint64_t no_reading{0};   ///< ticks without a device sample (absent, timed out, script ended)
   std::uint64_t clamped{0};      ///< ticks whose force exceeded the device maximum
   std::uint64_t rate_limited{0}; ///< ticks whose force change exceeded the slew limit
   std::uint64_t watchdog{0};     ///< ticks faded by the watchdog
@@ -36,12 +37,19 @@ class SafetyFilter {
  public:
   SafetyFilter(const DeviceSpec& spec, const SafetyConfig& config);
 
+  /// What the device gave this tick.
+  enum class Reading : std::uint8_t {
+    kValid,      ///< a finite sample
+    kMissing,    ///< no sample (device absent, timed out, scripted motion ended)
+    kNonFinite,  ///< a sample with NaN/Inf values
+  };
+
   /// The force to send for this tick.
   /// @param requested      force from rendering and effects, N
-  /// @param reading_valid  whether the device reading was valid and finite
+  /// @param reading        what the device gave
   /// @param snapshot_age_s how old the geometry snapshot is
   /// @param overrunning    whether this tick overran its period
-  Vec3 filter(const Vec3& requested, bool reading_valid, double snapshot_age_s, bool overrunning, double dt);
+  Vec3 filter(const Vec3& requested, Reading reading, double snapshot_age_s, bool overrunning, double dt);
 
   [[nodiscard]] const SafetyCounters& counters() const { return counters_; }
   [[nodiscard]] double gain() const { return gain_; }
