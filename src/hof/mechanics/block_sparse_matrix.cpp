@@ -1,6 +1,7 @@
 #include "hof/mechanics/block_sparse_matrix.h"
 
 #include <algorithm>
+#include <cstring>
 
 #if defined(__AVX2__)
 #include <immintrin.h>
@@ -232,6 +233,41 @@ void BlockSparseMatrix::multiply_single_rows(const float* x4, double* y, std::si
     y[3 * r + 1] = sum[1];
     y[3 * r + 2] = sum[2];
 #endif
+  }
+}
+
+void BlockSparseMatrix::set_diagonal_from_row(std::size_t first, std::size_t last) {
+  for (std::size_t r = first; r < last; ++r) {
+    const std::int64_t diagonal = diagonal_[r];
+    simd::Lanes sum[3] = {simd::splat(0.0), simd::splat(0.0), simd::splat(0.0)};
+    for (std::int64_t s = row_start_[r]; s < row_start_[r + 1]; ++s) {
+      if (s == diagonal) continue;
+      for (int q = 0; q < 3; ++q) sum[q] += simd::load(values_.data() + kBlockStride * s + 4 * q);
+    }
+    for (int q = 0; q < 3; ++q) simd::store(values_.data() + kBlockStride * diagonal + 4 * q, -sum[q]);
+  }
+}
+
+void BlockSparseMatrix::set_diagonal_from_row_single(std::size_t first, std::size_t last) {
+  using Floats8 = float __attribute__((vector_size(32)));
+  for (std::size_t r = first; r < last; ++r) {
+    // The diagonal block is cleared first, then every pair summed whole: both halves of
+    // column q's eight floats add up in the two four-float halves.
+    float* diagonal = single_block(diagonal_[r]);
+    for (int q = 0; q < 3; ++q) {
+      for (int i = 0; i < 4; ++i) diagonal[8 * q + i] = 0.0f;
+    }
+    Floats8 sum[3] = {};
+    for (std::int64_t k = pair_start_[r]; k < pair_start_[r + 1]; ++k) {
+      for (int q = 0; q < 3; ++q) {
+        Floats8 column;
+        std::memcpy(&column, values_single_.data() + 24 * k + 8 * q, sizeof column);
+        sum[q] += column;
+      }
+    }
+    for (int q = 0; q < 3; ++q) {
+      for (int i = 0; i < 4; ++i) diagonal[8 * q + i] = -(sum[q][i] + sum[q][4 + i]);
+    }
   }
 }
 

@@ -86,6 +86,14 @@ class BlockSparseMatrix {
   /// Rows [first, last) of y = A x.
   void multiply_rows(const Eigen::VectorXd& x, Eigen::VectorXd& y, std::size_t first, std::size_t last) const;
 
+  /// For rows [first, last): the diagonal block set to minus the sum of the row's other
+  /// blocks, in the double values or in the single-precision copy. This is the diagonal of
+  /// any stiffness that rigid translations do not load (Σ_j K_ij = 0 for each i, as for
+  /// every element of linear or co-rotational elasticity): a stream over the row instead
+  /// of a second gather over the elements.
+  void set_diagonal_from_row(std::size_t first, std::size_t last);
+  void set_diagonal_from_row_single(std::size_t first, std::size_t last);
+
   /// Dense copy, for tests and small problems.
   [[nodiscard]] Eigen::MatrixXd to_dense() const;
 

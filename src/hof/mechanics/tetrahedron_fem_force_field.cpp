@@ -486,18 +486,28 @@ void TetrahedronFemForceField::write_stiffness(const ForceFieldState& state, dou
   const double lambda = scale * lame_.lambda;
   const double mu = scale * lame_.mu;
   parallel_chunks(
-      diagonal_slots_.size(), 128,
-      [&](std::size_t begin, std::size_t end) {
-        fill_diagonal_blocks<kTarget>(c, incidence_.start.data(), incidence_.entries.data(), diagonal_slots_.data(), begin,
-                                      end, lambda, mu, k);
-      },
-      /*min_parallel=*/512);
-  parallel_chunks(
       edges_.size(), 512,
       [&](std::size_t begin, std::size_t end) {
         fill_edge_blocks<kTarget>(c, edges_.data(), edge_terms_.data(), begin, end, lambda, mu, k);
       },
       /*min_parallel=*/1024);
+  // Diagonal blocks. Each element's stiffness leaves rigid translations unloaded
+  // (Σ_j c̃_j = 0, so Σ_j A_ij = 0 and K_ii = −Σ_{j≠i} K_ij): when this field sets the whole
+  // matrix, the diagonal is minus the rest of the row, a stream over the blocks just written.
+  // Added to another field's values it must be gathered from the elements.
+  parallel_chunks(
+      diagonal_slots_.size(), 128,
+      [&](std::size_t begin, std::size_t end) {
+        if constexpr (kTarget == StiffnessTarget::kSetSingle) {
+          k.set_diagonal_from_row_single(begin, end);
+        } else if constexpr (kTarget == StiffnessTarget::kSetDouble) {
+          k.set_diagonal_from_row(begin, end);
+        } else {
+          fill_diagonal_blocks<kTarget>(c, incidence_.start.data(), incidence_.entries.data(), diagonal_slots_.data(),
+                                        begin, end, lambda, mu, k);
+        }
+      },
+      /*min_parallel=*/512);
 }
 
 void TetrahedronFemForceField::add_stiffness(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const {
