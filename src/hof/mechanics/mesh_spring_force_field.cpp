@@ -238,24 +238,33 @@ void MeshSpringForceField::add_force(const Eigen::VectorXd& x, const Eigen::Vect
       /*min_parallel=*/1024);
 }
 
-// Diagonal blocks gather Σ K_s over the node's springs; each spring's off-diagonal pair
-// (i, j), (j, i) is −K_s (symmetric), written once. No atomics, fixed summation order.
+// Each spring's off-diagonal pair (i, j), (j, i) is −K_s (symmetric), written once; the
+// diagonal blocks are Σ K_s over the node's springs. No atomics, fixed summation order.
 template <StiffnessTarget kTarget>
 void MeshSpringForceField::write_stiffness(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const {
   const double* records = state.element_scalars.data();
-  parallel_chunks(
-      diagonal_slots_.size(), 256,
-      [&](std::size_t begin, std::size_t end) {
-        fill_spring_diagonal<kTarget>(records, incidence_.start.data(), incidence_.entries.data(), diagonal_slots_.data(),
-                                      begin, end, scale, k);
-      },
-      /*min_parallel=*/1024);
   parallel_chunks(
       springs_.size(), 1024,
       [&](std::size_t begin, std::size_t end) {
         fill_spring_pairs<kTarget>(records, springs_.data(), begin, end, -scale, k);
       },
       /*min_parallel=*/2048);
+  // Diagonal blocks: Σ K_s over the node's springs, which is minus the rest of the row when
+  // the springs set the whole matrix (a stream over the blocks just written); added to
+  // another field's values it is gathered from the springs.
+  parallel_chunks(
+      diagonal_slots_.size(), 256,
+      [&](std::size_t begin, std::size_t end) {
+        if constexpr (kTarget == StiffnessTarget::kSetSingle) {
+          k.set_diagonal_from_row_single(begin, end);
+        } else if constexpr (kTarget == StiffnessTarget::kSetDouble) {
+          k.set_diagonal_from_row(begin, end);
+        } else {
+          fill_spring_diagonal<kTarget>(records, incidence_.start.data(), incidence_.entries.data(),
+                                        diagonal_slots_.data(), begin, end, scale, k);
+        }
+      },
+      /*min_parallel=*/1024);
 }
 
 void MeshSpringForceField::add_stiffness(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const {
