@@ -2,7 +2,6 @@
 // indentation must match the static FEM reaction at that indentation, solved separately
 // (the pressed node held at the device position, a static Newton solve with LDLT), within 10%.
 
-
 #include <gtest/gtest.h>
 
 #include "hof/coupling/session.h"
@@ -11,25 +10,13 @@
 #include "hof/mesh/boundary.h"
 #include "hof/mesh/liver_generator.h"
 
+#include "coupling/resting_liver.h"
+
 namespace hof::coupling {
 namespace {
 
 mechanics::ModelConfig liver_config(const mesh::Mesh& liver) {
-  mechanics::ModelConfig c;
-  c.name = "liver";
-  c.positions = liver.nodes;
-  c.tets = liver.tets;
-  c.mass.kind = mechanics::MassKind::kDiagonal;
-  c.mass.mass_density_kg_per_m3 = 1060.0;
-  c.gravity_m_per_s2 = Vec3::Zero();
-  mechanics::ForceFieldConfig fem;
-  fem.name = "FEM";
-  fem.tetrahedron_fem = mechanics::TetrahedronFemConfig{5400.0, 0.45, mechanics::FemMethod::kLarge};
-  c.force_fields.push_back(fem);
-  mechanics::FixedConstraintConfig base;
-  base.name = "base";
-  base.box = std::make_pair(Vec3(-1, -1, -1), Vec3(1, 1, -0.025));
-  c.fixed.push_back(base);
+  mechanics::ModelConfig c = testing::resting_liver_config(liver);
   c.ode.rayleigh_mass = 1.0;  // strongly damped: the press is quasi-static
   c.ode.rayleigh_stiffness = 0.1;
   c.linear.iterations = 100;

@@ -9,6 +9,8 @@
 #include "hof/mesh/boundary.h"
 #include "hof/mesh/liver_generator.h"
 
+#include "coupling/resting_liver.h"
+
 namespace hof::coupling {
 namespace {
 
@@ -21,20 +23,7 @@ struct PokeRun {
 PokeRun poke(ContactCoupling coupling, haptics::RendererKind renderer, double seconds = 1.5) {
   const mesh::Mesh liver = *mesh::generate_liver(mesh::LiverResolution::kSimple);
   const mesh::BoundarySurface b = mesh::extract_boundary(liver.nodes, liver.tets);
-  mechanics::ModelConfig c;
-  c.name = "liver";
-  c.positions = liver.nodes;
-  c.tets = liver.tets;
-  c.mass.kind = mechanics::MassKind::kDiagonal;
-  c.mass.mass_density_kg_per_m3 = 1060.0;
-  c.gravity_m_per_s2 = Vec3::Zero();
-  mechanics::ForceFieldConfig fem;
-  fem.name = "FEM";
-  fem.tetrahedron_fem = mechanics::TetrahedronFemConfig{5400.0, 0.45, mechanics::FemMethod::kLarge};
-  c.force_fields.push_back(fem);
-  mechanics::FixedConstraintConfig base;  // the liver rests on its lowest centimetre
-  base.box = std::make_pair(Vec3(-1, -1, -1), Vec3(1, 1, -0.025));
-  c.fixed.push_back(base);
+  mechanics::ModelConfig c = testing::resting_liver_config(liver);  // resting on its lowest centimetre
   c.ode.rayleigh_mass = c.ode.rayleigh_stiffness = 0.1;
   c.dt_s = 0.01;
   auto model = mechanics::build_model(c);

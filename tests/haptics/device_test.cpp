@@ -30,35 +30,7 @@
 #include "hof/haptics/device_backends/scripted_device.h"
 #include "hof/haptics/device_backends/virtual_hand_device.h"
 
-// ---------------------------------------------------------------------------------------
-// Allocation counter: counts operator new on threads that switched counting on.
-
-namespace {
-std::atomic<long> g_allocations{0};
-thread_local bool t_counting = false;
-}  // namespace
-
-void* operator new(std::size_t size) {
-  if (t_counting) g_allocations.fetch_add(1, std::memory_order_relaxed);
-  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t size) { return operator new(size); }
-void* operator new(std::size_t size, std::align_val_t align) {
-  if (t_counting) g_allocations.fetch_add(1, std::memory_order_relaxed);
-  const auto a = static_cast<std::size_t>(align);
-  if (void* p = std::aligned_alloc(a, (size + a - 1) / a * a)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t size, std::align_val_t align) { return operator new(size, align); }
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
-void operator delete(void* p, std::align_val_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::align_val_t) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
+#include "support/allocation_counter.h"
 
 // libspnav 1.0 keeps a 48-byte block per spnav_open() that nothing frees: reported when one
 // process opens twice (the asan preset). Not ours; LeakSanitizer reads this hook.
@@ -701,8 +673,7 @@ TEST(DeviceBackends, ReadAndWriteForceNeverAllocate) {
     devices.push_back(std::move(*d));
   }
   double sum = 0.0;
-  g_allocations = 0;
-  t_counting = true;
+  const long before = hof::testing::thread_allocation_count();
   for (int i = 0; i < 3000; ++i) {
     for (auto& d : devices) {
       const DeviceReading r = d->read(i * 1e-3);
@@ -710,8 +681,7 @@ TEST(DeviceBackends, ReadAndWriteForceNeverAllocate) {
       sum += r.position_m.x() + static_cast<double>(d->health() == DeviceHealth::kOk);
     }
   }
-  t_counting = false;
-  EXPECT_EQ(g_allocations.load(), 0);
+  EXPECT_EQ(hof::testing::thread_allocation_count() - before, 0);
   EXPECT_TRUE(std::isfinite(sum));
 }
 

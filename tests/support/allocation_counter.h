@@ -12,18 +12,23 @@
 
 namespace hof::testing {
 inline std::atomic<long> g_allocation_count{0};
+inline thread_local long t_allocation_count = 0;
 /// Allocations (operator new calls) so far in this program.
 inline long allocation_count() { return g_allocation_count.load(std::memory_order_relaxed); }
+/// Allocations so far on the calling thread (others, e.g. a device's receiver, not counted).
+inline long thread_allocation_count() { return t_allocation_count; }
 }  // namespace hof::testing
 
 void* operator new(std::size_t size) {
   hof::testing::g_allocation_count.fetch_add(1, std::memory_order_relaxed);
+  ++hof::testing::t_allocation_count;
   if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
   throw std::bad_alloc();
 }
 void* operator new[](std::size_t size) { return operator new(size); }
 void* operator new(std::size_t size, std::align_val_t align) {
   hof::testing::g_allocation_count.fetch_add(1, std::memory_order_relaxed);
+  ++hof::testing::t_allocation_count;
   const auto a = static_cast<std::size_t>(align);
   if (void* p = std::aligned_alloc(a, (size + a - 1) / a * a)) return p;
   throw std::bad_alloc();
