@@ -34,6 +34,10 @@ BlockSparseMatrix BlockSparseMatrix::from_pairs(
     ++m.row_start_[row + 1];
   }
   for (std::size_t r = 0; r < static_cast<std::size_t>(block_rows); ++r) m.row_start_[r + 1] += m.row_start_[r];
+  m.mirror_.resize(m.columns_.size());
+  for (std::int32_t r = 0; r < block_rows; ++r) {
+    for (std::int64_t s = m.row_start_[r]; s < m.row_start_[r + 1]; ++s) m.mirror_[s] = m.slot(m.columns_[s], r);
+  }
   m.values_.assign(m.columns_.size() * kBlockStride, 0.0);
   return m;
 }
@@ -236,38 +240,61 @@ void BlockSparseMatrix::multiply_single_rows(const float* x4, double* y, std::si
   }
 }
 
-void BlockSparseMatrix::set_diagonal_from_row(std::size_t first, std::size_t last) {
+void BlockSparseMatrix::complete_from_upper(std::size_t first, std::size_t last) {
   for (std::size_t r = first; r < last; ++r) {
     const std::int64_t diagonal = diagonal_[r];
     simd::Lanes sum[3] = {simd::splat(0.0), simd::splat(0.0), simd::splat(0.0)};
-    for (std::int64_t s = row_start_[r]; s < row_start_[r + 1]; ++s) {
-      if (s == diagonal) continue;
+    // Columns are sorted: the slots before the diagonal are below it.
+    for (std::int64_t s = row_start_[r]; s < diagonal; ++s) {
+      const double* upper = values_.data() + kBlockStride * mirror_[s];
+      simd::Lanes transposed[4];
+      simd::transpose_xyz(simd::load(upper), simd::load(upper + 4), simd::load(upper + 8), transposed);
+      for (int q = 0; q < 3; ++q) {
+        simd::store(values_.data() + kBlockStride * s + 4 * q, transposed[q]);
+        sum[q] += transposed[q];
+      }
+    }
+    for (std::int64_t s = diagonal + 1; s < row_start_[r + 1]; ++s) {
       for (int q = 0; q < 3; ++q) sum[q] += simd::load(values_.data() + kBlockStride * s + 4 * q);
     }
     for (int q = 0; q < 3; ++q) simd::store(values_.data() + kBlockStride * diagonal + 4 * q, -sum[q]);
   }
 }
 
-void BlockSparseMatrix::set_diagonal_from_row_single(std::size_t first, std::size_t last) {
-  using Floats8 = float __attribute__((vector_size(32)));
+void BlockSparseMatrix::complete_from_upper_single(std::size_t first, std::size_t last) {
+  using Floats4 = float __attribute__((vector_size(16)));
+  using Mask = int __attribute__((vector_size(16)));
+  constexpr std::int64_t kColumn = kSingleColumnStride;
+  auto load4 = [](const float* p) {
+    Floats4 v;
+    std::memcpy(&v, p, sizeof v);
+    return v;
+  };
+  auto store4 = [](float* p, Floats4 v) { std::memcpy(p, &v, sizeof v); };
   for (std::size_t r = first; r < last; ++r) {
-    // The diagonal block is cleared first, then every pair summed whole: both halves of
-    // column q's eight floats add up in the two four-float halves.
-    float* diagonal = single_block(diagonal_[r]);
-    for (int q = 0; q < 3; ++q) {
-      for (int i = 0; i < 4; ++i) diagonal[8 * q + i] = 0.0f;
-    }
-    Floats8 sum[3] = {};
-    for (std::int64_t k = pair_start_[r]; k < pair_start_[r + 1]; ++k) {
+    const std::int64_t diagonal = diagonal_[r];
+    Floats4 sum[3] = {};
+    for (std::int64_t s = row_start_[r]; s < diagonal; ++s) {
+      const float* upper = single_block(mirror_[s]);
+      const Floats4 c0 = load4(upper), c1 = load4(upper + kColumn), c2 = load4(upper + 2 * kColumn);
+      // Rows of the upper block (lane 3 of every column is zero) are the lower's columns.
+      const Floats4 lo01 = __builtin_shuffle(c0, c1, Mask{0, 4, 1, 5});  // c0₀ c1₀ c0₁ c1₁
+      const Floats4 hi01 = __builtin_shuffle(c0, c1, Mask{2, 6, 3, 7});  // c0₂ c1₂ 0 0
+      const Floats4 transposed[3] = {__builtin_shuffle(lo01, c2, Mask{0, 1, 4, 7}),
+                                     __builtin_shuffle(lo01, c2, Mask{2, 3, 5, 7}),
+                                     __builtin_shuffle(hi01, c2, Mask{0, 1, 6, 7})};
+      float* lower = single_block(s);
       for (int q = 0; q < 3; ++q) {
-        Floats8 column;
-        std::memcpy(&column, values_single_.data() + 24 * k + 8 * q, sizeof column);
-        sum[q] += column;
+        store4(lower + kColumn * q, transposed[q]);
+        sum[q] += transposed[q];
       }
     }
-    for (int q = 0; q < 3; ++q) {
-      for (int i = 0; i < 4; ++i) diagonal[8 * q + i] = -(sum[q][i] + sum[q][4 + i]);
+    for (std::int64_t s = diagonal + 1; s < row_start_[r + 1]; ++s) {
+      const float* block = single_block(s);
+      for (int q = 0; q < 3; ++q) sum[q] += load4(block + kColumn * q);
     }
+    float* block = single_block(diagonal);
+    for (int q = 0; q < 3; ++q) store4(block + kColumn * q, -sum[q]);
   }
 }
 

@@ -86,13 +86,19 @@ class BlockSparseMatrix {
   /// Rows [first, last) of y = A x.
   void multiply_rows(const Eigen::VectorXd& x, Eigen::VectorXd& y, std::size_t first, std::size_t last) const;
 
-  /// For rows [first, last): the diagonal block set to minus the sum of the row's other
-  /// blocks, in the double values or in the single-precision copy. This is the diagonal of
-  /// any stiffness that rigid translations do not load (Σ_j K_ij = 0 for each i, as for
-  /// every element of linear or co-rotational elasticity): a stream over the row instead
-  /// of a second gather over the elements.
-  void set_diagonal_from_row(std::size_t first, std::size_t last);
-  void set_diagonal_from_row_single(std::size_t first, std::size_t last);
+  /// Slot of the transposed block: (col, row) for the block (row, col) at `slot`.
+  [[nodiscard]] std::int64_t mirror_slot(std::int64_t slot) const { return mirror_[slot]; }
+
+  /// Completes a symmetric stiffness written above the diagonal only, for rows [first, last),
+  /// in the double values or in the single-precision copy: each block below the diagonal is
+  /// set to the transpose of its mirror, and the diagonal block to minus the sum of the
+  /// row's other blocks. That diagonal holds for any stiffness that rigid translations do
+  /// not load (Σ_j K_ij = 0 for each i, as for every element of linear or co-rotational
+  /// elasticity and every spring). Why: the force fields then write each node pair once, in
+  /// row order, and this pass reads the mirrors; scattered writes to the lower half (each a
+  /// cache line fetched and written back) cost more than the whole rest of the assembly.
+  void complete_from_upper(std::size_t first, std::size_t last);
+  void complete_from_upper_single(std::size_t first, std::size_t last);
 
   /// Dense copy, for tests and small problems.
   [[nodiscard]] Eigen::MatrixXd to_dense() const;
@@ -101,6 +107,7 @@ class BlockSparseMatrix {
   std::vector<std::int64_t> row_start_{0};  // (rows+1) first slot of each block row
   std::vector<std::int32_t> columns_;       // (blocks) column of each slot, sorted per row
   std::vector<std::int64_t> diagonal_;      // (rows) slot of the diagonal block
+  std::vector<std::int64_t> mirror_;        // (blocks) slot of the transposed block
   std::vector<double> values_;              // (12*blocks) column-major padded 3x3 blocks
   // Single-precision copy: per block row, its blocks in pairs (an odd row ends with a zero
   // block), 24 floats a pair: column q of both blocks in floats [8q, 8q+8).

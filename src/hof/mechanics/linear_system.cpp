@@ -67,14 +67,13 @@ bool assemble_single_only(const MechanicalModel& model, MechanicalState& state, 
   }
   // Fixed degrees of freedom: identity rows and columns (projection P A P + (I − P)).
   const auto& row_start = a.row_start();
-  const auto& columns = a.columns();
   for (std::int32_t d : model.fixed_dofs) {
     const std::int32_t n = d / 3;
     const int axis = d % 3;
     for (std::int64_t s = row_start[n]; s < row_start[n + 1]; ++s) {
       float* row_block = a.single_block(s);
       for (int q = 0; q < 3; ++q) row_block[kColumn * q + axis] = 0.0f;
-      float* column_block = a.single_block(a.slot(columns[s], n));
+      float* column_block = a.single_block(a.mirror_slot(s));
       for (int i = 0; i < 3; ++i) column_block[kColumn * axis + i] = 0.0f;
     }
     a.single_block(a.diagonal_slot(n))[kColumn * axis + axis] = 1.0f;
@@ -109,13 +108,12 @@ void assemble_system(const MechanicalModel& model, MechanicalState& state, doubl
   }
   // Fixed degrees of freedom: identity rows and columns (projection P A P + (I − P)).
   const auto& row_start = a.row_start();
-  const auto& columns = a.columns();
   for (std::int32_t d : model.fixed_dofs) {
     const std::int32_t n = d / 3;
     const int axis = d % 3;
     for (std::int64_t s = row_start[n]; s < row_start[n + 1]; ++s) {
       a.block(s).row(axis).setZero();
-      a.block(a.slot(columns[s], n)).col(axis).setZero();
+      a.block(a.mirror_slot(s)).col(axis).setZero();
     }
     a.block(a.diagonal_slot(n))(axis, axis) = 1.0;
   }

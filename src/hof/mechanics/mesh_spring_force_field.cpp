@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "hof/mechanics/parallel.h"
@@ -139,7 +140,10 @@ void fill_spring_pairs(const double* __restrict records, const Spring* __restric
     double t = 0.0;
     add_spring_block(records + kRecord * index, a0, a1, a2, t);
     write_spring_block<kTarget>(k, springs[index].slots[0], a0, a1, a2, t, factor);
-    write_spring_block<kTarget>(k, springs[index].slots[1], a0, a1, a2, t, factor);
+    // Setting the whole matrix, the lower half is completed from the upper one afterwards.
+    if constexpr (kTarget == StiffnessTarget::kAddDouble) {
+      write_spring_block<kTarget>(k, springs[index].slots[1], a0, a1, a2, t, factor);
+    }
   }
 }
 
@@ -157,7 +161,9 @@ void MeshSpringForceField::collect_couplings(std::vector<std::pair<std::int32_t,
 
 void MeshSpringForceField::bind(const BlockSparseMatrix& pattern) {
   for (Spring& s : springs_) {
-    const auto [i, j] = s.nodes;
+    // The block above the diagonal first: it is the one written when the springs set the matrix.
+    const std::int32_t i = std::min(s.nodes[0], s.nodes[1]);
+    const std::int32_t j = std::max(s.nodes[0], s.nodes[1]);
     s.slots = {static_cast<std::int32_t>(pattern.slot(i, j)), static_cast<std::int32_t>(pattern.slot(j, i))};
   }
   const std::size_t nodes = incidence_.start.size() - 1;
@@ -238,8 +244,8 @@ void MeshSpringForceField::add_force(const Eigen::VectorXd& x, const Eigen::Vect
       /*min_parallel=*/1024);
 }
 
-// Each spring's off-diagonal pair (i, j), (j, i) is −K_s (symmetric), written once; the
-// diagonal blocks are Σ K_s over the node's springs. No atomics, fixed summation order.
+// Each spring's off-diagonal pair (i, j), (j, i) is −K_s (symmetric); the diagonal blocks are
+// Σ K_s over the node's springs. No atomics, fixed summation order.
 template <StiffnessTarget kTarget>
 void MeshSpringForceField::write_stiffness(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const {
   const double* records = state.element_scalars.data();
@@ -249,16 +255,17 @@ void MeshSpringForceField::write_stiffness(const ForceFieldState& state, double 
         fill_spring_pairs<kTarget>(records, springs_.data(), begin, end, -scale, k);
       },
       /*min_parallel=*/2048);
-  // Diagonal blocks: Σ K_s over the node's springs, which is minus the rest of the row when
-  // the springs set the whole matrix (a stream over the blocks just written); added to
-  // another field's values it is gathered from the springs.
+  // Setting the whole matrix, only the blocks above the diagonal were written: one pass over
+  // the rows mirrors them below and sets each diagonal block to minus the rest of its row
+  // (Σ K_s over the node's springs). Added to another field's values, both off-diagonal
+  // blocks were written and the diagonal is gathered from the springs.
   parallel_chunks(
       diagonal_slots_.size(), 256,
       [&](std::size_t begin, std::size_t end) {
         if constexpr (kTarget == StiffnessTarget::kSetSingle) {
-          k.set_diagonal_from_row_single(begin, end);
+          k.complete_from_upper_single(begin, end);
         } else if constexpr (kTarget == StiffnessTarget::kSetDouble) {
-          k.set_diagonal_from_row(begin, end);
+          k.complete_from_upper(begin, end);
         } else {
           fill_spring_diagonal<kTarget>(records, incidence_.start.data(), incidence_.entries.data(),
                                         diagonal_slots_.data(), begin, end, scale, k);

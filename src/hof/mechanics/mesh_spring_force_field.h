@@ -47,7 +47,7 @@ class MeshSpringForceField final : public ForceField {
   struct Spring {
     std::array<std::int32_t, 2> nodes;
     double rest_length;
-    std::array<std::int32_t, 2> slots;  // (i,j) (j,i)
+    std::array<std::int32_t, 2> slots;  // (i,j) (j,i) with i < j
   };
   // Four springs side by side for the spring pass (one SIMD lane each); padded with copies
   // of spring 0 whose results are never read.

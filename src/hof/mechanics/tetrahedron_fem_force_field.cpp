@@ -399,8 +399,10 @@ void TetrahedronFemForceField::add_force(const Eigen::VectorXd& x, const Eigen::
 // linear law, rotated: R K_e Rᵀ, Müller et al. 2002), Σ over the elements sharing nodes i
 // and j. With A = Σ c̃_i c̃_jᵀ that is K_ij = λA + μAᵀ + μ tr(A) I, and K_ji = K_ijᵀ: one
 // 3x3 sum per node pair, three multiply-adds per element, gives both blocks. Each block is
-// summed in registers and written once: diagonal blocks by node, the pairs (i, j) and (j, i)
-// together by edge. Rows never share a writer: no atomics, and a fixed summation order.
+// summed in registers and written once: (i, j), i < j, by edge; then, when this field sets
+// the whole matrix, (j, i) and the diagonal by a pass over the rows (complete_from_upper),
+// otherwise (j, i) by edge and the diagonal by node. Rows never share a writer: no atomics,
+// and a fixed summation order.
 namespace {
 
 // A's columns a0..a2 (lane 3 zero) to the blocks λA + μAᵀ + μ tr(A) I at slot_ij and its
@@ -420,7 +422,9 @@ void write_pair(BlockSparseMatrix& k, simd::Lanes a0, simd::Lanes a1, simd::Lane
   const Lanes d0{d, 0.0, 0.0, 0.0}, d1{0.0, d, 0.0, 0.0}, d2{0.0, 0.0, d, 0.0};
   write_block<kTarget>(k, slot_ij, lambda * a0 + mu * at[0] + d0, lambda * a1 + mu * at[1] + d1,
                        lambda * a2 + mu * at[2] + d2);
-  if (slot_ji >= 0) {
+  // Setting the whole matrix, the lower half is completed from the upper one afterwards
+  // (BlockSparseMatrix::complete_from_upper): written here it would be a scattered write.
+  if (kTarget == StiffnessTarget::kAddDouble && slot_ji >= 0) {
     write_block<kTarget>(k, slot_ji, lambda * at[0] + mu * a0 + d0, lambda * at[1] + mu * a1 + d1,
                          lambda * at[2] + mu * a2 + d2);
   }
@@ -491,17 +495,17 @@ void TetrahedronFemForceField::write_stiffness(const ForceFieldState& state, dou
         fill_edge_blocks<kTarget>(c, edges_.data(), edge_terms_.data(), begin, end, lambda, mu, k);
       },
       /*min_parallel=*/1024);
-  // Diagonal blocks. Each element's stiffness leaves rigid translations unloaded
+  // Lower half and diagonal. Each element's stiffness leaves rigid translations unloaded
   // (Σ_j c̃_j = 0, so Σ_j A_ij = 0 and K_ii = −Σ_{j≠i} K_ij): when this field sets the whole
-  // matrix, the diagonal is minus the rest of the row, a stream over the blocks just written.
-  // Added to another field's values it must be gathered from the elements.
+  // matrix, one stream over the rows mirrors the upper blocks and sets the diagonal to minus
+  // the rest of the row. Added to another field's values it is gathered from the elements.
   parallel_chunks(
       diagonal_slots_.size(), 128,
       [&](std::size_t begin, std::size_t end) {
         if constexpr (kTarget == StiffnessTarget::kSetSingle) {
-          k.set_diagonal_from_row_single(begin, end);
+          k.complete_from_upper_single(begin, end);
         } else if constexpr (kTarget == StiffnessTarget::kSetDouble) {
-          k.set_diagonal_from_row(begin, end);
+          k.complete_from_upper(begin, end);
         } else {
           fill_diagonal_blocks<kTarget>(c, incidence_.start.data(), incidence_.entries.data(), diagonal_slots_.data(),
                                         begin, end, lambda, mu, k);
