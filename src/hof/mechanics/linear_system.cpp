@@ -5,6 +5,7 @@
 
 #include <cmath>
 
+#include "hof/mechanics/cg_kernels.h"
 #include "hof/mechanics/parallel.h"
 #include "hof/mechanics/simd_lanes.h"
 
@@ -12,6 +13,23 @@ namespace hof::mechanics::detail {
 
 namespace {
 constexpr std::size_t kVectorChunk = 4096;
+
+// The conjugate-gradient solve's fixed split of the nodes: chunks of about 256 nodes, their
+// count a multiple of 8. The static split gives each thread a contiguous run of chunks, and
+// with 2, 4 or 8 threads the runs are then equal (37 chunks on two threads would leave one
+// thread 7% more work, waited for at every pass). The chunks depend on the node count only,
+// not on the threads: results do not either.
+struct CgChunks {
+  std::size_t count;
+  std::size_t nodes_per_chunk;
+  [[nodiscard]] std::size_t first_node(std::size_t chunk, std::size_t nodes) const {
+    return std::min(nodes, chunk * nodes_per_chunk);
+  }
+};
+CgChunks cg_chunks(std::size_t nodes) {
+  const std::size_t count = (nodes + 256 * 8 - 1) / (256 * 8) * 8;
+  return {count, (nodes + count - 1) / count};
+}
 
 // Σ a[d]·b[d] over [d0, d1) in four interleaved partial sums (independent add chains: the
 // loop is not bound by the adder's latency), combined in a fixed order: deterministic.
@@ -218,12 +236,8 @@ bool solve_cg(const MechanicalModel& model, MechanicalState& state, const Eigen:
   const bool precondition = cfg.block_jacobi;
   const bool single = cfg.mixed_precision;
   const std::size_t nodes = model.node_count();
-  // Chunks of about 256 nodes, their count a multiple of 8: the static split gives each thread
-  // a contiguous run of chunks, and with 2, 4 or 8 threads the runs are then equal (37 chunks
-  // on two threads would leave one thread 7% more work, waited for at every pass). The
-  // chunks depend on the node count only, not on the threads: results do not either.
-  const std::size_t chunks = (nodes + 256 * 8 - 1) / (256 * 8) * 8;
-  const std::size_t chunk_nodes = (nodes + chunks - 1) / chunks;
+  const CgChunks split = cg_chunks(nodes);
+  const std::size_t chunks = split.count;
   if (w.partials.size() < 3 * chunks) w.partials.resize(3 * chunks);  // sized by make_state
   double* part0 = w.partials.data();
   double* part1 = part0 + chunks;
@@ -239,7 +253,7 @@ bool solve_cg(const MechanicalModel& model, MechanicalState& state, const Eigen:
         chunks, 1,
         [&](std::size_t c0, std::size_t c1) {
           for (std::size_t c = c0; c < c1; ++c) {
-            body(c, 3 * std::min(nodes, c * chunk_nodes), 3 * std::min(nodes, (c + 1) * chunk_nodes));
+            body(c, 3 * split.first_node(c, nodes), 3 * split.first_node(c + 1, nodes));
           }
         },
         /*min_parallel=*/3 * nodes >= kParallelThreshold ? 1 : chunks + 1);
@@ -303,11 +317,7 @@ bool solve_cg(const MechanicalModel& model, MechanicalState& state, const Eigen:
   auto direction_pass = [&](double beta) {
     over_chunks([&](std::size_t c, std::size_t d0, std::size_t d1) {
       multiply_z(d0, d1);
-      for (std::size_t d = d0; d < d1; ++d) {
-        ps[d] = zs[d] + beta * ps[d];
-        aps[d] = azs[d] + beta * aps[d];
-      }
-      part0[c] = dot_range(ps, aps, d0, d1);
+      part0[c] = cg_update_direction(ps, aps, zs, azs, beta, d0 / 3, d1 / 3);
     });
   };
   double r_norm2 = b_norm2;
@@ -325,17 +335,15 @@ bool solve_cg(const MechanicalModel& model, MechanicalState& state, const Eigen:
     const double alpha = rho / curvature;
     // Pass A: x += αp, r −= αAp, z = M⁻¹r; rᵀr and rᵀz.
     over_chunks([&](std::size_t c, std::size_t d0, std::size_t d1) {
-      for (std::size_t d = d0; d < d1; ++d) {
-        xs[d] += alpha * ps[d];
-        rs[d] -= alpha * aps[d];
-      }
-      const double rr = dot_range(rs, rs, d0, d1);
+      // Without a preconditioner z is r: the update rounds it for the product as it goes.
+      const double rr = cg_update_solution(xs, rs, ps, aps, alpha, single && !precondition ? z_single : nullptr,
+                                           d0 / 3, d1 / 3);
       double rz = rr;
       if (precondition) {
         apply_preconditioner(d0, d1);
         rz = dot_range(rs, zs, d0, d1);
+        if (single) BlockSparseMatrix::round_to_single(zs, z_single, d0 / 3, d1 / 3);
       }
-      if (single) BlockSparseMatrix::round_to_single(zs, z_single, d0 / 3, d1 / 3);
       part1[c] = rr;
       part2[c] = rz;
     });

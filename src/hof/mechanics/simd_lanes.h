@@ -47,6 +47,27 @@ inline void store_single(float* p, Lanes v) {
 #endif
 }
 
+/// Four nodes' coordinates, given as twelve doubles in three lanes (x₀ y₀ z₀ x₁ | y₁ z₁ x₂ y₂ |
+/// z₂ x₃ y₃ z₃), rounded to single precision into the padded layout of four floats per node
+/// (x y z 0) at p (16 floats).
+inline void store_four_nodes_single(float* p, Lanes a, Lanes b, Lanes c) {
+#if defined(__AVX__)
+  const __m128 f0 = _mm256_cvtpd_ps(a), f1 = _mm256_cvtpd_ps(b), f2 = _mm256_cvtpd_ps(c);
+  const __m128 zero = _mm_setzero_ps();
+  const __m128 n1 = _mm_shuffle_ps(f0, f1, _MM_SHUFFLE(1, 0, 3, 3));  // x₁ x₁ y₁ z₁
+  _mm_storeu_ps(p, _mm_blend_ps(f0, zero, 0x8));
+  _mm_storeu_ps(p + 4, _mm_blend_ps(_mm_shuffle_ps(n1, n1, _MM_SHUFFLE(3, 3, 2, 0)), zero, 0x8));
+  _mm_storeu_ps(p + 8, _mm_blend_ps(_mm_shuffle_ps(f1, f2, _MM_SHUFFLE(0, 0, 3, 2)), zero, 0x8));
+  _mm_storeu_ps(p + 12, _mm_blend_ps(_mm_shuffle_ps(f2, f2, _MM_SHUFFLE(3, 3, 2, 1)), zero, 0x8));
+#else
+  const double in[12] = {a[0], a[1], a[2], a[3], b[0], b[1], b[2], b[3], c[0], c[1], c[2], c[3]};
+  for (int node = 0; node < 4; ++node) {
+    for (int q = 0; q < 3; ++q) p[4 * node + q] = static_cast<float>(in[3 * node + q]);
+    p[4 * node + 3] = 0.0f;
+  }
+#endif
+}
+
 /// One double from memory in all four lanes (a plain load with AVX, no shuffle).
 [[nodiscard]] inline Lanes broadcast(const double* p) {
 #if defined(__AVX__)
