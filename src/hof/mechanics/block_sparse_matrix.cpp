@@ -189,8 +189,13 @@ void BlockSparseMatrix::round_to_single(const double* x, float* x4, std::size_t 
 }
 
 void BlockSparseMatrix::multiply_single_rows(const float* x4, double* y, std::size_t first, std::size_t last) const {
+  multiply_single_rows(x4, pair_columns_.data(), y, first, last);
+}
+
+void BlockSparseMatrix::multiply_single_rows(const float* x4, const std::int32_t* pair_columns, double* y,
+                                             std::size_t first, std::size_t last) const {
   const std::int64_t* pair_start = pair_start_.data();
-  const std::int32_t* cols = pair_columns_.data();
+  const std::int32_t* cols = pair_columns;
   const float* values = values_single_.data();
   for (std::size_t r = first; r < last; ++r) {
 #if defined(__AVX2__) && defined(__FMA__)

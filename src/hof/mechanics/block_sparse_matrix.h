@@ -74,6 +74,15 @@ class BlockSparseMatrix {
   static void round_to_single(const double* x, float* x4, std::size_t first, std::size_t last);
   /// Rows [first, last) of y = A x with the single-precision copy; x4 from round_to_single.
   void multiply_single_rows(const float* x4, double* y, std::size_t first, std::size_t last) const;
+  /// The same with the block columns of the copy replaced by `pair_columns` (same shape as
+  /// single_pair_columns()): for a caller that places some entries of x elsewhere in x4.
+  void multiply_single_rows(const float* x4, const std::int32_t* pair_columns, double* y, std::size_t first,
+                            std::size_t last) const;
+  /// The single-precision copy's column of each block in its pairs (two per pair; a padding
+  /// block repeats its row).
+  [[nodiscard]] const std::vector<std::int32_t>& single_pair_columns() const { return pair_columns_; }
+  /// First pair of each block row of the single-precision copy (rows+1).
+  [[nodiscard]] const std::vector<std::int64_t>& single_pair_start() const { return pair_start_; }
   /// y = A x with the single-precision copy (parallel over block rows).
   void multiply_single(const float* x4, Eigen::VectorXd& y) const;
   /// The single-precision block at `slot`: entry (i, q) at [8q + i]. For assembling straight

@@ -4,6 +4,7 @@
 #include "hof/mechanics/linear_system.h"
 
 #include <cmath>
+#include <cstring>
 
 #include "hof/mechanics/cg_kernels.h"
 #include "hof/mechanics/parallel.h"
@@ -142,9 +143,75 @@ bool uses_single_precision(const MechanicalModel& model) {
   return model.linear.kind == LinearSolverKind::kConjugateGradient && model.linear.mixed_precision;
 }
 
-void prepare_linear_solver(const MechanicalModel& model, MechanicalState& state) {
+namespace {
+
+// The CG's exchange between threads (see solve_cg). The chunks are split into one
+// contiguous part per thread, as the solve's static split runs them; for each part, the
+// nodes outside it that its rows read get a copy after the first N+1 nodes of the
+// single-precision vector, the part's product columns point at the copies, and the chunk that
+// owns a node writes its copies right after the node itself.
+void prepare_cg_exchange(const MechanicalModel& model, SolverWorkspace& w, int threads) {
+  w.cg_pair_columns.clear();
+  w.cg_send_start.clear();
+  w.cg_send_from.clear();
+  w.cg_send_to.clear();
+  const std::size_t nodes = model.node_count();
+  const CgChunks split = cg_chunks(nodes);
+  const auto parts = std::min<std::size_t>(static_cast<std::size_t>(std::max(threads, 1)), split.count);
+  if (!model.linear.mixed_precision || parts < 2 || 3 * nodes < kParallelThreshold) return;
+  const BlockSparseMatrix& a = w.system;
+  const std::vector<std::int64_t>& pair_start = a.single_pair_start();
+  w.cg_pair_columns = a.single_pair_columns();
+  std::vector<std::pair<std::int32_t, std::int32_t>> sends;  // (node, copy)
+  auto copy_index = static_cast<std::int32_t>(nodes + 1);
+  std::vector<std::int32_t> copy_of(nodes, -1);
+  for (std::size_t part = 0; part < parts; ++part) {
+    const std::size_t first = split.first_node(part * split.count / parts, nodes);
+    const std::size_t last = split.first_node((part + 1) * split.count / parts, nodes);
+    std::vector<std::int32_t> outside;
+    for (std::size_t row = first; row < last; ++row) {
+      for (std::int64_t k = 2 * pair_start[row]; k < 2 * pair_start[row + 1]; ++k) {
+        const auto col = static_cast<std::size_t>(w.cg_pair_columns[static_cast<std::size_t>(k)]);
+        if (col < first || col >= last) outside.push_back(static_cast<std::int32_t>(col));
+      }
+    }
+    std::sort(outside.begin(), outside.end());
+    outside.erase(std::unique(outside.begin(), outside.end()), outside.end());
+    for (std::int32_t node : outside) {
+      copy_of[static_cast<std::size_t>(node)] = copy_index;
+      sends.emplace_back(node, copy_index++);
+    }
+    for (std::size_t row = first; row < last; ++row) {
+      for (std::int64_t k = 2 * pair_start[row]; k < 2 * pair_start[row + 1]; ++k) {
+        std::int32_t& col = w.cg_pair_columns[static_cast<std::size_t>(k)];
+        if (static_cast<std::size_t>(col) < first || static_cast<std::size_t>(col) >= last) col = copy_of[static_cast<std::size_t>(col)];
+      }
+    }
+  }
+  // Sends by the chunk that owns the node, in node order.
+  std::sort(sends.begin(), sends.end());
+  w.cg_send_start.assign(split.count + 1, 0);
+  std::size_t at = 0;
+  for (std::size_t c = 0; c < split.count; ++c) {
+    const std::size_t end = split.first_node(c + 1, nodes);
+    while (at < sends.size() && static_cast<std::size_t>(sends[at].first) < end) {
+      w.cg_send_from.push_back(sends[at].first);
+      w.cg_send_to.push_back(sends[at].second);
+      ++at;
+    }
+    w.cg_send_start[c + 1] = static_cast<std::int32_t>(w.cg_send_from.size());
+  }
+  w.p_single.assign(4 * static_cast<std::size_t>(copy_index) + 4, 0.0f);
+}
+
+}  // namespace
+
+void prepare_linear_solver(const MechanicalModel& model, MechanicalState& state, int threads) {
   SolverWorkspace& w = state.work;
-  if (model.needs_matrix) w.system.prepare_single_precision();
+  if (model.needs_matrix) {
+    w.system.prepare_single_precision();
+    prepare_cg_exchange(model, w, threads);
+  }
   if (model.linear.kind != LinearSolverKind::kSparseLdlt || !model.needs_matrix) return;
   // CSC copy of the block matrix. Each triplet carries its block-storage index + 1 as its
   // value, which gives the map from CSC storage back to block storage after compression.
@@ -274,9 +341,25 @@ bool solve_cg(const MechanicalModel& model, MechanicalState& state, const Eigen:
       Eigen::Map<Eigen::Vector3d>(zs + 3 * n) = jacobi[n] * Eigen::Map<const Eigen::Vector3d>(rs + 3 * n);
     }
   };
+  // Between threads, each pass B reads the boundary entries of z that other threads wrote in
+  // pass A. Read where they lie, those entries are scattered over a few hundred cache lines,
+  // each fetched from the other core one at a time; their copies in a compact block (made by
+  // the owning chunk in pass A, see prepare_cg_exchange) take a handful of lines. On the
+  // 2-vCPU machine that cut an iteration's time by a sixth at `fine` and, when the machine
+  // is busy, by a quarter at `medium`. The values, and so the results, are the same.
+  const bool exchange = single && !w.cg_pair_columns.empty();
+  const std::int32_t* product_columns = exchange ? w.cg_pair_columns.data() : a.single_pair_columns().data();
+  auto publish = [&](std::size_t c) {
+    if (!exchange) return;
+    for (std::int32_t k = w.cg_send_start[c]; k < w.cg_send_start[c + 1]; ++k) {
+      const auto k_index = static_cast<std::size_t>(k);
+      std::memcpy(z_single + 4 * static_cast<std::size_t>(w.cg_send_to[k_index]),
+                  z_single + 4 * static_cast<std::size_t>(w.cg_send_from[k_index]), 4 * sizeof(float));
+    }
+  };
   // Az over the rows of [d0, d1).
   auto multiply_z = [&](std::size_t d0, std::size_t d1) {
-    if (single) a.multiply_single_rows(z_single, azs, d0 / 3, d1 / 3);
+    if (single) a.multiply_single_rows(z_single, product_columns, azs, d0 / 3, d1 / 3);
     else a.multiply_rows(z, w.az, d0 / 3, d1 / 3);
   };
 
@@ -304,6 +387,7 @@ bool solve_cg(const MechanicalModel& model, MechanicalState& state, const Eigen:
       apply_preconditioner(d0, d1);
     }
     if (single) BlockSparseMatrix::round_to_single(zs, z_single, d0 / 3, d1 / 3);
+    publish(c);
     part0[c] = bb;
     part1[c] = dot_range(rs, zs, d0, d1);
   });
@@ -344,6 +428,7 @@ bool solve_cg(const MechanicalModel& model, MechanicalState& state, const Eigen:
         rz = dot_range(rs, zs, d0, d1);
         if (single) BlockSparseMatrix::round_to_single(zs, z_single, d0 / 3, d1 / 3);
       }
+      publish(c);
       part1[c] = rr;
       part2[c] = rz;
     });

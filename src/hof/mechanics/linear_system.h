@@ -31,8 +31,9 @@ bool uses_single_precision(const MechanicalModel& model);
 /// solve broke down (non-finite values, a failed factorisation).
 bool solve_system(const MechanicalModel& model, MechanicalState& state, const Eigen::VectorXd& b, Eigen::VectorXd& x);
 
-/// Sets up the solver scratch that depends on the pattern (CSC map, LDLᵀ symbolic analysis).
-void prepare_linear_solver(const MechanicalModel& model, MechanicalState& state);
+/// Sets up the solver scratch that depends on the pattern (CSC map, LDLᵀ symbolic analysis,
+/// the CG's exchange between `threads` threads).
+void prepare_linear_solver(const MechanicalModel& model, MechanicalState& state, int threads);
 
 // Deterministic parallel vector kernels (results independent of the thread count).
 double dot(const Eigen::VectorXd& a, const Eigen::VectorXd& b, std::vector<double>& partials);

@@ -219,11 +219,11 @@ MechanicalState make_state(const MechanicalModel& model) {
   w.partials.assign(1024, 0.0);
   w.p_single.assign(4 * model.node_count() + 4, 0.0f);
   w.block_jacobi.assign(model.node_count(), Mat3::Identity());
+  s.arena = std::make_unique<tbb::task_arena>(model.threads > 0 ? model.threads : int{tbb::task_arena::automatic});
   if (model.needs_matrix) {
     w.system = model.pattern;
-    detail::prepare_linear_solver(model, s);
+    detail::prepare_linear_solver(model, s, s.arena->max_concurrency());
   }
-  s.arena = std::make_unique<tbb::task_arena>(model.threads > 0 ? model.threads : int{tbb::task_arena::automatic});
   return s;
 }
 

@@ -50,8 +50,14 @@ struct SolverWorkspace {
   Eigen::VectorXd b, dv, r, p, z, ap, az, diag_inv;  // CG and implicit Euler (3N)
   Eigen::VectorXd x_saved, v_saved;               // last good state, restored on divergence
   Eigen::VectorXd k1x, k1v, k2x, k2v, k3x, k3v, k4x, k4v, xt, vt;  // RK4
-  std::vector<float, Eigen::aligned_allocator<float>> p_single;  // CG direction rounded, 4 per node
+  std::vector<float, Eigen::aligned_allocator<float>> p_single;  // CG direction rounded, 4 per node (+ exchange copies)
   std::vector<double> partials;                    // deterministic reductions
+  // The CG's exchange between threads (see solve_cg): the entries of the direction that a
+  // thread's rows read from other threads' nodes are also copied to a compact block of
+  // p_single after the first N+1 nodes, and the product reads them there.
+  std::vector<std::int32_t> cg_pair_columns;       // the single copy's pair columns, redirected (empty: no exchange)
+  std::vector<std::int32_t> cg_send_start;         // (CG chunks+1) each chunk's range in cg_send_from/to
+  std::vector<std::int32_t> cg_send_from, cg_send_to;  // node of the chunk, node index of its copy
   BlockSparseMatrix system;                        // A = αM + βK, values refilled each step
   std::vector<Eigen::Matrix3d> block_jacobi;       // (N) inverse diagonal blocks
   // Sparse direct solver: CSC copy of `system` and the value map from block storage.
