@@ -3,6 +3,7 @@
 #define EIGEN_STACK_ALLOCATION_LIMIT 0
 #include "hof/mechanics/linear_system.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 
@@ -345,8 +346,8 @@ bool solve_cg(const MechanicalModel& model, MechanicalState& state, const Eigen:
   // pass A. Read where they lie, those entries are scattered over a few hundred cache lines,
   // each fetched from the other core one at a time; their copies in a compact block (made by
   // the owning chunk in pass A, see prepare_cg_exchange) take a handful of lines. On the
-  // 2-vCPU machine that cut an iteration's time by a sixth at `fine` and, when the machine
-  // is busy, by a quarter at `medium`. The values, and so the results, are the same.
+  // 2-vCPU machine that cut the solve's time by a fifth at `medium` and `fine`
+  // (docs/performance.md). The values, and so the results, are the same.
   const bool exchange = single && !w.cg_pair_columns.empty();
   const std::int32_t* product_columns = exchange ? w.cg_pair_columns.data() : a.single_pair_columns().data();
   auto publish = [&](std::size_t c) {
