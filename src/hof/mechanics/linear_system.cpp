@@ -27,6 +27,8 @@ struct CgChunks {
   [[nodiscard]] std::size_t first_node(std::size_t chunk, std::size_t nodes) const {
     return std::min(nodes, chunk * nodes_per_chunk);
   }
+  /// First chunk of part `part` of `parts` contiguous runs (one per thread).
+  [[nodiscard]] std::size_t first_chunk(std::size_t part, std::size_t parts) const { return part * count / parts; }
 };
 CgChunks cg_chunks(std::size_t nodes) {
   const std::size_t count = (nodes + 256 * 8 - 1) / (256 * 8) * 8;
@@ -158,8 +160,10 @@ void prepare_cg_exchange(const MechanicalModel& model, SolverWorkspace& w, int t
   w.cg_send_to.clear();
   const std::size_t nodes = model.node_count();
   const CgChunks split = cg_chunks(nodes);
-  const auto parts = std::min<std::size_t>(static_cast<std::size_t>(std::max(threads, 1)), split.count);
-  if (!model.linear.mixed_precision || parts < 2 || 3 * nodes < kParallelThreshold) return;
+  // Small systems are solved on one thread: the passes would cost more to share.
+  w.cg_parts = 3 * nodes >= kParallelThreshold ? std::min<std::size_t>(static_cast<std::size_t>(std::max(threads, 1)), split.count) : 1;
+  const std::size_t parts = w.cg_parts;
+  if (!uses_single_precision(model) || parts < 2) return;
   const BlockSparseMatrix& a = w.system;
   const std::vector<std::int64_t>& pair_start = a.single_pair_start();
   w.cg_pair_columns = a.single_pair_columns();
@@ -167,8 +171,8 @@ void prepare_cg_exchange(const MechanicalModel& model, SolverWorkspace& w, int t
   auto copy_index = static_cast<std::int32_t>(nodes + 1);
   std::vector<std::int32_t> copy_of(nodes, -1);
   for (std::size_t part = 0; part < parts; ++part) {
-    const std::size_t first = split.first_node(part * split.count / parts, nodes);
-    const std::size_t last = split.first_node((part + 1) * split.count / parts, nodes);
+    const std::size_t first = split.first_node(split.first_chunk(part, parts), nodes);
+    const std::size_t last = split.first_node(split.first_chunk(part + 1, parts), nodes);
     std::vector<std::int32_t> outside;
     for (std::size_t row = first; row < last; ++row) {
       for (std::int64_t k = 2 * pair_start[row]; k < 2 * pair_start[row + 1]; ++k) {
@@ -315,16 +319,18 @@ bool solve_cg(const MechanicalModel& model, MechanicalState& state, const Eigen:
     for (std::size_t c = 0; c < chunks; ++c) total += parts[c];
     return total;
   };
-  // Runs body(chunk, first dof, end dof) over all chunks, in parallel when large.
+  // Runs body(chunk, first dof, end dof) over all chunks: one task per part (a thread's
+  // contiguous run of chunks, the parts of the exchange below), each part's chunks in order.
+  const std::size_t parts = std::max<std::size_t>(w.cg_parts, 1);
   auto over_chunks = [&](auto&& body) {
     parallel_chunks(
-        chunks, 1,
-        [&](std::size_t c0, std::size_t c1) {
-          for (std::size_t c = c0; c < c1; ++c) {
+        parts, 1,
+        [&](std::size_t p0, std::size_t p1) {
+          for (std::size_t c = split.first_chunk(p0, parts); c < split.first_chunk(p1, parts); ++c) {
             body(c, 3 * split.first_node(c, nodes), 3 * split.first_node(c + 1, nodes));
           }
         },
-        /*min_parallel=*/3 * nodes >= kParallelThreshold ? 1 : chunks + 1);
+        /*min_parallel=*/1);
   };
 
   double* xs = x.data();

@@ -55,6 +55,7 @@ struct SolverWorkspace {
   // The CG's exchange between threads (see solve_cg): the entries of the direction that a
   // thread's rows read from other threads' nodes are also copied to a compact block of
   // p_single after the first N+1 nodes, and the product reads them there.
+  std::size_t cg_parts{1};                         // threads the CG's chunks are split over
   std::vector<std::int32_t> cg_pair_columns;       // the single copy's pair columns, redirected (empty: no exchange)
   std::vector<std::int32_t> cg_send_start;         // (CG chunks+1) each chunk's range in cg_send_from/to
   std::vector<std::int32_t> cg_send_from, cg_send_to;  // node of the chunk, node index of its copy
