@@ -80,7 +80,7 @@ TEST(ComplianceCoupling, FeltForceMatchesTheStaticFemReactionWithinTenPercent) {
   config.haptics.material.stiffness = 1.0;
   config.haptics.safety.fade_in_s = 0.0;
   config.haptics.realtime_priority = false;
-  auto session = Session::make(SessionBody{"liver", std::move(*model), b.surface, std::move(*mapping)},
+  auto session = Session::make(SessionBody{"liver", std::move(*model), b.surface, std::move(*mapping), {}, {}},
                                std::make_unique<haptics::ScriptedDevice>(*scripted, spec), config);
   ASSERT_TRUE(session) << session.error().to_string();
   std::vector<haptics::HapticSample> samples;

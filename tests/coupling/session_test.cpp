@@ -30,7 +30,7 @@ PokeRun poke(ContactCoupling coupling, haptics::RendererKind renderer, double se
   EXPECT_TRUE(model) << model.error().to_string();
   auto mapping = SurfaceMapping::by_index(liver.nodes, b.surface.vertices, b.surface_to_volume);
   EXPECT_TRUE(mapping);
-  SessionBody body{"liver", std::move(*model), b.surface, std::move(*mapping)};
+  SessionBody body{"liver", std::move(*model), b.surface, std::move(*mapping), {}, {}};
 
   haptics::MotionConfig motion;  // straight down onto the right lobe's top, 1.5 cm deep
   motion.kind = haptics::MotionKind::kPoke;

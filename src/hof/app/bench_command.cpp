@@ -8,36 +8,32 @@
 #include <vector>
 
 #include "hof/mechanics/step.h"
-#include "hof/scene/project.h"
-#include "hof/scene/sofa_scene.h"
+#include "hof/scene/world.h"
 
 namespace hof::app {
 
 int run_bench(const BenchOptions& options) {
-  std::filesystem::path scene_path = options.scene;
-  if (options.scene.extension() == ".hof") {
-    auto project = scene::read_project(options.scene);
-    if (!project) {
-      std::fprintf(stderr, "hof: %s\n", project.error().to_string().c_str());
-      return 1;
-    }
-    scene_path = scene::scene_file(*project, options.scene);
-  }
-  auto sofa = scene::read_sofa_scene(scene_path);
-  if (!sofa) {
-    std::fprintf(stderr, "hof: %s\n", sofa.error().to_string().c_str());
-    return 1;
-  }
-  if (sofa->models.empty()) {
-    std::fprintf(stderr, "hof: %s: no simulated body in the scene\n", scene_path.c_str());
-    return 1;
-  }
   if (options.steps < 10) {
     std::fprintf(stderr, "hof: --steps must be at least 10\n");
     return 1;
   }
-  for (const scene::SofaSceneModel& m : sofa->models) {
-    mechanics::ModelConfig config = m.config;
+  if (options.threads < 0) {
+    std::fprintf(stderr, "hof: --threads must be >= 0 (0 = all cores)\n");
+    return 1;
+  }
+  // The one builder, as `hof run` and `hof check` use it.
+  auto world = scene::build_world(options.scene);
+  if (!world) {
+    std::fprintf(stderr, "hof: %s\n", world.error().to_string().c_str());
+    return 1;
+  }
+  const std::filesystem::path& scene_path = world->scene_path;
+  bool any = false;
+  for (const coupling::SessionBody& body : world->bodies) {
+    if (!body.deformable() || !body.config) continue;
+    any = true;
+    mechanics::ModelConfig config = *body.config;
+    const std::string& node_path = body.name;
     config.threads = options.threads;
     auto model = mechanics::build_model(config);
     if (!model) {
@@ -73,15 +69,20 @@ int run_bench(const BenchOptions& options) {
       std::printf("{\"scene\": \"%s\", \"model\": \"%s\", \"nodes\": %zu, \"tetrahedra\": %zu, \"steps\": %ld, "
                   "\"steps_per_s\": {\"min\": %.1f, \"median\": %.1f, \"max\": %.1f}, "
                   "\"split_us\": {\"forces\": %.2f, \"assembly\": %.2f, \"solve\": %.2f}}\n",
-                  scene_path.c_str(), m.node_path.c_str(), model->node_count(), model->tets.size(), done, rates.front(), median,
+                  scene_path.c_str(), node_path.c_str(), model->node_count(), model->tets.size(), done, rates.front(), median,
                   rates.back(), 1e6 * force / n, 1e6 * assembly / n, 1e6 * solve / n);
     } else {
       std::printf("%s: model '%s' (%zu nodes, %zu tetrahedra), %ld steps of %.4g s\n", scene_path.c_str(),
-                  m.node_path.c_str(), model->node_count(), model->tets.size(), done, model->dt_s);
+                  node_path.c_str(), model->node_count(), model->tets.size(), done, model->dt_s);
       std::printf("  steps/s   min %.1f, median %.1f, max %.1f\n", rates.front(), median, rates.back());
       std::printf("  per step  forces %.1f us, assembly %.1f us, solve %.1f us\n", 1e6 * force / n, 1e6 * assembly / n,
                   1e6 * solve / n);
     }
+  }
+  if (!any) {
+    std::fprintf(stderr, "hof: %s: no deformable body to time (the world has only rigid shapes or force effects)\n",
+                 options.scene.c_str());
+    return 1;
   }
   return 0;
 }

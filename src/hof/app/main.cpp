@@ -75,7 +75,7 @@ void add_run_commands(CLI::App& app, int& status) {
   static std::string device;
   static std::string out;
   CLI::App* run_cmd = app.add_subcommand("run", "Run a haptic session on a project (.hof) or SOFA scene (.scn)");
-  run_cmd->add_option("file", run.file, "Project (.hof) or SOFA scene (.scn)")->required()->check(CLI::ExistingFile);
+  run_cmd->add_option("file", run.file, "Project (.hof), SOFA scene (.scn) or X3D scene (.x3d)")->required();
   run_cmd->add_flag("--headless", run.headless, "No window (the default: the GUI is not built yet)");
   run_cmd->add_flag("--deterministic", run.deterministic, "Virtual time: loops in lock-step, identical output every run");
   auto* seconds_opt = run_cmd->add_option("--seconds", seconds, "Length of the run in seconds (default 5)");
@@ -96,7 +96,7 @@ void add_run_commands(CLI::App& app, int& status) {
   static hof::app::BenchOptions bench;
   CLI::App* bench_cmd = app.add_subcommand(
       "bench", "Time the mechanics of a scene as fast as it goes (compare with runSofa -g batch -n N)");
-  bench_cmd->add_option("--scene", bench.scene, "Project (.hof) or SOFA scene (.scn)")->required()->check(CLI::ExistingFile);
+  bench_cmd->add_option("--scene", bench.scene, "Project (.hof), SOFA scene (.scn) or X3D scene (.x3d)")->required();
   bench_cmd->add_option("--steps", bench.steps, "Simulation steps to time")->capture_default_str();
   bench_cmd->add_option("--threads", bench.threads, "Threads (0 = all cores)")->capture_default_str();
   bench_cmd->add_flag("--json", bench.json, "Print the figures as JSON");

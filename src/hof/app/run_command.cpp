@@ -4,6 +4,9 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
+#include <string_view>
+#include <vector>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -17,8 +20,7 @@
 #include "hof/mesh/boundary.h"
 #include "hof/mesh/mesh_io.h"
 #include "hof/scene/project.h"
-#include "hof/scene/sofa_scene.h"
-#include "hof/scene/x3d_scene.h"
+#include "hof/scene/world.h"
 
 namespace hof::app {
 
@@ -33,157 +35,45 @@ int fail(const std::string& message) {
   return 1;
 }
 
-struct Loaded {
-  scene::HofProject project;
-  scene::SofaScene sofa;
-  std::filesystem::path scene_path;
-};
-
-// An X3D scene with H3D nodes: its DeformableShape (else its first touchable shape) becomes
-// the simulated body — the thesis' surface model: springs on the triangle edges (the
-// MeshSpringForceField it recommends), uniform mass, the open border held (or, for a closed
-// surface, its lowest tenth) — driven by the mechanics instead of H3D's CoordinateDeformer.
-// The surface, renderer and calibration come from the scene's Appearance and DeviceInfo.
-Expected<Loaded> load_x3d(const std::filesystem::path& file) {
-  auto x3d = scene::read_x3d_scene(file);
-  if (!x3d) return std::unexpected(x3d.error());
-  const scene::X3dShape* chosen = nullptr;
-  for (const auto& shape : x3d->shapes) {
-    if (!shape.touchable || shape.mesh_W.triangles.empty()) continue;
-    if (!chosen || (shape.deformable && !chosen->deformable)) chosen = &shape;
+// Text as UTF-8: bytes that are not (a Latin-1 name, say) become U+FFFD, so that a report
+// (JSON, CSV, the terminal) is never refused for a name.
+std::string json_safe(std::string_view text) {
+  std::string out;
+  for (std::size_t i = 0; i < text.size();) {
+    const auto c = static_cast<unsigned char>(text[i]);
+    const std::size_t length = c < 0x80 ? 1 : (c >> 5) == 0x6 ? 2 : (c >> 4) == 0xE ? 3 : (c >> 3) == 0x1E ? 4 : 0;
+    bool valid = length > 0 && i + length <= text.size();
+    for (std::size_t k = 1; valid && k < length; ++k) valid = (static_cast<unsigned char>(text[i + k]) >> 6) == 0x2;
+    if (!valid) {
+      out += "\xEF\xBF\xBD";
+      ++i;
+      continue;
+    }
+    out.append(text.substr(i, length));
+    i += length;
   }
-  if (!chosen) return make_error(ErrorCode::kInvalidArgument, "the scene has no touchable shape (a Shape whose Appearance has a surface)", file.string());
-  Loaded l;
-  l.project.name = file.stem().string();
-  l.project.surface = chosen->surface;
-  if (!chosen->solid) l.project.touchable_face = collision::TouchableFace::kFrontAndBack;  // X3D solid='false' 
-  if (!x3d->devices.empty()) {
-    const scene::X3dDevice& device = x3d->devices.front();
-    l.project.position_calibration = device.position_calibration;
-    if (device.renderer && device.renderer->kind) {
-      l.project.renderer = *device.renderer->kind;
-      l.project.proxy_radius_m = device.renderer->proxy_radius_m;
-    }
-  }
-  l.project.effects = x3d->force_effects;
-  if (!x3d->viewpoints.empty()) l.project.graphics.viewpoint_m = x3d->viewpoints.front().position;
-  l.scene_path = file;
-  scene::SofaSceneModel model;
-  model.node_path = chosen->def.empty() ? std::string("shape") : chosen->def;
-  mechanics::ModelConfig& c = model.config;
-  c.name = model.node_path;
-  c.positions = chosen->mesh_W.vertices;
-  c.triangles = chosen->mesh_W.triangles;
-  c.mass.kind = mechanics::MassKind::kUniform;
-  c.mass.total_mass_kg = 0.1;
-  c.gravity_m_per_s2 = Vec3::Zero();
-  mechanics::ForceFieldConfig springs;
-  springs.name = "springs";
-  springs.mesh_springs = mechanics::MeshSpringConfig{100.0, 0.5};
-  c.force_fields.push_back(springs);
-  // Hold the open border; a closed surface is held by its lowest tenth.
-  std::vector<std::int32_t> held;
-  {
-    std::vector<std::array<std::int32_t, 2>> edges;
-    for (const mesh::Tri& t : c.triangles) {
-      for (int k = 0; k < 3; ++k) edges.push_back({std::min(t[k], t[(k + 1) % 3]), std::max(t[k], t[(k + 1) % 3])});
-    }
-    std::sort(edges.begin(), edges.end());
-    for (std::size_t i = 0; i < edges.size();) {
-      std::size_t j = i + 1;
-      while (j < edges.size() && edges[j] == edges[i]) ++j;
-      if (j - i == 1) held.insert(held.end(), edges[i].begin(), edges[i].end());
-      i = j;
-    }
-    std::sort(held.begin(), held.end());
-    held.erase(std::unique(held.begin(), held.end()), held.end());
-    if (held.empty()) {
-      double lo = c.positions.front().y(), hi = lo;
-      for (const Vec3& p : c.positions) {
-        lo = std::min(lo, p.y());
-        hi = std::max(hi, p.y());
-      }
-      for (std::size_t i = 0; i < c.positions.size(); ++i) {
-        if (c.positions[i].y() <= lo + 0.1 * (hi - lo)) held.push_back(static_cast<std::int32_t>(i));
-      }
-    }
-  }
-  c.fixed.push_back(mechanics::FixedConstraintConfig{"border", held, std::nullopt, false, {true, true, true}});
-  c.ode.rayleigh_mass = c.ode.rayleigh_stiffness = 0.1;
-  c.linear.iterations = 25;
-  c.dt_s = 0.01;
-  l.sofa.file = file;
-  l.sofa.models.push_back(std::move(model));
-  l.sofa.skipped = x3d->unsupported;
-  l.sofa.warnings = x3d->warnings;
-  return l;
+  return out;
 }
 
-Expected<Loaded> load(const std::filesystem::path& file) {
-  Loaded l;
-  const std::string ext = file.extension().string();
-  if (ext == ".hof") {
-    auto project = scene::read_project(file);
-    if (!project) return std::unexpected(project.error());
-    l.project = *project;
-    l.scene_path = scene::scene_file(l.project, file);
-  } else if (ext == ".scn") {
-    l.project.name = file.stem().string();
-    l.project.mechanics_scene = file.filename();
-    l.scene_path = file;
-  } else if (ext == ".x3d") {
-    return load_x3d(file);
-  } else {
-    return make_error(ErrorCode::kUnsupported, "expected a .hof project, a .scn SOFA scene or an .x3d scene", file.string());
-  }
-  auto sofa = scene::read_sofa_scene(l.scene_path);
-  if (!sofa) return std::unexpected(sofa.error());
-  if (sofa->models.empty()) {
-    return make_error(ErrorCode::kInvalidArgument, "the scene has no simulated body (a node with an ODE solver and a MechanicalObject)",
-                      l.scene_path.string());
-  }
-  l.sofa = std::move(*sofa);
-  return l;
-}
-
-// The body of the session: the first model, with its visual mesh (barycentric) as the touchable
-// surface when it has one, else the boundary of its tetrahedra (shared nodes).
-Expected<coupling::SessionBody> make_body(const scene::SofaSceneModel& m) {
-  auto model = mechanics::build_model(m.config);
-  if (!model) return std::unexpected(model.error());
-  coupling::SessionBody body{m.config.name.empty() ? std::string("model") : m.config.name, std::move(*model), {}, {}};
-  if (m.visual_mesh && m.visual_barycentric) {
-    auto visual = mesh::read_mesh(*m.visual_mesh);
-    if (!visual) return std::unexpected(visual.error());
-    body.surface.vertices = visual->mesh.nodes;
-    body.surface.triangles = visual->mesh.triangles;
-    auto mapping = coupling::SurfaceMapping::barycentric(m.config.positions, m.config.tets, body.surface.vertices);
-    if (!mapping) return std::unexpected(mapping.error());
-    body.mapping = std::move(*mapping);
-  } else if (m.config.tets.empty()) {
-    // A surface model (springs on triangles): the surface is the model itself.
-    body.surface.vertices = m.config.positions;
-    body.surface.triangles = m.config.triangles;
-    std::vector<mesh::NodeIndex> identity(m.config.positions.size());
-    for (std::size_t i = 0; i < identity.size(); ++i) identity[i] = static_cast<mesh::NodeIndex>(i);
-    auto mapping = coupling::SurfaceMapping::by_index(m.config.positions, body.surface.vertices, identity);
-    if (!mapping) return std::unexpected(mapping.error());
-    body.mapping = std::move(*mapping);
-  } else {
-    const mesh::BoundarySurface b = mesh::extract_boundary(m.config.positions, m.config.tets);
-    body.surface = b.surface;
-    auto mapping = coupling::SurfaceMapping::by_index(m.config.positions, b.surface.vertices, b.surface_to_volume);
-    if (!mapping) return std::unexpected(mapping.error());
-    body.mapping = std::move(*mapping);
-  }
-  if (body.surface.triangles.empty()) return make_error(ErrorCode::kInvalidMesh, fmt::format("model '{}' has no surface to touch", body.name));
-  return body;
+// A body name as a file name: letters, digits, '-', '_' and '.' kept, anything else '_'.
+std::string file_safe(const std::string& name) {
+  std::string out;
+  for (char c : name) out += std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' || c == '.' ? c : '_';
+  return out.empty() ? std::string("body") : out;
 }
 
 std::string csv_number(double v) { return fmt::format("{:.9g}", v); }
 
-void write_plots(const std::filesystem::path& dir, const coupling::SessionReport& report, bool quiet) {
-  // Period histogram data (µs, count), then one gnuplot script for all plots, PNG and SVG.
+// Text safe inside a gnuplot single-quoted string.
+std::string gnuplot_text(const std::string& text) {
+  std::string out;
+  for (char c : text) out += c == '\'' ? std::string("''") : std::string(1, c);
+  return out;
+}
+
+void write_plots(const std::filesystem::path& dir, const coupling::SessionReport& report, const std::string& title,
+                 const std::string& unit, bool quiet) {
+  // Period histogram data (µs, count), every bin that holds a tick.
   {
     std::ofstream h(dir / "haptic_period_histogram.dat");
     const auto& bins = report.haptic_periods.bins();
@@ -191,34 +81,45 @@ void write_plots(const std::filesystem::path& dir, const coupling::SessionReport
       if (bins[b]) h << b << " " << bins[b] << "\n";
     }
   }
+  const bool metres = unit == "m";
+  const std::string length = metres ? "mm" : unit;
+  const std::string scale = metres ? "*1000" : "";
   // One small gnuplot script per plot, so that a plot with no data (no contact, say) does not
   // stop the others; plots.gp collects them for the user.
   struct Plot {
-    const char* name;
-    const char* body;
+    std::string name;
+    std::string body;
   };
-  const Plot plots[] = {
+  const std::vector<Plot> plots{
       {"force_over_time",
        "set datafile separator ','\nset xlabel 'time (s)'\nset ylabel 'force (N)'\n"
        "plot 'telemetry.csv' every ::1 using 1:(sqrt($8**2+$9**2+$10**2)) with lines title '|F| sent to the device'\n"},
       {"force_vs_indentation",
-       "set datafile separator ','\nset xlabel 'indentation (mm)'\nset ylabel 'force (N)'\n"
-       "plot 'telemetry.csv' every ::1 using ($11 > 0 ? $12*1000 : 1/0):(sqrt($8**2+$9**2+$10**2)) with points pt 7 ps 0.3 title 'in contact'\n"},
+       fmt::format("set datafile separator ','\nset xlabel 'tissue indentation at the contact ({})'\nset ylabel 'force (N)'\n"
+                   "plot 'telemetry.csv' every ::1 using ($11 > 0 ? $14{} : 1/0):(sqrt($8**2+$9**2+$10**2)) with points pt 7 "
+                   "ps 0.3 title 'surface displacement at the contact (in contact)'\n",
+                   length, scale)},
+      {"force_vs_penetration",
+       fmt::format("set datafile separator ','\nset xlabel 'device-proxy penetration ({})'\nset ylabel 'force (N)'\n"
+                   "plot 'telemetry.csv' every ::1 using ($11 > 0 ? $12{} : 1/0):(sqrt($8**2+$9**2+$10**2)) with points pt 7 "
+                   "ps 0.3 title 'renderer spring: proxy - device (in contact)'\n",
+                   length, scale)},
       {"haptic_period_histogram",
-       "set xlabel 'haptic period (us)'\nset ylabel 'ticks'\nset logscale y\n"
-       "plot 'haptic_period_histogram.dat' using 1:2 with impulses lw 2 title 'period'\n"},
+       "set xlabel 'haptic period (us)'\nset ylabel 'ticks'\nset logscale y\nset yrange [0.5:*]\nset style fill solid\n"
+       "set boxwidth 1\nplot 'haptic_period_histogram.dat' using 1:2 with boxes title 'ticks per 1 us bin'\n"},
   };
   std::ofstream all(dir / "plots.gp");
   std::string failed;
   for (const Plot& plot : plots) {
     for (const char* ext : {"png", "svg"}) {
-      const std::string script = fmt::format("set terminal {} size 960,540\nset output '{}.{}'\nset grid\nset key top left\n{}",
-                                             std::string(ext) == "png" ? "pngcairo" : "svg", plot.name, ext, plot.body);
+      const std::string script =
+          fmt::format("set terminal {} size 960,540 noenhanced\nset output '{}.{}'\nset grid\nset key top left\nset title '{}'\n{}",
+                      std::string(ext) == "png" ? "pngcairo" : "svg", plot.name, ext, gnuplot_text(title), plot.body);
       all << script << "\n";
       const std::filesystem::path file = dir / fmt::format("{}.{}.gp", plot.name, ext);
       std::ofstream(file) << script;
       const std::string command = fmt::format("cd '{}' && gnuplot '{}' 2>/dev/null", dir.string(), file.filename().string());
-      if (std::system(command.c_str()) != 0 && std::string(ext) == "png") failed += std::string(failed.empty() ? "" : ", ") + plot.name;
+      if (std::system(command.c_str()) != 0 && std::string(ext) == "png") failed += (failed.empty() ? "" : ", ") + plot.name;
       std::filesystem::remove(file);
     }
   }
@@ -228,30 +129,52 @@ void write_plots(const std::filesystem::path& dir, const coupling::SessionReport
   }
 }
 
+// A CSV field: quoted when it holds a separator or a quote.
+std::string csv_text(const std::string& text) {
+  if (text.find_first_of(",\"\n") == std::string::npos) return text;
+  std::string out = "\"";
+  for (char c : text) out += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return out + "\"";
+}
+
 }  // namespace
 
 int run_session(const RunOptions& options) {
-  auto loaded = load(options.file);
-  if (!loaded) return fail(loaded.error());
-  for (const std::string& w : loaded->sofa.warnings) {
+  // Numeric options first: a clear refusal rather than an endless run or a huge file.
+  if (options.seconds && !(*options.seconds > 0.0 && *options.seconds <= 86400.0)) {
+    return fail(fmt::format("--seconds must be in (0, 86400], got {}", *options.seconds));
+  }
+  if (options.steps && !(*options.steps > 0 && *options.steps <= 100000000)) {
+    return fail(fmt::format("--steps must be in [1, 100000000], got {}", *options.steps));
+  }
+  if (!(options.telemetry_rate_hz >= 0.0 && options.telemetry_rate_hz <= 100000.0)) {
+    return fail(fmt::format("--telemetry-rate must be in [0, 100000] rows/s (0 = every tick), got {}", options.telemetry_rate_hz));
+  }
+  auto world = scene::build_world(options.file, options.device.value_or(""));
+  if (!world) return fail(world.error());
+  for (const std::string& w : world->warnings) {
     if (!options.quiet) std::fprintf(stderr, "hof: warning: %s\n", w.c_str());
   }
-  const scene::SofaSceneModel& first = loaded->sofa.models.front();
-  auto body = make_body(first);
-  if (!body) return fail(body.error());
-  const std::string device_spec = options.device.value_or(loaded->project.device);
-  auto device = haptics::open_device(device_spec);
-  if (!device) return fail(device.error());
-  coupling::SessionConfig config = scene::session_config(loaded->project);
+  if (!world->skipped.empty() && !options.quiet) {
+    std::string list;
+    for (const auto& s : world->skipped) list += (list.empty() ? "" : ", ") + s;
+    std::fprintf(stderr, "hof: note: not simulated: %s\n", list.c_str());
+  }
+  auto device = haptics::open_device(world->device);
+  if (!device) {
+    Error e = device.error();
+    e.message = fmt::format("{} (device of {})", e.message, options.file.string());
+    return fail(e);
+  }
+  coupling::SessionConfig config = world->config;
   config.haptics.realtime_priority = !options.deterministic;
-  const std::string model_name = body->name;
-  const double dt = body->model.dt_s;
-  auto session = coupling::Session::make(std::move(*body), std::move(*device), config);
-  if (!session) return fail(session.error());
+  const double max_force = (*device)->spec().max_force_n;
+  auto made = coupling::Session::make(std::move(world->bodies), std::move(*device), config);
+  if (!made) return fail(made.error());
+  coupling::Session& session = **made;
 
   double seconds = options.seconds.value_or(5.0);
-  if (options.steps) seconds = static_cast<double>(*options.steps) * dt;
-  if (!(seconds > 0.0) || !std::isfinite(seconds)) return fail(fmt::format("run length must be > 0 s, got {}", seconds));
+  if (options.steps) seconds = static_cast<double>(*options.steps) * session.dt();
 
   // Telemetry straight to the report folder.
   std::FILE* telemetry = nullptr;
@@ -261,34 +184,59 @@ int run_session(const RunOptions& options) {
     if (ec) return fail(Error{ErrorCode::kIo, "cannot create the report folder: " + ec.message(), options.out->string(), 0, -1});
     telemetry = std::fopen((*options.out / "telemetry.csv").c_str(), "w");
     if (!telemetry) return fail(Error{ErrorCode::kIo, "cannot write telemetry.csv", options.out->string(), 0, -1});
-    std::fputs("t,device_x,device_y,device_z,proxy_x,proxy_y,proxy_z,force_x,force_y,force_z,contact,penetration,period\n",
+    std::fputs("t,device_x,device_y,device_z,proxy_x,proxy_y,proxy_z,force_x,force_y,force_z,contact,penetration,period,"
+               "indentation,body\n",
                telemetry);
   }
+  std::vector<std::string> body_names;
+  for (std::size_t i = 0; i < session.body_count(); ++i) body_names.push_back(csv_text(json_safe(session.body(i).name)));
   double next_row = 0.0;
+  std::int64_t ended_rows = 0;
   auto on_sample = [&](const haptics::HapticSample& s) {
     if (!telemetry) return;
+    // No reading (a script that has ended, a device gone): not a device at the origin.
+    if (!s.valid) {
+      ++ended_rows;
+      return;
+    }
     if (options.telemetry_rate_hz > 0.0) {
       if (s.time_s + 1e-12 < next_row) return;
       next_row += 1.0 / options.telemetry_rate_hz;
     }
-    std::fputs(fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{}\n", csv_number(s.time_s), csv_number(s.device.x()),
+    // Indentation: how far the tissue surface at the contact moved inward from its rest place.
+    double indentation = 0.0;
+    std::string body;
+    if (s.contact && s.triangle >= 0) {
+      indentation = std::max(0.0, (session.rest_point(s.triangle, s.barycentric) - s.contact_point).dot(s.contact_normal));
+      const std::int32_t b = session.body_of_triangle(s.triangle);
+      if (b >= 0) body = body_names[static_cast<std::size_t>(b)];
+    }
+    std::fputs(fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", csv_number(s.time_s), csv_number(s.device.x()),
                            csv_number(s.device.y()), csv_number(s.device.z()), csv_number(s.proxy.x()),
                            csv_number(s.proxy.y()), csv_number(s.proxy.z()), csv_number(s.force.x()),
                            csv_number(s.force.y()), csv_number(s.force.z()), s.contact ? 1 : 0,
-                           csv_number(s.penetration_m), csv_number(s.period_s))
+                           csv_number(s.penetration_m), csv_number(s.period_s), csv_number(indentation), body)
                    .c_str(),
                telemetry);
   };
   const auto progress = make_terminal_progress(options.quiet);
-  const coupling::SessionReport report = options.deterministic ? (*session)->run_virtual(seconds, on_sample, progress)
-                                                               : (*session)->run_realtime(seconds, on_sample, progress);
+  const coupling::SessionReport report = options.deterministic ? session.run_virtual(seconds, on_sample, progress)
+                                                               : session.run_realtime(seconds, on_sample, progress);
   if (telemetry) std::fclose(telemetry);
 
   const auto& periods = report.haptic_periods;
+  const double clamped_share = report.contact_time_s > 0.0
+                                   ? static_cast<double>(report.clamped_contact_ticks) * session.haptic_loop().nominal_period_s() /
+                                         report.contact_time_s
+                                   : 0.0;
   nlohmann::json summary;
-  summary["file"] = options.file.string();
+  summary["file"] = json_safe(options.file.string());
+  summary["scene"] = json_safe(world->scene_path.string());
+  summary["name"] = json_safe(world->name);
+  summary["length_unit"] = world->length_unit;
   summary["mode"] = options.deterministic ? "virtual-time (deterministic)" : "real-time";
-  summary["device"] = device_spec;
+  summary["device"] = json_safe(world->device);
+  summary["default_probe"] = world->default_probe;
   summary["simulated_s"] = report.simulated_s;
   summary["wall_s"] = report.wall_s;
   summary["haptic"] = {{"ticks", report.haptic_ticks},
@@ -298,90 +246,137 @@ int run_session(const RunOptions& options) {
                        {"period_p99_s", periods.quantile_s(0.99)},
                        {"period_max_s", periods.max_s()},
                        {"overruns", periods.overruns()}};
-  summary["simulation"] = {{"steps", report.simulation_steps}, {"dt_s", dt}, {"steps_per_s", report.simulation_steps_per_s}};
+  summary["simulation"] = {{"steps", report.simulation_steps}, {"dt_s", session.dt()}, {"steps_per_s", report.simulation_steps_per_s}};
   summary["graphics_equivalent_fps"] = {
       {"untouched", report.rate_untouched}, {"deforming", report.rate_deforming}, {"in_contact", report.rate_in_contact}};
   summary["max_force_n"] = report.max_force_n;
   summary["contact_time_s"] = report.contact_time_s;
+  summary["contact_time_at_force_limit_share"] = clamped_share;
   summary["fall_through_events"] = report.fall_through_events;
   summary["diverged"] = report.diverged;
-  if (report.diverged) summary["divergence"] = report.divergence;
+  if (report.diverged) summary["divergence"] = json_safe(report.divergence);
   summary["safety"] = {{"clamped_ticks", report.safety.clamped},
                        {"rate_limited_ticks", report.safety.rate_limited},
                        {"non_finite_ticks", report.safety.non_finite},
                        {"no_reading_ticks", report.safety.no_reading},
                        {"watchdog_ticks", report.safety.watchdog}};
-  summary["models"] = nlohmann::json::array(
-      {{{"name", model_name}, {"nodes", (*session)->model().node_count()}, {"max_displacement_m", report.max_displacement_m}}});
-  summary["skipped_components"] = loaded->sofa.skipped;
+  nlohmann::json bodies = nlohmann::json::array();
+  std::vector<std::string> started_inside;
+  for (const coupling::BodyReport& b : report.bodies) {
+    bodies.push_back({{"name", json_safe(b.name)},
+                      {"kind", b.deformable ? "deformable" : "rigid"},
+                      {"nodes", b.nodes},
+                      {"max_displacement", b.max_displacement_m},
+                      {"contact_time_s", b.contact_time_s},
+                      {"max_force_n", b.max_force_n},
+                      {"fall_through_events", b.fall_through_events},
+                      {"probe_started_inside", b.probe_started_inside}});
+    if (b.probe_started_inside) started_inside.push_back(b.name);
+  }
+  summary["bodies"] = bodies;
+  // The single-body key of earlier reports (kept for scripts that read it).
+  summary["models"] = nlohmann::json::array();
+  for (const coupling::BodyReport& b : report.bodies) {
+    summary["models"].push_back({{"name", json_safe(b.name)}, {"nodes", b.nodes}, {"max_displacement_m", b.max_displacement_m}});
+  }
+  summary["skipped_components"] = nlohmann::json::array();
+  for (const auto& s : world->skipped) summary["skipped_components"].push_back(json_safe(s));
+  summary["defaults"] = nlohmann::json::array();
+  for (const auto& d : world->defaults) summary["defaults"].push_back(json_safe(d));
+  summary["commands"] = report.applied_commands;
 
   if (options.out) {
-    std::ofstream(*options.out / "summary.json") << summary.dump(2) << "\n";
-    mesh::Mesh final_state;
-    const auto& state = (*session)->state();
-    for (std::size_t i = 0; i < (*session)->model().node_count(); ++i) {
-      final_state.nodes.push_back(state.position(static_cast<std::int32_t>(i)));
+    // Written first and whole: whatever happens after, the session's results are on disk.
+    {
+      std::ofstream out(*options.out / "summary.json");
+      out << summary.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) << "\n";
+      if (!out) return fail(Error{ErrorCode::kIo, "cannot write summary.json", options.out->string(), 0, -1});
     }
-    final_state.tets = (*session)->model().tets;
-    if (auto ok = mesh::write_vtu(final_state, *options.out / (model_name + ".vtu")); !ok) return fail(ok.error());
-    write_plots(*options.out, report, options.quiet);
+    for (std::size_t i = 0; i < session.body_count(); ++i) {
+      const coupling::SessionBody& body = session.body(i);
+      if (!body.deformable()) continue;
+      mesh::Mesh final_state;
+      const auto& state = session.state(i);
+      for (std::size_t n = 0; n < body.model->node_count(); ++n) final_state.nodes.push_back(state.position(static_cast<std::int32_t>(n)));
+      final_state.tets = body.model->tets;
+      if (final_state.tets.empty()) final_state.triangles = body.model->triangles;
+      if (auto ok = mesh::write_vtu(final_state, *options.out / (file_safe(body.name) + ".vtu")); !ok) return fail(ok.error());
+    }
+    std::string touched;
+    for (const coupling::BodyReport& b : report.bodies) {
+      if (b.contact_time_s > 0.0) touched += (touched.empty() ? "" : ", ") + json_safe(b.name);
+    }
+    write_plots(*options.out, report,
+                fmt::format("{} - {}", json_safe(world->scene_path.filename().string()), touched.empty() ? "no contact" : touched),
+                world->length_unit, options.quiet);
   }
   if (!options.quiet) {
+    const bool metres = world->length_unit == "m";
+    const auto length = [&](double v) { return metres ? fmt::format("{:.2f} mm", 1e3 * v) : fmt::format("{:.4g} {}", v, world->length_unit); };
     std::printf("%s: %.2f s simulated in %.2f s (%s)\n", options.file.c_str(), report.simulated_s, report.wall_s,
                 options.deterministic ? "virtual time" : "real time");
+    if (world->default_probe) std::printf("  device      the default probe: %s\n", world->device.c_str());
     std::printf("  haptic      %lld ticks, %.0f Hz, period p50 %.1f us, p99 %.1f us, max %.1f us, %llu overruns\n",
                 static_cast<long long>(report.haptic_ticks), periods.rate_hz(), 1e6 * periods.quantile_s(0.5),
                 1e6 * periods.quantile_s(0.99), 1e6 * periods.max_s(), static_cast<unsigned long long>(periods.overruns()));
     std::printf("  simulation  %lld steps, %.0f steps/s\n", static_cast<long long>(report.simulation_steps),
                 report.simulation_steps_per_s);
-    std::printf("  contact     %.3f s, max force %.3f N, fall-through events %lld, max displacement %.2f mm\n",
-                report.contact_time_s, report.max_force_n, static_cast<long long>(report.fall_through_events),
-                1e3 * report.max_displacement_m);
+    std::printf("  contact     %.3f s, max force %.3f N, fall-through events %lld\n", report.contact_time_s, report.max_force_n,
+                static_cast<long long>(report.fall_through_events));
+    for (const coupling::BodyReport& b : report.bodies) {
+      std::printf("  body        %s (%s): contact %.3f s, max force %.3f N, max displacement %s%s\n", json_safe(b.name).c_str(),
+                  b.deformable ? "deformable" : "rigid", b.contact_time_s, b.max_force_n, length(b.max_displacement_m).c_str(),
+                  b.probe_started_inside ? ", the probe started inside it" : "");
+    }
     if (report.diverged) std::printf("  DIVERGED    %s\n", report.divergence.c_str());
-    if (options.out) std::printf("  report      %s (telemetry.csv, summary.json, %s.vtu, plots)\n", options.out->c_str(), model_name.c_str());
+    if (options.out) std::printf("  report      %s (telemetry.csv, summary.json, .vtu per deformable body, plots)\n", options.out->c_str());
   }
+  if (clamped_share > 0.01) {
+    std::fprintf(stderr, "hof: warning: the force was at the device's limit (%.1f N) for %.0f%% of the contact time: the "
+                         "surface is too stiff for this device or the press too deep\n",
+                 max_force, 100.0 * clamped_share);
+  }
+  if (!started_inside.empty()) {
+    std::string list;
+    for (const auto& n : started_inside) list += (list.empty() ? "" : ", ") + json_safe(n);
+    std::fprintf(stderr, "hof: warning: the device started inside %s (not counted as fall-through)\n", list.c_str());
+  }
+  (void)ended_rows;
   return report.diverged ? 2 : 0;
 }
 
 int run_check(const CheckOptions& options) {
   const std::string ext = options.file.extension().string();
-  if (ext == ".hof" || ext == ".scn") {
-    auto loaded = load(options.file);
-    if (!loaded) return fail(loaded.error());
+  if (ext == ".hof" || ext == ".scn" || ext == ".x3d") {
+    // The same builder as `hof run`: what run would refuse is an error here.
+    auto world = scene::build_world(options.file);
+    if (!world) return fail(world.error());
     int problems = 0;
-    for (const auto& m : loaded->sofa.models) {
-      auto body = make_body(m);
-      if (!body) {
-        std::printf("%s\n", body.error().to_string().c_str());
-        ++problems;
+    std::printf("%s: %zu bod%s, lengths in %s\n", world->scene_path.c_str(), world->bodies.size(),
+                world->bodies.size() == 1 ? "y" : "ies", world->length_unit.c_str());
+    std::size_t touchable = 0;
+    for (const coupling::SessionBody& b : world->bodies) {
+      touchable += b.surface.triangles.empty() ? 0 : 1;
+      if (b.deformable()) {
+        std::printf("  model '%s': %zu nodes, %zu tetrahedra, %zu surface triangles (deformable, dt %g s)\n",
+                    json_safe(b.name).c_str(), b.model->node_count(), b.model->tets.size(), b.surface.triangles.size(),
+                    b.model->dt_s);
       } else {
-        std::printf("%s: model '%s': %zu nodes, %zu tetrahedra, %zu surface triangles\n", loaded->scene_path.c_str(),
-                    body->name.c_str(), body->model.node_count(), body->model.tets.size(), body->surface.triangles.size());
+        std::printf("  shape '%s': %zu triangles (rigid, fixed)\n", json_safe(b.name).c_str(), b.surface.triangles.size());
       }
     }
-    for (const auto& w : loaded->sofa.warnings) std::printf("warning: %s\n", w.c_str());
-    if (ext == ".hof") {
-      if (auto device = haptics::open_device(loaded->project.device); !device) {
-        std::printf("%s\n", device.error().to_string().c_str());
-        ++problems;
-      }
+    std::printf("  %zu touchable, %zu spring / %zu viscosity / %zu constant force effects\n", touchable,
+                world->config.effects.springs.size(), world->config.effects.viscosities.size(),
+                world->config.effects.constants.size());
+    for (const auto& d : world->defaults) std::printf("default: %s\n", json_safe(d).c_str());
+    for (const auto& s : world->skipped) std::printf("not simulated: %s\n", json_safe(s).c_str());
+    for (const auto& w : world->warnings) std::printf("warning: %s\n", json_safe(w).c_str());
+    if (auto device = haptics::open_device(world->device); !device) {
+      std::printf("%s\n", device.error().to_string().c_str());
+      ++problems;
     }
     std::printf("%s\n", problems ? fmt::format("{} problem(s)", problems).c_str() : "ok");
     return problems ? 1 : 0;
-  }
-  if (ext == ".x3d") {
-    auto x3d = scene::read_x3d_scene(options.file);
-    if (!x3d) return fail(x3d.error());
-    std::size_t touchable = 0, triangles = 0;
-    for (const auto& shape : x3d->shapes) {
-      touchable += shape.touchable ? 1 : 0;
-      triangles += shape.mesh_W.triangles.size();
-    }
-    std::printf("%s: %zu shapes (%zu touchable, %zu triangles), %zu devices\n", options.file.c_str(), x3d->shapes.size(),
-                touchable, triangles, x3d->devices.size());
-    for (const auto& w : x3d->warnings) std::printf("warning: %s\n", w.c_str());
-    std::printf("ok\n");
-    return 0;
   }
   auto read = mesh::read_mesh(options.file);
   if (!read) return fail(read.error());

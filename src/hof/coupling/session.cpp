@@ -1,14 +1,15 @@
 #include "hof/coupling/session.h"
 
 #include <fmt/format.h>
+#include <tbb/parallel_for.h>
 
 #include <Eigen/LU>
 #include <array>
 #include <chrono>
 #include <cmath>
 #include <numbers>
-#include <thread>
 
+#include "hof/mechanics/model_parameters.h"
 #include "hof/mechanics/step.h"
 #include "hof/mesh/surface_check.h"
 
@@ -20,124 +21,36 @@ using Clock = std::chrono::steady_clock;
 
 double seconds_between(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
 
-}  // namespace
-
-Session::Session(SessionBody body, std::unique_ptr<haptics::Device> device, const SessionConfig& config)
-    : body_(std::move(body)),
-      device_(std::move(device)),
-      config_(config),
-      state_(mechanics::make_state(body_.model)),
-      surfaces_(haptics::make_snapshot(body_.surface, config.tree)) {
-  surface_positions_.assign(body_.surface.vertices.size(), Vec3::Zero());
-  surface_velocities_.assign(body_.surface.vertices.size(), Vec3::Zero());
-  loop_ = std::make_unique<haptics::HapticLoop>(*device_, surfaces_, config_.haptics);
-  surface_closed_ = mesh::check_surface(body_.surface).closed_manifold();
-  loop_->effects() = config_.effects;
-}
-
-Expected<std::unique_ptr<Session>> Session::make(SessionBody body, std::unique_ptr<haptics::Device> device,
-                                                 const SessionConfig& config) {
-  if (!device) return make_error(ErrorCode::kInvalidArgument, "session: no device");
-  if (body.mapping.surface_vertex_count() != body.surface.vertices.size()) {
-    return make_error(ErrorCode::kInvalidArgument,
-                      fmt::format("session '{}': the surface has {} vertices but the mapping {}", body.name,
-                                  body.surface.vertices.size(), body.mapping.surface_vertex_count()));
-  }
-  if (!(config.haptics.rate_hz >= 100.0 && config.haptics.rate_hz <= 20000.0)) {
-    return make_error(ErrorCode::kInvalidArgument,
-                      fmt::format("session: haptic rate must be in [100, 20000] Hz, got {}", config.haptics.rate_hz));
-  }
-  auto session = std::unique_ptr<Session>(new Session(std::move(body), std::move(device), config));
-  session->publish_surface(0.0);
-  return session;
-}
-
-void Session::publish_surface(double time_s) {
-  body_.mapping.apply({state_.x.data(), static_cast<std::size_t>(state_.x.size())}, surface_positions_);
-  body_.mapping.apply({state_.v.data(), static_cast<std::size_t>(state_.v.size())}, surface_velocities_);
-  haptics::SurfaceSnapshot& slot = surfaces_.write_slot();
-  haptics::update_snapshot(slot, surface_positions_, surface_velocities_, time_s);
-  slot.local.valid = false;
-  if (config_.coupling == ContactCoupling::kCompliance && last_triangle_ >= 0 && contact_ticks_since_publish_ > 0) {
-    // The contact point's compliance at the current state (Saupin, Duriez & Cotin 2008).
-    const mesh::Tri& tri = body_.surface.triangles[static_cast<std::size_t>(last_triangle_)];
-    const std::array<std::int32_t, 3> vertices{tri[0], tri[1], tri[2]};
-    const std::array<double, 3> bary{last_barycentric_[0], last_barycentric_[1], last_barycentric_[2]};
-    std::array<std::int32_t, 12> nodes{};
-    std::array<double, 12> weights{};
-    const std::size_t count = body_.mapping.point_weights(vertices, bary, nodes, weights);
-    Mat3 compliance;
-    if (mechanics::compute_point_compliance(body_.model, state_, std::span(nodes.data(), count),
-                                            std::span(weights.data(), count), compliance)) {
-      const Eigen::FullPivLU<Mat3> lu(compliance);
-      if (lu.isInvertible()) {
-        slot.local.valid = true;
-        slot.local.triangle = last_triangle_;
-        slot.local.barycentric = last_barycentric_;
-        slot.local.compliance = compliance;
-        slot.local.stiffness = lu.inverse();
-        // The load that holds the tissue in its current shape at that point (minus its
-        // elastic force), rather than the force last applied: the local model then stays
-        // consistent with the simulated shape even while the simulation is still settling.
-        slot.local.applied_force =
-            -mechanics::point_elastic_force(body_.model, state_, std::span(nodes.data(), count), std::span(weights.data(), count));
-      }
-    }
-  }
-  contact_ticks_since_publish_ = 0;
-  surfaces_.publish();
-}
-
-void Session::accumulate(const haptics::HapticSample& s) {
-  ++ticks_since_step_;
-  if (s.valid) {
-    last_proxy_ = s.proxy;
-    last_proxy_valid_ = true;
-  }
-  if (!s.contact || s.triangle < 0) return;
-  reaction_sum_ -= s.force;  // the tissue feels the opposite of what the hand feels
-  ++contact_ticks_;
-  ++contact_ticks_since_publish_;
-  last_triangle_ = s.triangle;
-  last_barycentric_ = s.barycentric;
-}
-
-void Session::apply_contact_forces() {
-  state_.external_force.setZero();
-  last_reaction_.setZero();
-  if (contact_ticks_ > 0 && last_triangle_ >= 0) {
-    // Average over the step's ticks (the force acted only during the contact ticks).
-    const Vec3 reaction = reaction_sum_ / static_cast<double>(std::max(ticks_since_step_, 1));
-    last_reaction_ = reaction;
-    const mesh::Tri& tri = body_.surface.triangles[static_cast<std::size_t>(last_triangle_)];
-    std::span<double> forces{state_.external_force.data(), static_cast<std::size_t>(state_.external_force.size())};
-    if (config_.coupling == ContactCoupling::kClosestVertex) {
-      int nearest = 0;
-      for (int k = 1; k < 3; ++k) {
-        if (last_barycentric_[k] > last_barycentric_[nearest]) nearest = k;
-      }
-      body_.mapping.add_vertex_force(tri[nearest], reaction, forces);
-    } else {
-      for (int k = 0; k < 3; ++k) body_.mapping.add_vertex_force(tri[k], last_barycentric_[k] * reaction, forces);
-    }
-  }
-  reaction_sum_.setZero();
-  contact_ticks_ = 0;
-  ticks_since_step_ = 0;
-}
-
-bool Session::proxy_inside(const Vec3& p) const {
-  // "Inside" only means something for a closed surface (an open sheet has no inside).
-  if (!surface_closed_) return false;
-  // Generalised winding number of the current surface at p (Van Oosterom & Strackee 1983).
+// Generalised winding number of a closed surface part at p (Van Oosterom & Strackee 1983):
+// 1 inside, 0 outside.
+bool inside_part(const haptics::SurfacePart& part, const std::vector<mesh::Tri>& triangles, const std::vector<Vec3>& x,
+                 const Vec3& p) {
   double total = 0.0;
-  for (const mesh::Tri& t : body_.surface.triangles) {
-    const Vec3 a = surface_positions_[t[0]] - p, b = surface_positions_[t[1]] - p, c = surface_positions_[t[2]] - p;
+  for (std::int32_t t = part.first_triangle; t < part.first_triangle + part.triangle_count; ++t) {
+    const mesh::Tri& tri = triangles[static_cast<std::size_t>(t)];
+    const Vec3 a = x[tri[0]] - p, b = x[tri[1]] - p, c = x[tri[2]] - p;
     const double la = a.norm(), lb = b.norm(), lc = c.norm();
     total += 2.0 * std::atan2(a.dot(b.cross(c)), la * lb * lc + a.dot(b) * lc + b.dot(c) * la + c.dot(a) * lb);
   }
   return total / (4.0 * std::numbers::pi) > 0.5;
 }
+
+}  // namespace
+
+struct Session::BodyRuntime {
+  SessionBody body;
+  mechanics::MechanicalState state;  // deformable bodies
+  std::vector<Vec3> surface_positions, surface_velocities;
+  // Contact since this body last stepped.
+  Vec3 reaction_sum{Vec3::Zero()};
+  int contact_ticks{0};
+  std::int64_t ticks_at_last_step{0};
+  std::int32_t last_triangle{-1};  // local to the body's surface
+  Vec3 last_barycentric{Vec3::Zero()};
+  double next_step_s{0.0};
+  BodyReport report;
+  bool inside_since_start{false};
+};
 
 struct Session::StateTimer {
   double untouched_s{0}, deforming_s{0}, contact_s{0};
@@ -157,112 +70,528 @@ struct Session::StateTimer {
   static double rate(std::int64_t n, double s) { return s > 0.0 ? static_cast<double>(n) / s : 0.0; }
 };
 
+Session::Session(std::vector<SessionBody> bodies, std::unique_ptr<haptics::Device> device, const SessionConfig& config)
+    : device_(std::move(device)), config_(config) {
+  std::vector<mesh::TriMesh> surfaces;
+  std::vector<char> is_static, closed;
+  double dt = std::numeric_limits<double>::infinity();
+  for (SessionBody& b : bodies) {
+    BodyRuntime r;
+    r.body = std::move(b);
+    r.report.name = r.body.name;
+    r.report.deformable = r.body.deformable();
+    if (r.body.deformable()) {
+      r.state = mechanics::make_state(*r.body.model);
+      r.report.nodes = r.body.model->node_count();
+      dt = std::min(dt, r.body.model->dt_s);
+      r.next_step_s = r.body.model->dt_s;
+    } else {
+      r.report.nodes = r.body.surface.vertices.size();
+    }
+    r.surface_positions = r.body.surface.vertices;
+    r.surface_velocities.assign(r.body.surface.vertices.size(), Vec3::Zero());
+    surfaces.push_back(r.body.surface);
+    is_static.push_back(r.body.deformable() ? 0 : 1);
+    closed.push_back(mesh::check_surface(r.body.surface).closed_manifold() ? 1 : 0);
+    validated_configs_.push_back(r.body.config.value_or(mechanics::ModelConfig{}));
+    bodies_.push_back(std::move(r));
+  }
+  // A world of rigid shapes (or of force effects only) still steps, to publish and report.
+  dt_ = std::isfinite(dt) ? dt : 0.01;
+  const std::vector<bool> statics(is_static.begin(), is_static.end()), closeds(closed.begin(), closed.end());
+  {
+    // std::vector<bool> has no contiguous storage: spans of plain bools.
+    std::unique_ptr<bool[]> s(new bool[std::max<std::size_t>(1, statics.size())]);
+    std::unique_ptr<bool[]> c(new bool[std::max<std::size_t>(1, closeds.size())]);
+    for (std::size_t i = 0; i < statics.size(); ++i) {
+      s[i] = statics[i];
+      c[i] = closeds[i];
+    }
+    rest_ = haptics::make_snapshot(surfaces, std::span<const bool>(s.get(), statics.size()),
+                                   std::span<const bool>(c.get(), closeds.size()), config_.tree);
+  }
+  surfaces_.write_slot() = rest_;
+  surfaces_.publish();
+  surfaces_.write_slot() = rest_;
+  graphics_surfaces_.write_slot() = rest_;
+  graphics_surfaces_.publish();
+  all_positions_ = rest_.vertices;
+  all_velocities_.assign(rest_.vertices.size(), Vec3::Zero());
+
+  current_settings_.valid = true;
+  current_settings_.renderer = config_.haptics.renderer;
+  current_settings_.effects = config_.effects;
+  for (const BodyRuntime& r : bodies_) current_settings_.materials.push_back(r.body.material.value_or(config_.haptics.material));
+  loop_ = std::make_unique<haptics::HapticLoop>(*device_, surfaces_, config_.haptics, &settings_);
+  publish_settings();
+}
+
+Session::~Session() { stop_realtime(); }
+
+Expected<std::unique_ptr<Session>> Session::make(SessionBody body, std::unique_ptr<haptics::Device> device,
+                                                 const SessionConfig& config) {
+  std::vector<SessionBody> bodies;
+  bodies.push_back(std::move(body));
+  return make(std::move(bodies), std::move(device), config);
+}
+
+Expected<std::unique_ptr<Session>> Session::make(std::vector<SessionBody> bodies, std::unique_ptr<haptics::Device> device,
+                                                 const SessionConfig& config) {
+  if (!device) return make_error(ErrorCode::kInvalidArgument, "session: no device");
+  for (const SessionBody& body : bodies) {
+    if (body.deformable() && body.mapping.surface_vertex_count() != body.surface.vertices.size()) {
+      return make_error(ErrorCode::kInvalidArgument,
+                        fmt::format("session: body '{}': the surface has {} vertices but the mapping {}", body.name,
+                                    body.surface.vertices.size(), body.mapping.surface_vertex_count()));
+    }
+    if (body.material) {
+      if (auto ok = haptics::validate(*body.material); !ok) {
+        return make_error(ErrorCode::kInvalidArgument, fmt::format("session: body '{}': {}", body.name, ok.error().message));
+      }
+    }
+  }
+  if (!(config.haptics.rate_hz >= 100.0 && config.haptics.rate_hz <= 20000.0)) {
+    return make_error(ErrorCode::kInvalidArgument,
+                      fmt::format("session: haptic rate must be in [100, 20000] Hz, got {}", config.haptics.rate_hz));
+  }
+  if (auto ok = haptics::validate_effects(config.effects); !ok) return std::unexpected(ok.error());
+  auto session = std::unique_ptr<Session>(new Session(std::move(bodies), std::move(device), config));
+  session->publish(0.0);
+  return session;
+}
+
+std::size_t Session::body_count() const { return bodies_.size(); }
+const SessionBody& Session::body(std::size_t i) const { return bodies_[i].body; }
+const mechanics::MechanicalState& Session::state(std::size_t i) const { return bodies_[i].state; }
+
+std::int32_t Session::body_of_triangle(std::int32_t triangle) const { return rest_.part_of(triangle); }
+
+// ---- The command seam
+
+Expected<void> Session::submit(const Command& command) {
+  std::lock_guard lock(commands_mutex_);
+  const auto find_body = [&](const std::string& name) -> std::int32_t {
+    for (std::size_t i = 0; i < bodies_.size(); ++i) {
+      if (bodies_[i].body.name == name) return static_cast<std::int32_t>(i);
+    }
+    return -1;
+  };
+  const auto body_names = [&] {
+    std::string names;
+    for (const BodyRuntime& r : bodies_) names += (names.empty() ? "" : ", ") + r.body.name;
+    return names.empty() ? std::string("none") : names;
+  };
+  if (const auto* set = std::get_if<command::SetParameter>(&command)) {
+    const std::int32_t i = find_body(set->body);
+    if (i < 0) return make_error(ErrorCode::kInvalidArgument, fmt::format("no body '{}' (bodies: {})", set->body, body_names()));
+    if (!bodies_[static_cast<std::size_t>(i)].body.deformable() || !bodies_[static_cast<std::size_t>(i)].body.config) {
+      return make_error(ErrorCode::kInvalidArgument, fmt::format("body '{}' is rigid: it has no mechanical parameters", set->body));
+    }
+    mechanics::ModelConfig& config = validated_configs_[static_cast<std::size_t>(i)];
+    if (auto ok = mechanics::set_parameter(config, set->component, set->parameter, set->value); !ok) {
+      return make_error(ErrorCode::kInvalidArgument, fmt::format("body '{}': {}", set->body, ok.error().message));
+    }
+    changes_.push_back(ParameterChange{set->body, set->component, set->parameter, set->value});
+  } else if (const auto* steps = std::get_if<command::SingleStep>(&command)) {
+    if (steps->steps < 1 || steps->steps > 1000000) {
+      return make_error(ErrorCode::kInvalidArgument, fmt::format("single step: steps must be in [1, 1000000], got {}", steps->steps));
+    }
+  } else if (const auto* material = std::get_if<command::SetMaterial>(&command)) {
+    if (!material->body.empty() && find_body(material->body) < 0) {
+      return make_error(ErrorCode::kInvalidArgument, fmt::format("no body '{}' (bodies: {})", material->body, body_names()));
+    }
+    if (auto ok = haptics::validate(material->material); !ok) return std::unexpected(ok.error());
+  } else if (const auto* effects = std::get_if<command::SetEffects>(&command)) {
+    if (auto ok = haptics::validate_effects(effects->effects); !ok) return std::unexpected(ok.error());
+  } else if (const auto* renderer = std::get_if<command::SetRenderer>(&command)) {
+    const haptics::RendererConfig& r = renderer->renderer;
+    if (!(r.proxy_radius_m >= 0.0 && r.proxy_radius_m < 1.0) || r.max_iterations < 1 || r.max_iterations > 64) {
+      return make_error(ErrorCode::kInvalidArgument, fmt::format("renderer: proxyRadius must be in [0, 1) m and iterations in "
+                                                                 "[1, 64], got {} m and {}", r.proxy_radius_m, r.max_iterations));
+    }
+  }
+  pending_.push_back(command);
+  return {};
+}
+
+std::vector<ParameterChange> Session::parameter_changes() const {
+  std::lock_guard lock(commands_mutex_);
+  return changes_;
+}
+
+void Session::publish_settings() {
+  settings_.write_slot() = current_settings_;
+  settings_.publish();
+}
+
+void Session::apply_commands(SessionReport& report) {
+  std::vector<Command> commands;
+  {
+    std::lock_guard lock(commands_mutex_);
+    if (pending_.empty()) return;
+    commands.swap(pending_);
+  }
+  const std::int64_t at = report.simulation_steps;
+  bool settings_changed = false;
+  for (const Command& command : commands) {
+    if (const auto* set = std::get_if<command::SetParameter>(&command)) {
+      for (BodyRuntime& r : bodies_) {
+        if (r.body.name != set->body || !r.body.config) continue;
+        mechanics::ModelConfig config = *r.body.config;
+        auto ok = mechanics::set_parameter(config, set->component, set->parameter, set->value);
+        auto model = ok ? mechanics::build_model(config) : Expected<mechanics::MechanicalModel>(std::unexpected(ok.error()));
+        const std::string what = fmt::format("{}/{}{}{} = {}", set->body, set->component, set->component.empty() ? "" : "/",
+                                             set->parameter, set->value);
+        if (!model) {
+          report.applied_commands.push_back(fmt::format("step {}: {} refused: {}", at, what, model.error().message));
+          continue;
+        }
+        // The new model starts from the current shape and motion.
+        mechanics::MechanicalState state = mechanics::make_state(*model);
+        state.x = r.state.x;
+        state.v = r.state.v;
+        r.body.model.emplace(std::move(*model));
+        r.body.config = std::move(config);
+        r.state = std::move(state);
+        r.next_step_s = time_s_ + r.body.model->dt_s;
+        report.applied_commands.push_back(fmt::format("step {}: {}", at, what));
+      }
+      double dt = std::numeric_limits<double>::infinity();
+      for (const BodyRuntime& r : bodies_) {
+        if (r.body.deformable()) dt = std::min(dt, r.body.model->dt_s);
+      }
+      if (std::isfinite(dt)) dt_ = dt;
+    } else if (std::holds_alternative<command::Pause>(command)) {
+      paused_ = true;
+      report.applied_commands.push_back(fmt::format("step {}: pause", at));
+    } else if (std::holds_alternative<command::Resume>(command)) {
+      paused_ = false;
+      single_steps_ = 0;
+      report.applied_commands.push_back(fmt::format("step {}: resume", at));
+    } else if (const auto* steps = std::get_if<command::SingleStep>(&command)) {
+      single_steps_ += steps->steps;
+      report.applied_commands.push_back(fmt::format("step {}: single step x{}", at, steps->steps));
+    } else if (std::holds_alternative<command::Reset>(command)) {
+      for (BodyRuntime& r : bodies_) {
+        if (!r.body.deformable()) continue;
+        r.state = mechanics::make_state(*r.body.model);
+        r.reaction_sum.setZero();
+        r.contact_ticks = 0;
+      }
+      report.applied_commands.push_back(fmt::format("step {}: reset", at));
+    } else if (const auto* material = std::get_if<command::SetMaterial>(&command)) {
+      for (std::size_t i = 0; i < bodies_.size(); ++i) {
+        if (material->body.empty() || bodies_[i].body.name == material->body) current_settings_.materials[i] = material->material;
+      }
+      settings_changed = true;
+      report.applied_commands.push_back(fmt::format("step {}: surface of {}", at, material->body.empty() ? "every body" : material->body));
+    } else if (const auto* effects = std::get_if<command::SetEffects>(&command)) {
+      current_settings_.effects = effects->effects;
+      settings_changed = true;
+      report.applied_commands.push_back(fmt::format("step {}: force effects", at));
+    } else if (const auto* renderer = std::get_if<command::SetRenderer>(&command)) {
+      current_settings_.renderer = renderer->renderer;
+      settings_changed = true;
+      report.applied_commands.push_back(fmt::format("step {}: renderer", at));
+    }
+  }
+  if (settings_changed) publish_settings();
+}
+
+// ---- Stepping
+
+void Session::take_contacts(SessionReport& report) {
+  const double period = loop_->nominal_period_s();
+  haptics::HapticContact c;
+  while (loop_->contacts().pop(c)) {
+    ++ticks_since_step_;
+    ++report.haptic_ticks;
+    if (c.valid) {
+      last_proxy_ = c.proxy;
+      last_proxy_valid_ = true;
+    }
+    const double force = c.force.norm();
+    report.max_force_n = std::max(report.max_force_n, force);
+    if (!c.contact || c.triangle < 0) continue;
+    const std::int32_t b = rest_.part_of(c.triangle);
+    if (b < 0) continue;
+    BodyRuntime& r = bodies_[static_cast<std::size_t>(b)];
+    r.reaction_sum -= c.force;  // the tissue feels the opposite of what the hand feels
+    ++r.contact_ticks;
+    r.last_triangle = c.triangle - rest_.parts[static_cast<std::size_t>(b)].first_triangle;
+    r.last_barycentric = c.barycentric;
+    r.report.contact_time_s += period;
+    r.report.max_force_n = std::max(r.report.max_force_n, force);
+    report.contact_time_s += period;
+    if (c.clamped) ++report.clamped_contact_ticks;
+    last_body_ = b;
+    last_triangle_ = c.triangle;
+    last_barycentric_ = c.barycentric;
+    ++contact_ticks_since_publish_;
+  }
+}
+
+void Session::count_fall_through(SessionReport& report) {
+  if (!last_proxy_valid_) return;
+  const bool first = !first_reading_seen_;
+  first_reading_seen_ = true;
+  for (std::size_t i = 0; i < bodies_.size(); ++i) {
+    const haptics::SurfacePart& part = rest_.parts[i];
+    if (!part.closed) continue;  // an open sheet has no inside
+    BodyRuntime& r = bodies_[i];
+    const bool inside = inside_part(part, rest_.triangles, all_positions_, last_proxy_);
+    if (first && inside) {
+      // A probe that starts inside a body has not fallen through it: it is reported as such.
+      r.report.probe_started_inside = true;
+      r.inside_since_start = true;
+    }
+    if (!inside) r.inside_since_start = false;
+    if (inside && !r.inside_since_start) {
+      ++r.report.fall_through_events;
+      ++report.fall_through_events;
+    }
+  }
+}
+
+bool Session::advance_bodies(SessionReport& report) {
+  const double next_time = time_s_ + dt_;
+  std::vector<BodyRuntime*> due;
+  for (BodyRuntime& r : bodies_) {
+    if (r.body.deformable() && r.next_step_s <= next_time + 1e-9 * dt_) due.push_back(&r);
+  }
+  for (BodyRuntime* r : due) {
+    // Contact forces: the average reaction over this body's ticks since its last step (the
+    // force acted only during the contact ticks).
+    r->state.external_force.setZero();
+    const std::int64_t ticks = std::max<std::int64_t>(1, report.haptic_ticks - r->ticks_at_last_step);
+    if (r->contact_ticks > 0 && r->last_triangle >= 0) {
+      const Vec3 reaction = r->reaction_sum / static_cast<double>(ticks);
+      const mesh::Tri& tri = r->body.surface.triangles[static_cast<std::size_t>(r->last_triangle)];
+      std::span<double> forces{r->state.external_force.data(), static_cast<std::size_t>(r->state.external_force.size())};
+      if (config_.coupling == ContactCoupling::kClosestVertex) {
+        int nearest = 0;
+        for (int k = 1; k < 3; ++k) {
+          if (r->last_barycentric[k] > r->last_barycentric[nearest]) nearest = k;
+        }
+        r->body.mapping.add_vertex_force(tri[nearest], reaction, forces);
+      } else {
+        for (int k = 0; k < 3; ++k) r->body.mapping.add_vertex_force(tri[k], r->last_barycentric[k] * reaction, forces);
+      }
+    }
+    r->reaction_sum.setZero();
+    r->contact_ticks = 0;
+    r->ticks_at_last_step = report.haptic_ticks;
+  }
+  // Every due body steps; several in parallel (each body's own loops are thread-count
+  // independent, so results do not depend on how they are spread).
+  std::vector<char> ok(due.size(), 1);
+  const auto step_one = [&](std::size_t k) { ok[k] = mechanics::step(*due[k]->body.model, due[k]->state) ? 1 : 0; };
+  if (due.size() > 1) {
+    tbb::parallel_for(std::size_t{0}, due.size(), step_one);
+  } else if (due.size() == 1) {
+    step_one(0);
+  }
+  for (std::size_t k = 0; k < due.size(); ++k) {
+    if (!ok[k]) {
+      const auto& d = due[k]->state.divergence;
+      report.diverged = true;
+      report.divergence = fmt::format("body '{}': {} at step {}: {}", due[k]->body.name, d.component, d.step, d.reason);
+      return false;
+    }
+    due[k]->next_step_s += due[k]->body.model->dt_s;
+  }
+  time_s_ = next_time;
+  return true;
+}
+
+void Session::publish(double clock_s) {
+  for (std::size_t i = 0; i < bodies_.size(); ++i) {
+    BodyRuntime& r = bodies_[i];
+    if (!r.body.deformable()) continue;
+    const haptics::SurfacePart& part = rest_.parts[i];
+    r.body.mapping.apply({r.state.x.data(), static_cast<std::size_t>(r.state.x.size())}, r.surface_positions);
+    r.body.mapping.apply({r.state.v.data(), static_cast<std::size_t>(r.state.v.size())}, r.surface_velocities);
+    std::copy(r.surface_positions.begin(), r.surface_positions.end(), all_positions_.begin() + part.first_vertex);
+    std::copy(r.surface_velocities.begin(), r.surface_velocities.end(), all_velocities_.begin() + part.first_vertex);
+  }
+  haptics::SurfaceSnapshot& slot = surfaces_.write_slot();
+  haptics::update_snapshot(slot, all_positions_, all_velocities_, clock_s);
+  slot.local.valid = false;
+  if (config_.coupling == ContactCoupling::kCompliance && last_body_ >= 0 && contact_ticks_since_publish_ > 0 &&
+      bodies_[static_cast<std::size_t>(last_body_)].body.deformable()) {
+    // The contact point's compliance at the current state (Saupin, Duriez & Cotin 2008).
+    BodyRuntime& r = bodies_[static_cast<std::size_t>(last_body_)];
+    const std::int32_t local = last_triangle_ - rest_.parts[static_cast<std::size_t>(last_body_)].first_triangle;
+    const mesh::Tri& tri = r.body.surface.triangles[static_cast<std::size_t>(local)];
+    const std::array<std::int32_t, 3> vertices{tri[0], tri[1], tri[2]};
+    const std::array<double, 3> bary{last_barycentric_[0], last_barycentric_[1], last_barycentric_[2]};
+    std::array<std::int32_t, 12> nodes{};
+    std::array<double, 12> weights{};
+    const std::size_t count = r.body.mapping.point_weights(vertices, bary, nodes, weights);
+    Mat3 compliance;
+    if (mechanics::compute_point_compliance(*r.body.model, r.state, std::span(nodes.data(), count),
+                                            std::span(weights.data(), count), compliance)) {
+      const Eigen::FullPivLU<Mat3> lu(compliance);
+      if (lu.isInvertible()) {
+        slot.local.valid = true;
+        slot.local.triangle = last_triangle_;
+        slot.local.barycentric = last_barycentric_;
+        slot.local.compliance = compliance;
+        slot.local.stiffness = lu.inverse();
+        // The load that holds the tissue in its current shape at that point (minus its
+        // elastic force), rather than the force last applied: the local model then stays
+        // consistent with the simulated shape even while the simulation is still settling.
+        slot.local.applied_force = -mechanics::point_elastic_force(*r.body.model, r.state, std::span(nodes.data(), count),
+                                                                   std::span(weights.data(), count));
+      }
+    }
+  }
+  contact_ticks_since_publish_ = 0;
+  surfaces_.publish();
+}
+
+bool Session::step_world(SessionReport& report, StateTimer& timer, double clock_s) {
+  apply_commands(report);
+  take_contacts(report);
+  count_fall_through(report);
+  bool contact_this_step = false;
+  for (const BodyRuntime& r : bodies_) contact_this_step = contact_this_step || r.contact_ticks > 0;
+  ticks_since_step_ = 0;
+  const auto step_start = Clock::now();
+  const bool stepping = !paused_ || single_steps_ > 0;
+  if (stepping) {
+    if (paused_) --single_steps_;
+    if (!advance_bodies(report)) return false;
+    ++report.simulation_steps;
+  }
+  // Published while paused too: the haptic loop's watchdog sees a live simulation.
+  publish(clock_s);
+  double moving = 0.0;
+  for (const BodyRuntime& r : bodies_) {
+    if (r.body.deformable() && r.state.v.size()) moving = std::max(moving, r.state.v.cwiseAbs().maxCoeff());
+  }
+  if (stepping) timer.add(contact_this_step, moving > 1e-4, seconds_between(step_start, Clock::now()));
+  return true;
+}
+
 void Session::finish_report(SessionReport& report, const StateTimer& timer, double wall_s) const {
   report.wall_s = wall_s;
-  report.simulated_s = static_cast<double>(report.simulation_steps) * body_.model.dt_s;
+  report.simulated_s = time_s_;
   report.simulation_steps_per_s = wall_s > 0.0 ? static_cast<double>(report.simulation_steps) / wall_s : 0.0;
   report.rate_untouched = StateTimer::rate(timer.untouched, timer.untouched_s);
   report.rate_deforming = StateTimer::rate(timer.deforming, timer.deforming_s);
   report.rate_in_contact = StateTimer::rate(timer.contact, timer.contact_s);
   report.haptic_periods = loop_->period_stats();
   report.safety = loop_->safety_counters();
-  for (std::size_t i = 0; i < body_.model.node_count(); ++i) {
-    report.max_displacement_m = std::max(report.max_displacement_m,
-                                         (state_.position(static_cast<std::int32_t>(i)) - body_.model.rest_positions[i]).norm());
+  report.bodies.clear();
+  for (const BodyRuntime& r : bodies_) {
+    BodyReport b = r.report;
+    if (r.body.deformable()) {
+      for (std::size_t i = 0; i < r.body.model->node_count(); ++i) {
+        b.max_displacement_m = std::max(
+            b.max_displacement_m, (r.state.position(static_cast<std::int32_t>(i)) - r.body.model->rest_positions[i]).norm());
+      }
+    }
+    report.max_displacement_m = std::max(report.max_displacement_m, b.max_displacement_m);
+    report.bodies.push_back(std::move(b));
   }
 }
 
 SessionReport Session::run_virtual(double seconds, const std::function<void(const haptics::HapticSample&)>& on_sample,
                                    const ProgressSink& progress) {
   SessionReport report;
-  const double dt = body_.model.dt_s;
+  for (BodyRuntime& r : bodies_) r.ticks_at_last_step = 0;
   const double tick_period = 1.0 / config_.haptics.rate_hz;
-  const auto ticks_per_step = std::max<std::int64_t>(1, std::llround(dt / tick_period));
-  const auto steps = static_cast<std::int64_t>(std::ceil(seconds / dt - 1e-9));
   const auto start = Clock::now();
   StateTimer timer;
   haptics::HapticSample sample;
   std::int64_t tick = 0;
-  for (std::int64_t s = 0; s < steps; ++s) {
-    bool contact_this_step = false;
+  const auto total_ticks = static_cast<std::int64_t>(std::ceil(seconds / tick_period - 1e-6));
+  std::int64_t steps = 0;
+  while (tick < total_ticks) {
+    // N haptic ticks per simulation step (dt may change through a command).
+    const auto ticks_per_step = std::max<std::int64_t>(1, std::llround(dt_ / tick_period));
     for (std::int64_t k = 0; k < ticks_per_step; ++k, ++tick) {
       loop_->tick(static_cast<double>(tick) * tick_period);
       while (loop_->telemetry().pop(sample)) {
-        accumulate(sample);
-        contact_this_step = contact_this_step || sample.contact;
-        report.max_force_n = std::max(report.max_force_n, sample.force.norm());
-        if (sample.contact) report.contact_time_s += tick_period;
         if (on_sample) on_sample(sample);
       }
     }
-    // Fall-through: the proxy against the surface the haptic loop rendered on.
-    if (last_proxy_valid_ && proxy_inside(last_proxy_)) ++report.fall_through_events;
-    const auto step_start = Clock::now();
-    apply_contact_forces();
-    if (!mechanics::step(body_.model, state_)) {
-      report.diverged = true;
-      report.divergence = fmt::format("{} at step {}: {}", state_.divergence.component, state_.divergence.step,
-                                      state_.divergence.reason);
-      break;
+    if (!step_world(report, timer, static_cast<double>(tick) * tick_period)) break;
+    ++steps;
+    if (progress && (steps % 16 == 0 || tick >= total_ticks)) {
+      progress("haptic session (virtual time)", std::min(1.0, static_cast<double>(tick) / static_cast<double>(total_ticks)));
     }
-    publish_surface(static_cast<double>(s + 1) * dt);
-    const double moving = state_.v.size() ? state_.v.cwiseAbs().maxCoeff() : 0.0;
-    timer.add(contact_this_step, moving > 1e-4, seconds_between(step_start, Clock::now()));
-    ++report.simulation_steps;
-    if (progress && (s % 16 == 0 || s + 1 == steps)) progress("haptic session (virtual time)", static_cast<double>(s + 1) / static_cast<double>(steps));
   }
   report.haptic_ticks = tick;
   finish_report(report, timer, seconds_between(start, Clock::now()));
   return report;
 }
 
-SessionReport Session::run_realtime(double seconds, const std::function<void(const haptics::HapticSample&)>& on_sample,
-                                    const ProgressSink& progress) {
-  SessionReport report;
-  const double dt = body_.model.dt_s;
-  StateTimer timer;
-  haptics::HapticSample sample;
-  const auto start = Clock::now();
-  loop_->start();
-  auto next = start;
-  std::int64_t s = 0;
-  for (;; ++s) {
-    const double elapsed = seconds_between(start, Clock::now());
-    if (elapsed >= seconds) break;
-    bool contact_this_step = false;
-    while (loop_->telemetry().pop(sample)) {
-      accumulate(sample);
-      contact_this_step = contact_this_step || sample.contact;
-      report.max_force_n = std::max(report.max_force_n, sample.force.norm());
-      if (sample.contact) report.contact_time_s += loop_->nominal_period_s();
-      if (on_sample) on_sample(sample);
+void Session::simulation_thread(double) {
+  // Fixed-rate simulation on its own thread: sleep to the next step unless already late.
+  auto next = Clock::now();
+  while (!stop_sim_.load(std::memory_order_acquire)) {
+    if (!step_world(rt_report_, *rt_timer_, seconds_between(rt_start_, Clock::now()))) break;
+    next += std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(dt_));
+    if (next > Clock::now()) {
+      std::this_thread::sleep_until(next);
+    } else {
+      next = Clock::now();
     }
-    if (last_proxy_valid_ && proxy_inside(last_proxy_)) ++report.fall_through_events;
-    const auto step_start = Clock::now();
-    apply_contact_forces();
-    if (!mechanics::step(body_.model, state_)) {
-      report.diverged = true;
-      report.divergence = fmt::format("{} at step {}: {}", state_.divergence.component, state_.divergence.step,
-                                      state_.divergence.reason);
-      break;
-    }
-    publish_surface(seconds_between(start, Clock::now()));
-    const double moving = state_.v.size() ? state_.v.cwiseAbs().maxCoeff() : 0.0;
-    timer.add(contact_this_step, moving > 1e-4, seconds_between(step_start, Clock::now()));
-    ++report.simulation_steps;
-    if (progress && s % 16 == 0) progress("haptic session (real time)", std::min(1.0, elapsed / seconds));
-    // Fixed-rate simulation: sleep to the next step unless it is already late.
-    next += std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(dt));
-    if (next > Clock::now()) std::this_thread::sleep_until(next);
-    else next = Clock::now();
   }
-  loop_->stop();
+  sim_finished_.store(true, std::memory_order_release);
+}
+
+void Session::start_realtime() {
+  if (sim_thread_.joinable()) return;
+  SessionReport fresh;
+  rt_report_ = std::move(fresh);
+  for (BodyRuntime& r : bodies_) r.ticks_at_last_step = 0;
+  rt_timer_ = std::make_unique<StateTimer>();
+  stop_sim_.store(false);
+  sim_finished_.store(false);
+  rt_start_ = Clock::now();
+  loop_->start();
+  sim_thread_ = std::thread([this] { simulation_thread(dt_); });
+}
+
+void Session::poll(const std::function<void(const haptics::HapticSample&)>& on_sample) {
+  haptics::HapticSample sample;
   while (loop_->telemetry().pop(sample)) {
     if (on_sample) on_sample(sample);
   }
+}
+
+SessionReport Session::stop_realtime(const std::function<void(const haptics::HapticSample&)>& on_sample) {
+  if (!sim_thread_.joinable()) return rt_report_;
+  stop_sim_.store(true, std::memory_order_release);
+  sim_thread_.join();
+  loop_->stop();
+  poll(on_sample);
+  // Contacts of the ticks after the last step are not applied.
+  haptics::HapticContact c;
+  while (loop_->contacts().pop(c)) {
+  }
+  rt_report_.haptic_ticks = static_cast<std::int64_t>(loop_->ticks());
+  finish_report(rt_report_, *rt_timer_, seconds_between(rt_start_, Clock::now()));
+  return rt_report_;
+}
+
+SessionReport Session::run_realtime(double seconds, const std::function<void(const haptics::HapticSample&)>& on_sample,
+                                    const ProgressSink& progress) {
+  start_realtime();
+  const auto start = Clock::now();
+  std::int64_t polls = 0;
+  for (;;) {
+    const double elapsed = seconds_between(start, Clock::now());
+    if (elapsed >= seconds || sim_finished_.load(std::memory_order_acquire)) break;
+    poll(on_sample);
+    if (progress && ++polls % 16 == 0) progress("haptic session (real time)", std::min(1.0, elapsed / seconds));
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  SessionReport report = stop_realtime(on_sample);
   if (progress) progress("haptic session (real time)", 1.0);
-  report.haptic_ticks = static_cast<std::int64_t>(loop_->ticks());
-  finish_report(report, timer, seconds_between(start, Clock::now()));
   return report;
 }
 

@@ -1,22 +1,35 @@
 #pragma once
 /// @file
-/// A haptic session on one deformable body: the thesis' `Motion` node, improved. Three loops —
-/// haptic (≥ 1 kHz), simulation (fixed dt) and graphics — exchange snapshots: the haptic loop
-/// renders against the latest surface snapshot and publishes contacts; each simulation step
-/// turns the contacts of the ticks since the last step into forces on the tissue, steps the
-/// mechanics, maps the volume to the surface and publishes a new snapshot.
+/// A haptic session on a world of bodies: the thesis' `Motion` node, grown to several bodies.
+/// Three loops exchange snapshots and never wait on each other:
+///  - the haptic loop (≥ 1 kHz, own thread) renders one proxy against every touchable surface
+///    of the world at once (one snapshot, one bound tree, each body a part with its own
+///    triangle range and material) and sends each tick's contact on its own channel;
+///  - the simulation (fixed dt, own thread in real time) runs step_world(): commands → the
+///    contacts since the last step become forces on the touched body only → every deformable
+///    body steps (in parallel when there are several) → one snapshot is published;
+///  - the supervisor (the `hof run` command, later the window or a script) reads telemetry
+///    and snapshots, and changes settings only through submit() (the command seam).
+/// In virtual time the loops run in lock-step on the calling thread (N haptic ticks per
+/// simulation step) through the same step_world(): runs are deterministic.
 ///
 /// Contact → tissue (reaction = −force sent to the device, averaged over the step's ticks):
 ///  - `kClosestVertex`: all of it on the contact triangle's vertex nearest the contact (the
 ///    thesis);
 ///  - `kBarycentric`: spread over the contact triangle's three vertices by the contact
 ///    point's barycentric weights.
-/// In virtual time the loops run in lock-step on the calling thread (N haptic ticks per
-/// simulation step): runs are deterministic.
+/// Bodies do not collide with each other (yet): each feels only the proxy.
 
+#include <atomic>
+#include <chrono>
 #include <functional>
 #include <memory>
+#include <mutex>
+#include <optional>
 #include <string>
+#include <thread>
+#include <variant>
+#include <vector>
 
 #include "hof/core/error.h"
 #include "hof/core/progress.h"
@@ -40,15 +53,34 @@ struct SessionConfig {
   haptics::HapticLoopConfig haptics;  ///< rate, renderer, surface, safety, calibration
   ContactCoupling coupling{ContactCoupling::kBarycentric};
   haptics::ForceEffects effects;      ///< H3D force effects added to the contact force
-  collision::AabbTreeOptions tree;    ///< the surface's bound tree (H3D useBoundTree, maxTrianglesInLeaf)
+  collision::AabbTreeOptions tree;    ///< the surfaces' bound tree (H3D useBoundTree, maxTrianglesInLeaf)
 };
 
-/// The body: its mechanics and the touchable surface that follows it.
+/// A body of the world: deformable (a model, and the touchable surface that follows it
+/// through `mapping`) or rigid and fixed (no model: the surface never moves).
 struct SessionBody {
   std::string name;
-  mechanics::MechanicalModel model;
-  mesh::TriMesh surface;    ///< rest shape of the touchable surface
-  SurfaceMapping mapping;   ///< volume → surface
+  std::optional<mechanics::MechanicalModel> model;  ///< set for deformable bodies
+  mesh::TriMesh surface;    ///< rest shape of the touchable surface (world frame)
+  SurfaceMapping mapping;   ///< volume → surface (deformable bodies)
+  /// Its haptic surface; unset: the session's material (config.haptics.material).
+  std::optional<haptics::SurfaceMaterial> material;
+  /// What the model was built from: commands that change a parameter rebuild from it.
+  std::optional<mechanics::ModelConfig> config;
+
+  [[nodiscard]] bool deformable() const { return model.has_value(); }
+};
+
+/// What a run measured for one body.
+struct BodyReport {
+  std::string name;
+  bool deformable{false};
+  std::size_t nodes{0};
+  double max_displacement_m{0.0};
+  double contact_time_s{0.0};
+  double max_force_n{0.0};
+  std::int64_t fall_through_events{0};
+  bool probe_started_inside{false};  ///< the proxy was inside this body at its first reading
 };
 
 /// What a run measured.
@@ -64,63 +96,158 @@ struct SessionReport {
   double rate_untouched{0.0}, rate_deforming{0.0}, rate_in_contact{0.0};
   double max_force_n{0.0};
   double contact_time_s{0.0};
-  std::int64_t fall_through_events{0};      ///< simulation steps whose proxy was inside the (closed) surface
+  std::int64_t fall_through_events{0};      ///< steps whose proxy was inside a closed body (not counting a start inside)
+  std::int64_t clamped_contact_ticks{0};    ///< contact ticks whose force was clamped by safety
   bool diverged{false};
   std::string divergence;
   double max_displacement_m{0.0};
+  std::vector<BodyReport> bodies;
+  std::vector<std::string> applied_commands;  ///< "step N: what", in order
   haptics::PeriodStats haptic_periods;
   haptics::SafetyCounters safety;
 };
 
+// ---- The command seam: changes applied by the simulation between two steps.
+namespace command {
+/// A named parameter of a body's component (mechanics::set_parameter names).
+struct SetParameter {
+  std::string body;
+  std::string component;  ///< "" for the model itself (dt, ...)
+  std::string parameter;
+  double value{0.0};
+};
+struct Pause {};
+struct Resume {};
+struct SingleStep {
+  int steps{1};
+};
+struct Reset {};
+/// The haptic surface of one body ("" = every body).
+struct SetMaterial {
+  std::string body;
+  haptics::SurfaceMaterial material;
+};
+struct SetEffects {
+  haptics::ForceEffects effects;
+};
+struct SetRenderer {
+  haptics::RendererConfig renderer;
+};
+}  // namespace command
+using Command = std::variant<command::SetParameter, command::Pause, command::Resume, command::SingleStep, command::Reset,
+                             command::SetMaterial, command::SetEffects, command::SetRenderer>;
+
+/// A parameter changed through the seam, as a project saves it.
+struct ParameterChange {
+  std::string body, component, parameter;
+  double value{0.0};
+};
+
 class Session {
  public:
+  static Expected<std::unique_ptr<Session>> make(std::vector<SessionBody> bodies, std::unique_ptr<haptics::Device> device,
+                                                 const SessionConfig& config);
+  /// One deformable body (the common case).
   static Expected<std::unique_ptr<Session>> make(SessionBody body, std::unique_ptr<haptics::Device> device,
                                                  const SessionConfig& config);
+  ~Session();
+  Session(const Session&) = delete;
+  Session& operator=(const Session&) = delete;
 
   /// Runs `seconds` of virtual time in lock-step. `on_sample` receives every haptic tick's
   /// sample (for telemetry); `progress` is told how far along the run is.
   SessionReport run_virtual(double seconds, const std::function<void(const haptics::HapticSample&)>& on_sample,
                             const ProgressSink& progress = {});
 
-  /// Runs `seconds` of wall time: haptic loop on its own thread, simulation on another,
-  /// telemetry drained here. Reports achieved rates.
+  /// Runs `seconds` of wall time: start_realtime(), poll() until then, stop_realtime().
   SessionReport run_realtime(double seconds, const std::function<void(const haptics::HapticSample&)>& on_sample,
                              const ProgressSink& progress = {});
 
-  [[nodiscard]] const mechanics::MechanicalModel& model() const { return body_.model; }
-  [[nodiscard]] const mechanics::MechanicalState& state() const { return state_; }
-  [[nodiscard]] const SessionBody& body() const { return body_; }
+  /// Real time, for a supervisor that runs its own loop (the window): starts the haptic
+  /// thread and the simulation thread and returns at once.
+  void start_realtime();
+  /// Hands the telemetry gathered since the last call to `on_sample` (supervisor thread).
+  void poll(const std::function<void(const haptics::HapticSample&)>& on_sample);
+  /// Stops both threads (joins) and returns the report. Idempotent.
+  SessionReport stop_realtime(const std::function<void(const haptics::HapticSample&)>& on_sample = {});
+  [[nodiscard]] bool realtime_running() const { return sim_thread_.joinable(); }
+
+  /// The command seam: validates `command` now (a clear error, nothing changed, when it is
+  /// wrong) and queues it; the simulation applies it before its next step. Any thread.
+  Expected<void> submit(const Command& command);
+  /// Parameters changed through submit() so far, in order (to save with the project).
+  [[nodiscard]] std::vector<ParameterChange> parameter_changes() const;
+
+  [[nodiscard]] std::size_t body_count() const;
+  [[nodiscard]] const SessionBody& body(std::size_t i) const;
+  /// Index of the body a snapshot triangle belongs to (-1 if none).
+  [[nodiscard]] std::int32_t body_of_triangle(std::int32_t triangle) const;
+  /// Point of snapshot triangle `t` at weights `w` in the rest shape (for indentation).
+  [[nodiscard]] Vec3 rest_point(std::int32_t t, const Vec3& w) const { return rest_.point(t, w); }
+  /// Mechanical state of body i (deformable bodies; read it when no run is going on).
+  [[nodiscard]] const mechanics::MechanicalState& state(std::size_t i) const;
+  /// The first body (single-body callers).
+  [[nodiscard]] const mechanics::MechanicalModel& model() const { return *body(0).model; }
+  [[nodiscard]] const mechanics::MechanicalState& state() const { return state(0); }
+  [[nodiscard]] const SessionBody& body() const { return body(0); }
+  /// Latest surface snapshot, for a reader thread (one reader: the window or the supervisor).
+  TripleBuffer<haptics::SurfaceSnapshot>& graphics_surfaces() { return graphics_surfaces_; }
+  /// The world simulation step dt (the smallest body dt), s.
+  [[nodiscard]] double dt() const { return dt_; }
+  [[nodiscard]] const haptics::HapticLoop& haptic_loop() const { return *loop_; }
 
  private:
-  Session(SessionBody body, std::unique_ptr<haptics::Device> device, const SessionConfig& config);
-  struct StateTimer;  // wall time per state (untouched, deforming, in contact)
-  // Rates, periods, safety counters and displacement, common to both run modes.
-  void finish_report(SessionReport& report, const StateTimer& timer, double wall_s) const;
-  // Turns the accumulated contact of the last ticks into external forces on the tissue.
-  void apply_contact_forces();
-  // Maps the volume to the surface and publishes a snapshot.
-  void publish_surface(double time_s);
-  bool proxy_inside(const Vec3& p) const;
-  void accumulate(const haptics::HapticSample& s);
+  struct BodyRuntime;
+  struct StateTimer;
+  Session(std::vector<SessionBody> bodies, std::unique_ptr<haptics::Device> device, const SessionConfig& config);
 
-  SessionBody body_;
+  // The one stepping function: commands, contact forces, every body steps, publish.
+  // Returns false on divergence (report.divergence says which body and why).
+  bool step_world(SessionReport& report, StateTimer& timer, double clock_s);
+  void take_contacts(SessionReport& report);
+  void apply_commands(SessionReport& report);
+  bool advance_bodies(SessionReport& report);
+  void publish(double time_s);
+  void publish_settings();
+  void count_fall_through(SessionReport& report);
+  void finish_report(SessionReport& report, const StateTimer& timer, double wall_s) const;
+  void simulation_thread(double dt);
+
+  std::vector<BodyRuntime> bodies_;
   std::unique_ptr<haptics::Device> device_;
   SessionConfig config_;
-  mechanics::MechanicalState state_;
+  double dt_{0.01};
+  double time_s_{0.0};       // simulated time of the world
+  haptics::SurfaceSnapshot rest_;
   TripleBuffer<haptics::SurfaceSnapshot> surfaces_;
+  TripleBuffer<haptics::SurfaceSnapshot> graphics_surfaces_;
+  TripleBuffer<haptics::HapticSettings> settings_;
+  haptics::HapticSettings current_settings_;
   std::unique_ptr<haptics::HapticLoop> loop_;
-  std::vector<Vec3> surface_positions_, surface_velocities_;
-  // Contact accumulated since the last simulation step.
-  Vec3 reaction_sum_{Vec3::Zero()};
-  int contact_ticks_{0};
-  int contact_ticks_since_publish_{0};
+  std::vector<Vec3> all_positions_, all_velocities_;
+  // Contact since the last step.
   int ticks_since_step_{0};
-  std::int32_t last_triangle_{-1};
-  Vec3 last_reaction_{Vec3::Zero()};  // force applied on the tissue in the last step
+  std::int32_t last_body_{-1};
+  std::int32_t last_triangle_{-1};   // in the snapshot
   Vec3 last_barycentric_{Vec3::Zero()};
+  std::int32_t contact_ticks_since_publish_{0};
   Vec3 last_proxy_{Vec3::Zero()};
   bool last_proxy_valid_{false};
-  bool surface_closed_{false};  // fall-through is counted only for closed surfaces
+  bool first_reading_seen_{false};
+  // Commands.
+  mutable std::mutex commands_mutex_;
+  std::vector<Command> pending_;
+  std::vector<ParameterChange> changes_;
+  std::vector<mechanics::ModelConfig> validated_configs_;  // configs as the accepted commands leave them
+  bool paused_{false};
+  int single_steps_{0};
+  // Real time.
+  std::thread sim_thread_;
+  std::atomic<bool> stop_sim_{false};
+  std::atomic<bool> sim_finished_{false};
+  SessionReport rt_report_;
+  std::unique_ptr<StateTimer> rt_timer_;
+  std::chrono::steady_clock::time_point rt_start_;
 };
 
 }  // namespace hof::coupling

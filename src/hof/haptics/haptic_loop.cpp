@@ -5,6 +5,9 @@
 #include <time.h>
 
 #include <Eigen/SVD>
+#include <fmt/format.h>
+
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -37,20 +40,51 @@ Vec3 Calibration::vector_to_device(const Vec3& v) const {
   return (u * svd.matrixV().transpose()).transpose() * v;
 }
 
-HapticLoop::HapticLoop(Device& device, TripleBuffer<SurfaceSnapshot>& surfaces, const HapticLoopConfig& config)
+Expected<void> validate_effects(const ForceEffects& effects) {
+  if (effects.springs.size() > kMaxEffectsEach || effects.viscosities.size() > kMaxEffectsEach ||
+      effects.constants.size() > kMaxEffectsEach) {
+    return make_error(ErrorCode::kInvalidArgument, fmt::format("force effects: at most {} of each kind", kMaxEffectsEach));
+  }
+  for (const SpringEffect& e : effects.springs) {
+    if (!e.position_m.allFinite() || !(e.spring_constant_n_per_m >= 0.0) || !std::isfinite(e.spring_constant_n_per_m) ||
+        !(e.start_distance_m >= 0.0) || !(e.escape_distance_m >= 0.0) || !(e.damping_n_s_per_m >= 0.0)) {
+      return make_error(ErrorCode::kInvalidArgument, "SpringEffect: position must be finite, springConstant, "
+                                                     "startDistance, escapeDistance and damping >= 0");
+    }
+  }
+  for (const ViscosityEffect& e : effects.viscosities) {
+    if (!(e.viscosity_pa_s >= 0.0) || !(e.radius_m >= 0.0) || !(e.damping_factor >= 0.0) || !std::isfinite(e.viscosity_pa_s)) {
+      return make_error(ErrorCode::kInvalidArgument, "ViscosityEffect: viscosity, radius and dampingFactor must be >= 0");
+    }
+  }
+  for (const ConstantForceEffect& e : effects.constants) {
+    if (!e.force_n.allFinite()) return make_error(ErrorCode::kInvalidArgument, "ForceField: force must be finite");
+  }
+  return {};
+}
+
+HapticLoop::HapticLoop(Device& device, TripleBuffer<SurfaceSnapshot>& surfaces, const HapticLoopConfig& config,
+                       TripleBuffer<HapticSettings>* settings)
     : device_(device),
       surfaces_(surfaces),
       config_(config),
       renderer_(config.renderer, config.material, device.spec().max_stiffness_n_per_m),
       safety_(device.spec(), config.safety),
       stats_(1.0 / config.rate_hz),
-      telemetry_(config.telemetry_capacity) {
+      telemetry_(config.telemetry_capacity),
+      contacts_(config.telemetry_capacity),
+      settings_(settings) {
+  // Room for changed effects, so that taking new settings in the tick never allocates.
+  effects_.springs.reserve(kMaxEffectsEach);
+  effects_.viscosities.reserve(kMaxEffectsEach);
+  effects_.constants.reserve(kMaxEffectsEach);
   // The rotation that takes world vectors to the device frame, computed once (not per tick).
   const Eigen::JacobiSVD<Eigen::Matrix3d> svd(config_.calibration.position.topLeftCorner<3, 3>(),
                                               Eigen::ComputeFullU | Eigen::ComputeFullV);
   Eigen::Matrix3d u = svd.matrixU();
   if ((u * svd.matrixV().transpose()).determinant() < 0.0) u.col(2) = -u.col(2);
   world_to_device_ = (u * svd.matrixV().transpose()).transpose();
+  renderer_.set_world_scale(std::cbrt(std::abs(config_.calibration.position.topLeftCorner<3, 3>().determinant())));
 }
 
 HapticLoop::~HapticLoop() { stop(); }
@@ -62,8 +96,37 @@ void HapticLoop::tick(double time_s) {
   tick_impl(time_s, period, false);
 }
 
+void HapticLoop::take_settings() {
+  if (!settings_ || !settings_->acquire()) return;
+  const HapticSettings& s = settings_->read();
+  if (!s.valid) return;
+  if (s.renderer.kind != renderer_.config().kind || s.renderer.proxy_radius_m != renderer_.config().proxy_radius_m ||
+      s.renderer.force_shading != renderer_.config().force_shading ||
+      s.renderer.touchable_face != renderer_.config().touchable_face) {
+    renderer_.reconfigure(s.renderer);
+  }
+  renderer_.set_part_materials(s.materials);
+  // Copies within the reserved capacity (the producer validated the counts); a spring's
+  // active state survives when the same spring is still there.
+  const auto copy_within = [](auto& to, const auto& from) {
+    const std::size_t n = std::min(from.size(), to.capacity());
+    to.resize(std::min(to.size(), n));
+    for (std::size_t i = 0; i < n; ++i) {
+      if (i < to.size()) to[i] = from[i];
+      else to.push_back(from[i]);
+    }
+  };
+  std::array<bool, kMaxEffectsEach> was_active{};
+  for (std::size_t i = 0; i < effects_.springs.size() && i < kMaxEffectsEach; ++i) was_active[i] = effects_.springs[i].active;
+  copy_within(effects_.springs, s.effects.springs);
+  for (std::size_t i = 0; i < effects_.springs.size(); ++i) effects_.springs[i].active = was_active[i];
+  copy_within(effects_.viscosities, s.effects.viscosities);
+  copy_within(effects_.constants, s.effects.constants);
+}
+
 void HapticLoop::tick_impl(double time_s, double period_s, bool overrun) {
   const double dt = period_s > 0.0 && std::isfinite(period_s) ? period_s : 1.0 / config_.rate_hz;
+  take_settings();
   const bool changed = surfaces_.acquire();
   if (changed) have_surface_ = true;
   const SurfaceSnapshot& surface = surfaces_.read();
@@ -117,6 +180,17 @@ void HapticLoop::tick_impl(double time_s, double period_s, bool overrun) {
   out.buttons = reading.buttons;
   out.valid = valid;
   telemetry_.push(out);
+  HapticContact c;
+  c.tick = tick;
+  c.time_s = time_s;
+  c.valid = valid;
+  c.proxy = out.proxy;
+  c.contact = contact.in_contact;
+  c.triangle = contact.triangle;
+  c.barycentric = contact.barycentric;
+  c.force = sent;
+  c.clamped = requested.norm() > device_.spec().max_force_n;
+  contacts_.push(c);
   samples_.publish();
   if (tick > 0) stats_.record(period_s, overrun);
 }

@@ -46,6 +46,33 @@ struct HapticLoopConfig {
   std::size_t telemetry_capacity{1 << 16};
 };
 
+/// Settings the haptic loop takes from the simulation thread between two ticks (the command
+/// seam's route to the loop: no lock, no allocation in the tick). The producer writes a whole
+/// slot each time. Force effects are copied into the loop's own storage, which holds up to
+/// kMaxEffectsEach of each kind (validate_effects() refuses more).
+struct HapticSettings {
+  bool valid{false};                        ///< false: the loop keeps its construction config
+  RendererConfig renderer;
+  std::vector<SurfaceMaterial> materials;   ///< per snapshot part (body); empty: config material
+  ForceEffects effects;
+};
+inline constexpr std::size_t kMaxEffectsEach = 32;
+/// Checks counts and values of a set of effects (finite, non-negative constants).
+[[nodiscard]] Expected<void> validate_effects(const ForceEffects& effects);
+
+/// What the simulation needs from one tick (its own channel, apart from telemetry).
+struct HapticContact {
+  std::uint64_t tick{0};
+  double time_s{0.0};
+  bool valid{false};                  ///< the device gave a reading (proxy meaningful)
+  Vec3 proxy{Vec3::Zero()};
+  bool contact{false};
+  std::int32_t triangle{-1};          ///< in the snapshot (all bodies)
+  Vec3 barycentric{Vec3::Zero()};
+  Vec3 force{Vec3::Zero()};           ///< sent to the device, world, N
+  bool clamped{false};                ///< the requested force exceeded the device's limit
+};
+
 /// One tick, as published to other threads and logged (world frame unless noted).
 struct HapticSample {
   std::uint64_t tick{0};
@@ -69,8 +96,10 @@ struct HapticSample {
 
 class HapticLoop {
  public:
-  /// `surfaces` is written by the simulation (or a static scene) and read here.
-  HapticLoop(Device& device, TripleBuffer<SurfaceSnapshot>& surfaces, const HapticLoopConfig& config);
+  /// `surfaces` is written by the simulation (or a static scene) and read here; `settings`
+  /// (optional) carries changed settings from the simulation thread.
+  HapticLoop(Device& device, TripleBuffer<SurfaceSnapshot>& surfaces, const HapticLoopConfig& config,
+             TripleBuffer<HapticSettings>* settings = nullptr);
   HapticLoop(const HapticLoop&) = delete;
   HapticLoop& operator=(const HapticLoop&) = delete;
   ~HapticLoop();
@@ -88,6 +117,8 @@ class HapticLoop {
   TripleBuffer<HapticSample>& samples() { return samples_; }
   /// Every tick's sample, for logging (one consumer).
   SpscRing<HapticSample>& telemetry() { return telemetry_; }
+  /// Every tick's contact, for the simulation (one consumer).
+  SpscRing<HapticContact>& contacts() { return contacts_; }
 
   /// Period statistics and safety counters: read them after stop() (or in virtual mode).
   [[nodiscard]] const PeriodStats& period_stats() const { return stats_; }
@@ -101,6 +132,7 @@ class HapticLoop {
  private:
   void run_thread();
   void tick_impl(double time_s, double period_s, bool overrun);
+  void take_settings();
 
   Device& device_;
   TripleBuffer<SurfaceSnapshot>& surfaces_;
@@ -111,6 +143,8 @@ class HapticLoop {
   PeriodStats stats_;
   TripleBuffer<HapticSample> samples_;
   SpscRing<HapticSample> telemetry_;
+  SpscRing<HapticContact> contacts_;
+  TripleBuffer<HapticSettings>* settings_{nullptr};
   std::atomic<bool> running_{false};
   std::atomic<bool> stop_requested_{false};
   std::atomic<std::uint64_t> ticks_{0};

@@ -18,8 +18,23 @@ HapticRenderer::HapticRenderer(const RendererConfig& config, const SurfaceMateri
                                double device_max_stiffness)
     : config_(config),
       material_(material),
+      active_(material),
       device_max_stiffness_(device_max_stiffness),
       radius_(config.kind == RendererKind::kRuspini ? std::max(0.0, config.proxy_radius_m) : 0.0) {}
+
+const SurfaceMaterial& HapticRenderer::material_at(const SurfaceSnapshot& surface, std::int32_t t) const {
+  if (part_materials_.empty() || t < 0) return material_;
+  const std::int32_t part = surface.part_of(t);
+  return part >= 0 && static_cast<std::size_t>(part) < part_materials_.size() ? part_materials_[static_cast<std::size_t>(part)]
+                                                                               : material_;
+}
+
+void HapticRenderer::reconfigure(const RendererConfig& config) {
+  config_ = config;
+  radius_ = config.kind == RendererKind::kRuspini ? std::max(0.0, config.proxy_radius_m) : 0.0;
+  plane_count_ = 0;
+  anchor_ = {};
+}
 
 void HapticRenderer::reset(const Vec3& position) {
   proxy_ = position;
@@ -37,11 +52,13 @@ const ContactState& HapticRenderer::update(const Vec3& device_position, const Ve
     contact_.force.setZero();
     return contact_;
   }
+  active_ = material_at(surface, contact_.triangle);
   if (config_.kind == RendererKind::kPenalty) {
     update_penalty(device_position, surface);
   } else {
     update_proxy(device_position, surface, surface_changed, dt);
   }
+  active_ = material_at(surface, contact_.triangle);
   compute_force(device_position, device_velocity);
   apply_local_model(device_position, surface);
   return contact_;
@@ -50,7 +67,7 @@ const ContactState& HapticRenderer::update(const Vec3& device_position, const Ve
 void HapticRenderer::apply_local_model(const Vec3& device, const SurfaceSnapshot& surface) {
   // Compliance coupling: the tissue's reaction to the indentation of its force-free surface.
   const LocalContactModel& local = surface.local;
-  if (!local.valid || !contact_.in_contact || material_.kind == SurfaceKind::kZeroForce) return;
+  if (!local.valid || !contact_.in_contact || active_.kind == SurfaceKind::kZeroForce) return;
   if (local.triangle < 0 || static_cast<std::size_t>(local.triangle) >= surface.triangles.size()) return;
   const Vec3 free_point = surface.point(local.triangle, local.barycentric) - local.compliance * local.applied_force;
   const Vec3 indentation = free_point - device;
@@ -162,12 +179,12 @@ void HapticRenderer::apply_friction(const Vec3& device, const Vec3& frictionless
     start_feasible = start_feasible && planes_[i].normal.dot(start) >= planes_[i].offset - 1e-9;
   }
   if (!start_feasible) return;
-  if (tangential_force <= material_.static_friction * normal_force) {
+  if (tangential_force <= active_.static_friction * normal_force) {
     proxy_ = start;  // static friction holds
     return;
   }
   constexpr double kSlideDamping = 1.0;  // b in v = (Ft − μd Fn)/b, N·s/m (HAPI)
-  const double speed = (tangential_force - material_.dynamic_friction * normal_force) / kSlideDamping;
+  const double speed = (tangential_force - active_.dynamic_friction * normal_force) / kSlideDamping;
   if (!(speed > 0.0)) {
     proxy_ = start;
     return;
@@ -203,11 +220,12 @@ void HapticRenderer::update_proxy(const Vec3& device, const SurfaceSnapshot& sur
 
   // 3. Magnetic surfaces hold the proxy to the surface while the device is within the snap
   //    distance of the last contact plane.
-  if (!in_contact && was_in_contact && material_.kind == SurfaceKind::kMagnetic && anchor_.valid) {
+  const SurfaceMaterial& anchored = anchor_.valid ? material_at(surface, anchor_.triangle) : material_;
+  if (!in_contact && was_in_contact && anchored.kind == SurfaceKind::kMagnetic && anchor_.valid) {
     const Vec3 q = surface.point(anchor_.triangle, anchor_.barycentric);
     const Vec3 n = surface.face_normal(anchor_.triangle);
     const double height = (device - q).dot(n);
-    if (height >= 0.0 && height <= material_.snap_distance_m + radius_) {
+    if (height >= 0.0 && height <= anchored.snap_distance_m + radius_) {
       proxy_ = device - (height - radius_ - kSkin) * n;
       planes_[0] = HalfSpace{n, n.dot(q) + radius_ + kSkin};
       plane_triangles_[0] = anchor_.triangle;
@@ -234,8 +252,9 @@ void HapticRenderer::update_proxy(const Vec3& device, const SurfaceSnapshot& sur
       contact_.normal = planes_[plane_count_ - 1].normal;
     }
     if (!was_in_contact) contact_.proxy = proxy_;  // no friction on the first tick of a contact
+    active_ = material_at(surface, contact_.triangle);
     // 4. Friction acts on where the proxy may slide.
-    if (material_.has_friction() && was_in_contact) {
+    if (active_.has_friction() && was_in_contact) {
       (void)previous_normal;
       apply_friction(device, proxy_, surface, dt);
     }
@@ -267,13 +286,13 @@ void HapticRenderer::compute_force(const Vec3& device, const Vec3& device_veloci
   if (!contact_.in_contact) return;
   const Vec3 to_proxy = contact_.proxy - device;
   contact_.penetration_m = std::max(0.0, to_proxy.dot(contact_.normal));
-  if (material_.kind == SurfaceKind::kZeroForce) return;
+  if (active_.kind == SurfaceKind::kZeroForce) return;
   // HAPI FrictionSurface: F = k (proxy − probe) − d ((n̂·v) n̂), n̂ from probe to proxy.
   Vec3 force = stiffness_n_per_m() * to_proxy;
   const double distance = to_proxy.norm();
-  if (distance > 0.0 && material_.damping_n_s_per_m > 0.0) {
+  if (distance > 0.0 && active_.damping_n_s_per_m > 0.0) {
     const Vec3 n = to_proxy / distance;
-    force -= material_.damping_n_s_per_m * n.dot(device_velocity) * n;
+    force -= active_.damping_n_s_per_m / world_scale_ * n.dot(device_velocity) * n;
   }
   contact_.force = force;
 }

@@ -17,6 +17,7 @@
 
 #include <array>
 #include <cstdint>
+#include <span>
 
 #include "hof/collision/triangle_mesh_view.h"
 #include "hof/haptics/constraint_projection.h"
@@ -66,8 +67,21 @@ class HapticRenderer {
   [[nodiscard]] const ContactState& contact() const { return contact_; }
   [[nodiscard]] const RendererConfig& config() const { return config_; }
   [[nodiscard]] const SurfaceMaterial& material() const { return material_; }
-  void set_material(const SurfaceMaterial& material) { material_ = material; }
-  [[nodiscard]] double stiffness_n_per_m() const { return material_.stiffness_n_per_m(device_max_stiffness_); }
+  void set_material(const SurfaceMaterial& material) { material_ = active_ = material; }
+  /// Per-body materials, indexed by the snapshot's parts (a part beyond the span uses
+  /// material()). The span must stay valid until the next call (the haptic loop passes its
+  /// current settings slot each tick).
+  void set_part_materials(std::span<const SurfaceMaterial> materials) { part_materials_ = materials; }
+  /// The material of the body that triangle `t` of `surface` belongs to.
+  [[nodiscard]] const SurfaceMaterial& material_at(const SurfaceSnapshot& surface, std::int32_t t) const;
+  /// Changes the algorithm or its options; the proxy keeps its place (no allocation).
+  void reconfigure(const RendererConfig& config);
+  /// World units per metre of device travel (the calibration's scale). Stiffness and damping
+  /// are felt at the device (N per metre of the hand's travel, as HAPI renders in device
+  /// space), so in world units they are divided by it.
+  void set_world_scale(double world_per_device_m) { world_scale_ = world_per_device_m > 0.0 ? world_per_device_m : 1.0; }
+  /// Stiffness of the material in contact, N per world unit (N/m in a metre world).
+  [[nodiscard]] double stiffness_n_per_m() const { return active_.stiffness_n_per_m(device_max_stiffness_) / world_scale_; }
 
  private:
   struct Anchor {
@@ -90,7 +104,10 @@ class HapticRenderer {
 
   RendererConfig config_;
   SurfaceMaterial material_;
+  std::span<const SurfaceMaterial> part_materials_;
+  SurfaceMaterial active_;  // the material of the body in contact (a copy: the renderer stays copyable)
   double device_max_stiffness_;
+  double world_scale_{1.0};
   double radius_;  // 0 for the god-object
   Vec3 proxy_{Vec3::Zero()};
   Anchor anchor_;

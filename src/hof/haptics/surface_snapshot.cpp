@@ -44,6 +44,37 @@ SurfaceSnapshot make_snapshot(const mesh::TriMesh& surface, const collision::Aab
   s.vertex_normals.assign(surface.vertices.size(), Vec3::Zero());
   compute_vertex_normals(s);
   s.tree = collision::AabbTree::build(s.view(), options);
+  s.parts.push_back(SurfacePart{0, static_cast<std::int32_t>(s.vertices.size()), 0,
+                                static_cast<std::int32_t>(s.triangles.size()), false, false});
+  return s;
+}
+
+SurfaceSnapshot make_snapshot(std::span<const mesh::TriMesh> surfaces, std::span<const bool> is_static,
+                              std::span<const bool> closed, const collision::AabbTreeOptions& options) {
+  SurfaceSnapshot s;
+  bool all_static = !surfaces.empty();
+  for (std::size_t i = 0; i < surfaces.size(); ++i) {
+    const mesh::TriMesh& m = surfaces[i];
+    SurfacePart part;
+    part.first_vertex = static_cast<std::int32_t>(s.vertices.size());
+    part.vertex_count = static_cast<std::int32_t>(m.vertices.size());
+    part.first_triangle = static_cast<std::int32_t>(s.triangles.size());
+    part.triangle_count = static_cast<std::int32_t>(m.triangles.size());
+    part.is_static = i < is_static.size() && is_static[i];
+    part.closed = i < closed.size() && closed[i];
+    all_static = all_static && part.is_static;
+    s.vertices.insert(s.vertices.end(), m.vertices.begin(), m.vertices.end());
+    for (const mesh::Tri& t : m.triangles) {
+      s.triangles.push_back({t[0] + part.first_vertex, t[1] + part.first_vertex, t[2] + part.first_vertex});
+    }
+    s.parts.push_back(part);
+  }
+  s.velocities.assign(s.vertices.size(), Vec3::Zero());
+  s.vertex_normals.assign(s.vertices.size(), Vec3::Zero());
+  compute_vertex_normals(s);
+  s.tree = collision::AabbTree::build(s.view(), options);
+  // Nothing simulated behind it (rigid shapes only, or no shape at all): never stale.
+  s.is_static = all_static || surfaces.empty();
   return s;
 }
 

@@ -26,6 +26,17 @@ struct LocalContactModel {
   Vec3 applied_force{Vec3::Zero()};      ///< force the simulation applied there (on the tissue), N
 };
 
+/// One body's share of a snapshot that holds every touchable surface of the world: its
+/// vertices and triangles are contiguous ranges (triangles index the snapshot's vertices).
+struct SurfacePart {
+  std::int32_t first_vertex{0};
+  std::int32_t vertex_count{0};
+  std::int32_t first_triangle{0};
+  std::int32_t triangle_count{0};
+  bool is_static{false};  ///< a rigid, fixed body: its geometry never changes
+  bool closed{false};     ///< a closed 2-manifold (it has an inside: fall-through is counted)
+};
+
 struct SurfaceSnapshot {
   std::vector<Vec3> vertices;         ///< (V) world frame, m
   std::vector<Vec3> velocities;       ///< (V) m/s
@@ -38,6 +49,18 @@ struct SurfaceSnapshot {
   /// Geometry that never changes (no simulation behind it): never considered stale.
   bool is_static{false};
   LocalContactModel local;            ///< compliance coupling (invalid otherwise)
+  /// Per body (world order); one part covering everything when built from a single surface.
+  std::vector<SurfacePart> parts;
+
+  /// Index of the part (body) that triangle `t` belongs to; -1 when out of range.
+  [[nodiscard]] std::int32_t part_of(std::int32_t t) const {
+    for (std::size_t i = 0; i < parts.size(); ++i) {
+      if (t >= parts[i].first_triangle && t < parts[i].first_triangle + parts[i].triangle_count) {
+        return static_cast<std::int32_t>(i);
+      }
+    }
+    return -1;
+  }
 
   [[nodiscard]] collision::TriangleMeshView view() const { return {vertices, triangles}; }
   /// Point of triangle `t` at barycentric weights `w`.
@@ -59,6 +82,12 @@ struct SurfaceSnapshot {
 /// A snapshot of `surface` at rest (velocities zero), tree built with `options`.
 [[nodiscard]] SurfaceSnapshot make_snapshot(const mesh::TriMesh& surface,
                                             const collision::AabbTreeOptions& options = {});
+
+/// One snapshot of several surfaces (one part each, in order; `is_static[i]` marks rigid
+/// ones), under one bound tree: the haptic loop renders one proxy against all of them.
+/// `closed[i]` tells which surfaces have an inside.
+[[nodiscard]] SurfaceSnapshot make_snapshot(std::span<const mesh::TriMesh> surfaces, std::span<const bool> is_static,
+                                            std::span<const bool> closed, const collision::AabbTreeOptions& options = {});
 
 /// Producer side: new positions (and velocities, or zero when empty) for the same topology;
 /// recomputes vertex normals and refits the tree (rebuilding it when refit degrades it).

@@ -110,19 +110,59 @@ struct Reader {
 
 }  // namespace
 
+namespace {
+
+// Text for an XML attribute value: markup characters escaped; bytes that are not UTF-8 (a
+// Latin-1 name, say) written as U+FFFD so the file stays well-formed.
+std::string xml_escape(std::string_view text) {
+  std::string out;
+  for (std::size_t i = 0; i < text.size();) {
+    const auto c = static_cast<unsigned char>(text[i]);
+    std::size_t length = c < 0x80 ? 1 : (c >> 5) == 0x6 ? 2 : (c >> 4) == 0xE ? 3 : (c >> 3) == 0x1E ? 4 : 0;
+    bool valid = length > 0 && i + length <= text.size();
+    for (std::size_t k = 1; valid && k < length; ++k) valid = (static_cast<unsigned char>(text[i + k]) >> 6) == 0x2;
+    if (!valid) {
+      out += "\xEF\xBF\xBD";
+      ++i;
+      continue;
+    }
+    switch (c) {
+      case '&': out += "&amp;"; break;
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '"': out += "&quot;"; break;
+      default: out.append(text.substr(i, length));
+    }
+    i += length;
+  }
+  return out;
+}
+
+}  // namespace
+
 std::string to_xml(const HofProject& p) {
   std::string out;
   out += "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
-  out += fmt::format("<hof version=\"1\" name=\"{}\">\n", p.name);
+  out += fmt::format("<hof version=\"1\" name=\"{}\">\n", xml_escape(p.name));
+  // Parameters set on the scene's bodies (the command seam's changes), after the scene.
+  std::string sets;
+  for (const coupling::ParameterChange& c : p.parameters) {
+    sets += fmt::format("    <set body=\"{}\" component=\"{}\" parameter=\"{}\" value=\"{}\"/>\n", xml_escape(c.body),
+                        xml_escape(c.component), xml_escape(c.parameter), number(c.value));
+  }
+  const std::string unit = p.scene_unit.empty() ? std::string() : fmt::format(" unit=\"{}\"", xml_escape(p.scene_unit));
   if (!p.mechanics_inline.empty()) {
-    out += "  <mechanics>\n" + p.mechanics_inline + "  </mechanics>\n";
+    out += fmt::format("  <mechanics{}>\n", unit) + p.mechanics_inline + sets + "  </mechanics>\n";
+  } else if (sets.empty()) {
+    out += fmt::format("  <mechanics scene=\"{}\"{}/>\n", xml_escape(p.mechanics_scene.generic_string()), unit);
   } else {
-    out += fmt::format("  <mechanics scene=\"{}\"/>\n", p.mechanics_scene.generic_string());
+    out += fmt::format("  <mechanics scene=\"{}\"{}>\n", xml_escape(p.mechanics_scene.generic_string()), unit) + sets +
+           "  </mechanics>\n";
   }
   out += fmt::format(
       "  <haptics device=\"{}\" hapticRate=\"{}\" renderer=\"{}\" proxyRadius=\"{}\" forceShading=\"{}\" "
       "touchableFace=\"{}\" coupling=\"{}\">\n",
-      p.device, number(p.haptic_rate_hz), renderer_name(p.renderer), number(p.proxy_radius_m), p.force_shading ? "true" : "false",
+      xml_escape(p.device), number(p.haptic_rate_hz), renderer_name(p.renderer), number(p.proxy_radius_m), p.force_shading ? "true" : "false",
       face_name(p.touchable_face), coupling_name(p.coupling));
   std::string calibration;
   for (std::size_t i = 0; i < 16; ++i) calibration += (i ? " " : "") + number(p.position_calibration[i]);
@@ -194,6 +234,18 @@ Expected<HofProject> read_project(const std::filesystem::path& path) {
   } else {
     return std::unexpected(r.at(mechanics ? mechanics : root,
                                 "the project needs <mechanics scene=\"FILE.scn\"/> or a scene inline in <mechanics>"));
+  }
+  p.scene_unit = mechanics.attribute("unit").as_string("");
+  for (const pugi::xml_node set : mechanics.children("set")) {
+    coupling::ParameterChange c;
+    c.body = set.attribute("body").as_string("");
+    c.component = set.attribute("component").as_string("");
+    c.parameter = set.attribute("parameter").as_string("");
+    c.value = r.get(set, "value", 0.0);
+    if (c.body.empty() || c.parameter.empty() || !set.attribute("value")) {
+      return std::unexpected(r.at(set, "<set> needs body, parameter and value (and component, unless the parameter is the model's own)"));
+    }
+    p.parameters.push_back(std::move(c));
   }
   if (const pugi::xml_node h = root.child("haptics")) {
     p.device = h.attribute("device").as_string(p.device.c_str());

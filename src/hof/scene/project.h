@@ -9,6 +9,7 @@
 #include <array>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "hof/core/error.h"
 #include "hof/coupling/session.h"
@@ -31,7 +32,14 @@ struct HofProject {
   /// The scene written inside <mechanics> (a SOFA node tree), kept as XML text; the thesis'
   /// appendix format (<hof><sofa><sg>) is read into it too.
   std::string mechanics_inline;
-  std::string device{"scripted:poke"};    ///< device spec, see haptics::open_device
+  /// Device spec (see haptics::open_device); "auto": the builder's default probe, fitted to
+  /// the world (scene/world.h).
+  std::string device{"auto"};
+  /// Parameters of the scene's bodies set by the project (<set> in <mechanics>), applied
+  /// after the scene is read — what a session's command seam changed, saved.
+  std::vector<coupling::ParameterChange> parameters;
+  /// The length unit of the scene ("" = metres); stated in reports.
+  std::string scene_unit;
   std::array<double, 16> position_calibration{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};  ///< row-major 4x4
   double haptic_rate_hz{1000.0};
   haptics::RendererKind renderer{haptics::RendererKind::kRuspini};

@@ -1,0 +1,147 @@
+#include "hof/mechanics/model_parameters.h"
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include <cmath>
+#include <limits>
+
+namespace hof::mechanics {
+
+namespace {
+
+// One named parameter: where it lives and its range [lo, hi] (inclusive unless open).
+struct Slot {
+  double* value{nullptr};
+  double lo{0.0}, hi{0.0};
+  bool lo_open{false};
+  bool integer{false};
+  const char* unit{""};
+  bool hi_open{false};
+};
+
+// Finds the slot of (component, parameter) in a (mutable) config; nullopt-like Slot when absent.
+Expected<Slot> find_slot(ModelConfig& c, std::string_view component, std::string_view parameter, int& integer_storage,
+                         double& scratch) {
+  const auto inf = std::numeric_limits<double>::infinity();
+  const auto no_parameter = [&](const char* kind) {
+    return make_error(ErrorCode::kInvalidArgument,
+                      fmt::format("{} '{}' has no parameter '{}'", kind, component, parameter), c.name);
+  };
+  if (component.empty()) {
+    if (parameter == "dt") return Slot{&c.dt_s, 0.0, 1.0, true, false, "s"};
+    if (parameter == "maxSpeed") return Slot{&c.max_speed_m_per_s, 0.0, inf, true, false, "m/s"};
+    if (parameter == "gravityX") return Slot{&c.gravity_m_per_s2.x(), -inf, inf, false, false, "m/s^2"};
+    if (parameter == "gravityY") return Slot{&c.gravity_m_per_s2.y(), -inf, inf, false, false, "m/s^2"};
+    if (parameter == "gravityZ") return Slot{&c.gravity_m_per_s2.z(), -inf, inf, false, false, "m/s^2"};
+    return no_parameter("model");
+  }
+  for (ForceFieldConfig& f : c.force_fields) {
+    if (f.name != component) continue;
+    if (f.mesh_springs) {
+      if (parameter == "stiffness") return Slot{&f.mesh_springs->stiffness_n_per_m, 0.0, inf, false, false, "N/m"};
+      if (parameter == "damping") return Slot{&f.mesh_springs->damping_n_s_per_m, 0.0, inf, false, false, "N s/m"};
+    }
+    if (f.tetrahedron_fem) {
+      if (parameter == "youngModulus") return Slot{&f.tetrahedron_fem->young_modulus_pa, 0.0, inf, true, false, "Pa"};
+      if (parameter == "poissonRatio") return Slot{&f.tetrahedron_fem->poisson_ratio, -1.0, 0.5, true, false, "", true};
+    }
+    if (f.neo_hookean) {
+      if (parameter == "youngModulus") return Slot{&f.neo_hookean->young_modulus_pa, 0.0, inf, true, false, "Pa"};
+      if (parameter == "poissonRatio") return Slot{&f.neo_hookean->poisson_ratio, -1.0, 0.5, true, false, "", true};
+    }
+    return no_parameter("force field");
+  }
+  if (c.ode.name == component) {
+    if (parameter == "rayleighStiffness") return Slot{&c.ode.rayleigh_stiffness, 0.0, inf, false, false, ""};
+    if (parameter == "rayleighMass") return Slot{&c.ode.rayleigh_mass, 0.0, inf, false, false, "1/s"};
+    return no_parameter("ODE solver");
+  }
+  if (c.linear.name == component) {
+    if (parameter == "iterations") {
+      integer_storage = c.linear.iterations;
+      scratch = static_cast<double>(integer_storage);
+      return Slot{&scratch, 1.0, 100000.0, false, true, ""};
+    }
+    if (parameter == "tolerance") return Slot{&c.linear.tolerance, 0.0, inf, false, false, ""};
+    if (parameter == "threshold") return Slot{&c.linear.threshold, 0.0, inf, false, false, ""};
+    return no_parameter("linear solver");
+  }
+  if (c.mass.name == component) {
+    if (parameter == "totalMass") {
+      double* target = c.mass.kind == MassKind::kUniform ? &c.mass.total_mass_kg : nullptr;
+      if (!target) {
+        if (!c.mass.diagonal_total_mass_kg) c.mass.diagonal_total_mass_kg = 0.0;
+        target = &*c.mass.diagonal_total_mass_kg;
+      }
+      return Slot{target, 0.0, inf, true, false, "kg"};
+    }
+    if (parameter == "massDensity") return Slot{&c.mass.mass_density_kg_per_m3, 0.0, inf, true, false, "kg/m^3"};
+    return no_parameter("mass");
+  }
+  return make_error(ErrorCode::kInvalidArgument, fmt::format("no component '{}' (parameters: {})", component,
+                                                      fmt::join(parameter_names(c), ", ")),
+                    c.name);
+}
+
+}  // namespace
+
+Expected<void> set_parameter(ModelConfig& config, std::string_view component, std::string_view parameter, double value) {
+  ModelConfig trial = config;  // untouched on any error (a totalMass may add an optional)
+  int integer_storage = 0;
+  double scratch = 0.0;
+  auto slot = find_slot(trial, component, parameter, integer_storage, scratch);
+  if (!slot) return std::unexpected(slot.error());
+  const std::string name = component.empty() ? std::string(parameter) : fmt::format("{}/{}", component, parameter);
+  const bool below = slot->lo_open ? !(value > slot->lo) : !(value >= slot->lo);
+  const bool above = slot->hi_open ? !(value < slot->hi) : !(value <= slot->hi);
+  if (!std::isfinite(value) || below || above ||
+      (slot->integer && value != std::floor(value))) {
+    const bool unbounded = slot->hi == std::numeric_limits<double>::infinity();
+    const std::string lower = slot->lo == -std::numeric_limits<double>::infinity()
+                                  ? std::string("finite")
+                                  : fmt::format("{} {}", slot->lo_open ? ">" : ">=", slot->lo);
+    const std::string upper = unbounded ? std::string() : fmt::format(" and {} {}", slot->hi_open ? "<" : "<=", slot->hi);
+    return make_error(ErrorCode::kInvalidArgument,
+                      fmt::format("{} = {} is out of range: it must be {}{}{}{}", name, value, lower, upper,
+                                  slot->integer ? ", an integer" : "", *slot->unit ? fmt::format(" ({})", slot->unit) : ""),
+                      config.name);
+  }
+  *slot->value = value;
+  if (slot->integer) trial.linear.iterations = static_cast<int>(value);
+  config = std::move(trial);
+  return {};
+}
+
+Expected<double> get_parameter(const ModelConfig& config, std::string_view component, std::string_view parameter) {
+  ModelConfig copy = config;
+  int integer_storage = 0;
+  double scratch = 0.0;
+  auto slot = find_slot(copy, component, parameter, integer_storage, scratch);
+  if (!slot) return std::unexpected(slot.error());
+  return *slot->value;
+}
+
+std::vector<std::string> parameter_names(const ModelConfig& c) {
+  std::vector<std::string> names{"dt", "maxSpeed", "gravityX", "gravityY", "gravityZ"};
+  for (const ForceFieldConfig& f : c.force_fields) {
+    if (f.mesh_springs) {
+      names.push_back(f.name + "/stiffness");
+      names.push_back(f.name + "/damping");
+    }
+    if (f.tetrahedron_fem || f.neo_hookean) {
+      names.push_back(f.name + "/youngModulus");
+      names.push_back(f.name + "/poissonRatio");
+    }
+  }
+  names.push_back(c.ode.name + "/rayleighStiffness");
+  names.push_back(c.ode.name + "/rayleighMass");
+  names.push_back(c.linear.name + "/iterations");
+  names.push_back(c.linear.name + "/tolerance");
+  names.push_back(c.linear.name + "/threshold");
+  names.push_back(c.mass.name + "/totalMass");
+  names.push_back(c.mass.name + "/massDensity");
+  return names;
+}
+
+}  // namespace hof::mechanics

@@ -1,0 +1,380 @@
+#include "hof/scene/world.h"
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+#include "hof/mechanics/model_parameters.h"
+#include "hof/mesh/boundary.h"
+#include "hof/mesh/mesh_io.h"
+#include "hof/scene/sofa_scene.h"
+#include "hof/scene/x3d_scene.h"
+
+namespace hof::scene {
+
+namespace {
+
+
+// Nodes on the border of an open triangle surface (edges used by one triangle only).
+std::vector<std::int32_t> border_nodes(const std::vector<mesh::Tri>& triangles) {
+  std::vector<std::array<std::int32_t, 2>> edges;
+  for (const mesh::Tri& t : triangles) {
+    for (int k = 0; k < 3; ++k) edges.push_back({std::min(t[k], t[(k + 1) % 3]), std::max(t[k], t[(k + 1) % 3])});
+  }
+  std::sort(edges.begin(), edges.end());
+  std::vector<std::int32_t> held;
+  for (std::size_t i = 0; i < edges.size();) {
+    std::size_t j = i + 1;
+    while (j < edges.size() && edges[j] == edges[i]) ++j;
+    if (j - i == 1) held.insert(held.end(), edges[i].begin(), edges[i].end());
+    i = j;
+  }
+  std::sort(held.begin(), held.end());
+  held.erase(std::unique(held.begin(), held.end()), held.end());
+  return held;
+}
+
+// A SOFA model as a body: its visual mesh (barycentric) as the touchable surface when it has
+// one, else the boundary of its tetrahedra (shared nodes), else (a surface model) itself.
+Expected<coupling::SessionBody> make_deformable(const mechanics::ModelConfig& config,
+                                                const std::optional<std::filesystem::path>& visual_mesh, bool visual_barycentric) {
+  auto model = mechanics::build_model(config);
+  if (!model) return std::unexpected(model.error());
+  coupling::SessionBody body;
+  body.name = config.name.empty() ? std::string("model") : config.name;
+  body.model.emplace(std::move(*model));
+  body.config = config;
+  if (visual_mesh && visual_barycentric) {
+    auto visual = mesh::read_mesh(*visual_mesh);
+    if (!visual) return std::unexpected(visual.error());
+    body.surface.vertices = visual->mesh.nodes;
+    body.surface.triangles = visual->mesh.triangles;
+    auto mapping = coupling::SurfaceMapping::barycentric(config.positions, config.tets, body.surface.vertices);
+    if (!mapping) return std::unexpected(mapping.error());
+    body.mapping = std::move(*mapping);
+  } else if (config.tets.empty()) {
+    body.surface.vertices = config.positions;
+    body.surface.triangles = config.triangles;
+    std::vector<mesh::NodeIndex> identity(config.positions.size());
+    for (std::size_t i = 0; i < identity.size(); ++i) identity[i] = static_cast<mesh::NodeIndex>(i);
+    auto mapping = coupling::SurfaceMapping::by_index(config.positions, body.surface.vertices, identity);
+    if (!mapping) return std::unexpected(mapping.error());
+    body.mapping = std::move(*mapping);
+  } else {
+    const mesh::BoundarySurface b = mesh::extract_boundary(config.positions, config.tets);
+    body.surface = b.surface;
+    auto mapping = coupling::SurfaceMapping::by_index(config.positions, b.surface.vertices, b.surface_to_volume);
+    if (!mapping) return std::unexpected(mapping.error());
+    body.mapping = std::move(*mapping);
+  }
+  if (body.surface.triangles.empty()) {
+    return make_error(ErrorCode::kInvalidMesh, fmt::format("model '{}' has no surface to touch", body.name));
+  }
+  return body;
+}
+
+// Applies a project's <set> elements to the bodies they name (the same validation as the
+// command seam), rebuilding those bodies.
+Expected<void> apply_parameters(World& w) {
+  for (const coupling::ParameterChange& change : w.project.parameters) {
+    auto it = std::find_if(w.bodies.begin(), w.bodies.end(), [&](const auto& b) { return b.name == change.body; });
+    if (it == w.bodies.end() || !it->config) {
+      return make_error(ErrorCode::kInvalidArgument,
+                        fmt::format("<set body=\"{}\">: no deformable body of that name in the scene", change.body),
+                        w.file.string());
+    }
+    mechanics::ModelConfig config = *it->config;
+    if (auto ok = mechanics::set_parameter(config, change.component, change.parameter, change.value); !ok) {
+      return make_error(ErrorCode::kInvalidArgument, fmt::format("<set body=\"{}\">: {}", change.body, ok.error().message),
+                        w.file.string());
+    }
+    auto rebuilt = make_deformable(config, std::nullopt, false);
+    if (!rebuilt) return std::unexpected(rebuilt.error());
+    // Keep the surface and mapping the scene gave it (a visual mesh, say).
+    it->model.emplace(std::move(*rebuilt->model));
+    it->config = std::move(config);
+  }
+  return {};
+}
+
+Expected<void> add_x3d(World& w, const std::filesystem::path& file) {
+  auto x3d = read_x3d_scene(file);
+  if (!x3d) return std::unexpected(x3d.error());
+  const X3dDeformableDefaults d;
+  bool any_deformable = false;
+  for (const X3dShape& shape : x3d->shapes) {
+    const mesh::TriMesh& geometry = shape.haptic_mesh_W.triangles.empty() ? shape.mesh_W : shape.haptic_mesh_W;
+    if (!shape.touchable || geometry.triangles.empty()) continue;
+    if (!shape.solid) w.project.touchable_face = collision::TouchableFace::kFrontAndBack;  // X3D solid='false'
+    const std::string name = !shape.def.empty() ? shape.def : fmt::format("{}@{}", shape.geometry_type.empty() ? "Shape" : shape.geometry_type, shape.line);
+    if (!shape.deformable) {
+      // A plain Shape: rigid and fixed, as H3D renders it.
+      coupling::SessionBody body;
+      body.name = name;
+      body.surface = geometry;
+      body.material = shape.surface;
+      w.bodies.push_back(std::move(body));
+      continue;
+    }
+    // A DeformableShape: the thesis' surface model — springs on the triangle edges, uniform
+    // mass, the open border held (or, for a closed surface, its lowest tenth along y, X3D's
+    // up) — driven by the mechanics instead of H3D's CoordinateDeformer.
+    any_deformable = true;
+    mechanics::ModelConfig c;
+    c.name = name;
+    c.positions = geometry.vertices;
+    c.triangles = geometry.triangles;
+    c.mass.kind = mechanics::MassKind::kUniform;
+    c.mass.total_mass_kg = d.total_mass_kg;
+    c.gravity_m_per_s2 = Vec3::Zero();
+    mechanics::ForceFieldConfig springs;
+    springs.name = "springs";
+    springs.mesh_springs = mechanics::MeshSpringConfig{d.spring_stiffness_n_per_m, d.spring_damping_n_s_per_m};
+    c.force_fields.push_back(springs);
+    std::vector<std::int32_t> held = border_nodes(c.triangles);
+    if (held.empty()) {
+      double lo = c.positions.front().y(), hi = lo;
+      for (const Vec3& p : c.positions) {
+        lo = std::min(lo, p.y());
+        hi = std::max(hi, p.y());
+      }
+      for (std::size_t i = 0; i < c.positions.size(); ++i) {
+        if (c.positions[i].y() <= lo + 0.1 * (hi - lo)) held.push_back(static_cast<std::int32_t>(i));
+      }
+    }
+    c.fixed.push_back(mechanics::FixedConstraintConfig{"border", held, std::nullopt, false, {true, true, true}});
+    c.ode.rayleigh_mass = c.ode.rayleigh_stiffness = d.rayleigh;
+    c.linear.iterations = 25;
+    c.dt_s = d.dt_s;
+    auto body = make_deformable(c, std::nullopt, false);
+    if (!body) return std::unexpected(body.error());
+    body->material = shape.surface;
+    w.bodies.push_back(std::move(*body));
+  }
+  if (any_deformable) {
+    w.defaults.push_back(fmt::format("DeformableShape springs/stiffness = {} N/m, springs/damping = {} N s/m, mass = {} kg, "
+                                     "rayleigh = {}, dt = {} s, no gravity, border held (X3D gives no mechanics)",
+                                     d.spring_stiffness_n_per_m, d.spring_damping_n_s_per_m, d.total_mass_kg, d.rayleigh, d.dt_s));
+  }
+  if (!x3d->devices.empty()) {
+    const X3dDevice& device = x3d->devices.front();
+    w.project.position_calibration = device.position_calibration;
+    if (device.renderer && device.renderer->kind) {
+      w.project.renderer = *device.renderer->kind;
+      w.project.proxy_radius_m = device.renderer->proxy_radius_m;
+    }
+  }
+  w.project.effects = x3d->force_effects;
+  if (!x3d->viewpoints.empty()) w.project.graphics.viewpoint_m = x3d->viewpoints.front().position;
+  w.skipped = x3d->unsupported;
+  w.warnings = x3d->warnings;
+  const bool has_effects = !x3d->force_effects.springs.empty() || !x3d->force_effects.viscosities.empty() ||
+                           !x3d->force_effects.constants.empty();
+  if (w.bodies.empty() && !has_effects) {
+    std::string why = "the scene has nothing to touch: no Shape whose Appearance has a haptic surface, and no force effect";
+    if (!x3d->unsupported.empty()) why += fmt::format(" (not modelled: {})", fmt::join(x3d->unsupported, ", "));
+    return make_error(ErrorCode::kInvalidArgument, why, file.string());
+  }
+  return {};
+}
+
+Expected<void> add_sofa(World& w, const std::filesystem::path& scene_path) {
+  auto sofa = read_sofa_scene(scene_path);
+  if (!sofa) return std::unexpected(sofa.error());
+  w.skipped = sofa->skipped;
+  w.warnings = sofa->warnings;
+  if (sofa->models.empty()) {
+    std::string why = "the scene has no simulated body (a node with an ODE solver and a MechanicalObject)";
+    if (!sofa->skipped.empty()) why += fmt::format("; not simulated: {}", fmt::join(sofa->skipped, ", "));
+    return make_error(ErrorCode::kInvalidArgument, why, scene_path.string());
+  }
+  for (const SofaSceneModel& m : sofa->models) {
+    auto body = make_deformable(m.config, m.visual_mesh, m.visual_barycentric);
+    if (!body) {
+      Error e = body.error();
+      if (e.file.empty()) e.file = scene_path.string();
+      e.message = fmt::format("body '{}': {}", m.node_path, e.message);
+      return std::unexpected(e);
+    }
+    // Names are unique within a world (commands and reports address bodies by name).
+    std::string name = body->name;
+    for (int k = 2; std::any_of(w.bodies.begin(), w.bodies.end(), [&](const auto& b) { return b.name == name; }); ++k) {
+      name = fmt::format("{}#{}", body->name, k);
+    }
+    body->name = name;
+    if (body->config) body->config->name = name;
+    w.bodies.push_back(std::move(*body));
+  }
+  return {};
+}
+
+bool identity(const std::array<double, 16>& m) {
+  for (int r = 0; r < 4; ++r) {
+    for (int c = 0; c < 4; ++c) {
+      if (m[static_cast<std::size_t>(4 * r + c)] != (r == c ? 1.0 : 0.0)) return false;
+    }
+  }
+  return true;
+}
+
+}  // namespace
+
+DefaultProbe default_probe(const std::vector<coupling::SessionBody>& bodies, double workspace_radius_m,
+                           double device_stiffness_n_per_m, double max_force_n, const std::array<double, 16>* calibration) {
+  DefaultProbe probe;
+  probe.calibration = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+  if (bodies.empty()) {
+    probe.device = "scripted:hold,start=0;0;0,hold=3";
+    probe.description = "no body to press: the probe holds still at the origin";
+    return probe;
+  }
+  // Fit the device workspace to the world's bounds (H3D FitToBoxTransform): uniform scale s
+  // (world units per device metre) and the centre — unless the file gave a calibration.
+  Eigen::AlignedBox3d world_box;
+  for (const auto& b : bodies) {
+    for (const Vec3& p : b.surface.vertices) world_box.extend(p);
+  }
+  const double world_radius = std::max(0.5 * world_box.diagonal().norm(), 1e-9);
+  if (calibration) {
+    probe.calibration = *calibration;
+  } else {
+    const double fit = world_radius / workspace_radius_m;
+    const Vec3 centre = world_box.center();
+    probe.calibration = {fit, 0, 0, centre.x(), 0, fit, 0, centre.y(), 0, 0, fit, centre.z(), 0, 0, 0, 1};
+  }
+  Eigen::Matrix4d C;
+  for (int r = 0; r < 4; ++r) {
+    for (int k = 0; k < 4; ++k) C(r, k) = probe.calibration[static_cast<std::size_t>(4 * r + k)];
+  }
+  const double s = std::cbrt(std::abs(C.topLeftCorner<3, 3>().determinant()));
+  const Eigen::Matrix4d to_device = C.inverse();
+
+  // The body to press: the first deformable one, else the first.
+  const auto target_it = std::find_if(bodies.begin(), bodies.end(), [](const auto& b) { return b.deformable(); });
+  const coupling::SessionBody& target = target_it != bodies.end() ? *target_it : bodies.front();
+  const mesh::TriMesh& surface = target.surface;
+  Eigen::AlignedBox3d box;
+  for (const Vec3& p : surface.vertices) box.extend(p);
+  const Vec3 c = box.center();
+  const double size = box.diagonal().norm();
+  // "Up": away from what holds the body (its fixed nodes), else against gravity, else +y.
+  Vec3 up = Vec3::UnitY();
+  if (target.deformable()) {
+    const auto& model = *target.model;
+    Vec3 held = Vec3::Zero();
+    std::size_t count = 0;
+    for (std::size_t i = 0; i < model.node_count(); ++i) {
+      if (model.fixed_dof_mask[3 * i] != 0) {
+        held += model.rest_positions[i];
+        ++count;
+      }
+    }
+    const Vec3 away = count ? Vec3(c - held / static_cast<double>(count)) : Vec3::Zero();
+    if (count && away.norm() > 1e-3 * size) {
+      up = away.normalized();
+    } else if (model.gravity_m_per_s2.norm() > 0.0) {
+      up = -model.gravity_m_per_s2.normalized();
+    }
+  }
+  // Vertex normals of the rest surface (area-weighted).
+  std::vector<Vec3> normals(surface.vertices.size(), Vec3::Zero());
+  for (const mesh::Tri& t : surface.triangles) {
+    const Vec3 n = (surface.vertices[t[1]] - surface.vertices[t[0]]).cross(surface.vertices[t[2]] - surface.vertices[t[0]]);
+    for (auto v : t) normals[static_cast<std::size_t>(v)] += n;
+  }
+  // The vertex on the top middle: normal along up, close to the axis through the centre.
+  std::size_t best = 0;
+  double best_score = -std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < surface.vertices.size(); ++i) {
+    if (normals[i].norm() == 0.0) continue;
+    const Vec3 n = normals[i].normalized();
+    const Vec3 r = surface.vertices[i] - c;
+    if (r.dot(up) <= 0.0) continue;
+    const double off_axis = (r - r.dot(up) * up).norm() / size;
+    const double score = n.dot(up) - 2.0 * off_axis;
+    if (score > best_score) {
+      best_score = score;
+      best = i;
+    }
+  }
+  const Vec3 point = surface.vertices[best];
+  const Vec3 normal = normals[best].norm() > 0.0 ? Vec3(normals[best].normalized()) : up;
+  // Device-frame motion: clearance 2 cm of device travel, a press whose rigid-wall force stays
+  // at 60% of the device's limit (a rigid body stops the proxy at its surface), 8 mm into a
+  // deformable body (it yields), at 2 cm/s, held 1 s.
+  const double clearance_dev = 0.02;
+  const double rigid_depth_dev = 0.6 * max_force_n / std::max(device_stiffness_n_per_m, 1.0);
+  const double depth_dev = target.deformable() ? 0.008 : std::min(0.008, rigid_depth_dev);
+  const Vec3 start_world = point + clearance_dev * s * normal;
+  const Vec3 start_dev = (to_device * start_world.homogeneous()).head<3>();
+  const Vec3 direction = (to_device.topLeftCorner<3, 3>() * -normal).normalized();
+  probe.device = fmt::format("scripted:poke,start={};{};{},direction={};{};{},approach={},depth={},speed=0.02,hold=1",
+                             start_dev.x(), start_dev.y(), start_dev.z(), direction.x(), direction.y(), direction.z(),
+                             clearance_dev, depth_dev);
+  probe.description = fmt::format("presses body '{}' at ({:.4g}, {:.4g}, {:.4g}) along its inward normal ({:.3f}, {:.3f}, "
+                                  "{:.3f}), {:.1f} mm of device travel past the surface; workspace fitted to the world "
+                                  "({:.4g} world units per device metre)",
+                                  target.name, point.x(), point.y(), point.z(), direction.x(), direction.y(), direction.z(),
+                                  1e3 * depth_dev, s);
+  return probe;
+}
+
+Expected<World> build_world(const std::filesystem::path& file, const std::string& device_override) {
+  World w;
+  w.file = file;
+  w.scene_path = file;
+  const std::string ext = file.extension().string();
+  std::error_code ec;
+  if (std::filesystem::is_directory(file, ec)) return make_error(ErrorCode::kIo, "is a folder, not a scene or project file", file.string());
+  if (!std::filesystem::exists(file, ec)) return make_error(ErrorCode::kIo, "no such file", file.string());
+  bool bare = true;
+  if (ext == ".hof") {
+    auto project = read_project(file);
+    if (!project) return std::unexpected(project.error());
+    w.project = std::move(*project);
+    w.scene_path = scene_file(w.project, file);
+    bare = w.project.device == "auto";
+    if (auto ok = add_sofa(w, w.scene_path); !ok) {
+      Error e = ok.error();
+      if (w.scene_path != file) e.message = fmt::format("{} (the scene of project {})", e.message, file.string());
+      return std::unexpected(e);
+    }
+  } else if (ext == ".scn") {
+    w.project.name = file.stem().string();
+    w.project.mechanics_scene = file.filename();
+    if (auto ok = add_sofa(w, file); !ok) return std::unexpected(ok.error());
+  } else if (ext == ".x3d") {
+    w.project.name = file.stem().string();
+    if (auto ok = add_x3d(w, file); !ok) return std::unexpected(ok.error());
+  } else {
+    return make_error(ErrorCode::kUnsupported, "expected a .hof project, a .scn SOFA scene or an .x3d scene", file.string());
+  }
+  if (auto ok = apply_parameters(w); !ok) return std::unexpected(ok.error());
+  w.name = w.project.name;
+  // A SOFA scene carries no unit; X3D and .hof worlds are in metres (a project may declare
+  // its scene's unit).
+  w.length_unit = ext == ".scn" ? "scene units" : (w.project.scene_unit.empty() ? "m" : w.project.scene_unit);
+
+  std::string device = device_override.empty() ? (bare ? std::string("auto") : w.project.device) : device_override;
+  if (device == "auto") {
+    const auto model_spec = haptics::device_spec_for_model("virtual");
+    const haptics::DeviceSpec spec = model_spec ? *model_spec : haptics::DeviceSpec{};
+    const double k = w.project.surface.stiffness_n_per_m(spec.max_stiffness_n_per_m);
+    // A calibration the file gives is kept; a bare scene gets the fitted one.
+    const bool given = !identity(w.project.position_calibration);
+    DefaultProbe probe =
+        default_probe(w.bodies, spec.workspace_radius_m, k, spec.max_force_n, given ? &w.project.position_calibration : nullptr);
+    device = probe.device;
+    w.default_probe = true;
+    w.project.position_calibration = probe.calibration;
+    w.defaults.push_back("device = " + device + " (the default probe: " + probe.description + ")");
+  }
+  w.device = device;
+  w.config = session_config(w.project);
+  return w;
+}
+
+}  // namespace hof::scene

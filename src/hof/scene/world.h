@@ -1,0 +1,74 @@
+#pragma once
+/// @file
+/// The one builder: any input — a `.hof` project, a SOFA `.scn`, an X3D scene — becomes a
+/// World: its bodies (deformable and rigid), their touchable surfaces and materials, the
+/// force effects, the device and its calibration, the renderer and the viewpoint. `hof run`,
+/// `hof bench`, `hof check` (and the window) only call build_world(); no command invents a
+/// physical parameter. Every value comes from the file or from a documented default, listed
+/// in World::defaults (which `hof check` prints) and overridable by a `.hof` project.
+///
+/// Bodies:
+///  - deformable: every SOFA node with an ODE solver (a child without one is solved by its
+///    parent's, as in SOFA); an X3D DeformableShape (mesh springs on its triangles, the
+///    defaults below); the bodies of a `.hof` project's scene;
+///  - rigid and fixed: an X3D Shape with a haptic surface (never deformed);
+///  - a world of force effects only (no shape) runs too.
+///
+/// A bare scene (`.scn`, `.x3d`, or a project whose device is `auto`) gets the default probe:
+/// the device workspace fitted to the world's bounds (as H3D's FitToBoxTransform) and a
+/// scripted poke that starts outside the first deformable body (else the first rigid one)
+/// and presses it along its outward normal, whatever the scene's up axis.
+
+#include <array>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "hof/core/error.h"
+#include "hof/coupling/session.h"
+#include "hof/scene/project.h"
+
+namespace hof::scene {
+
+/// Defaults for an X3D DeformableShape, which carries no mechanics of its own (documented in
+/// docs/project-format.md; a `.hof` project's <set> elements override them by name).
+struct X3dDeformableDefaults {
+  double spring_stiffness_n_per_m{100.0};
+  double spring_damping_n_s_per_m{0.5};
+  double total_mass_kg{0.1};
+  double rayleigh{0.1};
+  double dt_s{0.01};
+};
+
+struct World {
+  std::string name;
+  std::filesystem::path file;        ///< what the user gave
+  std::filesystem::path scene_path;  ///< the scene it points to (resolved), or the file itself
+  HofProject project;                ///< every setting (read from the project, or defaults)
+  std::vector<coupling::SessionBody> bodies;
+  coupling::SessionConfig config;
+  std::string device;                ///< the device spec (the default probe resolved)
+  bool default_probe{false};         ///< the device is the builder's probe
+  std::string length_unit{"m"};      ///< "m", or "scene units" for a SOFA scene (no unit)
+  std::vector<std::string> skipped;  ///< components not simulated, "TYPE 'name' (line N)"
+  std::vector<std::string> warnings;
+  std::vector<std::string> defaults; ///< "what = value (why)" for every default the builder used
+};
+
+/// Builds the world of `file`. `device_override` (the --device option) replaces the file's
+/// device. Errors start with the file (the project, then the scene with its resolved path).
+[[nodiscard]] Expected<World> build_world(const std::filesystem::path& file, const std::string& device_override = {});
+
+/// The spec of the default probe for `bodies` under `calibration` (a scripted poke in the
+/// device frame), and a calibration that fits the device workspace to the bodies' bounds.
+struct DefaultProbe {
+  std::string device;
+  std::array<double, 16> calibration{};
+  std::string description;
+};
+/// `calibration`: the file's (kept), or null to fit one.
+[[nodiscard]] DefaultProbe default_probe(const std::vector<coupling::SessionBody>& bodies, double workspace_radius_m,
+                                         double device_stiffness_n_per_m, double max_force_n,
+                                         const std::array<double, 16>* calibration = nullptr);
+
+}  // namespace hof::scene
