@@ -110,11 +110,13 @@ Session::Session(std::vector<SessionBody> bodies, std::unique_ptr<haptics::Devic
     rest_ = haptics::make_snapshot(surfaces, std::span<const bool>(s.get(), statics.size()),
                                    std::span<const bool>(c.get(), closeds.size()), config_.tree);
   }
-  surfaces_.write_slot() = rest_;
-  surfaces_.publish();
-  surfaces_.write_slot() = rest_;
-  graphics_surfaces_.write_slot() = rest_;
-  graphics_surfaces_.publish();
+  // Every slot holds the geometry (the producer then only updates positions in place).
+  for (auto* buffer : {&surfaces_, &graphics_surfaces_}) {
+    buffer->write_slot() = rest_;
+    buffer->read_mutable() = rest_;
+    buffer->publish();
+    buffer->write_slot() = rest_;
+  }
   all_positions_ = rest_.vertices;
   all_velocities_.assign(rest_.vertices.size(), Vec3::Zero());
 
@@ -392,6 +394,14 @@ bool Session::advance_bodies(SessionReport& report) {
     step_one(0);
   }
   for (std::size_t k = 0; k < due.size(); ++k) {
+    if (ok[k]) {
+      // The largest displacement over the run (not only at its end: a press is released).
+      const auto& model = *due[k]->body.model;
+      double& largest = due[k]->report.max_displacement_m;
+      for (std::size_t i = 0; i < model.node_count(); ++i) {
+        largest = std::max(largest, (due[k]->state.position(static_cast<std::int32_t>(i)) - model.rest_positions[i]).norm());
+      }
+    }
     if (!ok[k]) {
       const auto& d = due[k]->state.divergence;
       report.diverged = true;
@@ -486,12 +496,6 @@ void Session::finish_report(SessionReport& report, const StateTimer& timer, doub
   report.bodies.clear();
   for (const BodyRuntime& r : bodies_) {
     BodyReport b = r.report;
-    if (r.body.deformable()) {
-      for (std::size_t i = 0; i < r.body.model->node_count(); ++i) {
-        b.max_displacement_m = std::max(
-            b.max_displacement_m, (r.state.position(static_cast<std::int32_t>(i)) - r.body.model->rest_positions[i]).norm());
-      }
-    }
     report.max_displacement_m = std::max(report.max_displacement_m, b.max_displacement_m);
     report.bodies.push_back(std::move(b));
   }

@@ -9,7 +9,9 @@ PeriodStats::PeriodStats(double nominal_period_s) : nominal_s_(nominal_period_s)
 
 void PeriodStats::record(double period_s, bool overrun) {
   if (!(period_s >= 0.0)) return;
-  const auto bin = static_cast<std::size_t>(std::min(period_s / kBinWidth, static_cast<double>(bins_.size() - 1)));
+  // Nearest microsecond: bin b holds [b − 0.5, b + 0.5) µs, so that a period of exactly 1 ms
+  // computed as a difference of times (0.000999999… s) is counted as 1000 µs.
+  const auto bin = static_cast<std::size_t>(std::min(std::round(period_s / kBinWidth), static_cast<double>(bins_.size() - 1)));
   ++bins_[bin];
   ++count_;
   if (overrun) ++overruns_;
@@ -29,7 +31,7 @@ double PeriodStats::quantile_s(double q) const {
   std::uint64_t seen = 0;
   for (std::size_t b = 0; b < bins_.size(); ++b) {
     seen += bins_[b];
-    if (seen >= std::max<std::uint64_t>(target, 1)) return std::min((static_cast<double>(b) + 0.5) * kBinWidth, max_s_);
+    if (seen >= std::max<std::uint64_t>(target, 1)) return std::min(static_cast<double>(b) * kBinWidth, max_s_);
   }
   return max_s_;
 }

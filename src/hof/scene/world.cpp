@@ -8,6 +8,7 @@
 #include <cmath>
 
 #include "hof/mechanics/model_parameters.h"
+#include "hof/mechanics/step.h"
 #include "hof/mesh/boundary.h"
 #include "hof/mesh/mesh_io.h"
 #include "hof/scene/sofa_scene.h"
@@ -106,7 +107,10 @@ Expected<void> add_x3d(World& w, const std::filesystem::path& file) {
   const X3dDeformableDefaults d;
   bool any_deformable = false;
   for (const X3dShape& shape : x3d->shapes) {
-    const mesh::TriMesh& geometry = shape.haptic_mesh_W.triangles.empty() ? shape.mesh_W : shape.haptic_mesh_W;
+    // A rigid shape is felt through its hapticGeometry when it has one (as H3D renders it); a
+    // deformable one is simulated on its geometry (the mesh that deforms).
+    const mesh::TriMesh& geometry =
+        shape.deformable || shape.haptic_mesh_W.triangles.empty() ? shape.mesh_W : shape.haptic_mesh_W;
     if (!shape.touchable || geometry.triangles.empty()) continue;
     if (!shape.solid) w.project.touchable_face = collision::TouchableFace::kFrontAndBack;  // X3D solid='false'
     const std::string name = !shape.def.empty() ? shape.def : fmt::format("{}@{}", shape.geometry_type.empty() ? "Shape" : shape.geometry_type, shape.line);
@@ -211,6 +215,8 @@ Expected<void> add_sofa(World& w, const std::filesystem::path& scene_path) {
   return {};
 }
 
+constexpr double kProbeSpeed = 0.02;  // m/s of device travel
+
 bool identity(const std::array<double, 16>& m) {
   for (int r = 0; r < 4; ++r) {
     for (int c = 0; c < 4; ++c) {
@@ -223,12 +229,16 @@ bool identity(const std::array<double, 16>& m) {
 }  // namespace
 
 DefaultProbe default_probe(const std::vector<coupling::SessionBody>& bodies, double workspace_radius_m,
-                           double device_stiffness_n_per_m, double max_force_n, const std::array<double, 16>* calibration) {
+                           double device_stiffness_n_per_m, double max_force_n, const std::array<double, 16>* calibration,
+                           const Vec3& effects_centre) {
   DefaultProbe probe;
   probe.calibration = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
   if (bodies.empty()) {
-    probe.device = "scripted:hold,start=0;0;0,hold=3";
-    probe.description = "no body to press: the probe holds still at the origin";
+    // Force effects only: circle through them (a still probe feels no viscosity and sits at a
+    // spring's rest point), 5 mm around the first spring's anchor or the origin.
+    const Vec3 centre = effects_centre;
+    probe.device = fmt::format("scripted:circle,centre={};{};{},radius=0.005,period=1,repeat=0", centre.x(), centre.y(), centre.z());
+    probe.description = "no body to press: the probe circles (5 mm, 1 s a turn) through the force effects";
     return probe;
   }
   // Fit the device workspace to the world's bounds (H3D FitToBoxTransform): uniform scale s
@@ -279,19 +289,34 @@ DefaultProbe default_probe(const std::vector<coupling::SessionBody>& bodies, dou
       up = -model.gravity_m_per_s2.normalized();
     }
   }
-  // Vertex normals of the rest surface (area-weighted).
-  std::vector<Vec3> normals(surface.vertices.size(), Vec3::Zero());
+  // Where the surface will be when the probe arrives: a body under gravity sags, swings or
+  // falls back meanwhile, so its motion without contact is simulated for the approach time
+  // (in virtual time the session then reproduces it exactly until the contact).
+  constexpr double clearance_dev = 0.02;
+  std::vector<Vec3> arrival = surface.vertices;
+  if (target.deformable() && target.model->gravity_m_per_s2.norm() > 0.0) {
+    mechanics::MechanicalState state = mechanics::make_state(*target.model);
+    const auto steps = static_cast<std::int64_t>(std::ceil(clearance_dev / kProbeSpeed / target.model->dt_s - 1e-9));
+    bool ok = true;
+    for (std::int64_t k = 0; k < steps && ok; ++k) ok = mechanics::step(*target.model, state);
+    if (ok) target.mapping.apply({state.x.data(), static_cast<std::size_t>(state.x.size())}, arrival);
+  }
+  Eigen::AlignedBox3d arrival_box;
+  for (const Vec3& p : arrival) arrival_box.extend(p);
+  const Vec3 arrival_centre = arrival_box.center();
+  // Vertex normals of the surface at arrival (area-weighted).
+  std::vector<Vec3> normals(arrival.size(), Vec3::Zero());
   for (const mesh::Tri& t : surface.triangles) {
-    const Vec3 n = (surface.vertices[t[1]] - surface.vertices[t[0]]).cross(surface.vertices[t[2]] - surface.vertices[t[0]]);
+    const Vec3 n = (arrival[t[1]] - arrival[t[0]]).cross(arrival[t[2]] - arrival[t[0]]);
     for (auto v : t) normals[static_cast<std::size_t>(v)] += n;
   }
   // The vertex on the top middle: normal along up, close to the axis through the centre.
   std::size_t best = 0;
   double best_score = -std::numeric_limits<double>::infinity();
-  for (std::size_t i = 0; i < surface.vertices.size(); ++i) {
+  for (std::size_t i = 0; i < arrival.size(); ++i) {
     if (normals[i].norm() == 0.0) continue;
     const Vec3 n = normals[i].normalized();
-    const Vec3 r = surface.vertices[i] - c;
+    const Vec3 r = arrival[i] - arrival_centre;
     if (r.dot(up) <= 0.0) continue;
     const double off_axis = (r - r.dot(up) * up).norm() / size;
     const double score = n.dot(up) - 2.0 * off_axis;
@@ -300,25 +325,41 @@ DefaultProbe default_probe(const std::vector<coupling::SessionBody>& bodies, dou
       best = i;
     }
   }
-  const Vec3 point = surface.vertices[best];
+  const Vec3 point = arrival[best];
   const Vec3 normal = normals[best].norm() > 0.0 ? Vec3(normals[best].normalized()) : up;
-  // Device-frame motion: clearance 2 cm of device travel, a press whose rigid-wall force stays
-  // at 60% of the device's limit (a rigid body stops the proxy at its surface), 8 mm into a
-  // deformable body (it yields), at 2 cm/s, held 1 s.
-  const double clearance_dev = 0.02;
-  const double rigid_depth_dev = 0.6 * max_force_n / std::max(device_stiffness_n_per_m, 1.0);
-  const double depth_dev = target.deformable() ? 0.008 : std::min(0.008, rigid_depth_dev);
+  // Device-frame motion: clearance 2 cm of device travel, then a press deep enough for a
+  // force of 40% of the device's limit against the tissue's own stiffness there (its
+  // compliance at rest, in series with the rendering spring), 1 to 20 mm, at 2 cm/s, held 1 s.
+  double compliance_world = 0.0;  // world units per N along the normal
+  if (target.deformable()) {
+    mechanics::MechanicalState state = mechanics::make_state(*target.model);
+    const std::array<std::int32_t, 1> vertex{static_cast<std::int32_t>(best)};
+    const std::array<double, 1> one{1.0};
+    std::array<std::int32_t, 12> nodes{};
+    std::array<double, 12> weights{};
+    const std::size_t count = target.mapping.point_weights(vertex, one, nodes, weights);
+    Mat3 point_compliance;
+    if (mechanics::compute_point_compliance(*target.model, state, std::span(nodes.data(), count),
+                                            std::span(weights.data(), count), point_compliance) &&
+        point_compliance.allFinite()) {
+      compliance_world = std::max(0.0, normal.dot(point_compliance * normal));
+    }
+  }
+  const double k_device = std::max(device_stiffness_n_per_m, 1.0);
+  const double k_effective = 1.0 / (1.0 / k_device + compliance_world / s);
+  const double depth_dev = std::clamp(0.4 * max_force_n / k_effective, 0.001, 0.01);
+  const double approach_dev = clearance_dev;
   const Vec3 start_world = point + clearance_dev * s * normal;
   const Vec3 start_dev = (to_device * start_world.homogeneous()).head<3>();
   const Vec3 direction = (to_device.topLeftCorner<3, 3>() * -normal).normalized();
-  probe.device = fmt::format("scripted:poke,start={};{};{},direction={};{};{},approach={},depth={},speed=0.02,hold=1",
+  probe.device = fmt::format("scripted:poke,start={};{};{},direction={};{};{},approach={},depth={},speed={},hold=1",
                              start_dev.x(), start_dev.y(), start_dev.z(), direction.x(), direction.y(), direction.z(),
-                             clearance_dev, depth_dev);
-  probe.description = fmt::format("presses body '{}' at ({:.4g}, {:.4g}, {:.4g}) along its inward normal ({:.3f}, {:.3f}, "
-                                  "{:.3f}), {:.1f} mm of device travel past the surface; workspace fitted to the world "
-                                  "({:.4g} world units per device metre)",
+                             approach_dev, depth_dev, kProbeSpeed);
+  probe.description = fmt::format("presses body '{}' where its surface will be on arrival, ({:.4g}, {:.4g}, {:.4g}) along its inward normal ({:.3f}, {:.3f}, "
+                                  "{:.3f}), {:.1f} mm of device travel past the surface for about {:.1f} N (tissue compliance "
+                                  "{:.3g} world units/N there); {:.4g} world units per device metre",
                                   target.name, point.x(), point.y(), point.z(), direction.x(), direction.y(), direction.z(),
-                                  1e3 * depth_dev, s);
+                                  1e3 * depth_dev, k_effective * depth_dev, compliance_world, s);
   return probe;
 }
 
@@ -365,8 +406,9 @@ Expected<World> build_world(const std::filesystem::path& file, const std::string
     const double k = w.project.surface.stiffness_n_per_m(spec.max_stiffness_n_per_m);
     // A calibration the file gives is kept; a bare scene gets the fitted one.
     const bool given = !identity(w.project.position_calibration);
-    DefaultProbe probe =
-        default_probe(w.bodies, spec.workspace_radius_m, k, spec.max_force_n, given ? &w.project.position_calibration : nullptr);
+    const Vec3 effects_centre = w.project.effects.springs.empty() ? Vec3::Zero() : w.project.effects.springs.front().position_m;
+    DefaultProbe probe = default_probe(w.bodies, spec.workspace_radius_m, k, spec.max_force_n,
+                                       given ? &w.project.position_calibration : nullptr, effects_centre);
     device = probe.device;
     w.default_probe = true;
     w.project.position_calibration = probe.calibration;

@@ -69,6 +69,7 @@ struct DefaultProbe {
 /// `calibration`: the file's (kept), or null to fit one.
 [[nodiscard]] DefaultProbe default_probe(const std::vector<coupling::SessionBody>& bodies, double workspace_radius_m,
                                          double device_stiffness_n_per_m, double max_force_n,
-                                         const std::array<double, 16>* calibration = nullptr);
+                                         const std::array<double, 16>* calibration = nullptr,
+                                         const Vec3& effects_centre = Vec3::Zero());
 
 }  // namespace hof::scene
