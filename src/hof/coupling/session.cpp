@@ -308,6 +308,7 @@ void Session::take_contacts(SessionReport& report) {
   while (loop_->contacts().pop(c)) {
     ++ticks_since_step_;
     ++report.haptic_ticks;
+    last_tick_valid_ = c.valid;
     if (c.valid) {
       last_proxy_ = c.proxy;
       last_proxy_valid_ = true;
@@ -334,7 +335,9 @@ void Session::take_contacts(SessionReport& report) {
 }
 
 void Session::count_fall_through(SessionReport& report) {
-  if (!last_proxy_valid_) return;
+  // Only a proxy the device is driving: after a script ends (or the device is gone) the proxy
+  // stays where it was, and a body moving through that spot has not been fallen through.
+  if (!last_proxy_valid_ || !last_tick_valid_) return;
   const bool first = !first_reading_seen_;
   first_reading_seen_ = true;
   for (std::size_t i = 0; i < bodies_.size(); ++i) {

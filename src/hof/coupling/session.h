@@ -233,6 +233,7 @@ class Session {
   std::int32_t contact_ticks_since_publish_{0};
   Vec3 last_proxy_{Vec3::Zero()};
   bool last_proxy_valid_{false};
+  bool last_tick_valid_{false};
   bool first_reading_seen_{false};
   // Commands.
   mutable std::mutex commands_mutex_;

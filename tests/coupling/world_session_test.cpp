@@ -1,0 +1,389 @@
+// Sessions on worlds of several bodies: rigid shapes, two livers, force effects only, and the
+// command seam — in virtual time (lock-step, deterministic) and in real time (two threads).
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <thread>
+
+#include "hof/coupling/session.h"
+#include "hof/haptics/device_backends/scripted_device.h"
+#include "hof/mechanics/model_parameters.h"
+#include "hof/mesh/boundary.h"
+#include "hof/mesh/liver_generator.h"
+
+#include "coupling/resting_liver.h"
+#include "support/allocation_counter.h"
+
+namespace hof::coupling {
+namespace {
+
+// An axis-aligned box as a closed triangle surface, normals outward.
+mesh::TriMesh box(const Vec3& lo, const Vec3& hi) {
+  mesh::TriMesh m;
+  for (int i = 0; i < 8; ++i) m.vertices.emplace_back(i & 1 ? hi.x() : lo.x(), i & 2 ? hi.y() : lo.y(), i & 4 ? hi.z() : lo.z());
+  const auto quad = [&](int a, int b, int c, int d) {
+    m.triangles.push_back({a, b, c});
+    m.triangles.push_back({a, c, d});
+  };
+  quad(0, 2, 3, 1);  // z = lo
+  quad(4, 5, 7, 6);  // z = hi
+  quad(0, 1, 5, 4);  // y = lo
+  quad(2, 6, 7, 3);  // y = hi
+  quad(0, 4, 6, 2);  // x = lo
+  quad(1, 3, 7, 5);  // x = hi
+  return m;
+}
+
+std::unique_ptr<haptics::ScriptedDevice> poke_device(const Vec3& start, const Vec3& direction, double approach, double depth,
+                                                      double speed, double hold, const haptics::DeviceSpec& spec = {}) {
+  haptics::MotionConfig motion;
+  motion.kind = haptics::MotionKind::kPoke;
+  motion.start_m = start;
+  motion.direction = direction;
+  motion.approach_m = approach;
+  motion.depth_m = depth;
+  motion.speed_m_per_s = speed;
+  motion.hold_s = hold;
+  auto scripted = haptics::ScriptedMotion::make(motion);
+  EXPECT_TRUE(scripted) << scripted.error().to_string();
+  return std::make_unique<haptics::ScriptedDevice>(*scripted, spec);
+}
+
+SessionConfig god_object_config() {
+  SessionConfig config;
+  config.haptics.renderer.kind = haptics::RendererKind::kGodObject;
+  config.haptics.realtime_priority = false;
+  config.haptics.safety.fade_in_s = 0.0;
+  return config;
+}
+
+struct RigidRun {
+  std::vector<haptics::HapticSample> samples;
+  SessionReport report;
+};
+
+// A 4 cm box (top at y = 0) pressed from above along −y by a poke of `depth` past its top.
+RigidRun press_rigid_box(double depth, double speed) {
+  std::vector<SessionBody> bodies(1);
+  bodies[0].name = "box";
+  bodies[0].surface = box(Vec3(-0.02, -0.04, -0.02), Vec3(0.02, 0.0, 0.02));
+  const SessionConfig config = god_object_config();
+  auto session = Session::make(std::move(bodies), poke_device(Vec3(0, 0.05, 0), Vec3(0, -1, 0), 0.05, depth, speed, 0.3), config);
+  EXPECT_TRUE(session) << session.error().to_string();
+  RigidRun run;
+  run.report = (*session)->run_virtual(5.0, [&](const haptics::HapticSample& s) { run.samples.push_back(s); });
+  return run;
+}
+
+TEST(WorldSession, RigidShapeHoldsThePressAtStiffnessTimesPenetration) {
+  const RigidRun run = press_rigid_box(0.003, 0.02);  // 3 mm: 1500 N/m × 3 mm = 4.5 N, below the 8 N limit
+  const double k = 0.5 * haptics::DeviceSpec{}.max_stiffness_n_per_m;
+  int held = 0;
+  for (const haptics::HapticSample& s : run.samples) {
+    if (!s.valid || !s.contact) continue;
+    EXPECT_NEAR(s.proxy.y(), 0.0, 1e-4) << "the proxy leaves the rigid surface at t = " << s.time_s;
+    const double penetration = -s.device.y();
+    if (penetration > 0.0029) {
+      ++held;
+      EXPECT_NEAR(s.force.norm(), std::min(k * penetration, 8.0), 0.05) << "t = " << s.time_s;
+    }
+  }
+  EXPECT_GT(held, 200);
+  EXPECT_EQ(run.report.fall_through_events, 0);
+  ASSERT_EQ(run.report.bodies.size(), 1u);
+  EXPECT_FALSE(run.report.bodies[0].deformable);
+  EXPECT_GT(run.report.bodies[0].contact_time_s, 0.2);
+}
+
+TEST(WorldSession, RigidShapePushedAtTheDeviceLimitStaysPutAndTheForceIsClamped) {
+  const RigidRun run = press_rigid_box(0.03, 0.02);  // 3 cm: 45 N requested
+  int clamped = 0;
+  for (const haptics::HapticSample& s : run.samples) {
+    if (!s.valid || !s.contact) continue;
+    EXPECT_NEAR(s.proxy.y(), 0.0, 1e-4);
+    EXPECT_LE(s.force.norm(), 8.0 + 1e-9);
+    if (s.requested_force.norm() > 8.0) {
+      ++clamped;
+      EXPECT_NEAR(s.force.norm(), 8.0, 1e-6);
+    }
+  }
+  EXPECT_GT(clamped, 100);
+  EXPECT_EQ(run.report.fall_through_events, 0);
+  EXPECT_GT(run.report.clamped_contact_ticks, 100);
+}
+
+TEST(WorldSession, RigidShapeCrossedInOneTickDoesNotLetTheProxyThrough) {
+  // 200 m/s: 20 cm a tick — from 5 cm above the box to 11 cm below its top (through its
+  // whole 4 cm height) in one tick.
+  const RigidRun run = press_rigid_box(0.11, 200.0);
+  bool crossed = false;
+  for (const haptics::HapticSample& s : run.samples) {
+    if (!s.valid) continue;
+    if (s.device.y() < -0.05) {
+      crossed = true;
+      EXPECT_TRUE(s.contact);
+      EXPECT_NEAR(s.proxy.y(), 0.0, 1e-4) << "t = " << s.time_s;
+      EXPECT_LE(s.force.norm(), 8.0 + 1e-9);
+    }
+  }
+  EXPECT_TRUE(crossed);
+  EXPECT_EQ(run.report.fall_through_events, 0);
+}
+
+// Two simple livers 30 cm apart, each with its own solver; the probe presses the first.
+struct TwoLivers {
+  std::unique_ptr<Session> session;
+  std::vector<Vec3> rest_b;
+};
+
+TwoLivers two_livers(mesh::LiverResolution resolution, const Vec3& probe_start) {
+  const mesh::Mesh liver = *mesh::generate_liver(resolution);
+  std::vector<SessionBody> bodies;
+  for (int i = 0; i < 2; ++i) {
+    mesh::Mesh placed = liver;
+    for (Vec3& p : placed.nodes) p.x() += 0.3 * i;
+    const mesh::BoundarySurface b = mesh::extract_boundary(placed.nodes, placed.tets);
+    mechanics::ModelConfig c = testing::resting_liver_config(placed);
+    c.name = i == 0 ? "A" : "B";
+    c.ode.rayleigh_mass = c.ode.rayleigh_stiffness = 0.1;
+    auto model = mechanics::build_model(c);
+    EXPECT_TRUE(model) << model.error().to_string();
+    auto mapping = SurfaceMapping::by_index(placed.nodes, b.surface.vertices, b.surface_to_volume);
+    EXPECT_TRUE(mapping);
+    SessionBody body;
+    body.name = c.name;
+    body.model.emplace(std::move(*model));
+    body.surface = b.surface;
+    body.mapping = std::move(*mapping);
+    body.config = c;
+    bodies.push_back(std::move(body));
+  }
+  SessionConfig config;
+  config.haptics.realtime_priority = false;
+  auto session = Session::make(std::move(bodies), poke_device(probe_start, Vec3(0, 0, -1), 0.04, 0.01, 0.05, 0.3), config);
+  EXPECT_TRUE(session) << session.error().to_string();
+  TwoLivers t;
+  t.session = std::move(*session);
+  return t;
+}
+
+TEST(WorldSession, TouchingOneLiverLeavesTheOtherAtRest) {
+  TwoLivers t = two_livers(mesh::LiverResolution::kSimple, Vec3(0.03, 0.0, 0.09));
+  std::int64_t contacts_on_a = 0, contacts_elsewhere = 0;
+  const SessionReport report = t.session->run_virtual(1.5, [&](const haptics::HapticSample& s) {
+    if (!s.contact) return;
+    (t.session->body_of_triangle(s.triangle) == 0 ? contacts_on_a : contacts_elsewhere) += 1;
+  });
+  EXPECT_FALSE(report.diverged) << report.divergence;
+  EXPECT_GT(contacts_on_a, 100);
+  EXPECT_EQ(contacts_elsewhere, 0);
+  ASSERT_EQ(report.bodies.size(), 2u);
+  EXPECT_GT(report.bodies[0].max_displacement_m, 5e-4) << "the pressed liver did not move";
+  EXPECT_GT(report.bodies[0].contact_time_s, 0.1);
+  EXPECT_EQ(report.bodies[1].contact_time_s, 0.0);
+  // Both were simulated (as many steps), and the untouched one stayed at rest.
+  const mechanics::MechanicalState& b = t.session->state(1);
+  const auto& model_b = *t.session->body(1).model;
+  for (std::size_t i = 0; i < model_b.node_count(); ++i) {
+    ASSERT_LE((b.position(static_cast<std::int32_t>(i)) - model_b.rest_positions[i]).norm(), 1e-12) << "node " << i;
+  }
+  EXPECT_EQ(report.fall_through_events, 0);
+}
+
+TEST(WorldSession, TheSameLiverPressedAloneOrBesideAnotherGivesTheSameForces) {
+  TwoLivers t = two_livers(mesh::LiverResolution::kSimple, Vec3(0.03, 0.0, 0.09));
+  std::vector<Vec3> pair_forces;
+  t.session->run_virtual(1.0, [&](const haptics::HapticSample& s) { pair_forces.push_back(s.force); });
+
+  const mesh::Mesh liver = *mesh::generate_liver(mesh::LiverResolution::kSimple);
+  const mesh::BoundarySurface b = mesh::extract_boundary(liver.nodes, liver.tets);
+  mechanics::ModelConfig c = testing::resting_liver_config(liver);
+  c.ode.rayleigh_mass = c.ode.rayleigh_stiffness = 0.1;
+  SessionBody body{"A", *mechanics::build_model(c), b.surface,
+                   *SurfaceMapping::by_index(liver.nodes, b.surface.vertices, b.surface_to_volume), {}, c};
+  SessionConfig config;
+  config.haptics.realtime_priority = false;
+  auto alone = Session::make(std::move(body), poke_device(Vec3(0.03, 0.0, 0.09), Vec3(0, 0, -1), 0.04, 0.01, 0.05, 0.3), config);
+  ASSERT_TRUE(alone);
+  std::vector<Vec3> alone_forces;
+  (*alone)->run_virtual(1.0, [&](const haptics::HapticSample& s) { alone_forces.push_back(s.force); });
+  ASSERT_EQ(pair_forces.size(), alone_forces.size());
+  for (std::size_t i = 0; i < pair_forces.size(); ++i) ASSERT_EQ(pair_forces[i], alone_forces[i]) << "tick " << i;
+}
+
+// ---- Force effects only: no shape at all.
+
+TEST(WorldSession, EffectOnlyWorldRendersEachEffectsOwnFormulaAtEveryTick) {
+  SessionConfig config;
+  config.haptics.realtime_priority = false;
+  config.haptics.safety.fade_in_s = 0.0;
+  const Vec3 anchor(0.01, 0.02, 0.0);
+  haptics::SpringEffect spring;
+  spring.position_m = anchor;
+  spring.spring_constant_n_per_m = 100.0;
+  spring.start_distance_m = 1.0;  // holds the device from the first tick
+  spring.escape_distance_m = 1.0;
+  haptics::ViscosityEffect viscosity;
+  viscosity.viscosity_pa_s = 50.0;
+  haptics::ConstantForceEffect constant;
+  constant.force_n = Vec3(0.0, 0.3, 0.0);
+  config.effects.springs.push_back(spring);
+  config.effects.viscosities.push_back(viscosity);
+  config.effects.constants.push_back(constant);
+  haptics::MotionConfig circle;
+  circle.kind = haptics::MotionKind::kCircle;
+  circle.centre_m = Vec3(0.0, 0.0, 0.0);
+  circle.normal = Vec3(0, 0, 1);
+  circle.radius_m = 0.02;
+  circle.period_s = 1.0;
+  circle.repeat = 0;
+  auto motion = haptics::ScriptedMotion::make(circle);
+  ASSERT_TRUE(motion);
+  haptics::DeviceSpec spec;
+  spec.max_force_rate_n_per_s = 1e6;  // the first tick's step up is the effects', not a slew
+  auto session = Session::make(std::vector<SessionBody>{}, std::make_unique<haptics::ScriptedDevice>(*motion, spec), config);
+  ASSERT_TRUE(session) << session.error().to_string();
+  int checked = 0;
+  const SessionReport report = (*session)->run_virtual(2.0, [&](const haptics::HapticSample& s) {
+    ASSERT_TRUE(s.valid);
+    // H3D: spring k (p − x) − d v; Stokes drag −dampingFactor · 6π μ r · v; the constant.
+    const Vec3 expected = 100.0 * (anchor - s.device) - 0.5 * 6.0 * std::numbers::pi * 50.0 * 0.0025 * s.device_velocity +
+                          Vec3(0.0, 0.3, 0.0);
+    ASSERT_LT((s.force - expected).norm(), 1e-9) << "t = " << s.time_s;
+    ++checked;
+  });
+  EXPECT_EQ(checked, 2000);
+  EXPECT_GT(report.max_force_n, 1.0);
+  EXPECT_EQ(report.contact_time_s, 0.0);
+  EXPECT_GT(report.simulation_steps, 0);
+}
+
+// ---- The command seam.
+
+std::unique_ptr<Session> springs_liver_session(std::unique_ptr<haptics::Device> device) {
+  const mesh::Mesh liver = *mesh::generate_liver(mesh::LiverResolution::kSimple);
+  const mesh::BoundarySurface b = mesh::extract_boundary(liver.nodes, liver.tets);
+  mechanics::ModelConfig c = testing::resting_liver_config(liver);
+  c.name = "Liver";
+  c.force_fields.clear();
+  mechanics::ForceFieldConfig springs;
+  springs.name = "springs";
+  springs.mesh_springs = mechanics::MeshSpringConfig{50.0, 0.5};
+  c.force_fields.push_back(springs);
+  c.ode.rayleigh_mass = c.ode.rayleigh_stiffness = 0.1;
+  SessionBody body{"Liver", *mechanics::build_model(c), b.surface,
+                   *SurfaceMapping::by_index(liver.nodes, b.surface.vertices, b.surface_to_volume), {}, c};
+  SessionConfig config;
+  config.haptics.realtime_priority = false;
+  auto session = Session::make(std::move(body), std::move(device), config);
+  EXPECT_TRUE(session) << session.error().to_string();
+  return std::move(*session);
+}
+
+TEST(CommandSeam, ABadValueIsRefusedWithAMessageAndChangesNothing) {
+  auto session = springs_liver_session(poke_device(Vec3(0.03, 0, 0.09), Vec3(0, 0, -1), 0.04, 0.01, 0.05, 0.3));
+  for (double bad : {-5.0, std::nan(""), std::numeric_limits<double>::infinity()}) {
+    auto refused = session->submit(command::SetParameter{"Liver", "springs", "stiffness", bad});
+    ASSERT_FALSE(refused);
+    EXPECT_NE(refused.error().message.find("springs/stiffness"), std::string::npos) << refused.error().message;
+  }
+  EXPECT_FALSE(session->submit(command::SetParameter{"Spleen", "springs", "stiffness", 10.0}));
+  EXPECT_FALSE(session->submit(command::SetParameter{"Liver", "FEM", "youngModulus", 10.0}));
+  EXPECT_FALSE(session->submit(command::SetParameter{"Liver", "springs", "youngModulus", 10.0}));
+  EXPECT_FALSE(session->submit(command::SetParameter{"Liver", "cg", "iterations", 2.5}));
+  EXPECT_FALSE(session->submit(command::SetParameter{"Liver", "", "dt", 0.0}));
+  EXPECT_FALSE(session->submit(command::SingleStep{0}));
+  haptics::SurfaceMaterial negative;
+  negative.stiffness = -1.0;
+  EXPECT_FALSE(session->submit(command::SetMaterial{"Liver", negative}));
+  const SessionReport report = session->run_virtual(0.1, {});
+  EXPECT_TRUE(report.applied_commands.empty());
+  EXPECT_TRUE(session->parameter_changes().empty());
+  EXPECT_EQ(session->body().config->force_fields[0].mesh_springs->stiffness_n_per_m, 50.0);
+}
+
+TEST(CommandSeam, AStiffnessChangedInVirtualTimeActsAtTheNextStep) {
+  // Two identical sessions; one gets stiffer springs after 0.5 s: the runs agree to that
+  // step and differ from the next one on.
+  auto a = springs_liver_session(poke_device(Vec3(0.03, 0, 0.09), Vec3(0, 0, -1), 0.04, 0.01, 0.05, 0.3));
+  auto b = springs_liver_session(poke_device(Vec3(0.03, 0, 0.09), Vec3(0, 0, -1), 0.04, 0.01, 0.05, 0.3));
+  a->run_virtual(0.5, {});
+  b->run_virtual(0.5, {});
+  ASSERT_TRUE(a->state().x.isApprox(b->state().x, 0.0));
+  ASSERT_TRUE(b->submit(command::SetParameter{"Liver", "springs", "stiffness", 500.0}));
+  const SessionReport rb = b->run_virtual(0.01, {});  // one step
+  a->run_virtual(0.01, {});
+  ASSERT_EQ(rb.applied_commands.size(), 1u);
+  EXPECT_EQ(rb.applied_commands[0], "step 0: Liver/springs/stiffness = 500");
+  EXPECT_FALSE(a->state().x.isApprox(b->state().x, 0.0)) << "the change did not act at the next step";
+  EXPECT_EQ(b->body().config->force_fields[0].mesh_springs->stiffness_n_per_m, 500.0);
+  ASSERT_EQ(b->parameter_changes().size(), 1u);
+  EXPECT_EQ(b->parameter_changes()[0].value, 500.0);
+}
+
+TEST(CommandSeam, CommandsDuringARealTimeRunAreAppliedBetweenSteps) {
+  haptics::MotionConfig hold;
+  hold.kind = haptics::MotionKind::kHold;
+  hold.start_m = Vec3(0.03, 0.0, 0.09);
+  hold.hold_s = std::numeric_limits<double>::infinity();
+  auto session = springs_liver_session(std::make_unique<haptics::ScriptedDevice>(*haptics::ScriptedMotion::make(hold)));
+  session->start_realtime();
+  EXPECT_TRUE(session->realtime_running());
+  ASSERT_TRUE(session->submit(command::SetParameter{"Liver", "springs", "stiffness", 80.0}));
+  ASSERT_TRUE(session->submit(command::Pause{}));
+  ASSERT_TRUE(session->submit(command::SingleStep{3}));
+  ASSERT_TRUE(session->submit(command::Resume{}));
+  haptics::SurfaceMaterial frictional;
+  frictional.kind = haptics::SurfaceKind::kFrictional;
+  ASSERT_TRUE(session->submit(command::SetMaterial{"", frictional}));
+  EXPECT_FALSE(session->submit(command::SetParameter{"Liver", "springs", "stiffness", -1.0}));
+  // Wait for the simulation to take them (no timing asserted: however long it takes).
+  std::int64_t samples = 0;
+  while (session->haptic_loop().ticks() < 300) {
+    session->poll([&](const haptics::HapticSample&) { ++samples; });
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  const SessionReport report = session->stop_realtime([&](const haptics::HapticSample&) { ++samples; });
+  EXPECT_FALSE(session->realtime_running());
+  ASSERT_GE(report.applied_commands.size(), 5u);
+  EXPECT_NE(report.applied_commands[0].find("Liver/springs/stiffness = 80"), std::string::npos);
+  EXPECT_NE(report.applied_commands[1].find("pause"), std::string::npos);
+  EXPECT_EQ(session->body().config->force_fields[0].mesh_springs->stiffness_n_per_m, 80.0);
+  EXPECT_GT(report.simulation_steps, 0);
+  // Every tick's sample reached the supervisor (none lost between the threads).
+  EXPECT_EQ(samples, static_cast<std::int64_t>(session->haptic_loop().ticks()));
+}
+
+TEST(CommandSeam, TheHapticTickNeverAllocatesWhenSettingsChange) {
+  // A loop fed new settings (renderer, materials, effects) through its triple buffer.
+  const mesh::TriMesh surface = box(Vec3(-0.02, -0.04, -0.02), Vec3(0.02, 0.0, 0.02));
+  TripleBuffer<haptics::SurfaceSnapshot> surfaces(haptics::make_snapshot(surface));
+  surfaces.publish();
+  TripleBuffer<haptics::HapticSettings> settings;
+  haptics::HapticLoopConfig config;
+  config.realtime_priority = false;
+  auto device = poke_device(Vec3(0, 0.05, 0), Vec3(0, -1, 0), 0.05, 0.005, 0.05, 1.0);
+  haptics::HapticLoop loop(*device, surfaces, config, &settings);
+  double t = 0.0;
+  for (int i = 0; i < 100; ++i, t += 0.001) loop.tick(t);
+  for (int change = 0; change < 5; ++change) {
+    haptics::HapticSettings& slot = settings.write_slot();
+    slot.valid = true;
+    slot.renderer.kind = change % 2 ? haptics::RendererKind::kGodObject : haptics::RendererKind::kRuspini;
+    slot.materials.assign(1, haptics::SurfaceMaterial{});
+    slot.materials[0].stiffness = 0.2 + 0.1 * change;
+    slot.effects.springs.assign(static_cast<std::size_t>(change + 1), haptics::SpringEffect{});
+    slot.effects.viscosities.assign(3, haptics::ViscosityEffect{});
+    settings.publish();
+    const auto before = hof::testing::thread_allocation_count();
+    for (int i = 0; i < 200; ++i, t += 0.001) loop.tick(t);
+    EXPECT_EQ(hof::testing::thread_allocation_count(), before) << "change " << change;
+  }
+}
+
+}  // namespace
+}  // namespace hof::coupling
