@@ -50,7 +50,7 @@ ForceFieldConfig field_config(Field f) {
   ForceFieldConfig c;
   c.name = "tissue";
   switch (f) {
-    case Field::kSprings: c.mesh_springs = MeshSpringConfig{5000.0, 25.0}; break;  // the thesis' settings
+    case Field::kSprings: c.mesh_springs = MeshSpringConfig{5000.0, 25.0, 1.0}; break;  // the thesis' settings
     case Field::kSmall: c.tetrahedron_fem = TetrahedronFemConfig{30000.0, 0.45, FemMethod::kSmall}; break;
     case Field::kLarge: c.tetrahedron_fem = TetrahedronFemConfig{30000.0, 0.45, FemMethod::kLarge}; break;
     case Field::kPolar: c.tetrahedron_fem = TetrahedronFemConfig{30000.0, 0.45, FemMethod::kPolar}; break;

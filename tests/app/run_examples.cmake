@@ -56,3 +56,73 @@ string(JSON moved GET "${summary}" models 0 max_displacement_m)
 if(contact LESS_EQUAL 0 OR moved LESS_EQUAL 0.001)
   message(FATAL_ERROR "the X3D deformable shape was not touched and deformed: contact ${contact} s, moved ${moved} m")
 endif()
+
+# The default probe: every bundled example and every anchor scene with a touchable body runs
+# with `--device auto` and touches something: contact time > 0, the touched body moves (or is
+# rigid), no fall-through, the force below the device's limit most of the time.
+file(GLOB scenes ${SOURCE}/examples/*.hof ${SOURCE}/examples/*.scn ${ANCHORS}/sofa/*.scn ${ANCHORS}/sofa/history/2008-07-30*/liver.scn
+     ${ANCHORS}/h3d/examples/All/DeformableShape.x3d ${ANCHORS}/h3d/examples/All/Surfaces.x3d
+     ${ANCHORS}/h3d/examples/All/HapticsOptions.x3d ${ANCHORS}/h3d/examples/All/HapticLayeredGroup.x3d)
+set(i 0)
+foreach(scene ${scenes})
+  math(EXPR i "${i} + 1")
+  execute_process(COMMAND ${HOF} run ${scene} --device auto --deterministic --seconds 3 --quiet --out ${WORK}/probe${i}
+                  RESULT_VARIABLE rc ERROR_VARIABLE err)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "hof run ${scene} --device auto failed (${rc}): ${err}")
+  endif()
+  file(READ ${WORK}/probe${i}/summary.json summary)
+  string(JSON contact GET "${summary}" contact_time_s)
+  string(JSON fall GET "${summary}" fall_through_events)
+  string(JSON clamped GET "${summary}" contact_time_at_force_limit_share)
+  string(JSON kind GET "${summary}" bodies 0 kind)
+  string(JSON moved GET "${summary}" bodies 0 max_displacement)
+  string(JSON inside GET "${summary}" bodies 0 probe_started_inside)
+  if(contact LESS_EQUAL 0.2 OR NOT fall EQUAL 0 OR clamped GREATER 0.01 OR inside)
+    message(FATAL_ERROR "${scene} with the default probe: contact ${contact} s, fall-through ${fall}, "
+                        "clamped share ${clamped}, started inside ${inside}")
+  endif()
+  if(kind STREQUAL "deformable" AND moved LESS_EQUAL 0)
+    message(FATAL_ERROR "${scene} with the default probe: the touched body did not move")
+  endif()
+endforeach()
+
+# Effect-only worlds run: H3D's SpringEffect example has no shape at all.
+execute_process(COMMAND ${HOF} run ${ANCHORS}/h3d/examples/All/SpringEffect.x3d --deterministic --seconds 2 --quiet --out ${WORK}/spring
+                RESULT_VARIABLE rc ERROR_VARIABLE err)
+file(READ ${WORK}/spring/summary.json summary)
+string(JSON force GET "${summary}" max_force_n)
+if(NOT rc EQUAL 0 OR force LESS_EQUAL 0.1)
+  message(FATAL_ERROR "SpringEffect.x3d did not run or felt nothing (rc ${rc}, max force ${force}): ${err}")
+endif()
+
+# A report is never lost: names that are not UTF-8 (a Latin-1 file) are escaped.
+string(ASCII 223 sharp_s)
+file(WRITE ${WORK}/latin1.x3d "<?xml version='1.0' encoding='ISO-8859-1'?>\n<X3D><Scene><Shape DEF='Gr")
+file(APPEND ${WORK}/latin1.x3d "${sharp_s}e'><Appearance><SmoothSurface/></Appearance><Box size='0.1 0.1 0.1'/></Shape></Scene></X3D>\n")
+execute_process(COMMAND ${HOF} run ${WORK}/latin1.x3d --deterministic --seconds 2 --quiet --out ${WORK}/latin1
+                RESULT_VARIABLE rc ERROR_VARIABLE err)
+if(NOT rc EQUAL 0 OR NOT EXISTS ${WORK}/latin1/summary.json)
+  message(FATAL_ERROR "a Latin-1 scene lost its report (rc ${rc}): ${err}")
+endif()
+file(READ ${WORK}/latin1/summary.json summary)
+string(JSON name GET "${summary}" bodies 0 name)
+if(NOT name MATCHES "^Gr.*e$")
+  message(FATAL_ERROR "the Latin-1 body name was not kept (escaped): ${name}")
+endif()
+
+# Numeric options are range-checked with a clear message starting with `hof:`.
+foreach(bad "--telemetry-rate;-5" "--seconds;1e9" "--seconds;0" "--steps;-3")
+  execute_process(COMMAND ${HOF} run ${SOURCE}/examples/liver-palpation-simple.hof --deterministic ${bad} --quiet
+                  RESULT_VARIABLE rc ERROR_VARIABLE err)
+  if(rc EQUAL 0 OR NOT err MATCHES "^hof: ")
+    message(FATAL_ERROR "hof run ${bad} was not refused clearly (rc ${rc}): ${err}")
+  endif()
+endforeach()
+
+# check and run agree: what run refuses, check reports as an error.
+file(WRITE ${WORK}/nothing.x3d "<X3D><Scene><PythonScript url='x.py'/><Shape><Box/></Shape></Scene></X3D>\n")
+execute_process(COMMAND ${HOF} check ${WORK}/nothing.x3d RESULT_VARIABLE rc ERROR_VARIABLE err OUTPUT_VARIABLE out)
+if(rc EQUAL 0 OR NOT err MATCHES "^hof: .*nothing.x3d.*PythonScript")
+  message(FATAL_ERROR "hof check accepted a scene hof run refuses (rc ${rc}): ${out}${err}")
+endif()

@@ -272,7 +272,7 @@ std::unique_ptr<Session> springs_liver_session(std::unique_ptr<haptics::Device> 
   c.force_fields.clear();
   mechanics::ForceFieldConfig springs;
   springs.name = "springs";
-  springs.mesh_springs = mechanics::MeshSpringConfig{50.0, 0.5};
+  springs.mesh_springs = mechanics::MeshSpringConfig{50.0, 0.5, 1.0};
   c.force_fields.push_back(springs);
   c.ode.rayleigh_mass = c.ode.rayleigh_stiffness = 0.1;
   SessionBody body{"Liver", *mechanics::build_model(c), b.surface,

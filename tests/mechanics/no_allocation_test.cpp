@@ -24,7 +24,7 @@ struct Case {
 };
 
 std::vector<Case> cases() {
-  ForceFieldConfig springs{"springs", MeshSpringConfig{5000.0, 25.0}, {}, {}, {}};
+  ForceFieldConfig springs{"springs", MeshSpringConfig{5000.0, 25.0, 1.0}, {}, {}, {}};
   ForceFieldConfig large{"fem", {}, TetrahedronFemConfig{5400.0, 0.45, FemMethod::kLarge}, {}, {}};
   ForceFieldConfig polar{"fem", {}, TetrahedronFemConfig{5400.0, 0.45, FemMethod::kPolar}, {}, {}};
   ForceFieldConfig neo{"neo", {}, {}, NeoHookeanConfig{5400.0, 0.45}, {}};

@@ -24,6 +24,10 @@ Expected<std::unique_ptr<MeshSpringForceField>> MeshSpringForceField::make(
     return make_error(ErrorCode::kInvalidArgument,
                       fmt::format("{}: damping must be >= 0 N·s/m, got {}", who, config.damping_n_s_per_m));
   }
+  if (!(config.rest_length_scale > 0.0 && config.rest_length_scale <= 2.0)) {
+    return make_error(ErrorCode::kInvalidArgument,
+                      fmt::format("{}: restLengthScale must be in (0, 2], got {}", who, config.rest_length_scale));
+  }
   std::vector<mesh::Edge> edges = mesh::tet_edges(tets);
   const std::vector<mesh::Edge> surface_edges = mesh::triangle_edges(triangles);
   edges.insert(edges.end(), surface_edges.begin(), surface_edges.end());
@@ -44,7 +48,7 @@ Expected<std::unique_ptr<MeshSpringForceField>> MeshSpringForceField::make(
       return make_error(ErrorCode::kInvalidMesh,
                         fmt::format("{}: nodes {} and {} coincide at rest (zero-length spring)", who, e[0], e[1]));
     }
-    field->springs_.push_back({{e[0], e[1]}, length, {-1, -1}});
+    field->springs_.push_back({{e[0], e[1]}, config.rest_length_scale * length, {-1, -1}});
   }
   field->groups_.resize((field->springs_.size() + simd::kLanes - 1) / simd::kLanes);
   for (std::size_t g = 0; g < field->groups_.size(); ++g) {

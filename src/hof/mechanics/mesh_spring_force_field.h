@@ -20,6 +20,10 @@ namespace hof::mechanics {
 struct MeshSpringConfig {
   double stiffness_n_per_m{0.0};  ///< SOFA `stiffness` (all element kinds) or `tetrahedraStiffness`
   double damping_n_s_per_m{0.0};  ///< SOFA `damping`
+  /// Rest length of each spring as a fraction of its length in the given shape: below 1 the
+  /// springs start in tension (a drum skin, whose tension gives a flat sheet the stiffness
+  /// across its plane that untensioned springs lack). 1 = SOFA's behaviour.
+  double rest_length_scale{1.0};
 };
 
 class MeshSpringForceField final : public ForceField {

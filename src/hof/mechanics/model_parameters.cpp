@@ -41,6 +41,7 @@ Expected<Slot> find_slot(ModelConfig& c, std::string_view component, std::string
     if (f.mesh_springs) {
       if (parameter == "stiffness") return Slot{&f.mesh_springs->stiffness_n_per_m, 0.0, inf, false, false, "N/m"};
       if (parameter == "damping") return Slot{&f.mesh_springs->damping_n_s_per_m, 0.0, inf, false, false, "N s/m"};
+      if (parameter == "restLengthScale") return Slot{&f.mesh_springs->rest_length_scale, 0.0, 2.0, true, false, ""};
     }
     if (f.tetrahedron_fem) {
       if (parameter == "youngModulus") return Slot{&f.tetrahedron_fem->young_modulus_pa, 0.0, inf, true, false, "Pa"};
@@ -128,6 +129,7 @@ std::vector<std::string> parameter_names(const ModelConfig& c) {
     if (f.mesh_springs) {
       names.push_back(f.name + "/stiffness");
       names.push_back(f.name + "/damping");
+      names.push_back(f.name + "/restLengthScale");
     }
     if (f.tetrahedron_fem || f.neo_hookean) {
       names.push_back(f.name + "/youngModulus");

@@ -3,7 +3,7 @@
 /// Named parameters of a model's components, as a scene names them (SOFA's data names), so
 /// that a setting can be changed by name — by the command seam while a session runs, and by a
 /// project's overrides when it is loaded — with one validation:
-///   component = a force field's name:  stiffness, damping (mesh springs);
+///   component = a force field's name:  stiffness, damping, restLengthScale (mesh springs);
 ///                                      youngModulus, poissonRatio (FEM, Neo-Hookean)
 ///   component = the ODE solver's name: rayleighStiffness, rayleighMass
 ///   component = the linear solver's:   iterations, tolerance, threshold

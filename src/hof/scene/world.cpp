@@ -136,9 +136,10 @@ Expected<void> add_x3d(World& w, const std::filesystem::path& file) {
     c.gravity_m_per_s2 = Vec3::Zero();
     mechanics::ForceFieldConfig springs;
     springs.name = "springs";
-    springs.mesh_springs = mechanics::MeshSpringConfig{d.spring_stiffness_n_per_m, d.spring_damping_n_s_per_m};
-    c.force_fields.push_back(springs);
     std::vector<std::int32_t> held = border_nodes(c.triangles);
+    springs.mesh_springs = mechanics::MeshSpringConfig{d.spring_stiffness_n_per_m, d.spring_damping_n_s_per_m,
+                                                       held.empty() ? 1.0 : d.open_sheet_rest_length_scale};
+    c.force_fields.push_back(springs);
     if (held.empty()) {
       double lo = c.positions.front().y(), hi = lo;
       for (const Vec3& p : c.positions) {
@@ -159,9 +160,12 @@ Expected<void> add_x3d(World& w, const std::filesystem::path& file) {
     w.bodies.push_back(std::move(*body));
   }
   if (any_deformable) {
-    w.defaults.push_back(fmt::format("DeformableShape springs/stiffness = {} N/m, springs/damping = {} N s/m, mass = {} kg, "
-                                     "rayleigh = {}, dt = {} s, no gravity, border held (X3D gives no mechanics)",
-                                     d.spring_stiffness_n_per_m, d.spring_damping_n_s_per_m, d.total_mass_kg, d.rayleigh, d.dt_s));
+    w.defaults.push_back(fmt::format("DeformableShape springs/stiffness = {} N/m, springs/damping = {} N s/m, "
+                                     "springs/restLengthScale = {} for an open sheet (a drum skin, border held; a closed "
+                                     "surface: 1, lowest tenth held), mass = {} kg, rayleigh = {}, dt = {} s, no gravity "
+                                     "(X3D gives no mechanics)",
+                                     d.spring_stiffness_n_per_m, d.spring_damping_n_s_per_m, d.open_sheet_rest_length_scale,
+                                     d.total_mass_kg, d.rayleigh, d.dt_s));
   }
   if (!x3d->devices.empty()) {
     const X3dDevice& device = x3d->devices.front();
@@ -230,7 +234,7 @@ bool identity(const std::array<double, 16>& m) {
 
 DefaultProbe default_probe(const std::vector<coupling::SessionBody>& bodies, double workspace_radius_m,
                            double device_stiffness_n_per_m, double max_force_n, const std::array<double, 16>* calibration,
-                           const Vec3& effects_centre) {
+                           const Vec3& effects_centre, double proxy_radius) {
   DefaultProbe probe;
   probe.calibration = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
   if (bodies.empty()) {
@@ -310,34 +314,77 @@ DefaultProbe default_probe(const std::vector<coupling::SessionBody>& bodies, dou
     const Vec3 n = (arrival[t[1]] - arrival[t[0]]).cross(arrival[t[2]] - arrival[t[0]]);
     for (auto v : t) normals[static_cast<std::size_t>(v)] += n;
   }
-  // The vertex on the top middle: normal along up, close to the axis through the centre.
-  std::size_t best = 0;
-  double best_score = -std::numeric_limits<double>::infinity();
-  for (std::size_t i = 0; i < arrival.size(); ++i) {
-    if (normals[i].norm() == 0.0) continue;
-    const Vec3 n = normals[i].normalized();
-    const Vec3 r = arrival[i] - arrival_centre;
-    if (r.dot(up) <= 0.0) continue;
-    const double off_axis = (r - r.dot(up) * up).norm() / size;
-    const double score = n.dot(up) - 2.0 * off_axis;
-    if (score > best_score) {
-      best_score = score;
-      best = i;
+  // The point to press: where a line down the body's vertical axis (along −up, through the
+  // centre of its bounds) first meets the surface from outside — the top middle — as a
+  // triangle and barycentric point, so that coarse primitives (a box's four top corners) are
+  // pressed on a face, not a corner.
+  std::int32_t hit_triangle = -1;
+  Vec3 hit_weights = Vec3::Zero();
+  {
+    const Vec3 from = arrival_centre + size * up;
+    const Vec3 segment = -2.0 * size * up;
+    double nearest = std::numeric_limits<double>::infinity();
+    for (std::size_t t = 0; t < surface.triangles.size(); ++t) {
+      const mesh::Tri& tri = surface.triangles[t];
+      const Vec3 a0 = arrival[tri[0]], e1 = arrival[tri[1]] - a0, e2 = arrival[tri[2]] - a0;
+      if (e1.cross(e2).dot(up) <= 0.0) continue;  // faces up (outward normal toward the probe)
+      // Möller & Trumbore 1997, ray–triangle intersection.
+      const Vec3 p = segment.cross(e2);
+      const double det = e1.dot(p);
+      if (std::abs(det) < 1e-300) continue;
+      const Vec3 q = from - a0;
+      const double u = q.dot(p) / det;
+      const Vec3 qe = q.cross(e1);
+      const double v = segment.dot(qe) / det;
+      const double along = e2.dot(qe) / det;
+      if (u < 0.0 || v < 0.0 || u + v > 1.0 || along < 0.0 || along > 1.0 || along >= nearest) continue;
+      nearest = along;
+      hit_triangle = static_cast<std::int32_t>(t);
+      hit_weights = Vec3(1.0 - u - v, u, v);
     }
   }
-  const Vec3 point = arrival[best];
-  const Vec3 normal = normals[best].norm() > 0.0 ? Vec3(normals[best].normalized()) : up;
+  std::size_t best = 0;
+  if (hit_triangle < 0) {
+    // Nothing on the axis (a ring, say): the vertex on the top that faces up the most, close
+    // to the axis.
+    double best_score = -std::numeric_limits<double>::infinity();
+    for (std::size_t i = 0; i < arrival.size(); ++i) {
+      if (normals[i].norm() == 0.0) continue;
+      const Vec3 n = normals[i].normalized();
+      const Vec3 r = arrival[i] - arrival_centre;
+      if (r.dot(up) <= 0.0) continue;
+      const double score = n.dot(up) - 2.0 * (r - r.dot(up) * up).norm() / size;
+      if (score > best_score) {
+        best_score = score;
+        best = i;
+      }
+    }
+  }
+  Vec3 point = arrival[best];
+  Vec3 normal = normals[best].norm() > 0.0 ? Vec3(normals[best].normalized()) : up;
+  std::array<std::int32_t, 3> press_vertices{static_cast<std::int32_t>(best), 0, 0};
+  std::array<double, 3> press_weights{1.0, 0.0, 0.0};
+  std::size_t press_count = 1;
+  if (hit_triangle >= 0) {
+    const mesh::Tri& tri = surface.triangles[static_cast<std::size_t>(hit_triangle)];
+    point = hit_weights[0] * arrival[tri[0]] + hit_weights[1] * arrival[tri[1]] + hit_weights[2] * arrival[tri[2]];
+    normal = (arrival[tri[1]] - arrival[tri[0]]).cross(arrival[tri[2]] - arrival[tri[0]]).normalized();
+    press_vertices = {tri[0], tri[1], tri[2]};
+    press_weights = {hit_weights[0], hit_weights[1], hit_weights[2]};
+    press_count = 3;
+  }
+  // A sphere proxy (Ruspini) touches when its centre — the device point — is one radius away.
+  point += std::max(0.0, proxy_radius) * normal;
   // Device-frame motion: clearance 2 cm of device travel, then a press deep enough for a
   // force of 40% of the device's limit against the tissue's own stiffness there (its
   // compliance at rest, in series with the rendering spring), 1 to 20 mm, at 2 cm/s, held 1 s.
   double compliance_world = 0.0;  // world units per N along the normal
   if (target.deformable()) {
     mechanics::MechanicalState state = mechanics::make_state(*target.model);
-    const std::array<std::int32_t, 1> vertex{static_cast<std::int32_t>(best)};
-    const std::array<double, 1> one{1.0};
     std::array<std::int32_t, 12> nodes{};
     std::array<double, 12> weights{};
-    const std::size_t count = target.mapping.point_weights(vertex, one, nodes, weights);
+    const std::size_t count = target.mapping.point_weights(std::span(press_vertices.data(), press_count),
+                                                           std::span(press_weights.data(), press_count), nodes, weights);
     Mat3 point_compliance;
     if (mechanics::compute_point_compliance(*target.model, state, std::span(nodes.data(), count),
                                             std::span(weights.data(), count), point_compliance) &&
@@ -407,8 +454,9 @@ Expected<World> build_world(const std::filesystem::path& file, const std::string
     // A calibration the file gives is kept; a bare scene gets the fitted one.
     const bool given = !identity(w.project.position_calibration);
     const Vec3 effects_centre = w.project.effects.springs.empty() ? Vec3::Zero() : w.project.effects.springs.front().position_m;
+    const double radius = w.project.renderer == haptics::RendererKind::kRuspini ? w.project.proxy_radius_m : 0.0;
     DefaultProbe probe = default_probe(w.bodies, spec.workspace_radius_m, k, spec.max_force_n,
-                                       given ? &w.project.position_calibration : nullptr, effects_centre);
+                                       given ? &w.project.position_calibration : nullptr, effects_centre, radius);
     device = probe.device;
     w.default_probe = true;
     w.project.position_calibration = probe.calibration;

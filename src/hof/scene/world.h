@@ -32,9 +32,14 @@ namespace hof::scene {
 
 /// Defaults for an X3D DeformableShape, which carries no mechanics of its own (documented in
 /// docs/project-format.md; a `.hof` project's <set> elements override them by name).
+/// An open sheet is a drum skin: springs pre-tensioned (rest lengths 0.9 of the drawn ones)
+/// with the border held, so that it resists a press across its plane from the start
+/// (untensioned springs in a plane have no stiffness across it: the sheet would fly off the
+/// proxy). A closed surface is held by its lowest tenth, untensioned.
 struct X3dDeformableDefaults {
-  double spring_stiffness_n_per_m{100.0};
-  double spring_damping_n_s_per_m{0.5};
+  double spring_stiffness_n_per_m{2000.0};
+  double spring_damping_n_s_per_m{1.0};
+  double open_sheet_rest_length_scale{0.9};
   double total_mass_kg{0.1};
   double rayleigh{0.1};
   double dt_s{0.01};
@@ -70,6 +75,6 @@ struct DefaultProbe {
 [[nodiscard]] DefaultProbe default_probe(const std::vector<coupling::SessionBody>& bodies, double workspace_radius_m,
                                          double device_stiffness_n_per_m, double max_force_n,
                                          const std::array<double, 16>* calibration = nullptr,
-                                         const Vec3& effects_centre = Vec3::Zero());
+                                         const Vec3& effects_centre = Vec3::Zero(), double proxy_radius = 0.0);
 
 }  // namespace hof::scene

@@ -1,0 +1,264 @@
+// The one builder: X3D geometry touched where H3D draws it, rigid and deformable bodies,
+// effect-only worlds, SOFA scenes with several bodies, project parameters, the default probe.
+
+#include "hof/scene/world.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include "hof/haptics/device_backends/scripted_device.h"
+#include "hof/mechanics/model_parameters.h"
+
+namespace hof::scene {
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path write(const std::string& name, const std::string& text) {
+  const fs::path dir = fs::temp_directory_path() / "hof_world_test";
+  fs::create_directories(dir);
+  const fs::path file = dir / name;
+  std::ofstream(file, std::ios::binary) << text;
+  return file;
+}
+
+std::string x3d(const std::string& body) {
+  return "<X3D profile='H3DAPI' version='1.4'><Scene>\n" + body + "\n</Scene></X3D>\n";
+}
+
+// A touchable shape's appearance.
+const std::string kSurface = "<Appearance><Material/><SmoothSurface stiffness='0.5'/></Appearance>";
+
+struct Touch {
+  bool contact{false};
+  Vec3 proxy{Vec3::Zero()};
+  std::int32_t body{-1};
+};
+
+// Presses the world from `start` along `direction` (3 mm past the first surface, god-object
+// proxy, device frame = world frame) and reports where the proxy rests during the hold.
+Touch touch(const fs::path& file, const Vec3& start, const Vec3& direction, double approach) {
+  auto built = build_world(file);
+  EXPECT_TRUE(built) << built.error().to_string();
+  World world = std::move(*built);
+  haptics::MotionConfig motion;
+  motion.kind = haptics::MotionKind::kPoke;
+  motion.start_m = start;
+  motion.direction = direction;
+  motion.approach_m = approach;
+  motion.depth_m = 0.003;
+  motion.speed_m_per_s = 0.05;
+  motion.hold_s = 0.3;
+  auto scripted = haptics::ScriptedMotion::make(motion);
+  EXPECT_TRUE(scripted);
+  coupling::SessionConfig config = world.config;
+  config.haptics.renderer.kind = haptics::RendererKind::kGodObject;
+  config.haptics.calibration = haptics::Calibration{};
+  config.haptics.realtime_priority = false;
+  auto session = coupling::Session::make(std::move(world.bodies), std::make_unique<haptics::ScriptedDevice>(*scripted), config);
+  EXPECT_TRUE(session) << session.error().to_string();
+  Touch t;
+  const double hold_start = (approach + 0.003) / 0.05 + 0.05;
+  (*session)->run_virtual(hold_start + 0.2, [&](const haptics::HapticSample& s) {
+    if (s.time_s < hold_start || !s.contact) return;
+    t.contact = true;
+    t.proxy = s.proxy;
+    t.body = (*session)->body_of_triangle(s.triangle);
+  });
+  return t;
+}
+
+TEST(World, X3dShapeIsRigidAndTouchedWhereTransformAndScalePlaceIt) {
+  // A 2 cm box scaled 2x and moved 10 cm along x: top face at y = 0.02 over x in [0.08, 0.12].
+  const auto file = write("transform.x3d", x3d("<Transform translation='0.1 0 0' scale='2 2 2'><Shape>" + kSurface +
+                                               "<Box size='0.02 0.02 0.02'/></Shape></Transform>"));
+  auto world = build_world(file);
+  ASSERT_TRUE(world) << world.error().to_string();
+  ASSERT_EQ(world->bodies.size(), 1u);
+  EXPECT_FALSE(world->bodies[0].deformable()) << "a plain Shape must stay rigid";
+  const Touch t = touch(file, Vec3(0.1, 0.1, 0.0), Vec3(0, -1, 0), 0.08);
+  ASSERT_TRUE(t.contact);
+  EXPECT_NEAR(t.proxy.y(), 0.02, 1e-4);
+  EXPECT_NEAR(t.proxy.x(), 0.1, 1e-4);
+}
+
+TEST(World, X3dRotationAndCentreAreAppliedAsH3dDoes) {
+  // Box rotated half a turn about the z axis through (0.01, 0, 0): its centre goes to x = 0.02.
+  const auto file = write("centre.x3d", x3d("<Transform center='0.01 0 0' rotation='0 0 1 3.14159265358979'><Shape>" +
+                                            kSurface + "<Box size='0.02 0.02 0.02'/></Shape></Transform>"));
+  auto world = build_world(file);
+  ASSERT_TRUE(world) << world.error().to_string();
+  const Touch hit = touch(file, Vec3(0.025, 0.1, 0.0), Vec3(0, -1, 0), 0.09);
+  ASSERT_TRUE(hit.contact);
+  EXPECT_NEAR(hit.proxy.y(), 0.01, 1e-4);
+  // Where the box was before the rotation there is nothing.
+  const Touch miss = touch(file, Vec3(-0.005, 0.1, 0.0), Vec3(0, -1, 0), 0.09);
+  EXPECT_FALSE(miss.contact);
+}
+
+TEST(World, X3dNestedRotationMovesASphere) {
+  // A 1 cm sphere 5 cm along local x, the frame turned a quarter turn about z: centre at
+  // (0, 0.05, 0), top at y = 0.06 (the tessellation reaches the local ±x exactly).
+  const auto file = write("sphere.x3d", x3d("<Transform rotation='0 0 1 1.5707963267949'><Transform translation='0.05 0 0'>"
+                                            "<Shape>" + kSurface + "<Sphere radius='0.01'/></Shape></Transform></Transform>"));
+  auto world = build_world(file);
+  ASSERT_TRUE(world) << world.error().to_string();
+  const Touch t = touch(file, Vec3(0.0, 0.1, 0.0), Vec3(0, -1, 0), 0.04);
+  ASSERT_TRUE(t.contact);
+  EXPECT_NEAR(t.proxy.y(), 0.06, 1e-4);
+}
+
+TEST(World, X3dPrimitivesAreTouchedOnTheirSurfaces) {
+  // Cylinder (height 4 cm: cap at y = 0.02) at x = 0, cone (apex at y = 0.02) at x = 0.1,
+  // an IndexedFaceSet quad at y = 0.01 around x = 0.2.
+  const auto file = write(
+      "primitives.x3d",
+      x3d("<Shape>" + kSurface + "<Cylinder radius='0.01' height='0.04'/></Shape>"
+          "<Transform translation='0.1 0 0'><Shape>" + kSurface + "<Cone bottomRadius='0.02' height='0.04'/></Shape></Transform>"
+          "<Shape>" + kSurface + "<IndexedFaceSet solid='false' coordIndex='0 1 2 3 -1'>"
+          "<Coordinate point='0.19 0.01 -0.01  0.19 0.01 0.01  0.21 0.01 0.01  0.21 0.01 -0.01'/></IndexedFaceSet></Shape>"));
+  auto world = build_world(file);
+  ASSERT_TRUE(world) << world.error().to_string();
+  ASSERT_EQ(world->bodies.size(), 3u);
+  const Touch cylinder = touch(file, Vec3(0.002, 0.1, 0.0), Vec3(0, -1, 0), 0.08);
+  ASSERT_TRUE(cylinder.contact);
+  EXPECT_NEAR(cylinder.proxy.y(), 0.02, 1e-4);
+  EXPECT_EQ(cylinder.body, 0);
+  // The cone's side 5 mm off its axis (y = 0.01 there): the frictionless proxy slides on the
+  // slope, and stays on it (radius r from the axis: y = 0.02 − 2r, the 32-gon within 0.5%).
+  const Touch cone = touch(file, Vec3(0.105, 0.1, 0.0), Vec3(0, -1, 0), 0.09);
+  ASSERT_TRUE(cone.contact);
+  const double r = std::hypot(cone.proxy.x() - 0.1, cone.proxy.z());
+  EXPECT_NEAR(cone.proxy.y(), 0.02 - 2.0 * r, 3e-4);
+  EXPECT_EQ(cone.body, 1);
+  const Touch face = touch(file, Vec3(0.2, 0.1, 0.0), Vec3(0, -1, 0), 0.09);
+  ASSERT_TRUE(face.contact);
+  EXPECT_NEAR(face.proxy.y(), 0.01, 1e-4);
+  EXPECT_EQ(face.body, 2);
+}
+
+TEST(World, X3dUseOfAShapeIsTouchedInEachPlace) {
+  const auto file = write("use.x3d", x3d("<Shape DEF='Block'>" + kSurface + "<Box size='0.02 0.02 0.02'/></Shape>"
+                                         "<Transform translation='0.1 0.05 0'><Shape USE='Block'/></Transform>"));
+  auto world = build_world(file);
+  ASSERT_TRUE(world) << world.error().to_string();
+  ASSERT_EQ(world->bodies.size(), 2u);
+  const Touch first = touch(file, Vec3(0.0, 0.1, 0.0), Vec3(0, -1, 0), 0.09);
+  ASSERT_TRUE(first.contact);
+  EXPECT_NEAR(first.proxy.y(), 0.01, 1e-4);
+  const Touch second = touch(file, Vec3(0.1, 0.1, 0.0), Vec3(0, -1, 0), 0.04);
+  ASSERT_TRUE(second.contact);
+  EXPECT_NEAR(second.proxy.y(), 0.06, 1e-4);
+  EXPECT_EQ(second.body, 1);
+}
+
+TEST(World, X3dDeformableShapeIsSimulatedAndItsDefaultsAreListed) {
+  const auto file = write("deformable.x3d",
+                          x3d("<DeformableShape><CoordinateDeformer/>" + kSurface +
+                              "<IndexedFaceSet solid='false' coordIndex='0 1 4 3 -1 1 2 5 4 -1 3 4 7 6 -1 4 5 8 7 -1'>"
+                              "<Coordinate point='-0.02 0 -0.02  0 0 -0.02  0.02 0 -0.02  -0.02 0 0  0 0 0  0.02 0 0  "
+                              "-0.02 0 0.02  0 0 0.02  0.02 0 0.02'/></IndexedFaceSet></DeformableShape>"));
+  auto world = build_world(file);
+  ASSERT_TRUE(world) << world.error().to_string();
+  ASSERT_EQ(world->bodies.size(), 1u);
+  EXPECT_TRUE(world->bodies[0].deformable());
+  bool listed = false;
+  for (const auto& d : world->defaults) listed = listed || d.find("springs/stiffness = 2000 N/m") != std::string::npos;
+  EXPECT_TRUE(listed);
+}
+
+TEST(World, EffectOnlyX3dSceneBuildsAWorldWithNoBody) {
+  const auto file = write("effects.x3d", x3d("<SpringEffect position='0 0.01 0' springConstant='50'/><ViscosityEffect/>"));
+  auto world = build_world(file);
+  ASSERT_TRUE(world) << world.error().to_string();
+  EXPECT_TRUE(world->bodies.empty());
+  ASSERT_EQ(world->config.effects.springs.size(), 1u);
+  EXPECT_EQ(world->config.effects.springs[0].spring_constant_n_per_m, 50.0);
+  EXPECT_NE(world->device.find("scripted:circle"), std::string::npos) << world->device;
+}
+
+TEST(World, X3dWithNothingToTouchNamesWhatIsNotModelled) {
+  const auto file = write("nothing.x3d", x3d("<PythonScript url='x.py'/><Shape><Box/></Shape>"));
+  auto world = build_world(file);
+  ASSERT_FALSE(world);
+  EXPECT_NE(world.error().message.find("nothing to touch"), std::string::npos);
+  EXPECT_NE(world.error().message.find("PythonScript"), std::string::npos) << world.error().message;
+}
+
+TEST(World, SofaSceneWithTwoSolvedNodesGivesTwoBodies) {
+  const std::string mesh = std::string(HOF_SOURCE_DIR) + "/data/models/liver-simple.msh";
+  const std::string node = "<EulerImplicitSolver/><CGLinearSolver iterations='25'/><MeshGmshLoader name='l' filename='" + mesh +
+                           "'/><MechanicalObject src='@l'/><TetrahedronFEMForceField name='FEM' youngModulus='5000' "
+                           "poissonRatio='0.45'/><DiagonalMass massDensity='1060'/><FixedConstraint indices='0 1 2'/>";
+  const auto file = write("two.scn", "<Node name='root' gravity='0 0 0' dt='0.01'><Node name='Left'>" + node +
+                                         "</Node><Node name='Right'>" + node + "</Node></Node>");
+  auto world = build_world(file);
+  ASSERT_TRUE(world) << world.error().to_string();
+  ASSERT_EQ(world->bodies.size(), 2u);
+  EXPECT_TRUE(world->bodies[0].deformable() && world->bodies[1].deformable());
+  EXPECT_NE(world->bodies[0].name, world->bodies[1].name);
+  EXPECT_EQ(world->length_unit, "scene units");
+}
+
+TEST(World, ProjectParametersOverrideTheSceneAndRoundTrip) {
+  HofProject p;
+  p.name = "override";
+  p.mechanics_scene = fs::path(HOF_SOURCE_DIR) / "examples/liver-medium-fem.scn";
+  p.parameters.push_back({"Liver", "FEM", "youngModulus", 8000.0});
+  p.parameters.push_back({"Liver", "cg", "iterations", 40.0});
+  const fs::path file = fs::temp_directory_path() / "hof_world_test" / "override.hof";
+  fs::create_directories(file.parent_path());
+  ASSERT_TRUE(write_project(p, file));
+  auto again = read_project(file);
+  ASSERT_TRUE(again) << again.error().to_string();
+  ASSERT_EQ(again->parameters.size(), 2u);
+  EXPECT_EQ(to_xml(*again), to_xml(p));
+  auto world = build_world(file);
+  ASSERT_TRUE(world) << world.error().to_string();
+  ASSERT_EQ(world->bodies.size(), 1u);
+  EXPECT_EQ(*mechanics::get_parameter(*world->bodies[0].config, "FEM", "youngModulus"), 8000.0);
+  EXPECT_EQ(world->bodies[0].config->linear.iterations, 40);
+  // A bad override is an error naming the project.
+  p.parameters.push_back({"Liver", "FEM", "poissonRatio", 0.5});
+  ASSERT_TRUE(write_project(p, file));
+  auto bad = build_world(file);
+  ASSERT_FALSE(bad);
+  EXPECT_NE(bad.error().to_string().find("override.hof"), std::string::npos) << bad.error().to_string();
+  EXPECT_NE(bad.error().message.find("poissonRatio"), std::string::npos);
+}
+
+TEST(World, DefaultProbeStartsOutsideAndPressesWhateverTheUpAxis) {
+  // The same box, once with y up and once turned so that z is up: the probe presses its top.
+  for (const std::string& rotation : {std::string("0 0 1 0"), std::string("1 0 0 1.5707963267949")}) {
+    const auto file = write("probe.x3d", x3d("<Transform rotation='" + rotation + "'><Shape>" + kSurface +
+                                             "<Box size='0.1 0.04 0.1'/></Shape></Transform>"));
+    auto world = build_world(file);
+    ASSERT_TRUE(world) << world.error().to_string();
+    EXPECT_TRUE(world->default_probe);
+    auto device = haptics::open_device(world->device);
+    ASSERT_TRUE(device) << device.error().to_string();
+    auto session = coupling::Session::make(std::move(world->bodies), std::move(*device), world->config);
+    ASSERT_TRUE(session);
+    const coupling::SessionReport report = (*session)->run_virtual(3.0, {});
+    EXPECT_GT(report.contact_time_s, 0.5) << rotation;
+    EXPECT_EQ(report.fall_through_events, 0);
+    EXPECT_FALSE(report.bodies[0].probe_started_inside);
+    EXPECT_LT(report.max_force_n, 8.0);
+    EXPECT_EQ(report.clamped_contact_ticks, 0);
+  }
+}
+
+TEST(World, MissingOrFolderInputsAreClearErrors) {
+  auto missing = build_world("/nonexistent/scene.scn");
+  ASSERT_FALSE(missing);
+  EXPECT_NE(missing.error().to_string().find("/nonexistent/scene.scn"), std::string::npos);
+  auto folder = build_world(fs::temp_directory_path());
+  ASSERT_FALSE(folder);
+  EXPECT_NE(folder.error().message.find("folder"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace hof::scene
