@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The main job. Does all set-up on a fresh Debian 12 machine, builds `hof`, then runs a
 # headless haptic session on the bundled medium liver (physiologic tissue: co-rotational FEM,
-# E = 5.4 kPa, nu = 0.45; the default probe presses it a centimetre deep at under 2 N) and
+# E = 5.4 kPa, nu = 0.45; the default probe presses it about 2 cm deep at about 2 N) and
 # writes its report to out/report/ (telemetry, summary, final state, plots). Deterministic (virtual time): the same report every run.
 # Usage: scripts/run.sh [PROJECT.hof] [OUT_DIR]   (the GUI is a later issue)
 set -euo pipefail
@@ -11,5 +11,5 @@ out=${2:-out/report}
 bash scripts/install-deps.sh
 cmake --preset release >/dev/null
 cmake --build --preset release --target hof
-build/release/bin/hof run "$project" --headless --deterministic --seconds 3 --out "$out"
+build/release/bin/hof run "$project" --headless --deterministic --seconds 4 --out "$out"
 echo "Report: $out/summary.json, $out/telemetry.csv, plots $out/*.png"
