@@ -1,0 +1,70 @@
+// The world's simulation step with one and with two bodies (two medium livers side by side,
+// each with its own solver): bodies step in parallel, so on 2 cores two bodies should cost
+// well under twice one body. Run: build/release/bin/hof_bench_coupling
+// (--benchmark_repetitions=5 for the spread).
+
+#include <benchmark/benchmark.h>
+
+#include "hof/coupling/session.h"
+#include "hof/haptics/device_backends/scripted_device.h"
+#include "hof/mesh/boundary.h"
+#include "hof/mesh/liver_generator.h"
+
+namespace {
+
+using namespace hof;
+
+// `count` co-rotational FEM livers (E = 5.4 kPa, ν = 0.45, 1060 kg/m³, implicit Euler + CG 25,
+// dt 0.01), 30 cm apart, and a device that holds still far away: each world step is the
+// bodies' mechanics plus the snapshot.
+std::unique_ptr<coupling::Session> livers(int count, mesh::LiverResolution resolution) {
+  const mesh::Mesh liver = *mesh::generate_liver(resolution);
+  std::vector<coupling::SessionBody> bodies;
+  for (int i = 0; i < count; ++i) {
+    mesh::Mesh placed = liver;
+    for (Vec3& p : placed.nodes) p.x() += 0.3 * i;
+    const mesh::BoundarySurface b = mesh::extract_boundary(placed.nodes, placed.tets);
+    mechanics::ModelConfig c;
+    c.name = "liver" + std::to_string(i);
+    c.positions = placed.nodes;
+    c.tets = placed.tets;
+    c.mass.mass_density_kg_per_m3 = 1060.0;
+    c.gravity_m_per_s2 = Vec3(0, 0, -9.81);
+    mechanics::ForceFieldConfig fem;
+    fem.name = "FEM";
+    fem.tetrahedron_fem = mechanics::TetrahedronFemConfig{5400.0, 0.45, mechanics::FemMethod::kLarge};
+    c.force_fields.push_back(fem);
+    mechanics::FixedConstraintConfig base;
+    base.box = std::make_pair(Vec3(-1, -1, -1), Vec3(1, 1, -0.025));
+    c.fixed.push_back(base);
+    c.ode.rayleigh_mass = c.ode.rayleigh_stiffness = 0.1;
+    coupling::SessionBody body;
+    body.name = c.name;
+    body.model.emplace(*mechanics::build_model(c));
+    body.surface = b.surface;
+    body.mapping = *coupling::SurfaceMapping::by_index(placed.nodes, b.surface.vertices, b.surface_to_volume);
+    body.config = c;
+    bodies.push_back(std::move(body));
+  }
+  coupling::SessionConfig config;
+  config.haptics.realtime_priority = false;
+  auto device = std::make_unique<haptics::ScriptedDevice>(haptics::ScriptedMotion::stationary(Vec3(0, 0, 1.0)));
+  return std::move(*coupling::Session::make(std::move(bodies), std::move(device), config));
+}
+
+void BM_WorldStep(benchmark::State& state) {
+  auto session = livers(static_cast<int>(state.range(0)), static_cast<mesh::LiverResolution>(state.range(1)));
+  for (auto _ : state) {
+    // One simulation step with its 10 haptic ticks, in virtual time.
+    const coupling::SessionReport report = session->run_virtual(0.01, {});
+    benchmark::DoNotOptimize(report.simulation_steps);
+  }
+  state.counters["bodies"] = static_cast<double>(state.range(0));
+}
+
+}  // namespace
+
+// Resolutions: 1 = coarse, 2 = medium (mesh::LiverResolution order).
+BENCHMARK(BM_WorldStep)->Args({1, 2})->Args({2, 2})->Args({1, 1})->Args({2, 1})->Unit(benchmark::kMillisecond)->UseRealTime();
+
+BENCHMARK_MAIN();
