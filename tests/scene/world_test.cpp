@@ -203,6 +203,31 @@ TEST(World, SofaSceneWithTwoSolvedNodesGivesTwoBodies) {
   EXPECT_EQ(world->length_unit, "scene units");
 }
 
+TEST(World, SofaCollisionModelWithoutASolverIsARigidObstacle) {
+  // A table under the liver: a TriangleCollisionModel on a state no solver moves.
+  write("table.obj", "v -0.2 -0.2 -0.06\nv 0.2 -0.2 -0.06\nv 0.2 0.2 -0.06\nv -0.2 0.2 -0.06\nf 1 2 3\nf 1 3 4\n");
+  const std::string mesh = std::string(HOF_SOURCE_DIR) + "/data/models/liver-simple.msh";
+  const auto file = write("table.scn",
+                          "<Node name='root' gravity='0 0 0' dt='0.01'>"
+                          "<Node name='Liver'><EulerImplicitSolver/><CGLinearSolver/><MeshGmshLoader name='l' filename='" +
+                              mesh + "'/><MechanicalObject src='@l'/><TetrahedronFEMForceField name='FEM'/>"
+                              "<DiagonalMass massDensity='1060'/><FixedConstraint indices='0 1 2'/></Node>"
+                              "<Node name='Table'><MeshOBJLoader name='t' filename='table.obj'/><MechanicalObject src='@t'/>"
+                              "<TriangleCollisionModel moving='0' simulated='0'/></Node></Node>");
+  auto world = build_world(file);
+  ASSERT_TRUE(world) << world.error().to_string();
+  ASSERT_EQ(world->bodies.size(), 2u);
+  EXPECT_TRUE(world->bodies[0].deformable());
+  EXPECT_EQ(world->bodies[1].name, "Table");
+  EXPECT_FALSE(world->bodies[1].deformable());
+  EXPECT_EQ(world->bodies[1].surface.triangles.size(), 2u);
+  // The table is touched where it lies (beside the liver, x = 0.15).
+  const Touch t = touch(file, Vec3(0.15, 0.15, 0.0), Vec3(0, 0, -1), 0.06);
+  ASSERT_TRUE(t.contact);
+  EXPECT_EQ(t.body, 1);
+  EXPECT_NEAR(t.proxy.z(), -0.06, 1e-4);
+}
+
 TEST(World, ProjectParametersOverrideTheSceneAndRoundTrip) {
   HofProject p;
   p.name = "override";

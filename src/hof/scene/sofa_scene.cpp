@@ -545,6 +545,11 @@ Expected<void> Reader::collect_models(SceneNode& node) {
     auto model = make_model(node, state);
     if (!model) return std::unexpected(model.error());
     scene_.models.push_back(std::move(*model));
+  } else if (!mapped && !solver_in_scope) {
+    // Nothing moves it: a triangle collision model here is a rigid obstacle.
+    auto obstacle = make_obstacle(node, state);
+    if (!obstacle) return std::unexpected(obstacle.error());
+    if (*obstacle) scene_.obstacles.push_back(std::move(**obstacle));
   }
   for (auto& child : node.children)
     if (auto r = collect_models(*child); !r) return r;

@@ -15,6 +15,7 @@
 
 #include "hof/core/error.h"
 #include "hof/mechanics/mechanical_model.h"
+#include "hof/mesh/mesh.h"
 
 namespace hof::scene {
 
@@ -26,9 +27,18 @@ struct SofaSceneModel {
   bool visual_barycentric{false};                 ///< a BarycentricMapping maps the volume to it
 };
 
+/// A rigid, fixed obstacle: a node with a triangle collision model on a state (or loader) that
+/// no ODE solver moves — SOFA's floors, tables and fixed organs.
+struct SofaSceneObstacle {
+  std::string node_path;
+  std::string name;
+  mesh::TriMesh surface;  ///< scene units
+};
+
 struct SofaScene {
   std::filesystem::path file;
   std::vector<SofaSceneModel> models;
+  std::vector<SofaSceneObstacle> obstacles;
   std::vector<std::string> skipped;   ///< "TYPE 'name' (line N)" of every component not simulated
   std::vector<std::string> warnings;  ///< "FILE:LINE: ..." notes (defaults assumed, aliases used)
 };

@@ -2,6 +2,7 @@
 #include <cmath>
 
 #include "hof/scene/sofa_scene_reader.h"
+#include "hof/mesh/mesh_io.h"
 
 #include <array>
 
@@ -110,6 +111,70 @@ Expected<SofaSceneModel> Reader::make_model(SceneNode& node, Component* state) {
 
   if (auto r = apply_visual(node, out); !r) return std::unexpected(r.error());
   return out;
+}
+
+Expected<std::optional<SofaSceneObstacle>> Reader::make_obstacle(SceneNode& node, Component* state) {
+  Component* collision = nullptr;
+  for (auto& c : node.components) {
+    const std::string& t = c->type;
+    if (t == "TriangleCollisionModel" || t == "TriangleModel" || t == "Triangle" || t == "TTriangleModel") {
+      collision = c.get();
+      break;
+    }
+  }
+  if (!collision) return std::optional<SofaSceneObstacle>{};
+  // Its geometry: the state (with its fallbacks), else the node's topology or loader.
+  Component* source = state;
+  if (!source) {
+    for (auto& c : node.components) {
+      if (is_topology(c->type) || is_loader(c->type)) {
+        source = c.get();
+        break;
+      }
+    }
+  }
+  if (!source) {
+    warn(collision->line, fmt::format("{}: no state, topology or loader with positions in node '{}'; not touchable",
+                                      collision->label(), node.path));
+    return std::optional<SofaSceneObstacle>{};
+  }
+  auto d = data_of(*source);
+  if (!d) return std::unexpected(d.error());
+  MeshData data;
+  fill_missing(data, **d);
+  for (auto& c : node.components) {
+    if (c.get() == source || !(is_topology(c->type) || is_loader(c->type))) continue;
+    auto more = data_of(*c);
+    if (!more) return std::unexpected(more.error());
+    fill_missing(data, **more);
+  }
+  if ((!data.has_positions || data.triangles.empty()) && data.file) {
+    // A surface loader HoF only names for visual models (MeshOBJLoader): read it here.
+    auto surface = mesh::read_mesh(*data.file);
+    if (!surface) return std::unexpected(surface.error());
+    data.positions = surface->mesh.nodes;
+    data.triangles = surface->mesh.triangles;
+    data.has_positions = data.has_triangles = true;
+  }
+  if (!data.has_positions || data.positions.empty() || data.triangles.empty()) {
+    warn(collision->line, fmt::format("{}: node '{}' has no triangles to touch; skipped", collision->label(), node.path));
+    return std::optional<SofaSceneObstacle>{};
+  }
+  const auto n = static_cast<std::int64_t>(data.positions.size());
+  for (std::size_t t = 0; t < data.triangles.size(); ++t)
+    for (std::int32_t i : data.triangles[t])
+      if (i < 0 || i >= n)
+        return fail(*source, fmt::format("triangle {} uses node {} but the obstacle has {} nodes", t, i, n),
+                    ErrorCode::kInvalidMesh);
+  collision->used = true;
+  if (state) state->used = true;
+  source->used = true;
+  SofaSceneObstacle o;
+  o.node_path = node.path;
+  o.name = node.name;
+  o.surface.vertices = data.positions;
+  o.surface.triangles = data.triangles;
+  return std::optional<SofaSceneObstacle>{std::move(o)};
 }
 
 Expected<void> Reader::apply_ode(Component& c, ModelConfig& m, bool& cg_embedded) {

@@ -135,6 +135,7 @@ class Reader {
   // Models.
   Expected<void> collect_models(SceneNode& node);
   Expected<SofaSceneModel> make_model(SceneNode& node, Component* state);
+  Expected<std::optional<SofaSceneObstacle>> make_obstacle(SceneNode& node, Component* state);
   Expected<void> apply_ode(Component& c, ModelConfig& m, bool& cg_embedded);
   Expected<void> apply_linear(Component& c, ModelConfig& m);
   Expected<void> apply_mass(Component& c, ModelConfig& m, std::size_t n);

@@ -194,8 +194,9 @@ Expected<void> add_sofa(World& w, const std::filesystem::path& scene_path) {
   if (!sofa) return std::unexpected(sofa.error());
   w.skipped = sofa->skipped;
   w.warnings = sofa->warnings;
-  if (sofa->models.empty()) {
-    std::string why = "the scene has no simulated body (a node with an ODE solver and a MechanicalObject)";
+  if (sofa->models.empty() && sofa->obstacles.empty()) {
+    std::string why = "the scene has no simulated body (a node with an ODE solver and a MechanicalObject) and no "
+                      "obstacle (a TriangleCollisionModel on a state no solver moves)";
     if (!sofa->skipped.empty()) why += fmt::format("; not simulated: {}", fmt::join(sofa->skipped, ", "));
     return make_error(ErrorCode::kInvalidArgument, why, scene_path.string());
   }
@@ -215,6 +216,15 @@ Expected<void> add_sofa(World& w, const std::filesystem::path& scene_path) {
     body->name = name;
     if (body->config) body->config->name = name;
     w.bodies.push_back(std::move(*body));
+  }
+  for (const SofaSceneObstacle& o : sofa->obstacles) {
+    coupling::SessionBody body;
+    body.name = o.name;
+    for (int k = 2; std::any_of(w.bodies.begin(), w.bodies.end(), [&](const auto& b) { return b.name == body.name; }); ++k) {
+      body.name = fmt::format("{}#{}", o.name, k);
+    }
+    body.surface = o.surface;
+    w.bodies.push_back(std::move(body));
   }
   return {};
 }
