@@ -207,8 +207,8 @@ int run_session(const RunOptions& options) {
     double indentation = 0.0;
     std::string body;
     if (s.contact && s.triangle >= 0) {
-      indentation = std::max(0.0, (session.rest_point(s.triangle, s.barycentric) - s.contact_point).dot(s.contact_normal));
-      const std::int32_t b = session.body_of_triangle(s.triangle);
+      indentation = std::max(0.0, (session.rest_point(s.triangle, s.barycentric, s.layer) - s.contact_point).dot(s.contact_normal));
+      const std::int32_t b = session.body_of_triangle(s.triangle, s.layer);
       if (b >= 0) body = body_names[static_cast<std::size_t>(b)];
     }
     std::fputs(fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", csv_number(s.time_s), csv_number(s.device.x()),

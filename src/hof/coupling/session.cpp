@@ -50,6 +50,17 @@ struct Session::BodyRuntime {
   double next_step_s{0.0};
   BodyReport report;
   bool inside_since_start{false};
+  std::size_t layer{0};  // haptic layer
+  std::size_t part{0};   // part of the layer's snapshot
+};
+
+struct Session::LayerRuntime {
+  std::vector<std::size_t> bodies;           // indices into bodies_, in part order
+  haptics::SurfaceSnapshot rest;             // the layer's surfaces at rest (parts name bodies)
+  TripleBuffer<haptics::SurfaceSnapshot> surfaces;  // to the haptic loop
+  TripleBuffer<haptics::SurfaceSnapshot> graphics;  // to a reader (the window)
+  std::vector<Vec3> positions, velocities;   // the layer's vertices now
+  Vec3 proxy{Vec3::Zero()};                  // this layer's proxy at the last tick
 };
 
 struct Session::StateTimer {
@@ -72,8 +83,6 @@ struct Session::StateTimer {
 
 Session::Session(std::vector<SessionBody> bodies, std::unique_ptr<haptics::Device> device, const SessionConfig& config)
     : device_(std::move(device)), config_(config) {
-  std::vector<mesh::TriMesh> surfaces;
-  std::vector<char> is_static, closed;
   double dt = std::numeric_limits<double>::infinity();
   for (SessionBody& b : bodies) {
     BodyRuntime r;
@@ -90,41 +99,59 @@ Session::Session(std::vector<SessionBody> bodies, std::unique_ptr<haptics::Devic
     }
     r.surface_positions = r.body.surface.vertices;
     r.surface_velocities.assign(r.body.surface.vertices.size(), Vec3::Zero());
-    surfaces.push_back(r.body.surface);
-    is_static.push_back(r.body.deformable() ? 0 : 1);
-    closed.push_back(mesh::check_surface(r.body.surface).closed_manifold() ? 1 : 0);
     validated_configs_.push_back(r.body.config.value_or(mechanics::ModelConfig{}));
     bodies_.push_back(std::move(r));
   }
   // A world of rigid shapes (or of force effects only) still steps, to publish and report.
   dt_ = std::isfinite(dt) ? dt : 0.01;
-  const std::vector<bool> statics(is_static.begin(), is_static.end()), closeds(closed.begin(), closed.end());
-  {
-    // std::vector<bool> has no contiguous storage: spans of plain bools.
-    std::unique_ptr<bool[]> s(new bool[std::max<std::size_t>(1, statics.size())]);
-    std::unique_ptr<bool[]> c(new bool[std::max<std::size_t>(1, closeds.size())]);
-    for (std::size_t i = 0; i < statics.size(); ++i) {
-      s[i] = statics[i];
-      c[i] = closeds[i];
+
+  // Haptic layers (H3D HapticLayeredGroup): the bodies' layer numbers, in order, become
+  // layers 0, 1, ... (at most kMaxLayers; deeper ones join the last).
+  std::vector<int> numbers;
+  for (const BodyRuntime& r : bodies_) numbers.push_back(r.body.layer);
+  std::sort(numbers.begin(), numbers.end());
+  numbers.erase(std::unique(numbers.begin(), numbers.end()), numbers.end());
+  if (numbers.empty()) numbers.push_back(0);
+  const std::size_t layer_count = std::min(numbers.size(), haptics::kMaxLayers);
+  for (std::size_t l = 0; l < layer_count; ++l) layers_.push_back(std::make_unique<LayerRuntime>());
+  for (std::size_t i = 0; i < bodies_.size(); ++i) {
+    const auto at = static_cast<std::size_t>(std::lower_bound(numbers.begin(), numbers.end(), bodies_[i].body.layer) - numbers.begin());
+    bodies_[i].layer = std::min(at, layer_count - 1);
+    bodies_[i].part = layers_[bodies_[i].layer]->bodies.size();
+    layers_[bodies_[i].layer]->bodies.push_back(i);
+  }
+  std::vector<TripleBuffer<haptics::SurfaceSnapshot>*> buffers;
+  for (auto& layer : layers_) {
+    std::vector<mesh::TriMesh> surfaces;
+    std::unique_ptr<bool[]> is_static(new bool[std::max<std::size_t>(1, layer->bodies.size())]);
+    std::unique_ptr<bool[]> closed(new bool[std::max<std::size_t>(1, layer->bodies.size())]);
+    for (std::size_t k = 0; k < layer->bodies.size(); ++k) {
+      const SessionBody& body = bodies_[layer->bodies[k]].body;
+      surfaces.push_back(body.surface);
+      is_static[k] = !body.deformable();
+      closed[k] = mesh::check_surface(body.surface).closed_manifold();
     }
-    rest_ = haptics::make_snapshot(surfaces, std::span<const bool>(s.get(), statics.size()),
-                                   std::span<const bool>(c.get(), closeds.size()), config_.tree);
+    layer->rest = haptics::make_snapshot(surfaces, std::span<const bool>(is_static.get(), layer->bodies.size()),
+                                         std::span<const bool>(closed.get(), layer->bodies.size()), config_.tree);
+    for (std::size_t k = 0; k < layer->bodies.size(); ++k) layer->rest.parts[k].body = static_cast<std::int32_t>(layer->bodies[k]);
+    // Every slot holds the geometry (the producer then only updates positions in place).
+    for (auto* buffer : {&layer->surfaces, &layer->graphics}) {
+      buffer->write_slot() = layer->rest;
+      buffer->read_mutable() = layer->rest;
+      buffer->publish();
+      buffer->write_slot() = layer->rest;
+    }
+    layer->positions = layer->rest.vertices;
+    layer->velocities.assign(layer->rest.vertices.size(), Vec3::Zero());
+    buffers.push_back(&layer->surfaces);
   }
-  // Every slot holds the geometry (the producer then only updates positions in place).
-  for (auto* buffer : {&surfaces_, &graphics_surfaces_}) {
-    buffer->write_slot() = rest_;
-    buffer->read_mutable() = rest_;
-    buffer->publish();
-    buffer->write_slot() = rest_;
-  }
-  all_positions_ = rest_.vertices;
-  all_velocities_.assign(rest_.vertices.size(), Vec3::Zero());
 
   current_settings_.valid = true;
   current_settings_.renderer = config_.haptics.renderer;
   current_settings_.effects = config_.effects;
   for (const BodyRuntime& r : bodies_) current_settings_.materials.push_back(r.body.material.value_or(config_.haptics.material));
-  loop_ = std::make_unique<haptics::HapticLoop>(*device_, surfaces_, config_.haptics, &settings_);
+  loop_ = std::make_unique<haptics::HapticLoop>(*device_, std::span<TripleBuffer<haptics::SurfaceSnapshot>* const>(buffers),
+                                                config_.haptics, &settings_);
   publish_settings();
 }
 
@@ -166,7 +193,23 @@ std::size_t Session::body_count() const { return bodies_.size(); }
 const SessionBody& Session::body(std::size_t i) const { return bodies_[i].body; }
 const mechanics::MechanicalState& Session::state(std::size_t i) const { return bodies_[i].state; }
 
-std::int32_t Session::body_of_triangle(std::int32_t triangle) const { return rest_.part_of(triangle); }
+std::int32_t Session::body_of_triangle(std::int32_t triangle, std::int32_t layer) const {
+  if (layer < 0 || static_cast<std::size_t>(layer) >= layers_.size()) return -1;
+  const haptics::SurfaceSnapshot& rest = layers_[static_cast<std::size_t>(layer)]->rest;
+  const std::int32_t part = rest.part_of(triangle);
+  return part < 0 ? -1 : rest.parts[static_cast<std::size_t>(part)].body;
+}
+
+Vec3 Session::rest_point(std::int32_t triangle, const Vec3& weights, std::int32_t layer) const {
+  if (layer < 0 || static_cast<std::size_t>(layer) >= layers_.size()) return Vec3::Zero();
+  const haptics::SurfaceSnapshot& rest = layers_[static_cast<std::size_t>(layer)]->rest;
+  if (triangle < 0 || static_cast<std::size_t>(triangle) >= rest.triangles.size()) return Vec3::Zero();
+  return rest.point(triangle, weights);
+}
+
+std::size_t Session::layer_count() const { return layers_.size(); }
+
+TripleBuffer<haptics::SurfaceSnapshot>& Session::graphics_surfaces(std::size_t layer) { return layers_[layer]->graphics; }
 
 // ---- The command seam
 
@@ -310,26 +353,34 @@ void Session::take_contacts(SessionReport& report) {
     ++report.haptic_ticks;
     last_tick_valid_ = c.valid;
     if (c.valid) {
-      last_proxy_ = c.proxy;
+      for (std::size_t l = 0; l < layers_.size(); ++l) layers_[l]->proxy = c.layers[l].proxy;
       last_proxy_valid_ = true;
     }
     const double force = c.force.norm();
     report.max_force_n = std::max(report.max_force_n, force);
-    if (!c.contact || c.triangle < 0) continue;
-    const std::int32_t b = rest_.part_of(c.triangle);
-    if (b < 0) continue;
-    BodyRuntime& r = bodies_[static_cast<std::size_t>(b)];
-    r.reaction_sum -= c.force;  // the tissue feels the opposite of what the hand feels
-    ++r.contact_ticks;
-    r.last_triangle = c.triangle - rest_.parts[static_cast<std::size_t>(b)].first_triangle;
-    r.last_barycentric = c.barycentric;
-    r.report.contact_time_s += period;
-    r.report.max_force_n = std::max(r.report.max_force_n, force);
+    bool any = false;
+    for (std::size_t l = 0; l < layers_.size() && l < c.layer_count; ++l) {
+      const haptics::HapticContact::Layer& layer = c.layers[l];
+      if (!layer.contact || layer.triangle < 0) continue;
+      const haptics::SurfaceSnapshot& rest = layers_[l]->rest;
+      const std::int32_t part = rest.part_of(layer.triangle);
+      if (part < 0) continue;
+      const auto b = static_cast<std::size_t>(rest.parts[static_cast<std::size_t>(part)].body);
+      BodyRuntime& r = bodies_[b];
+      r.reaction_sum -= layer.force;  // the tissue feels the opposite of what the hand feels
+      ++r.contact_ticks;
+      r.last_triangle = layer.triangle - rest.parts[static_cast<std::size_t>(part)].first_triangle;
+      r.last_barycentric = layer.barycentric;
+      r.report.contact_time_s += period;
+      r.report.max_force_n = std::max(r.report.max_force_n, force);
+      last_body_ = static_cast<std::int32_t>(b);
+      last_triangle_ = layer.triangle;
+      last_barycentric_ = layer.barycentric;
+      any = true;
+    }
+    if (!any) continue;
     report.contact_time_s += period;
     if (c.clamped) ++report.clamped_contact_ticks;
-    last_body_ = b;
-    last_triangle_ = c.triangle;
-    last_barycentric_ = c.barycentric;
     ++contact_ticks_since_publish_;
   }
 }
@@ -341,10 +392,11 @@ void Session::count_fall_through(SessionReport& report) {
   const bool first = !first_reading_seen_;
   first_reading_seen_ = true;
   for (std::size_t i = 0; i < bodies_.size(); ++i) {
-    const haptics::SurfacePart& part = rest_.parts[i];
-    if (!part.closed) continue;  // an open sheet has no inside
     BodyRuntime& r = bodies_[i];
-    const bool inside = inside_part(part, rest_.triangles, all_positions_, last_proxy_);
+    const LayerRuntime& layer = *layers_[r.layer];
+    const haptics::SurfacePart& part = layer.rest.parts[r.part];
+    if (!part.closed) continue;  // an open sheet has no inside
+    const bool inside = inside_part(part, layer.rest.triangles, layer.positions, layer.proxy);
     if (first && inside) {
       // A probe that starts inside a body has not fallen through it: it is reported as such.
       r.report.probe_started_inside = true;
@@ -418,49 +470,53 @@ bool Session::advance_bodies(SessionReport& report) {
 }
 
 void Session::publish(double clock_s) {
-  for (std::size_t i = 0; i < bodies_.size(); ++i) {
-    BodyRuntime& r = bodies_[i];
-    if (!r.body.deformable()) continue;
-    const haptics::SurfacePart& part = rest_.parts[i];
-    r.body.mapping.apply({r.state.x.data(), static_cast<std::size_t>(r.state.x.size())}, r.surface_positions);
-    r.body.mapping.apply({r.state.v.data(), static_cast<std::size_t>(r.state.v.size())}, r.surface_velocities);
-    std::copy(r.surface_positions.begin(), r.surface_positions.end(), all_positions_.begin() + part.first_vertex);
-    std::copy(r.surface_velocities.begin(), r.surface_velocities.end(), all_velocities_.begin() + part.first_vertex);
-  }
-  haptics::SurfaceSnapshot& slot = surfaces_.write_slot();
-  haptics::update_snapshot(slot, all_positions_, all_velocities_, clock_s);
-  slot.local.valid = false;
-  if (config_.coupling == ContactCoupling::kCompliance && last_body_ >= 0 && contact_ticks_since_publish_ > 0 &&
-      bodies_[static_cast<std::size_t>(last_body_)].body.deformable()) {
-    // The contact point's compliance at the current state (Saupin, Duriez & Cotin 2008).
-    BodyRuntime& r = bodies_[static_cast<std::size_t>(last_body_)];
-    const std::int32_t local = last_triangle_ - rest_.parts[static_cast<std::size_t>(last_body_)].first_triangle;
-    const mesh::Tri& tri = r.body.surface.triangles[static_cast<std::size_t>(local)];
-    const std::array<std::int32_t, 3> vertices{tri[0], tri[1], tri[2]};
-    const std::array<double, 3> bary{last_barycentric_[0], last_barycentric_[1], last_barycentric_[2]};
-    std::array<std::int32_t, 12> nodes{};
-    std::array<double, 12> weights{};
-    const std::size_t count = r.body.mapping.point_weights(vertices, bary, nodes, weights);
-    Mat3 compliance;
-    if (mechanics::compute_point_compliance(*r.body.model, r.state, std::span(nodes.data(), count),
-                                            std::span(weights.data(), count), compliance)) {
-      const Eigen::FullPivLU<Mat3> lu(compliance);
-      if (lu.isInvertible()) {
-        slot.local.valid = true;
-        slot.local.triangle = last_triangle_;
-        slot.local.barycentric = last_barycentric_;
-        slot.local.compliance = compliance;
-        slot.local.stiffness = lu.inverse();
-        // The load that holds the tissue in its current shape at that point (minus its
-        // elastic force), rather than the force last applied: the local model then stays
-        // consistent with the simulated shape even while the simulation is still settling.
-        slot.local.applied_force = -mechanics::point_elastic_force(*r.body.model, r.state, std::span(nodes.data(), count),
-                                                                   std::span(weights.data(), count));
+  for (std::size_t l = 0; l < layers_.size(); ++l) {
+    LayerRuntime& layer = *layers_[l];
+    for (const std::size_t i : layer.bodies) {
+      BodyRuntime& r = bodies_[i];
+      if (!r.body.deformable()) continue;
+      const haptics::SurfacePart& part = layer.rest.parts[r.part];
+      r.body.mapping.apply({r.state.x.data(), static_cast<std::size_t>(r.state.x.size())}, r.surface_positions);
+      r.body.mapping.apply({r.state.v.data(), static_cast<std::size_t>(r.state.v.size())}, r.surface_velocities);
+      std::copy(r.surface_positions.begin(), r.surface_positions.end(), layer.positions.begin() + part.first_vertex);
+      std::copy(r.surface_velocities.begin(), r.surface_velocities.end(), layer.velocities.begin() + part.first_vertex);
+    }
+    haptics::SurfaceSnapshot& slot = layer.surfaces.write_slot();
+    haptics::update_snapshot(slot, layer.positions, layer.velocities, clock_s);
+    slot.local.valid = false;
+    const bool touched_here = last_body_ >= 0 && bodies_[static_cast<std::size_t>(last_body_)].layer == l;
+    if (config_.coupling == ContactCoupling::kCompliance && touched_here && contact_ticks_since_publish_ > 0 &&
+        bodies_[static_cast<std::size_t>(last_body_)].body.deformable()) {
+      // The contact point's compliance at the current state (Saupin, Duriez & Cotin 2008).
+      BodyRuntime& r = bodies_[static_cast<std::size_t>(last_body_)];
+      const std::int32_t local = last_triangle_ - layer.rest.parts[r.part].first_triangle;
+      const mesh::Tri& tri = r.body.surface.triangles[static_cast<std::size_t>(local)];
+      const std::array<std::int32_t, 3> vertices{tri[0], tri[1], tri[2]};
+      const std::array<double, 3> bary{last_barycentric_[0], last_barycentric_[1], last_barycentric_[2]};
+      std::array<std::int32_t, 12> nodes{};
+      std::array<double, 12> weights{};
+      const std::size_t count = r.body.mapping.point_weights(vertices, bary, nodes, weights);
+      Mat3 compliance;
+      if (mechanics::compute_point_compliance(*r.body.model, r.state, std::span(nodes.data(), count),
+                                              std::span(weights.data(), count), compliance)) {
+        const Eigen::FullPivLU<Mat3> lu(compliance);
+        if (lu.isInvertible()) {
+          slot.local.valid = true;
+          slot.local.triangle = last_triangle_;
+          slot.local.barycentric = last_barycentric_;
+          slot.local.compliance = compliance;
+          slot.local.stiffness = lu.inverse();
+          // The load that holds the tissue in its current shape at that point (minus its
+          // elastic force), rather than the force last applied: the local model then stays
+          // consistent with the simulated shape even while the simulation is still settling.
+          slot.local.applied_force = -mechanics::point_elastic_force(*r.body.model, r.state, std::span(nodes.data(), count),
+                                                                     std::span(weights.data(), count));
+        }
       }
     }
+    layer.surfaces.publish();
   }
   contact_ticks_since_publish_ = 0;
-  surfaces_.publish();
 }
 
 bool Session::step_world(SessionReport& report, StateTimer& timer, double clock_s) {

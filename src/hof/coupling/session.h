@@ -67,6 +67,9 @@ struct SessionBody {
   std::optional<haptics::SurfaceMaterial> material;
   /// What the model was built from: commands that change a parameter rebuild from it.
   std::optional<mechanics::ModelConfig> config;
+  /// Haptic layer (H3D HapticLayeredGroup): bodies of each layer are felt through a proxy of
+  /// their own, and the layers' forces add up. Layers are taken in increasing order.
+  int layer{0};
 
   [[nodiscard]] bool deformable() const { return model.has_value(); }
 };
@@ -180,10 +183,11 @@ class Session {
 
   [[nodiscard]] std::size_t body_count() const;
   [[nodiscard]] const SessionBody& body(std::size_t i) const;
-  /// Index of the body a snapshot triangle belongs to (-1 if none).
-  [[nodiscard]] std::int32_t body_of_triangle(std::int32_t triangle) const;
+  /// Index of the body a snapshot triangle (of haptic layer `layer`) belongs to (-1 if none).
+  [[nodiscard]] std::int32_t body_of_triangle(std::int32_t triangle, std::int32_t layer = 0) const;
   /// Point of snapshot triangle `t` at weights `w` in the rest shape (for indentation).
-  [[nodiscard]] Vec3 rest_point(std::int32_t t, const Vec3& w) const { return rest_.point(t, w); }
+  [[nodiscard]] Vec3 rest_point(std::int32_t t, const Vec3& w, std::int32_t layer = 0) const;
+  [[nodiscard]] std::size_t layer_count() const;
   /// Mechanical state of body i (deformable bodies; read it when no run is going on).
   [[nodiscard]] const mechanics::MechanicalState& state(std::size_t i) const;
   /// The first body (single-body callers).
@@ -191,13 +195,14 @@ class Session {
   [[nodiscard]] const mechanics::MechanicalState& state() const { return state(0); }
   [[nodiscard]] const SessionBody& body() const { return body(0); }
   /// Latest surface snapshot, for a reader thread (one reader: the window or the supervisor).
-  TripleBuffer<haptics::SurfaceSnapshot>& graphics_surfaces() { return graphics_surfaces_; }
+  TripleBuffer<haptics::SurfaceSnapshot>& graphics_surfaces(std::size_t layer = 0);
   /// The world simulation step dt (the smallest body dt), s.
   [[nodiscard]] double dt() const { return dt_; }
   [[nodiscard]] const haptics::HapticLoop& haptic_loop() const { return *loop_; }
 
  private:
   struct BodyRuntime;
+  struct LayerRuntime;
   struct StateTimer;
   Session(std::vector<SessionBody> bodies, std::unique_ptr<haptics::Device> device, const SessionConfig& config);
 
@@ -218,20 +223,16 @@ class Session {
   SessionConfig config_;
   double dt_{0.01};
   double time_s_{0.0};       // simulated time of the world
-  haptics::SurfaceSnapshot rest_;
-  TripleBuffer<haptics::SurfaceSnapshot> surfaces_;
-  TripleBuffer<haptics::SurfaceSnapshot> graphics_surfaces_;
+  std::vector<std::unique_ptr<LayerRuntime>> layers_;
   TripleBuffer<haptics::HapticSettings> settings_;
   haptics::HapticSettings current_settings_;
   std::unique_ptr<haptics::HapticLoop> loop_;
-  std::vector<Vec3> all_positions_, all_velocities_;
   // Contact since the last step.
   int ticks_since_step_{0};
   std::int32_t last_body_{-1};
-  std::int32_t last_triangle_{-1};   // in the snapshot
+  std::int32_t last_triangle_{-1};   // in its layer's snapshot
   Vec3 last_barycentric_{Vec3::Zero()};
   std::int32_t contact_ticks_since_publish_{0};
-  Vec3 last_proxy_{Vec3::Zero()};
   bool last_proxy_valid_{false};
   bool last_tick_valid_{false};
   bool first_reading_seen_{false};

@@ -7,6 +7,7 @@
 #include <Eigen/SVD>
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <limits>
@@ -65,10 +66,15 @@ Expected<void> validate_effects(const ForceEffects& effects) {
 
 HapticLoop::HapticLoop(Device& device, TripleBuffer<SurfaceSnapshot>& surfaces, const HapticLoopConfig& config,
                        TripleBuffer<HapticSettings>* settings)
+    : HapticLoop(device, std::span<TripleBuffer<SurfaceSnapshot>* const>(std::array{&surfaces}.data(), 1), config, settings) {}
+
+HapticLoop::HapticLoop(Device& device, std::span<TripleBuffer<SurfaceSnapshot>* const> layers, const HapticLoopConfig& config,
+                       TripleBuffer<HapticSettings>* settings)
     : device_(device),
-      surfaces_(surfaces),
+      layers_(layers.begin(), layers.begin() + static_cast<std::ptrdiff_t>(std::clamp<std::size_t>(layers.size(), 1, kMaxLayers))),
       config_(config),
-      renderer_(config.renderer, config.material, device.spec().max_stiffness_n_per_m),
+      renderers_(layers_.size(), HapticRenderer(config.renderer, config.material, device.spec().max_stiffness_n_per_m)),
+      have_surface_(layers_.size(), 0),
       safety_(device.spec(), config.safety),
       stats_(1.0 / config.rate_hz),
       telemetry_(config.telemetry_capacity),
@@ -84,7 +90,9 @@ HapticLoop::HapticLoop(Device& device, TripleBuffer<SurfaceSnapshot>& surfaces, 
   Eigen::Matrix3d u = svd.matrixU();
   if ((u * svd.matrixV().transpose()).determinant() < 0.0) u.col(2) = -u.col(2);
   world_to_device_ = (u * svd.matrixV().transpose()).transpose();
-  renderer_.set_world_scale(std::cbrt(std::abs(config_.calibration.position.topLeftCorner<3, 3>().determinant())));
+  for (HapticRenderer& r : renderers_) {
+    r.set_world_scale(std::cbrt(std::abs(config_.calibration.position.topLeftCorner<3, 3>().determinant())));
+  }
 }
 
 HapticLoop::~HapticLoop() { stop(); }
@@ -100,12 +108,13 @@ void HapticLoop::take_settings() {
   if (!settings_ || !settings_->acquire()) return;
   const HapticSettings& s = settings_->read();
   if (!s.valid) return;
-  if (s.renderer.kind != renderer_.config().kind || s.renderer.proxy_radius_m != renderer_.config().proxy_radius_m ||
-      s.renderer.force_shading != renderer_.config().force_shading ||
-      s.renderer.touchable_face != renderer_.config().touchable_face) {
-    renderer_.reconfigure(s.renderer);
+  for (HapticRenderer& r : renderers_) {
+    if (s.renderer.kind != r.config().kind || s.renderer.proxy_radius_m != r.config().proxy_radius_m ||
+        s.renderer.force_shading != r.config().force_shading || s.renderer.touchable_face != r.config().touchable_face) {
+      r.reconfigure(s.renderer);
+    }
+    r.set_part_materials(s.materials);
   }
-  renderer_.set_part_materials(s.materials);
   // Copies within the reserved capacity (the producer validated the counts); a spring's
   // active state survives when the same spring is still there.
   const auto copy_within = [](auto& to, const auto& from) {
@@ -127,9 +136,11 @@ void HapticLoop::take_settings() {
 void HapticLoop::tick_impl(double time_s, double period_s, bool overrun) {
   const double dt = period_s > 0.0 && std::isfinite(period_s) ? period_s : 1.0 / config_.rate_hz;
   take_settings();
-  const bool changed = surfaces_.acquire();
-  if (changed) have_surface_ = true;
-  const SurfaceSnapshot& surface = surfaces_.read();
+  std::array<bool, kMaxLayers> changed{};
+  for (std::size_t l = 0; l < layers_.size(); ++l) {
+    changed[l] = layers_[l]->acquire();
+    if (changed[l]) have_surface_[l] = 1;
+  }
 
   // Read and calibrate.
   const DeviceReading reading = device_.read(time_s);
@@ -137,22 +148,35 @@ void HapticLoop::tick_impl(double time_s, double period_s, bool overrun) {
   const Vec3 x = valid ? config_.calibration.to_world(reading.position_m) : Vec3::Zero();
   const Vec3 v = valid ? config_.calibration.vector_to_world(reading.velocity_m_per_s) : Vec3::Zero();
   if (valid && !proxy_initialised_) {
-    renderer_.reset(x);
+    for (HapticRenderer& r : renderers_) r.reset(x);
     proxy_initialised_ = true;
   }
 
-  // Render: surface contact, then force effects.
+  // Render: each layer's surfaces with its own proxy (forces add up), then force effects.
   Vec3 requested = Vec3::Zero();
-  ContactState contact;
+  std::array<ContactState, kMaxLayers> contacts{};
+  std::size_t first_contact = kMaxLayers;
   if (valid && proxy_initialised_) {
-    if (have_surface_ && !surface.triangles.empty()) contact = renderer_.update(x, v, surface, changed, dt);
-    requested = contact.force + effects_.evaluate(x, v);
+    for (std::size_t l = 0; l < layers_.size(); ++l) {
+      const SurfaceSnapshot& surface = layers_[l]->read();
+      if (have_surface_[l] && !surface.triangles.empty()) contacts[l] = renderers_[l].update(x, v, surface, changed[l], dt);
+      requested += contacts[l].force;
+      if (contacts[l].in_contact && first_contact == kMaxLayers) first_contact = l;
+    }
+    requested += effects_.evaluate(x, v);
   }
+  const std::size_t shown = first_contact < kMaxLayers ? first_contact : 0;
+  const ContactState& contact = contacts[shown];
 
-  // Safety, then out to the device (in its own frame).
-  const double age = !have_surface_ ? std::numeric_limits<double>::infinity()
-                     : surface.is_static ? 0.0
-                                         : time_s - surface.time_s;
+  // Safety, then out to the device (in its own frame). The geometry's age is the oldest
+  // layer's (a layer of rigid shapes only never ages).
+  double age = 0.0;
+  for (std::size_t l = 0; l < layers_.size(); ++l) {
+    const SurfaceSnapshot& surface = layers_[l]->read();
+    age = std::max(age, !have_surface_[l] ? std::numeric_limits<double>::infinity()
+                        : surface.is_static ? 0.0
+                                            : time_s - surface.time_s);
+  }
   const SafetyFilter::Reading reading_state = !reading.valid ? SafetyFilter::Reading::kMissing
                                               : valid        ? SafetyFilter::Reading::kValid
                                                              : SafetyFilter::Reading::kNonFinite;
@@ -166,16 +190,17 @@ void HapticLoop::tick_impl(double time_s, double period_s, bool overrun) {
   out.time_s = time_s;
   out.device = x;
   out.device_velocity = v;
-  out.proxy = proxy_initialised_ ? renderer_.contact().proxy : x;
+  out.proxy = proxy_initialised_ ? renderers_[shown].contact().proxy : x;
   out.force = sent;
   out.requested_force = requested;
   out.contact = contact.in_contact;
+  out.layer = static_cast<std::int32_t>(shown);
   out.triangle = contact.triangle;
   out.barycentric = contact.barycentric;
   out.contact_point = contact.point;
   out.contact_normal = contact.normal;
   out.penetration_m = contact.penetration_m;
-  out.snapshot_sequence = have_surface_ ? surface.sequence : 0;
+  out.snapshot_sequence = have_surface_[shown] ? layers_[shown]->read().sequence : 0;
   out.period_s = period_s;
   out.buttons = reading.buttons;
   out.valid = valid;
@@ -184,12 +209,20 @@ void HapticLoop::tick_impl(double time_s, double period_s, bool overrun) {
   c.tick = tick;
   c.time_s = time_s;
   c.valid = valid;
-  c.proxy = out.proxy;
-  c.contact = contact.in_contact;
-  c.triangle = contact.triangle;
-  c.barycentric = contact.barycentric;
   c.force = sent;
   c.clamped = requested.norm() > device_.spec().max_force_n;
+  c.layer_count = static_cast<std::uint8_t>(layers_.size());
+  // Each layer's share of what was sent (the safety layer scales the whole request).
+  const double requested_norm = requested.norm();
+  const double scale = requested_norm > 0.0 ? sent.norm() / requested_norm : 0.0;
+  for (std::size_t l = 0; l < layers_.size(); ++l) {
+    HapticContact::Layer& layer = c.layers[l];
+    layer.proxy = proxy_initialised_ ? renderers_[l].contact().proxy : x;
+    layer.contact = contacts[l].in_contact;
+    layer.triangle = contacts[l].triangle;
+    layer.barycentric = contacts[l].barycentric;
+    layer.force = scale * contacts[l].force;
+  }
   contacts_.push(c);
   samples_.publish();
   if (tick > 0) stats_.record(period_s, overrun);

@@ -8,9 +8,12 @@
 /// (in), the sample TripleBuffer and the telemetry SpscRing (out), and atomics.
 
 #include <Eigen/Geometry>
+#include <array>
 #include <atomic>
 #include <cstdint>
 #include <memory>
+#include <span>
+#include <vector>
 #include <thread>
 
 #include "hof/core/spsc_ring.h"
@@ -60,17 +63,26 @@ inline constexpr std::size_t kMaxEffectsEach = 32;
 /// Checks counts and values of a set of effects (finite, non-negative constants).
 [[nodiscard]] Expected<void> validate_effects(const ForceEffects& effects);
 
+/// Haptic layers (H3D HapticLayeredGroup): each layer has its own surfaces and its own proxy,
+/// and the forces of the layers add up.
+inline constexpr std::size_t kMaxLayers = 4;
+
 /// What the simulation needs from one tick (its own channel, apart from telemetry).
 struct HapticContact {
+  struct Layer {
+    Vec3 proxy{Vec3::Zero()};
+    bool contact{false};
+    std::int32_t triangle{-1};        ///< in this layer's snapshot
+    Vec3 barycentric{Vec3::Zero()};
+    Vec3 force{Vec3::Zero()};         ///< this layer's share of the force sent to the device, world, N
+  };
   std::uint64_t tick{0};
   double time_s{0.0};
-  bool valid{false};                  ///< the device gave a reading (proxy meaningful)
-  Vec3 proxy{Vec3::Zero()};
-  bool contact{false};
-  std::int32_t triangle{-1};          ///< in the snapshot (all bodies)
-  Vec3 barycentric{Vec3::Zero()};
+  bool valid{false};                  ///< the device gave a reading (proxies meaningful)
   Vec3 force{Vec3::Zero()};           ///< sent to the device, world, N
   bool clamped{false};                ///< the requested force exceeded the device's limit
+  std::array<Layer, kMaxLayers> layers{};
+  std::uint8_t layer_count{1};
 };
 
 /// One tick, as published to other threads and logged (world frame unless noted).
@@ -83,7 +95,8 @@ struct HapticSample {
   Vec3 force{Vec3::Zero()};          ///< sent to the device (after safety), world frame, N
   Vec3 requested_force{Vec3::Zero()};///< before safety
   bool contact{false};
-  std::int32_t triangle{-1};
+  std::int32_t layer{0};             ///< the layer of the contact below (the first in contact)
+  std::int32_t triangle{-1};         ///< in that layer's snapshot
   Vec3 barycentric{Vec3::Zero()};
   Vec3 contact_point{Vec3::Zero()};
   Vec3 contact_normal{Vec3::Zero()};
@@ -99,6 +112,9 @@ class HapticLoop {
   /// `surfaces` is written by the simulation (or a static scene) and read here; `settings`
   /// (optional) carries changed settings from the simulation thread.
   HapticLoop(Device& device, TripleBuffer<SurfaceSnapshot>& surfaces, const HapticLoopConfig& config,
+             TripleBuffer<HapticSettings>* settings = nullptr);
+  /// Several haptic layers (1 to kMaxLayers), outermost first: one proxy each.
+  HapticLoop(Device& device, std::span<TripleBuffer<SurfaceSnapshot>* const> layers, const HapticLoopConfig& config,
              TripleBuffer<HapticSettings>* settings = nullptr);
   HapticLoop(const HapticLoop&) = delete;
   HapticLoop& operator=(const HapticLoop&) = delete;
@@ -124,8 +140,10 @@ class HapticLoop {
   [[nodiscard]] const PeriodStats& period_stats() const { return stats_; }
   [[nodiscard]] const SafetyCounters& safety_counters() const { return safety_.counters(); }
   [[nodiscard]] std::uint64_t ticks() const { return ticks_.load(std::memory_order_relaxed); }
-  [[nodiscard]] const HapticRenderer& renderer() const { return renderer_; }
-  [[nodiscard]] HapticRenderer& renderer() { return renderer_; }
+  /// The renderer (proxy) of the outermost layer; renderer(l) of layer l.
+  [[nodiscard]] const HapticRenderer& renderer(std::size_t layer = 0) const { return renderers_[layer]; }
+  [[nodiscard]] HapticRenderer& renderer(std::size_t layer = 0) { return renderers_[layer]; }
+  [[nodiscard]] std::size_t layer_count() const { return layers_.size(); }
   ForceEffects& effects() { return effects_; }
   [[nodiscard]] double nominal_period_s() const { return 1.0 / config_.rate_hz; }
 
@@ -135,9 +153,10 @@ class HapticLoop {
   void take_settings();
 
   Device& device_;
-  TripleBuffer<SurfaceSnapshot>& surfaces_;
+  std::vector<TripleBuffer<SurfaceSnapshot>*> layers_;
   HapticLoopConfig config_;
-  HapticRenderer renderer_;
+  std::vector<HapticRenderer> renderers_;
+  std::vector<char> have_surface_;
   ForceEffects effects_;
   SafetyFilter safety_;
   PeriodStats stats_;
@@ -151,7 +170,6 @@ class HapticLoop {
   std::thread thread_;
   Eigen::Matrix3d world_to_device_{Eigen::Matrix3d::Identity()};
   double last_time_s_{-1.0};
-  bool have_surface_{false};
   bool proxy_initialised_{false};
 };
 

@@ -25,8 +25,10 @@ HapticRenderer::HapticRenderer(const RendererConfig& config, const SurfaceMateri
 const SurfaceMaterial& HapticRenderer::material_at(const SurfaceSnapshot& surface, std::int32_t t) const {
   if (part_materials_.empty() || t < 0) return material_;
   const std::int32_t part = surface.part_of(t);
-  return part >= 0 && static_cast<std::size_t>(part) < part_materials_.size() ? part_materials_[static_cast<std::size_t>(part)]
-                                                                               : material_;
+  if (part < 0) return material_;
+  const std::int32_t body = surface.parts[static_cast<std::size_t>(part)].body;
+  const auto index = static_cast<std::size_t>(body >= 0 ? body : part);
+  return index < part_materials_.size() ? part_materials_[index] : material_;
 }
 
 void HapticRenderer::reconfigure(const RendererConfig& config) {

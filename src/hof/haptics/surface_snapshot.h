@@ -35,6 +35,7 @@ struct SurfacePart {
   std::int32_t triangle_count{0};
   bool is_static{false};  ///< a rigid, fixed body: its geometry never changes
   bool closed{false};     ///< a closed 2-manifold (it has an inside: fall-through is counted)
+  std::int32_t body{-1};  ///< the world's body index (materials are per body); -1: the part index
 };
 
 struct SurfaceSnapshot {

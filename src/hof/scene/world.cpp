@@ -120,6 +120,7 @@ Expected<void> add_x3d(World& w, const std::filesystem::path& file) {
       body.name = name;
       body.surface = geometry;
       body.material = shape.surface;
+      body.layer = shape.layer;
       w.bodies.push_back(std::move(body));
       continue;
     }
@@ -157,6 +158,7 @@ Expected<void> add_x3d(World& w, const std::filesystem::path& file) {
     auto body = make_deformable(c, std::nullopt, false);
     if (!body) return std::unexpected(body.error());
     body->material = shape.surface;
+    body->layer = shape.layer;
     w.bodies.push_back(std::move(*body));
   }
   if (any_deformable) {

@@ -301,7 +301,17 @@ class Reader {
     if (tag == "head" || tag == "meta" || tag == "component" || tag == "unit") return;
     const pugi::xml_node n = resolve(original);
     const std::string_view t = n.name();
-    if (is_group(t)) {
+    if (t == "HapticLayeredGroup") {
+      // H3D: each child is a haptic layer, rendered with its own proxy (forces summed).
+      const int outer = layer_;
+      int index = 0;
+      for (pugi::xml_node c : n.children()) {
+        if (c.type() != pugi::node_element) continue;
+        layer_ = index++;
+        visit(c, X);
+      }
+      layer_ = outer;
+    } else if (is_group(t)) {
       visit_children(n, X);
     } else if (t == "Transform") {
       visit_children(n, X * transform_matrix(n));
@@ -435,6 +445,7 @@ class Reader {
         unsupported(c_orig);
       }
     }
+    s.layer = layer_;
     scene_.shapes.push_back(std::move(s));
   }
 
@@ -655,6 +666,7 @@ class Reader {
   std::vector<std::ptrdiff_t> line_starts_;
   std::map<std::string, std::vector<pugi::xml_node>, std::less<>> defs_;
   X3dScene scene_;
+  int layer_{0};  // haptic layer of the shapes being visited
 };
 
 }  // namespace

@@ -73,6 +73,7 @@ struct X3dShape {
   std::string surface_type;    ///< "SmoothSurface", ... ("" if none)
   haptics::SurfaceMaterial surface;  ///< meaningful when touchable
   bool deformable{false};      ///< a DeformableShape
+  int layer{0};                ///< haptic layer: index of its HapticLayeredGroup child (0 outside one)
   std::string deformer_type;   ///< e.g. "CoordinateDeformer" ("" = no deformation)
   Vec3 diffuse_color{0.8, 0.8, 0.8};  ///< Material.diffuseColor (X3D default 0.8 0.8 0.8)
   std::optional<X3dHapticsOptions> haptics_options;      ///< from the geometry's `options`
