@@ -304,6 +304,77 @@ TEST(World, ProjectParametersOverrideTheSceneAndRoundTrip) {
   EXPECT_NE(bad.error().message.find("poissonRatio"), std::string::npos);
 }
 
+TEST(World, ProjectHoldsBodySurfacesAndRigidObstaclesAndRoundTrips) {
+  write("plate.obj", "v -0.1 -0.1 0\nv 0.1 -0.1 0\nv 0.1 0.1 0\nv -0.1 0.1 0\nf 1 2 3\nf 1 3 4\n");
+  HofProject p;
+  p.name = "bodies";
+  p.mechanics_scene = fs::path(HOF_SOURCE_DIR) / "examples/liver-medium-fem.scn";
+  haptics::SurfaceMaterial soft;
+  soft.kind = haptics::SurfaceKind::kFrictional;
+  soft.stiffness = 0.25;
+  p.bodies.push_back({"Liver", soft});
+  haptics::SurfaceMaterial hard;
+  hard.stiffness = 0.9;
+  p.obstacles.push_back({"Table", "plate.obj", Vec3(0, 0, -0.06), hard});
+  const fs::path file = fs::temp_directory_path() / "hof_world_test" / "bodies.hof";
+  ASSERT_TRUE(write_project(p, file));
+  auto again = read_project(file);
+  ASSERT_TRUE(again) << again.error().to_string();
+  EXPECT_EQ(to_xml(*again), to_xml(p)) << "save -> load -> save changed the project";
+  auto world = build_world(file);
+  ASSERT_TRUE(world) << world.error().to_string();
+  ASSERT_EQ(world->bodies.size(), 2u);
+  ASSERT_TRUE(world->bodies[0].material);
+  EXPECT_EQ(world->bodies[0].material->kind, haptics::SurfaceKind::kFrictional);
+  EXPECT_EQ(world->bodies[0].material->stiffness, 0.25);
+  EXPECT_EQ(world->bodies[1].name, "Table");
+  EXPECT_FALSE(world->bodies[1].deformable());
+  EXPECT_EQ(world->bodies[1].surface.vertices[0].z(), -0.06);
+  EXPECT_EQ(world->bodies[1].material->stiffness, 0.9);
+  // An obstacle whose mesh is missing is an error naming it and the project.
+  p.obstacles[0].mesh = "nowhere.obj";
+  ASSERT_TRUE(write_project(p, file));
+  auto bad = build_world(file);
+  ASSERT_FALSE(bad);
+  EXPECT_NE(bad.error().to_string().find("nowhere.obj"), std::string::npos);
+  EXPECT_NE(bad.error().message.find("Table"), std::string::npos) << bad.error().message;
+}
+
+TEST(World, ChangesThroughTheCommandSeamAreInTheNextSavedProject) {
+  HofProject p;
+  p.name = "seam";
+  p.mechanics_scene = fs::path(HOF_SOURCE_DIR) / "examples/liver-medium-fem.scn";
+  const fs::path file = fs::temp_directory_path() / "hof_world_test" / "seam.hof";
+  ASSERT_TRUE(write_project(p, file));
+  auto world = build_world(file);
+  ASSERT_TRUE(world) << world.error().to_string();
+  auto device = haptics::open_device(world->device);
+  ASSERT_TRUE(device);
+  coupling::SessionConfig config = world->config;
+  config.haptics.realtime_priority = false;
+  auto session = coupling::Session::make(std::move(world->bodies), std::move(*device), config);
+  ASSERT_TRUE(session);
+  (*session)->run_virtual(0.05, {});
+  ASSERT_TRUE((*session)->submit(coupling::command::SetParameter{"Liver", "FEM", "youngModulus", 7000.0}));
+  ASSERT_FALSE((*session)->submit(coupling::command::SetParameter{"Liver", "FEM", "youngModulus", -7000.0}));
+  haptics::SurfaceMaterial magnetic;
+  magnetic.kind = haptics::SurfaceKind::kMagnetic;
+  ASSERT_TRUE((*session)->submit(coupling::command::SetMaterial{"Liver", magnetic}));
+  const coupling::SessionReport report = (*session)->run_virtual(0.02, {});
+  ASSERT_EQ(report.applied_commands.size(), 2u);
+  record_changes(world->project, **session);
+  ASSERT_TRUE(write_project(world->project, file));
+  const std::string saved = to_xml(world->project);
+  EXPECT_NE(saved.find("<set body=\"Liver\" component=\"FEM\" parameter=\"youngModulus\" value=\"7000\"/>"), std::string::npos)
+      << saved;
+  auto reloaded = build_world(file);
+  ASSERT_TRUE(reloaded) << reloaded.error().to_string();
+  EXPECT_EQ(*mechanics::get_parameter(*reloaded->bodies[0].config, "FEM", "youngModulus"), 7000.0);
+  ASSERT_TRUE(reloaded->bodies[0].material);
+  EXPECT_EQ(reloaded->bodies[0].material->kind, haptics::SurfaceKind::kMagnetic);
+  EXPECT_EQ(to_xml(reloaded->project), saved);
+}
+
 TEST(World, DefaultProbeStartsOutsideAndPressesWhateverTheUpAxis) {
   // The same box, once with y up and once turned so that z is up: the probe presses its top.
   for (const std::string& rotation : {std::string("0 0 1 0"), std::string("1 0 0 1.5707963267949")}) {

@@ -246,6 +246,9 @@ Expected<void> Session::submit(const Command& command) {
       return make_error(ErrorCode::kInvalidArgument, fmt::format("no body '{}' (bodies: {})", material->body, body_names()));
     }
     if (auto ok = haptics::validate(material->material); !ok) return std::unexpected(ok.error());
+    for (const BodyRuntime& r : bodies_) {
+      if (material->body.empty() || r.body.name == material->body) material_changes_.emplace_back(r.body.name, material->material);
+    }
   } else if (const auto* effects = std::get_if<command::SetEffects>(&command)) {
     if (auto ok = haptics::validate_effects(effects->effects); !ok) return std::unexpected(ok.error());
   } else if (const auto* renderer = std::get_if<command::SetRenderer>(&command)) {
@@ -262,6 +265,11 @@ Expected<void> Session::submit(const Command& command) {
 std::vector<ParameterChange> Session::parameter_changes() const {
   std::lock_guard lock(commands_mutex_);
   return changes_;
+}
+
+std::vector<std::pair<std::string, haptics::SurfaceMaterial>> Session::material_changes() const {
+  std::lock_guard lock(commands_mutex_);
+  return material_changes_;
 }
 
 void Session::publish_settings() {

@@ -28,6 +28,7 @@
 #include <optional>
 #include <string>
 #include <thread>
+#include <utility>
 #include <variant>
 #include <vector>
 
@@ -180,6 +181,8 @@ class Session {
   Expected<void> submit(const Command& command);
   /// Parameters changed through submit() so far, in order (to save with the project).
   [[nodiscard]] std::vector<ParameterChange> parameter_changes() const;
+  /// Surface materials set through submit() so far, by body name, in order.
+  [[nodiscard]] std::vector<std::pair<std::string, haptics::SurfaceMaterial>> material_changes() const;
 
   [[nodiscard]] std::size_t body_count() const;
   [[nodiscard]] const SessionBody& body(std::size_t i) const;
@@ -240,6 +243,7 @@ class Session {
   mutable std::mutex commands_mutex_;
   std::vector<Command> pending_;
   std::vector<ParameterChange> changes_;
+  std::vector<std::pair<std::string, haptics::SurfaceMaterial>> material_changes_;
   std::vector<mechanics::ModelConfig> validated_configs_;  // configs as the accepted commands leave them
   bool paused_{false};
   int single_steps_{0};

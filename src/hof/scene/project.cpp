@@ -108,6 +108,24 @@ struct Reader {
   }
 };
 
+haptics::SurfaceMaterial read_surface(Reader& r, const pugi::xml_node& s) {
+  haptics::SurfaceMaterial m;
+  const std::string type = s.attribute("type").as_string("SmoothSurface");
+  if (type == "SmoothSurface") m.kind = haptics::SurfaceKind::kSmooth;
+  else if (type == "FrictionalSurface") m.kind = haptics::SurfaceKind::kFrictional;
+  else if (type == "MagneticSurface") m.kind = haptics::SurfaceKind::kMagnetic;
+  else if (type == "ZeroForceSurface") m.kind = haptics::SurfaceKind::kZeroForce;
+  else r.fail(s, fmt::format("unknown surface type \"{}\"", type));
+  m.stiffness = r.get(s, "stiffness", m.stiffness);
+  m.damping_n_s_per_m = r.get(s, "damping", m.damping_n_s_per_m);
+  m.use_relative_values = r.get_bool(s, "useRelativeValues", m.use_relative_values);
+  m.static_friction = r.get(s, "staticFriction", m.static_friction);
+  m.dynamic_friction = r.get(s, "dynamicFriction", m.dynamic_friction);
+  m.snap_distance_m = r.get(s, "snapDistance", m.snap_distance_m);
+  if (auto valid = haptics::validate(m); !valid) r.fail(s, valid.error().message);
+  return m;
+}
+
 }  // namespace
 
 namespace {
@@ -140,6 +158,18 @@ std::string xml_escape(std::string_view text) {
 
 }  // namespace
 
+namespace {
+
+std::string surface_xml(const haptics::SurfaceMaterial& s, std::string_view indent) {
+  return fmt::format(
+      "{}<surface type=\"{}\" stiffness=\"{}\" damping=\"{}\" useRelativeValues=\"{}\" staticFriction=\"{}\" "
+      "dynamicFriction=\"{}\" snapDistance=\"{}\"/>\n",
+      indent, surface_name(s.kind), number(s.stiffness), number(s.damping_n_s_per_m), s.use_relative_values ? "true" : "false",
+      number(s.static_friction), number(s.dynamic_friction), number(s.snap_distance_m));
+}
+
+}  // namespace
+
 std::string to_xml(const HofProject& p) {
   std::string out;
   out += "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
@@ -159,6 +189,22 @@ std::string to_xml(const HofProject& p) {
     out += fmt::format("  <mechanics scene=\"{}\"{}>\n", xml_escape(p.mechanics_scene.generic_string()), unit) + sets +
            "  </mechanics>\n";
   }
+  if (!p.bodies.empty() || !p.obstacles.empty()) {
+    out += "  <bodies>\n";
+    for (const BodySetup& b : p.bodies) {
+      if (b.surface) {
+        out += fmt::format("    <body name=\"{}\">\n", xml_escape(b.name)) + surface_xml(*b.surface, "      ") + "    </body>\n";
+      } else {
+        out += fmt::format("    <body name=\"{}\"/>\n", xml_escape(b.name));
+      }
+    }
+    for (const ObstacleSetup& o : p.obstacles) {
+      const std::string open = fmt::format("    <obstacle name=\"{}\" mesh=\"{}\" translation=\"{}\"", xml_escape(o.name),
+                                           xml_escape(o.mesh.generic_string()), vec(o.translation));
+      out += o.surface ? open + ">\n" + surface_xml(*o.surface, "      ") + "    </obstacle>\n" : open + "/>\n";
+    }
+    out += "  </bodies>\n";
+  }
   out += fmt::format(
       "  <haptics device=\"{}\" hapticRate=\"{}\" renderer=\"{}\" proxyRadius=\"{}\" forceShading=\"{}\" "
       "touchableFace=\"{}\" coupling=\"{}\">\n",
@@ -167,12 +213,7 @@ std::string to_xml(const HofProject& p) {
   std::string calibration;
   for (std::size_t i = 0; i < 16; ++i) calibration += (i ? " " : "") + number(p.position_calibration[i]);
   out += fmt::format("    <calibration positionCalibration=\"{}\"/>\n", calibration);
-  const auto& s = p.surface;
-  out += fmt::format(
-      "    <surface type=\"{}\" stiffness=\"{}\" damping=\"{}\" useRelativeValues=\"{}\" staticFriction=\"{}\" "
-      "dynamicFriction=\"{}\" snapDistance=\"{}\"/>\n",
-      surface_name(s.kind), number(s.stiffness), number(s.damping_n_s_per_m), s.use_relative_values ? "true" : "false",
-      number(s.static_friction), number(s.dynamic_friction), number(s.snap_distance_m));
+  out += surface_xml(p.surface, "    ");
   out += fmt::format("    <safety fadeIn=\"{}\" fadeOut=\"{}\" maxSnapshotAge=\"{}\" maxConsecutiveOverruns=\"{}\"/>\n",
                      number(p.safety.fade_in_s), number(p.safety.fade_out_s), number(p.safety.max_snapshot_age_s),
                      p.safety.max_consecutive_overruns);
@@ -247,6 +288,30 @@ Expected<HofProject> read_project(const std::filesystem::path& path) {
     }
     p.parameters.push_back(std::move(c));
   }
+  for (const pugi::xml_node b : root.child("bodies").children()) {
+    if (b.type() != pugi::node_element) continue;
+    const std::string tag = b.name();
+    const std::string name = b.attribute("name").as_string("");
+    if (name.empty()) {
+      r.fail(b, fmt::format("<{}> needs a name", tag));
+      continue;
+    }
+    std::optional<haptics::SurfaceMaterial> surface;
+    if (const pugi::xml_node s = b.child("surface")) surface = read_surface(r, s);
+    if (tag == "body") {
+      p.bodies.push_back(BodySetup{name, surface});
+    } else if (tag == "obstacle") {
+      ObstacleSetup o;
+      o.name = name;
+      o.mesh = b.attribute("mesh").as_string("");
+      if (o.mesh.empty()) r.fail(b, "<obstacle> needs mesh=\"FILE\" (OBJ, STL, OFF or a tetrahedral mesh)");
+      o.translation = r.get_vec(b, "translation", Vec3::Zero());
+      o.surface = surface;
+      p.obstacles.push_back(std::move(o));
+    } else {
+      r.fail(b, fmt::format("unknown element <{}> in <bodies> (body, obstacle)", tag));
+    }
+  }
   if (const pugi::xml_node h = root.child("haptics")) {
     p.device = h.attribute("device").as_string(p.device.c_str());
     p.haptic_rate_hz = r.get(h, "hapticRate", p.haptic_rate_hz);
@@ -278,21 +343,7 @@ Expected<HofProject> read_project(const std::filesystem::path& path) {
         }
       }
     }
-    if (const pugi::xml_node s = h.child("surface")) {
-      const std::string type = s.attribute("type").as_string("SmoothSurface");
-      if (type == "SmoothSurface") p.surface.kind = haptics::SurfaceKind::kSmooth;
-      else if (type == "FrictionalSurface") p.surface.kind = haptics::SurfaceKind::kFrictional;
-      else if (type == "MagneticSurface") p.surface.kind = haptics::SurfaceKind::kMagnetic;
-      else if (type == "ZeroForceSurface") p.surface.kind = haptics::SurfaceKind::kZeroForce;
-      else r.fail(s, fmt::format("unknown surface type \"{}\"", type));
-      p.surface.stiffness = r.get(s, "stiffness", p.surface.stiffness);
-      p.surface.damping_n_s_per_m = r.get(s, "damping", p.surface.damping_n_s_per_m);
-      p.surface.use_relative_values = r.get_bool(s, "useRelativeValues", p.surface.use_relative_values);
-      p.surface.static_friction = r.get(s, "staticFriction", p.surface.static_friction);
-      p.surface.dynamic_friction = r.get(s, "dynamicFriction", p.surface.dynamic_friction);
-      p.surface.snap_distance_m = r.get(s, "snapDistance", p.surface.snap_distance_m);
-      if (auto valid = haptics::validate(p.surface); !valid) r.fail(s, valid.error().message);
-    }
+    if (const pugi::xml_node s = h.child("surface")) p.surface = read_surface(r, s);
     if (const pugi::xml_node o = h.child("options")) {
       p.use_bound_tree = r.get_bool(o, "useBoundTree", p.use_bound_tree);
       p.max_triangles_in_leaf = static_cast<int>(r.get(o, "maxTrianglesInLeaf", p.max_triangles_in_leaf));

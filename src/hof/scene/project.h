@@ -7,6 +7,7 @@
 /// round-trip numbers, so save → load → save gives the same bytes.
 
 #include <array>
+#include <optional>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -26,6 +27,21 @@ struct GraphicsSetup {
   std::string render_mode{"shaded"};  ///< shaded | wireframe | shaded+wireframe
 };
 
+/// Settings of one body of the scene (by its name), written in <bodies>.
+struct BodySetup {
+  std::string name;
+  std::optional<haptics::SurfaceMaterial> surface;  ///< its haptic surface (else the project's)
+};
+
+/// A rigid, fixed obstacle the project adds to the scene (a table, a rib cage): a surface mesh
+/// file (OBJ, STL, OFF, or a tetrahedral mesh's boundary), path relative to the project.
+struct ObstacleSetup {
+  std::string name;
+  std::filesystem::path mesh;
+  Vec3 translation{Vec3::Zero()};                   ///< m, added to the mesh's coordinates
+  std::optional<haptics::SurfaceMaterial> surface;  ///< else the project's
+};
+
 struct HofProject {
   std::string name{"untitled"};
   std::filesystem::path mechanics_scene;  ///< as written in the file (relative to it); empty when inline
@@ -40,6 +56,8 @@ struct HofProject {
   std::vector<coupling::ParameterChange> parameters;
   /// The length unit of the scene ("" = metres); stated in reports.
   std::string scene_unit;
+  std::vector<BodySetup> bodies;          ///< per-body settings (<bodies><body>)
+  std::vector<ObstacleSetup> obstacles;   ///< rigid obstacles (<bodies><obstacle>)
   std::array<double, 16> position_calibration{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};  ///< row-major 4x4
   double haptic_rate_hz{1000.0};
   haptics::RendererKind renderer{haptics::RendererKind::kRuspini};

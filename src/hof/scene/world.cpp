@@ -101,6 +101,42 @@ Expected<void> apply_parameters(World& w) {
   return {};
 }
 
+// The project's per-body settings and obstacles.
+Expected<void> apply_bodies(World& w) {
+  for (const BodySetup& setup : w.project.bodies) {
+    auto it = std::find_if(w.bodies.begin(), w.bodies.end(), [&](const auto& b) { return b.name == setup.name; });
+    if (it == w.bodies.end()) {
+      return make_error(ErrorCode::kInvalidArgument, fmt::format("<body name=\"{}\">: no body of that name in the scene", setup.name),
+                        w.file.string());
+    }
+    if (setup.surface) it->material = setup.surface;
+  }
+  for (const ObstacleSetup& o : w.project.obstacles) {
+    const std::filesystem::path path = o.mesh.is_absolute() ? o.mesh : w.file.parent_path() / o.mesh;
+    auto read = mesh::read_mesh(path);
+    if (!read) {
+      Error e = read.error();
+      e.message = fmt::format("obstacle '{}': {} (in project {})", o.name, e.message, w.file.string());
+      return std::unexpected(e);
+    }
+    coupling::SessionBody body;
+    body.name = o.name;
+    if (!read->mesh.tets.empty()) {
+      body.surface = mesh::extract_boundary(read->mesh.nodes, read->mesh.tets).surface;
+    } else {
+      body.surface.vertices = read->mesh.nodes;
+      body.surface.triangles = read->mesh.triangles;
+    }
+    if (body.surface.triangles.empty()) {
+      return make_error(ErrorCode::kInvalidMesh, fmt::format("obstacle '{}' has no triangles to touch", o.name), path.string());
+    }
+    for (Vec3& p : body.surface.vertices) p += o.translation;
+    body.material = o.surface;
+    w.bodies.push_back(std::move(body));
+  }
+  return {};
+}
+
 Expected<void> add_x3d(World& w, const std::filesystem::path& file) {
   auto x3d = read_x3d_scene(file);
   if (!x3d) return std::unexpected(x3d.error());
@@ -422,6 +458,32 @@ DefaultProbe default_probe(const std::vector<coupling::SessionBody>& bodies, dou
   return probe;
 }
 
+void record_changes(HofProject& project, const coupling::Session& session) {
+  for (const coupling::ParameterChange& change : session.parameter_changes()) {
+    auto same = std::find_if(project.parameters.begin(), project.parameters.end(), [&](const auto& p) {
+      return p.body == change.body && p.component == change.component && p.parameter == change.parameter;
+    });
+    if (same != project.parameters.end()) {
+      same->value = change.value;
+    } else {
+      project.parameters.push_back(change);
+    }
+  }
+  for (const auto& [name, material] : session.material_changes()) {
+    auto obstacle = std::find_if(project.obstacles.begin(), project.obstacles.end(), [&](const auto& o) { return o.name == name; });
+    if (obstacle != project.obstacles.end()) {
+      obstacle->surface = material;
+      continue;
+    }
+    auto body = std::find_if(project.bodies.begin(), project.bodies.end(), [&](const auto& b) { return b.name == name; });
+    if (body == project.bodies.end()) {
+      project.bodies.push_back(BodySetup{name, material});
+    } else {
+      body->surface = material;
+    }
+  }
+}
+
 Expected<World> build_world(const std::filesystem::path& file, const std::string& device_override) {
   World w;
   w.file = file;
@@ -453,6 +515,7 @@ Expected<World> build_world(const std::filesystem::path& file, const std::string
     return make_error(ErrorCode::kUnsupported, "expected a .hof project, a .scn SOFA scene or an .x3d scene", file.string());
   }
   if (auto ok = apply_parameters(w); !ok) return std::unexpected(ok.error());
+  if (auto ok = apply_bodies(w); !ok) return std::unexpected(ok.error());
   w.name = w.project.name;
   // A SOFA scene carries no unit; X3D and .hof worlds are in metres (a project may declare
   // its scene's unit).

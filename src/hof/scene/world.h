@@ -64,6 +64,11 @@ struct World {
 /// device. Errors start with the file (the project, then the scene with its resolved path).
 [[nodiscard]] Expected<World> build_world(const std::filesystem::path& file, const std::string& device_override = {});
 
+/// Writes what a session changed through its command seam into `project` (parameters as
+/// <set> elements, replacing an earlier value of the same parameter; surfaces in <bodies>),
+/// so that the next save holds them.
+void record_changes(HofProject& project, const coupling::Session& session);
+
 /// The spec of the default probe for `bodies` under `calibration` (a scripted poke in the
 /// device frame), and a calibration that fits the device workspace to the bodies' bounds.
 struct DefaultProbe {
