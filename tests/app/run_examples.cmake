@@ -126,3 +126,10 @@ execute_process(COMMAND ${HOF} check ${WORK}/nothing.x3d RESULT_VARIABLE rc ERRO
 if(rc EQUAL 0 OR NOT err MATCHES "^hof: .*nothing.x3d.*PythonScript")
   message(FATAL_ERROR "hof check accepted a scene hof run refuses (rc ${rc}): ${out}${err}")
 endif()
+
+# A project whose scene is broken: the error names the project, then the scene (resolved).
+file(WRITE ${WORK}/points-to-missing.hof "<hof>\n  <mechanics scene=\"missing.scn\"/>\n</hof>\n")
+execute_process(COMMAND ${HOF} run ${WORK}/points-to-missing.hof --deterministic --quiet RESULT_VARIABLE rc ERROR_VARIABLE err)
+if(rc EQUAL 0 OR NOT err MATCHES "^hof: [^\n]*points-to-missing.hof: its scene [^\n]*/missing.scn:[0-9]+: [^\n]*nowhere.msh")
+  message(FATAL_ERROR "a project's broken scene was not reported project first (rc=${rc}): ${err}")
+endif()

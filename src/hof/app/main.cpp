@@ -74,7 +74,7 @@ void add_run_commands(CLI::App& app, int& status) {
   static long steps = 0;
   static std::string device;
   static std::string out;
-  CLI::App* run_cmd = app.add_subcommand("run", "Run a haptic session on a project (.hof) or SOFA scene (.scn)");
+  CLI::App* run_cmd = app.add_subcommand("run", "Run a haptic session on a project (.hof), SOFA scene (.scn) or X3D scene (.x3d)");
   run_cmd->add_option("file", run.file, "Project (.hof), SOFA scene (.scn) or X3D scene (.x3d)")->required();
   run_cmd->add_flag("--headless", run.headless, "No window (the default: the GUI is not built yet)");
   run_cmd->add_flag("--deterministic", run.deterministic, "Virtual time: loops in lock-step, identical output every run");
@@ -120,7 +120,10 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
+    // Every error of the command starts with "hof:", as the verbs' own do.
+    std::fprintf(stderr, "hof: %s (see hof --help)\n", e.what());
+    return e.get_exit_code();
   }
   return status;
 }

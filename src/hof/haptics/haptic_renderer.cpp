@@ -31,8 +31,17 @@ const SurfaceMaterial& HapticRenderer::material_at(const SurfaceSnapshot& surfac
   return index < part_materials_.size() ? part_materials_[index] : material_;
 }
 
+void HapticRenderer::set_world_scale(double world_per_device_m) {
+  const double scale = world_per_device_m > 0.0 && std::isfinite(world_per_device_m) ? world_per_device_m : 1.0;
+  config_.ride_distance_m *= scale / world_scale_;
+  config_.penalty_max_distance_m *= scale / world_scale_;
+  world_scale_ = scale;
+}
+
 void HapticRenderer::reconfigure(const RendererConfig& config) {
   config_ = config;
+  config_.ride_distance_m *= world_scale_;
+  config_.penalty_max_distance_m *= world_scale_;
   radius_ = config.kind == RendererKind::kRuspini ? std::max(0.0, config.proxy_radius_m) : 0.0;
   plane_count_ = 0;
   anchor_ = {};

@@ -79,7 +79,9 @@ class HapticRenderer {
   /// World units per metre of device travel (the calibration's scale). Stiffness and damping
   /// are felt at the device (N per metre of the hand's travel, as HAPI renders in device
   /// space), so in world units they are divided by it.
-  void set_world_scale(double world_per_device_m) { world_scale_ = world_per_device_m > 0.0 ? world_per_device_m : 1.0; }
+  /// The distances the renderer reasons in (ride distance, penalty reach) are device-side
+  /// too: they scale with it.
+  void set_world_scale(double world_per_device_m);
   /// Stiffness of the material in contact, N per world unit (N/m in a metre world).
   [[nodiscard]] double stiffness_n_per_m() const { return active_.stiffness_n_per_m(device_max_stiffness_) / world_scale_; }
 

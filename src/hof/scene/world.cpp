@@ -500,8 +500,16 @@ Expected<World> build_world(const std::filesystem::path& file, const std::string
     w.scene_path = scene_file(w.project, file);
     bare = w.project.device == "auto";
     if (auto ok = add_sofa(w, w.scene_path); !ok) {
-      Error e = ok.error();
-      if (w.scene_path != file) e.message = fmt::format("{} (the scene of project {})", e.message, file.string());
+      // The project first, then the scene it points to (resolved), then what is wrong there.
+      Error inner = ok.error();
+      if (w.scene_path == file) return std::unexpected(inner);
+      std::error_code canonical_error;
+      const std::filesystem::path resolved = std::filesystem::weakly_canonical(w.scene_path, canonical_error);
+      if (!canonical_error && (inner.file.empty() || inner.file == w.scene_path.string())) inner.file = resolved.string();
+      Error e;
+      e.code = inner.code;
+      e.file = file.string();
+      e.message = "its scene " + inner.to_string();
       return std::unexpected(e);
     }
   } else if (ext == ".scn") {
