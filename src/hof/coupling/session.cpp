@@ -100,6 +100,7 @@ Session::Session(std::vector<SessionBody> bodies, std::unique_ptr<haptics::Devic
     r.surface_positions = r.body.surface.vertices;
     r.surface_velocities.assign(r.body.surface.vertices.size(), Vec3::Zero());
     validated_configs_.push_back(r.body.config.value_or(mechanics::ModelConfig{}));
+    has_mechanics_.push_back(r.body.deformable() && r.body.config ? 1 : 0);
     bodies_.push_back(std::move(r));
   }
   // A world of rigid shapes (or of force effects only) still steps, to publish and report.
@@ -229,7 +230,9 @@ Expected<void> Session::submit(const Command& command) {
   if (const auto* set = std::get_if<command::SetParameter>(&command)) {
     const std::int32_t i = find_body(set->body);
     if (i < 0) return make_error(ErrorCode::kInvalidArgument, fmt::format("no body '{}' (bodies: {})", set->body, body_names()));
-    if (!bodies_[static_cast<std::size_t>(i)].body.deformable() || !bodies_[static_cast<std::size_t>(i)].body.config) {
+    // Whether it has mechanics is fixed at construction (the simulation thread may be
+    // rebuilding the model right now: its optional is not read here).
+    if (!has_mechanics_[static_cast<std::size_t>(i)]) {
       return make_error(ErrorCode::kInvalidArgument, fmt::format("body '{}' is rigid: it has no mechanical parameters", set->body));
     }
     mechanics::ModelConfig& config = validated_configs_[static_cast<std::size_t>(i)];

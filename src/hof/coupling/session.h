@@ -245,6 +245,7 @@ class Session {
   std::vector<ParameterChange> changes_;
   std::vector<std::pair<std::string, haptics::SurfaceMaterial>> material_changes_;
   std::vector<mechanics::ModelConfig> validated_configs_;  // configs as the accepted commands leave them
+  std::vector<char> has_mechanics_;                        // per body, fixed: a model and its config
   bool paused_{false};
   int single_steps_{0};
   // Real time.
