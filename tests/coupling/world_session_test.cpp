@@ -358,8 +358,43 @@ TEST(CommandSeam, CommandsDuringARealTimeRunAreAppliedBetweenSteps) {
   EXPECT_EQ(samples, static_cast<std::int64_t>(session->haptic_loop().ticks()));
 }
 
+TEST(CommandSeam, AnotherDeviceIsSwitchedToWithItsOwnForceLimit) {
+  // A box, touched first by nothing (a probe holding still far above), then by a device
+  // with a 3.3 N limit pressing 3 cm in (10 N requested).
+  std::vector<SessionBody> bodies(1);
+  bodies[0].name = "box";
+  bodies[0].surface = box(Vec3(-0.02, -0.04, -0.02), Vec3(0.02, 0.0, 0.02));
+  haptics::MotionConfig hold;
+  hold.kind = haptics::MotionKind::kHold;
+  hold.start_m = Vec3(0.0, 0.5, 0.0);
+  hold.hold_s = std::numeric_limits<double>::infinity();
+  SessionConfig config = god_object_config();
+  auto session = Session::make(std::move(bodies), std::make_unique<haptics::ScriptedDevice>(*haptics::ScriptedMotion::make(hold)),
+                               config);
+  ASSERT_TRUE(session);
+  (*session)->run_virtual(0.1, {});
+  auto absent = (*session)->submit(command::SetDevice{"udp:notaport", nullptr});
+  ASSERT_FALSE(absent);
+  EXPECT_FALSE((*session)->submit(command::SetDevice{"scripted:nope", nullptr}));
+  ASSERT_TRUE((*session)->submit(command::SetDevice{
+      "scripted:poke,start=0;0.05;0,direction=0;-1;0,approach=0.05,depth=0.03,speed=0.1,hold=1,model=omni", nullptr}));
+  double largest = 0.0;
+  int clamped = 0;
+  const SessionReport report = (*session)->run_virtual(2.0, [&](const haptics::HapticSample& s) {
+    largest = std::max(largest, s.force.norm());
+    if (s.requested_force.norm() > 3.3 && s.valid) ++clamped;
+  });
+  ASSERT_FALSE(report.applied_commands.empty());
+  EXPECT_NE(report.applied_commands[0].find("device scripted:poke"), std::string::npos);
+  EXPECT_LE(largest, 3.3 + 1e-9) << "the new device's limit must hold from its first tick";
+  EXPECT_GT(clamped, 100);
+  EXPECT_GT(report.contact_time_s, 0.5);
+  EXPECT_EQ(report.fall_through_events, 0);
+}
+
 TEST(CommandSeam, TheHapticTickNeverAllocatesWhenSettingsChange) {
-  // A loop fed new settings (renderer, materials, effects) through its triple buffer.
+  // A loop fed new settings (renderer, materials, effects) through its triple buffer, and
+  // switched to another device.
   const mesh::TriMesh surface = box(Vec3(-0.02, -0.04, -0.02), Vec3(0.02, 0.0, 0.02));
   TripleBuffer<haptics::SurfaceSnapshot> surfaces(haptics::make_snapshot(surface));
   surfaces.publish();
@@ -368,6 +403,7 @@ TEST(CommandSeam, TheHapticTickNeverAllocatesWhenSettingsChange) {
   config.realtime_priority = false;
   auto device = poke_device(Vec3(0, 0.05, 0), Vec3(0, -1, 0), 0.05, 0.005, 0.05, 1.0);
   haptics::HapticLoop loop(*device, surfaces, config, &settings);
+  auto other = poke_device(Vec3(0, 0.04, 0), Vec3(0, -1, 0), 0.04, 0.005, 0.05, 1.0);
   double t = 0.0;
   for (int i = 0; i < 100; ++i, t += 0.001) loop.tick(t);
   for (int change = 0; change < 5; ++change) {
@@ -379,6 +415,9 @@ TEST(CommandSeam, TheHapticTickNeverAllocatesWhenSettingsChange) {
     slot.effects.springs.assign(static_cast<std::size_t>(change + 1), haptics::SpringEffect{});
     slot.effects.viscosities.assign(3, haptics::ViscosityEffect{});
     settings.publish();
+    if (change == 2) {
+      ASSERT_TRUE(loop.switch_device(*other));  // taken by the next tick
+    }
     const auto before = hof::testing::thread_allocation_count();
     for (int i = 0; i < 200; ++i, t += 0.001) loop.tick(t);
     EXPECT_EQ(hof::testing::thread_allocation_count(), before) << "change " << change;

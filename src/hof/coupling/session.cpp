@@ -214,7 +214,14 @@ TripleBuffer<haptics::SurfaceSnapshot>& Session::graphics_surfaces(std::size_t l
 
 // ---- The command seam
 
-Expected<void> Session::submit(const Command& command) {
+Expected<void> Session::submit(const Command& submitted) {
+  Command command = submitted;
+  if (auto* device = std::get_if<command::SetDevice>(&command)) {
+    // Opened here, on the caller's thread (a network device may wait for its first packet).
+    auto opened = haptics::open_device(device->spec);
+    if (!opened) return std::unexpected(opened.error());
+    device->opened = std::shared_ptr<haptics::Device>(std::move(*opened));
+  }
   std::lock_guard lock(commands_mutex_);
   const auto find_body = [&](const std::string& name) -> std::int32_t {
     for (std::size_t i = 0; i < bodies_.size(); ++i) {
@@ -349,6 +356,15 @@ void Session::apply_commands(SessionReport& report) {
       current_settings_.renderer = renderer->renderer;
       settings_changed = true;
       report.applied_commands.push_back(fmt::format("step {}: renderer", at));
+    } else if (const auto* device = std::get_if<command::SetDevice>(&command)) {
+      if (!loop_->switch_device(*device->opened)) {
+        // The previous switch has not reached a tick yet: try again at the next step.
+        std::lock_guard lock(commands_mutex_);
+        pending_.insert(pending_.begin(), command);
+        continue;
+      }
+      switched_devices_.push_back(device->opened);
+      report.applied_commands.push_back(fmt::format("step {}: device {}", at, device->spec));
     }
   }
   if (settings_changed) publish_settings();

@@ -137,9 +137,15 @@ struct SetEffects {
 struct SetRenderer {
   haptics::RendererConfig renderer;
 };
+/// Another device (a spec, see haptics::open_device): opened when submitted (a device that is
+/// not there is refused then), switched to between two ticks with its own force limit.
+struct SetDevice {
+  std::string spec;
+  std::shared_ptr<haptics::Device> opened;  ///< filled by submit()
+};
 }  // namespace command
 using Command = std::variant<command::SetParameter, command::Pause, command::Resume, command::SingleStep, command::Reset,
-                             command::SetMaterial, command::SetEffects, command::SetRenderer>;
+                             command::SetMaterial, command::SetEffects, command::SetRenderer, command::SetDevice>;
 
 /// A parameter changed through the seam, as a project saves it.
 struct ParameterChange {
@@ -223,6 +229,7 @@ class Session {
 
   std::vector<BodyRuntime> bodies_;
   std::unique_ptr<haptics::Device> device_;
+  std::vector<std::shared_ptr<haptics::Device>> switched_devices_;  // kept until the loop is gone
   SessionConfig config_;
   double dt_{0.01};
   double time_s_{0.0};       // simulated time of the world

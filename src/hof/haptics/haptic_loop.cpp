@@ -70,16 +70,16 @@ HapticLoop::HapticLoop(Device& device, TripleBuffer<SurfaceSnapshot>& surfaces, 
 
 HapticLoop::HapticLoop(Device& device, std::span<TripleBuffer<SurfaceSnapshot>* const> layers, const HapticLoopConfig& config,
                        TripleBuffer<HapticSettings>* settings)
-    : device_(device),
-      layers_(layers.begin(), layers.begin() + static_cast<std::ptrdiff_t>(std::clamp<std::size_t>(layers.size(), 1, kMaxLayers))),
+    : layers_(layers.begin(), layers.begin() + static_cast<std::ptrdiff_t>(std::clamp<std::size_t>(layers.size(), 1, kMaxLayers))),
       config_(config),
       renderers_(layers_.size(), HapticRenderer(config.renderer, config.material, device.spec().max_stiffness_n_per_m)),
       have_surface_(layers_.size(), 0),
-      safety_(device.spec(), config.safety),
       stats_(1.0 / config.rate_hz),
       telemetry_(config.telemetry_capacity),
       contacts_(config.telemetry_capacity),
       settings_(settings) {
+  bindings_.push_back(std::make_unique<DeviceBinding>(DeviceBinding{&device, SafetyFilter(device.spec(), config_.safety)}));
+  binding_.store(bindings_.back().get(), std::memory_order_release);
   // Room for changed effects, so that taking new settings in the tick never allocates.
   effects_.springs.reserve(kMaxEffectsEach);
   effects_.viscosities.reserve(kMaxEffectsEach);
@@ -133,9 +133,29 @@ void HapticLoop::take_settings() {
   copy_within(effects_.constants, s.effects.constants);
 }
 
+bool HapticLoop::switch_device(Device& device) {
+  if (pending_.load(std::memory_order_acquire) != nullptr) return false;
+  bindings_.push_back(std::make_unique<DeviceBinding>(DeviceBinding{&device, SafetyFilter(device.spec(), config_.safety)}));
+  pending_.store(bindings_.back().get(), std::memory_order_release);
+  return true;
+}
+
 void HapticLoop::tick_impl(double time_s, double period_s, bool overrun) {
   const double dt = period_s > 0.0 && std::isfinite(period_s) ? period_s : 1.0 / config_.rate_hz;
   take_settings();
+  if (DeviceBinding* next = pending_.exchange(nullptr, std::memory_order_acq_rel)) {
+    // Another device: the old one is let go at zero force, the new one's filter keeps the
+    // loop's counts, and the proxy starts again at its first reading.
+    DeviceBinding* old = binding_.load(std::memory_order_relaxed);
+    old->device->write_force(Vec3::Zero(), Vec3::Zero());
+    next->safety.add_counters(old->safety.counters());
+    for (HapticRenderer& r : renderers_) r.set_device_max_stiffness(next->device->spec().max_stiffness_n_per_m);
+    proxy_initialised_ = false;
+    binding_.store(next, std::memory_order_release);
+  }
+  DeviceBinding& bound = *binding_.load(std::memory_order_relaxed);
+  Device& device = *bound.device;
+  SafetyFilter& safety = bound.safety;
   std::array<bool, kMaxLayers> changed{};
   for (std::size_t l = 0; l < layers_.size(); ++l) {
     changed[l] = layers_[l]->acquire();
@@ -143,7 +163,7 @@ void HapticLoop::tick_impl(double time_s, double period_s, bool overrun) {
   }
 
   // Read and calibrate.
-  const DeviceReading reading = device_.read(time_s);
+  const DeviceReading reading = device.read(time_s);
   const bool valid = reading.valid && reading.position_m.allFinite() && reading.velocity_m_per_s.allFinite();
   const Vec3 x = valid ? config_.calibration.to_world(reading.position_m) : Vec3::Zero();
   const Vec3 v = valid ? config_.calibration.vector_to_world(reading.velocity_m_per_s) : Vec3::Zero();
@@ -180,8 +200,8 @@ void HapticLoop::tick_impl(double time_s, double period_s, bool overrun) {
   const SafetyFilter::Reading reading_state = !reading.valid ? SafetyFilter::Reading::kMissing
                                               : valid        ? SafetyFilter::Reading::kValid
                                                              : SafetyFilter::Reading::kNonFinite;
-  const Vec3 sent = safety_.filter(requested, reading_state, age, overrun, dt);
-  device_.write_force(world_to_device_ * sent, Vec3::Zero());
+  const Vec3 sent = safety.filter(requested, reading_state, age, overrun, dt);
+  device.write_force(world_to_device_ * sent, Vec3::Zero());
 
   // Publish.
   const std::uint64_t tick = ticks_.fetch_add(1, std::memory_order_relaxed);
@@ -210,7 +230,7 @@ void HapticLoop::tick_impl(double time_s, double period_s, bool overrun) {
   c.time_s = time_s;
   c.valid = valid;
   c.force = sent;
-  c.clamped = requested.norm() > device_.spec().max_force_n;
+  c.clamped = requested.norm() > device.spec().max_force_n;
   c.layer_count = static_cast<std::uint8_t>(layers_.size());
   // Each layer's share of what was sent (the safety layer scales the whole request).
   const double requested_norm = requested.norm();
@@ -239,7 +259,7 @@ void HapticLoop::stop() {
   stop_requested_.store(true, std::memory_order_release);
   if (thread_.joinable()) thread_.join();
   running_.store(false, std::memory_order_release);
-  device_.write_force(Vec3::Zero(), Vec3::Zero());
+  binding_.load()->device->write_force(Vec3::Zero(), Vec3::Zero());
 }
 
 void HapticLoop::run_thread() {

@@ -123,6 +123,15 @@ class HapticLoop {
   /// One tick at haptic time `time_s` (virtual-time mode). Not to be mixed with start().
   void tick(double time_s);
 
+  /// Switches to another device between two ticks (the command seam's route; call it from
+  /// one producer thread, e.g. the simulation). The new device gets its own safety filter —
+  /// its own force limit from the first tick, fading in from zero — and the proxy is placed
+  /// anew at its first reading. `device` must outlive the loop. Returns false while an earlier
+  /// switch has not been taken by a tick yet.
+  bool switch_device(Device& device);
+  /// The device the ticks use now (the producer may read it after a switch was taken).
+  [[nodiscard]] Device& device() { return *binding_.load(std::memory_order_acquire)->device; }
+
   /// Real-time mode: starts the thread; time counts from the call.
   void start();
   /// Stops the thread (joins), then sends a zero force. Idempotent.
@@ -138,7 +147,7 @@ class HapticLoop {
 
   /// Period statistics and safety counters: read them after stop() (or in virtual mode).
   [[nodiscard]] const PeriodStats& period_stats() const { return stats_; }
-  [[nodiscard]] const SafetyCounters& safety_counters() const { return safety_.counters(); }
+  [[nodiscard]] const SafetyCounters& safety_counters() const { return binding_.load()->safety.counters(); }
   [[nodiscard]] std::uint64_t ticks() const { return ticks_.load(std::memory_order_relaxed); }
   /// The renderer (proxy) of the outermost layer; renderer(l) of layer l.
   [[nodiscard]] const HapticRenderer& renderer(std::size_t layer = 0) const { return renderers_[layer]; }
@@ -152,13 +161,19 @@ class HapticLoop {
   void tick_impl(double time_s, double period_s, bool overrun);
   void take_settings();
 
-  Device& device_;
+  // A device and the safety filter made for its specification, switched as one.
+  struct DeviceBinding {
+    Device* device;
+    SafetyFilter safety;
+  };
+  std::vector<std::unique_ptr<DeviceBinding>> bindings_;  // every binding made (producer side)
+  std::atomic<DeviceBinding*> binding_{nullptr};         // the ticks' (written only by the tick)
+  std::atomic<DeviceBinding*> pending_{nullptr};         // a switch waiting for the next tick
   std::vector<TripleBuffer<SurfaceSnapshot>*> layers_;
   HapticLoopConfig config_;
   std::vector<HapticRenderer> renderers_;
   std::vector<char> have_surface_;
   ForceEffects effects_;
-  SafetyFilter safety_;
   PeriodStats stats_;
   TripleBuffer<HapticSample> samples_;
   SpscRing<HapticSample> telemetry_;

@@ -74,6 +74,8 @@ class HapticRenderer {
   void set_part_materials(std::span<const SurfaceMaterial> materials) { part_materials_ = materials; }
   /// The material of the body that triangle `t` of `surface` belongs to.
   [[nodiscard]] const SurfaceMaterial& material_at(const SurfaceSnapshot& surface, std::int32_t t) const;
+  /// A device with another stable stiffness (relative surface stiffnesses are fractions of it).
+  void set_device_max_stiffness(double n_per_m) { device_max_stiffness_ = n_per_m; }
   /// Changes the algorithm or its options; the proxy keeps its place (no allocation).
   void reconfigure(const RendererConfig& config);
   /// World units per metre of device travel (the calibration's scale). Stiffness and damping

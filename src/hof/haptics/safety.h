@@ -55,6 +55,14 @@ class SafetyFilter {
   [[nodiscard]] double gain() const { return gain_; }
   [[nodiscard]] const Vec3& last_force() const { return last_; }
   void reset();
+  /// Adds counts kept by an earlier filter (the loop's totals survive a device switch).
+  void add_counters(const SafetyCounters& earlier) {
+    counters_.non_finite += earlier.non_finite;
+    counters_.no_reading += earlier.no_reading;
+    counters_.clamped += earlier.clamped;
+    counters_.rate_limited += earlier.rate_limited;
+    counters_.watchdog += earlier.watchdog;
+  }
 
  private:
   DeviceSpec spec_;
