@@ -402,8 +402,8 @@ TEST(CommandSeam, TheHapticTickNeverAllocatesWhenSettingsChange) {
   haptics::HapticLoopConfig config;
   config.realtime_priority = false;
   auto device = poke_device(Vec3(0, 0.05, 0), Vec3(0, -1, 0), 0.05, 0.005, 0.05, 1.0);
+  auto other = poke_device(Vec3(0, 0.04, 0), Vec3(0, -1, 0), 0.04, 0.005, 0.05, 1.0);  // outlives the loop
   haptics::HapticLoop loop(*device, surfaces, config, &settings);
-  auto other = poke_device(Vec3(0, 0.04, 0), Vec3(0, -1, 0), 0.04, 0.005, 0.05, 1.0);
   double t = 0.0;
   for (int i = 0; i < 100; ++i, t += 0.001) loop.tick(t);
   for (int change = 0; change < 5; ++change) {
