@@ -153,13 +153,9 @@ int run_session(const RunOptions& options) {
   auto world = scene::build_world(options.file, options.device.value_or(""));
   if (!world) return fail(world.error());
   for (const std::string& w : world->warnings) {
-    if (!options.quiet) std::fprintf(stderr, "hof: warning: %s\n", w.c_str());
+    if (!options.quiet) std::fprintf(stderr, "hof: warning: %s\n", json_safe(w).c_str());
   }
-  if (!world->skipped.empty() && !options.quiet) {
-    std::string list;
-    for (const auto& s : world->skipped) list += (list.empty() ? "" : ", ") + s;
-    std::fprintf(stderr, "hof: note: not simulated: %s\n", list.c_str());
-  }
+  // (The components not simulated are in the reader's warnings above, and in summary.json.)
   auto device = haptics::open_device(world->device);
   if (!device) {
     Error e = device.error();
@@ -324,8 +320,9 @@ int run_session(const RunOptions& options) {
     std::printf("  contact     %.3f s, max force %.3f N, fall-through events %lld\n", report.contact_time_s, report.max_force_n,
                 static_cast<long long>(report.fall_through_events));
     for (const coupling::BodyReport& b : report.bodies) {
-      std::printf("  body        %s (%s): contact %.3f s, max force %.3f N, max displacement %s%s\n", json_safe(b.name).c_str(),
-                  b.deformable ? "deformable" : "rigid", b.contact_time_s, b.max_force_n, length(b.max_displacement_m).c_str(),
+      std::printf("  body        %s (%s): contact %.3f s, max force %.3f N%s%s\n", json_safe(b.name).c_str(),
+                  b.deformable ? "deformable" : "rigid", b.contact_time_s, b.max_force_n,
+                  b.deformable ? (", max displacement " + length(b.max_displacement_m)).c_str() : "",
                   b.probe_started_inside ? ", the probe started inside it" : "");
     }
     if (report.diverged) std::printf("  DIVERGED    %s\n", report.divergence.c_str());

@@ -282,6 +282,7 @@ bool identity(const std::array<double, 16>& m) {
 
 DefaultProbe default_probe(const std::vector<coupling::SessionBody>& bodies, double workspace_radius_m,
                            double device_stiffness_n_per_m, double max_force_n, const std::array<double, 16>* calibration,
+                           double device_max_stiffness_n_per_m,
                            const Vec3& effects_centre, double proxy_radius) {
   DefaultProbe probe;
   probe.calibration = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
@@ -440,7 +441,11 @@ DefaultProbe default_probe(const std::vector<coupling::SessionBody>& bodies, dou
       compliance_world = std::max(0.0, normal.dot(point_compliance * normal));
     }
   }
-  const double k_device = std::max(device_stiffness_n_per_m, 1.0);
+  // The rendering stiffness of the pressed body's own surface (device_stiffness_n_per_m is the
+  // project's surface on this device; a body's own surface is a fraction of the same device).
+  const double k_device = std::max(target.material ? target.material->stiffness_n_per_m(device_max_stiffness_n_per_m)
+                                                   : device_stiffness_n_per_m,
+                                   1.0);
   const double k_effective = 1.0 / (1.0 / k_device + compliance_world / s);
   const double depth_dev = std::clamp(0.4 * max_force_n / k_effective, 0.001, 0.015);
   const double approach_dev = clearance_dev;
@@ -539,7 +544,8 @@ Expected<World> build_world(const std::filesystem::path& file, const std::string
     const Vec3 effects_centre = w.project.effects.springs.empty() ? Vec3::Zero() : w.project.effects.springs.front().position_m;
     const double radius = w.project.renderer == haptics::RendererKind::kRuspini ? w.project.proxy_radius_m : 0.0;
     DefaultProbe probe = default_probe(w.bodies, spec.workspace_radius_m, k, spec.max_force_n,
-                                       given ? &w.project.position_calibration : nullptr, effects_centre, radius);
+                                       given ? &w.project.position_calibration : nullptr, spec.max_stiffness_n_per_m,
+                                       effects_centre, radius);
     device = probe.device;
     w.default_probe = true;
     w.project.position_calibration = probe.calibration;

@@ -80,6 +80,7 @@ struct DefaultProbe {
 [[nodiscard]] DefaultProbe default_probe(const std::vector<coupling::SessionBody>& bodies, double workspace_radius_m,
                                          double device_stiffness_n_per_m, double max_force_n,
                                          const std::array<double, 16>* calibration = nullptr,
+                                         double device_max_stiffness_n_per_m = 3000.0,
                                          const Vec3& effects_centre = Vec3::Zero(), double proxy_radius = 0.0);
 
 }  // namespace hof::scene
