@@ -5,6 +5,8 @@
 
 #include <benchmark/benchmark.h>
 
+#include <cmath>
+
 #include "hof/coupling/session.h"
 #include "hof/haptics/device_backends/scripted_device.h"
 #include "hof/mesh/boundary.h"
@@ -62,7 +64,87 @@ void BM_WorldStep(benchmark::State& state) {
   state.counters["bodies"] = static_cast<double>(state.range(0));
 }
 
+// One bound tree over every body's surface (what the haptic loop uses) against one tree per
+// body (each queried, the nearest hit kept): the haptic tick's swept-sphere query and
+// closest-point query near liver A of two medium livers side by side.
+struct TwoSurfaces {
+  haptics::SurfaceSnapshot combined;
+  std::vector<haptics::SurfaceSnapshot> separate;
+  std::vector<Vec3> probes;
+};
+
+const TwoSurfaces& two_surfaces() {
+  static const TwoSurfaces s = [] {
+    TwoSurfaces t;
+    const mesh::Mesh liver = *mesh::generate_liver(mesh::LiverResolution::kMedium);
+    std::vector<mesh::TriMesh> surfaces;
+    for (int i = 0; i < 2; ++i) {
+      mesh::Mesh placed = liver;
+      for (Vec3& p : placed.nodes) p.x() += 0.3 * i;
+      surfaces.push_back(mesh::extract_boundary(placed.nodes, placed.tets).surface);
+      t.separate.push_back(haptics::make_snapshot(surfaces.back()));
+    }
+    const bool flags[2] = {false, false};
+    t.combined = haptics::make_snapshot(surfaces, flags, flags);
+    // Probe points just above liver A's top, spread over it.
+    for (int i = 0; i < 64; ++i) t.probes.emplace_back(-0.08 + 0.0025 * i, 0.01 * std::sin(i), 0.06);
+    return t;
+  }();
+  return s;
+}
+
+void BM_SweptSphereOneTree(benchmark::State& state) {
+  const TwoSurfaces& s = two_surfaces();
+  std::size_t i = 0;
+  for (auto _ : state) {
+    const Vec3& a = s.probes[i++ % s.probes.size()];
+    benchmark::DoNotOptimize(s.combined.tree.first_hit_swept_sphere(s.combined.view(), a, a - Vec3(0, 0, 0.1), 0.0025));
+  }
+}
+
+void BM_SweptSphereTreePerBody(benchmark::State& state) {
+  const TwoSurfaces& s = two_surfaces();
+  std::size_t i = 0;
+  for (auto _ : state) {
+    const Vec3& a = s.probes[i++ % s.probes.size()];
+    collision::SweepHit best;
+    for (const haptics::SurfaceSnapshot& body : s.separate) {
+      const collision::SweepHit hit = body.tree.first_hit_swept_sphere(body.view(), a, a - Vec3(0, 0, 0.1), 0.0025);
+      if (hit.triangle >= 0 && (best.triangle < 0 || hit.t < best.t)) best = hit;
+    }
+    benchmark::DoNotOptimize(best);
+  }
+}
+
+void BM_ClosestPointOneTree(benchmark::State& state) {
+  const TwoSurfaces& s = two_surfaces();
+  std::size_t i = 0;
+  for (auto _ : state) {
+    const Vec3& a = s.probes[i++ % s.probes.size()];
+    benchmark::DoNotOptimize(s.combined.tree.closest_point(s.combined.view(), a, 0.05));
+  }
+}
+
+void BM_ClosestPointTreePerBody(benchmark::State& state) {
+  const TwoSurfaces& s = two_surfaces();
+  std::size_t i = 0;
+  for (auto _ : state) {
+    const Vec3& a = s.probes[i++ % s.probes.size()];
+    collision::ClosestPoint best;
+    for (const haptics::SurfaceSnapshot& body : s.separate) {
+      const collision::ClosestPoint near = body.tree.closest_point(body.view(), a, 0.05);
+      if (near.triangle >= 0 && (best.triangle < 0 || near.distance < best.distance)) best = near;
+    }
+    benchmark::DoNotOptimize(best);
+  }
+}
+
 }  // namespace
+
+BENCHMARK(BM_SweptSphereOneTree);
+BENCHMARK(BM_SweptSphereTreePerBody);
+BENCHMARK(BM_ClosestPointOneTree);
+BENCHMARK(BM_ClosestPointTreePerBody);
 
 // Resolutions: 1 = coarse, 2 = medium (mesh::LiverResolution order).
 BENCHMARK(BM_WorldStep)->Args({1, 2})->Args({2, 2})->Args({1, 1})->Args({2, 1})->Unit(benchmark::kMillisecond)->UseRealTime();
