@@ -315,6 +315,7 @@ TEST(CommandSeam, AStiffnessChangedInVirtualTimeActsAtTheNextStep) {
   b->run_virtual(0.5, {});
   ASSERT_TRUE(a->state().x.isApprox(b->state().x, 0.0));
   ASSERT_TRUE(b->submit(command::SetParameter{"Liver", "springs", "stiffness", 500.0}));
+  EXPECT_TRUE(b->parameter_changes().empty()) << "recorded once applied, not when submitted";
   const SessionReport rb = b->run_virtual(0.01, {});  // one step
   a->run_virtual(0.01, {});
   ASSERT_EQ(rb.applied_commands.size(), 1u);
@@ -337,6 +338,7 @@ TEST(CommandSeam, CommandsDuringARealTimeRunAreAppliedBetweenSteps) {
   ASSERT_TRUE(session->submit(command::Pause{}));
   ASSERT_TRUE(session->submit(command::SingleStep{3}));
   ASSERT_TRUE(session->submit(command::Resume{}));
+  ASSERT_TRUE(session->submit(command::SingleStep{2}));  // not paused any more: ignored
   haptics::SurfaceMaterial frictional;
   frictional.kind = haptics::SurfaceKind::kFrictional;
   ASSERT_TRUE(session->submit(command::SetMaterial{"", frictional}));
@@ -349,9 +351,11 @@ TEST(CommandSeam, CommandsDuringARealTimeRunAreAppliedBetweenSteps) {
   }
   const SessionReport report = session->stop_realtime([&](const haptics::HapticSample&) { ++samples; });
   EXPECT_FALSE(session->realtime_running());
-  ASSERT_GE(report.applied_commands.size(), 5u);
+  ASSERT_GE(report.applied_commands.size(), 6u);
   EXPECT_NE(report.applied_commands[0].find("Liver/springs/stiffness = 80"), std::string::npos);
   EXPECT_NE(report.applied_commands[1].find("pause"), std::string::npos);
+  EXPECT_NE(report.applied_commands[2].find("single step x3"), std::string::npos);
+  EXPECT_NE(report.applied_commands[4].find("single step ignored (not paused)"), std::string::npos);
   EXPECT_EQ(session->body().config->force_fields[0].mesh_springs->stiffness_n_per_m, 80.0);
   EXPECT_GT(report.simulation_steps, 0);
   // Every tick's sample reached the supervisor (none lost between the threads).

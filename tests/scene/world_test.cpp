@@ -146,6 +146,8 @@ TEST(World, X3dUseOfAShapeIsTouchedInEachPlace) {
   auto world = build_world(file);
   ASSERT_TRUE(world) << world.error().to_string();
   ASSERT_EQ(world->bodies.size(), 2u);
+  EXPECT_EQ(world->bodies[0].name, "Block");
+  EXPECT_EQ(world->bodies[1].name, "Block#2") << "bodies are addressed by name: a USE'd shape gets its own";
   const Touch first = touch(file, Vec3(0.0, 0.1, 0.0), Vec3(0, -1, 0), 0.09);
   ASSERT_TRUE(first.contact);
   EXPECT_NEAR(first.proxy.y(), 0.01, 1e-4);

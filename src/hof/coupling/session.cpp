@@ -210,7 +210,10 @@ Vec3 Session::rest_point(std::int32_t triangle, const Vec3& weights, std::int32_
 
 std::size_t Session::layer_count() const { return layers_.size(); }
 
-TripleBuffer<haptics::SurfaceSnapshot>& Session::graphics_surfaces(std::size_t layer) { return layers_[layer]->graphics; }
+TripleBuffer<haptics::SurfaceSnapshot>& Session::graphics_surfaces(std::size_t layer) {
+  graphics_wanted_.store(true, std::memory_order_release);
+  return layers_[std::min(layer, layers_.size() - 1)]->graphics;
+}
 
 // ---- The command seam
 
@@ -246,7 +249,7 @@ Expected<void> Session::submit(const Command& submitted) {
     if (auto ok = mechanics::set_parameter(config, set->component, set->parameter, set->value); !ok) {
       return make_error(ErrorCode::kInvalidArgument, fmt::format("body '{}': {}", set->body, ok.error().message));
     }
-    changes_.push_back(ParameterChange{set->body, set->component, set->parameter, set->value});
+    // Recorded as a change (to be saved) once the simulation has applied it.
   } else if (const auto* steps = std::get_if<command::SingleStep>(&command)) {
     if (steps->steps < 1 || steps->steps > 1000000) {
       return make_error(ErrorCode::kInvalidArgument, fmt::format("single step: steps must be in [1, 1000000], got {}", steps->steps));
@@ -263,9 +266,15 @@ Expected<void> Session::submit(const Command& submitted) {
     if (auto ok = haptics::validate_effects(effects->effects); !ok) return std::unexpected(ok.error());
   } else if (const auto* renderer = std::get_if<command::SetRenderer>(&command)) {
     const haptics::RendererConfig& r = renderer->renderer;
-    if (!(r.proxy_radius_m >= 0.0 && r.proxy_radius_m < 1.0) || r.max_iterations < 1 || r.max_iterations > 64) {
-      return make_error(ErrorCode::kInvalidArgument, fmt::format("renderer: proxyRadius must be in [0, 1) m and iterations in "
-                                                                 "[1, 64], got {} m and {}", r.proxy_radius_m, r.max_iterations));
+    if (!(r.proxy_radius_m >= 0.0 && r.proxy_radius_m < 1.0) || r.max_iterations < 1 || r.max_iterations > 64 ||
+        !(r.ride_distance_m >= 0.0 && std::isfinite(r.ride_distance_m)) ||
+        !(r.penalty_max_distance_m >= 0.0 && std::isfinite(r.penalty_max_distance_m)) ||
+        static_cast<int>(r.kind) > static_cast<int>(haptics::RendererKind::kRuspini) ||
+        static_cast<int>(r.touchable_face) > static_cast<int>(collision::TouchableFace::kFrontAndBack)) {
+      return make_error(ErrorCode::kInvalidArgument,
+                        fmt::format("renderer: proxyRadius must be in [0, 1) m, iterations in [1, 64], the ride and penalty "
+                                    "distances finite and >= 0; got {} m, {}, {} m, {} m",
+                                    r.proxy_radius_m, r.max_iterations, r.ride_distance_m, r.penalty_max_distance_m));
     }
   }
   pending_.push_back(command);
@@ -296,7 +305,8 @@ void Session::apply_commands(SessionReport& report) {
   }
   const std::int64_t at = report.simulation_steps;
   bool settings_changed = false;
-  for (const Command& command : commands) {
+  for (std::size_t index = 0; index < commands.size(); ++index) {
+    const Command& command = commands[index];
     if (const auto* set = std::get_if<command::SetParameter>(&command)) {
       for (BodyRuntime& r : bodies_) {
         if (r.body.name != set->body || !r.body.config) continue;
@@ -307,6 +317,8 @@ void Session::apply_commands(SessionReport& report) {
                                              set->parameter, set->value);
         if (!model) {
           report.applied_commands.push_back(fmt::format("step {}: {} refused: {}", at, what, model.error().message));
+          std::lock_guard lock(commands_mutex_);
+          validated_configs_[static_cast<std::size_t>(&r - bodies_.data())] = *r.body.config;  // back to what runs
           continue;
         }
         // The new model starts from the current shape and motion.
@@ -318,20 +330,27 @@ void Session::apply_commands(SessionReport& report) {
         r.state = std::move(state);
         r.next_step_s = time_s_ + r.body.model->dt_s;
         report.applied_commands.push_back(fmt::format("step {}: {}", at, what));
+        std::lock_guard lock(commands_mutex_);
+        changes_.push_back(ParameterChange{set->body, set->component, set->parameter, set->value});
       }
       double dt = std::numeric_limits<double>::infinity();
       for (const BodyRuntime& r : bodies_) {
         if (r.body.deformable()) dt = std::min(dt, r.body.model->dt_s);
       }
-      if (std::isfinite(dt)) dt_ = dt;
+      if (std::isfinite(dt)) dt_.store(dt, std::memory_order_relaxed);
     } else if (std::holds_alternative<command::Pause>(command)) {
       paused_ = true;
+      single_steps_ = 0;
       report.applied_commands.push_back(fmt::format("step {}: pause", at));
     } else if (std::holds_alternative<command::Resume>(command)) {
       paused_ = false;
       single_steps_ = 0;
       report.applied_commands.push_back(fmt::format("step {}: resume", at));
     } else if (const auto* steps = std::get_if<command::SingleStep>(&command)) {
+      if (!paused_) {
+        report.applied_commands.push_back(fmt::format("step {}: single step ignored (not paused)", at));
+        continue;
+      }
       single_steps_ += steps->steps;
       report.applied_commands.push_back(fmt::format("step {}: single step x{}", at, steps->steps));
     } else if (std::holds_alternative<command::Reset>(command)) {
@@ -358,10 +377,11 @@ void Session::apply_commands(SessionReport& report) {
       report.applied_commands.push_back(fmt::format("step {}: renderer", at));
     } else if (const auto* device = std::get_if<command::SetDevice>(&command)) {
       if (!loop_->switch_device(*device->opened)) {
-        // The previous switch has not reached a tick yet: try again at the next step.
+        // The previous switch has not reached a tick yet: this command and the ones after it
+        // wait for the next step, in order.
         std::lock_guard lock(commands_mutex_);
-        pending_.insert(pending_.begin(), command);
-        continue;
+        pending_.insert(pending_.begin(), commands.begin() + static_cast<std::ptrdiff_t>(index), commands.end());
+        break;
       }
       switched_devices_.push_back(device->opened);
       report.applied_commands.push_back(fmt::format("step {}: device {}", at, device->spec));
@@ -399,13 +419,14 @@ void Session::take_contacts(SessionReport& report) {
       r.last_triangle = layer.triangle - rest.parts[static_cast<std::size_t>(part)].first_triangle;
       r.last_barycentric = layer.barycentric;
       r.report.contact_time_s += period;
-      r.report.max_force_n = std::max(r.report.max_force_n, force);
+      r.report.max_force_n = std::max(r.report.max_force_n, layer.force.norm());
       last_body_ = static_cast<std::int32_t>(b);
       last_triangle_ = layer.triangle;
       last_barycentric_ = layer.barycentric;
       any = true;
     }
     if (!any) continue;
+    ++contact_ticks_this_step_;
     report.contact_time_s += period;
     if (c.clamped) ++report.clamped_contact_ticks;
     ++contact_ticks_since_publish_;
@@ -542,6 +563,10 @@ void Session::publish(double clock_s) {
       }
     }
     layer.surfaces.publish();
+    if (graphics_wanted_.load(std::memory_order_acquire)) {
+      haptics::update_snapshot(layer.graphics.write_slot(), layer.positions, layer.velocities, clock_s);
+      layer.graphics.publish();
+    }
   }
   contact_ticks_since_publish_ = 0;
 }
@@ -550,8 +575,14 @@ bool Session::step_world(SessionReport& report, StateTimer& timer, double clock_
   apply_commands(report);
   take_contacts(report);
   count_fall_through(report);
-  bool contact_this_step = false;
-  for (const BodyRuntime& r : bodies_) contact_this_step = contact_this_step || r.contact_ticks > 0;
+  const bool contact_this_step = contact_ticks_this_step_ > 0;
+  contact_ticks_this_step_ = 0;
+  // Rigid bodies never step: their contact is not accumulated (it acts on nothing).
+  for (BodyRuntime& r : bodies_) {
+    if (r.body.deformable()) continue;
+    r.reaction_sum.setZero();
+    r.contact_ticks = 0;
+  }
   ticks_since_step_ = 0;
   const auto step_start = Clock::now();
   const bool stepping = !paused_ || single_steps_ > 0;
@@ -590,7 +621,7 @@ void Session::finish_report(SessionReport& report, const StateTimer& timer, doub
 SessionReport Session::run_virtual(double seconds, const std::function<void(const haptics::HapticSample&)>& on_sample,
                                    const ProgressSink& progress) {
   SessionReport report;
-  for (BodyRuntime& r : bodies_) r.ticks_at_last_step = 0;
+  begin_run();
   const double tick_period = 1.0 / config_.haptics.rate_hz;
   const auto start = Clock::now();
   StateTimer timer;
@@ -618,6 +649,17 @@ SessionReport Session::run_virtual(double seconds, const std::function<void(cons
   return report;
 }
 
+void Session::begin_run() {
+  // Each run reports on itself: per-body figures start again, as the session's do.
+  for (BodyRuntime& r : bodies_) {
+    r.ticks_at_last_step = 0;
+    r.report = BodyReport{r.report.name, r.report.deformable, r.report.nodes, 0.0, 0.0, 0.0, 0, false};
+    r.inside_since_start = false;
+  }
+  first_reading_seen_ = false;
+  contact_ticks_this_step_ = 0;
+}
+
 void Session::simulation_thread(double) {
   // Fixed-rate simulation on its own thread: sleep to the next step unless already late.
   auto next = Clock::now();
@@ -637,7 +679,7 @@ void Session::start_realtime() {
   if (sim_thread_.joinable()) return;
   SessionReport fresh;
   rt_report_ = std::move(fresh);
-  for (BodyRuntime& r : bodies_) r.ticks_at_last_step = 0;
+  begin_run();
   rt_timer_ = std::make_unique<StateTimer>();
   stop_sim_.store(false);
   sim_finished_.store(false);

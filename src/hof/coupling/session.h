@@ -203,10 +203,11 @@ class Session {
   [[nodiscard]] const mechanics::MechanicalModel& model() const { return *body(0).model; }
   [[nodiscard]] const mechanics::MechanicalState& state() const { return state(0); }
   [[nodiscard]] const SessionBody& body() const { return body(0); }
-  /// Latest surface snapshot, for a reader thread (one reader: the window or the supervisor).
+  /// Latest surface snapshot of a haptic layer, for a reader thread (one reader: the window).
+  /// Published with every step from the first call on (before it, nothing is copied for it).
   TripleBuffer<haptics::SurfaceSnapshot>& graphics_surfaces(std::size_t layer = 0);
   /// The world simulation step dt (the smallest body dt), s.
-  [[nodiscard]] double dt() const { return dt_; }
+  [[nodiscard]] double dt() const { return dt_.load(std::memory_order_relaxed); }
   [[nodiscard]] const haptics::HapticLoop& haptic_loop() const { return *loop_; }
 
  private:
@@ -226,12 +227,13 @@ class Session {
   void count_fall_through(SessionReport& report);
   void finish_report(SessionReport& report, const StateTimer& timer, double wall_s) const;
   void simulation_thread(double dt);
+  void begin_run();
 
   std::vector<BodyRuntime> bodies_;
   std::unique_ptr<haptics::Device> device_;
   std::vector<std::shared_ptr<haptics::Device>> switched_devices_;  // kept until the loop is gone
   SessionConfig config_;
-  double dt_{0.01};
+  std::atomic<double> dt_{0.01};  // written by the simulation (a dt command), read anywhere
   double time_s_{0.0};       // simulated time of the world
   std::vector<std::unique_ptr<LayerRuntime>> layers_;
   TripleBuffer<haptics::HapticSettings> settings_;
@@ -254,6 +256,8 @@ class Session {
   std::vector<mechanics::ModelConfig> validated_configs_;  // configs as the accepted commands leave them
   std::vector<char> has_mechanics_;                        // per body, fixed: a model and its config
   bool paused_{false};
+  std::atomic<bool> graphics_wanted_{false};
+  std::int64_t contact_ticks_this_step_{0};
   int single_steps_{0};
   // Real time.
   std::thread sim_thread_;

@@ -77,7 +77,8 @@ HapticLoop::HapticLoop(Device& device, std::span<TripleBuffer<SurfaceSnapshot>* 
       stats_(1.0 / config.rate_hz),
       telemetry_(config.telemetry_capacity),
       contacts_(config.telemetry_capacity),
-      settings_(settings) {
+      settings_(settings),
+      last_renderer_(config.renderer) {
   bindings_.push_back(std::make_unique<DeviceBinding>(DeviceBinding{&device, SafetyFilter(device.spec(), config_.safety)}));
   binding_.store(bindings_.back().get(), std::memory_order_release);
   // Room for changed effects, so that taking new settings in the tick never allocates.
@@ -107,12 +108,16 @@ void HapticLoop::tick(double time_s) {
 void HapticLoop::take_settings() {
   if (!settings_ || !settings_->acquire()) return;
   const HapticSettings& s = settings_->read();
-  if (!s.valid) return;
+  if (!s.valid) {
+    // The previous slot, which the materials pointed into, now belongs to the producer.
+    for (HapticRenderer& r : renderers_) r.set_part_materials({});
+    return;
+  }
+  // The renderer's configuration as the producer gave it (the renderer keeps a scaled copy).
+  const bool renderer_changed = !(s.renderer == last_renderer_);
+  if (renderer_changed) last_renderer_ = s.renderer;
   for (HapticRenderer& r : renderers_) {
-    if (s.renderer.kind != r.config().kind || s.renderer.proxy_radius_m != r.config().proxy_radius_m ||
-        s.renderer.force_shading != r.config().force_shading || s.renderer.touchable_face != r.config().touchable_face) {
-      r.reconfigure(s.renderer);
-    }
+    if (renderer_changed) r.reconfigure(s.renderer);
     r.set_part_materials(s.materials);
   }
   // Copies within the reserved capacity (the producer validated the counts); a spring's

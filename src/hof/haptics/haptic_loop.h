@@ -179,6 +179,7 @@ class HapticLoop {
   SpscRing<HapticSample> telemetry_;
   SpscRing<HapticContact> contacts_;
   TripleBuffer<HapticSettings>* settings_{nullptr};
+  RendererConfig last_renderer_;  // the last renderer configuration taken from the settings
   std::atomic<bool> running_{false};
   std::atomic<bool> stop_requested_{false};
   std::atomic<std::uint64_t> ticks_{0};

@@ -38,6 +38,8 @@ struct RendererConfig {
   /// When not touching, the proxy is carried with the surface if it is within this distance
   /// of it (H3D dynamicMode: shapes move the proxy with them).
   double ride_distance_m{0.01};
+
+  bool operator==(const RendererConfig&) const = default;
 };
 
 /// What a tick produced.

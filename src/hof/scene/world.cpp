@@ -38,6 +38,16 @@ std::vector<std::int32_t> border_nodes(const std::vector<mesh::Tri>& triangles) 
   return held;
 }
 
+// `name`, or `name#2`, `name#3`, ... : names are unique within a world (commands, projects
+// and reports address bodies by name; a USE'd shape or two nodes may share one).
+std::string unique_name(const std::vector<coupling::SessionBody>& bodies, const std::string& name) {
+  std::string candidate = name;
+  for (int k = 2; std::any_of(bodies.begin(), bodies.end(), [&](const auto& b) { return b.name == candidate; }); ++k) {
+    candidate = fmt::format("{}#{}", name, k);
+  }
+  return candidate;
+}
+
 // A SOFA model as a body: its visual mesh (barycentric) as the touchable surface when it has
 // one, else the boundary of its tetrahedra (shared nodes), else (a surface model) itself.
 Expected<coupling::SessionBody> make_deformable(const mechanics::ModelConfig& config,
@@ -120,7 +130,7 @@ Expected<void> apply_bodies(World& w) {
       return std::unexpected(e);
     }
     coupling::SessionBody body;
-    body.name = o.name;
+    body.name = unique_name(w.bodies, o.name);
     if (!read->mesh.tets.empty()) {
       body.surface = mesh::extract_boundary(read->mesh.nodes, read->mesh.tets).surface;
     } else {
@@ -149,7 +159,8 @@ Expected<void> add_x3d(World& w, const std::filesystem::path& file) {
         shape.deformable || shape.haptic_mesh_W.triangles.empty() ? shape.mesh_W : shape.haptic_mesh_W;
     if (!shape.touchable || geometry.triangles.empty()) continue;
     if (!shape.solid) w.project.touchable_face = collision::TouchableFace::kFrontAndBack;  // X3D solid='false'
-    const std::string name = !shape.def.empty() ? shape.def : fmt::format("{}@{}", shape.geometry_type.empty() ? "Shape" : shape.geometry_type, shape.line);
+    const std::string name = unique_name(
+        w.bodies, !shape.def.empty() ? shape.def : fmt::format("{}@{}", shape.geometry_type.empty() ? "Shape" : shape.geometry_type, shape.line));
     if (!shape.deformable) {
       // A plain Shape: rigid and fixed, as H3D renders it.
       coupling::SessionBody body;
@@ -246,21 +257,14 @@ Expected<void> add_sofa(World& w, const std::filesystem::path& scene_path) {
       e.message = fmt::format("body '{}': {}", m.node_path, e.message);
       return std::unexpected(e);
     }
-    // Names are unique within a world (commands and reports address bodies by name).
-    std::string name = body->name;
-    for (int k = 2; std::any_of(w.bodies.begin(), w.bodies.end(), [&](const auto& b) { return b.name == name; }); ++k) {
-      name = fmt::format("{}#{}", body->name, k);
-    }
+    const std::string name = unique_name(w.bodies, body->name);
     body->name = name;
     if (body->config) body->config->name = name;
     w.bodies.push_back(std::move(*body));
   }
   for (const SofaSceneObstacle& o : sofa->obstacles) {
     coupling::SessionBody body;
-    body.name = o.name;
-    for (int k = 2; std::any_of(w.bodies.begin(), w.bodies.end(), [&](const auto& b) { return b.name == body.name; }); ++k) {
-      body.name = fmt::format("{}#{}", o.name, k);
-    }
+    body.name = unique_name(w.bodies, o.name);
     body.surface = o.surface;
     w.bodies.push_back(std::move(body));
   }
