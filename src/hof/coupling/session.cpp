@@ -153,6 +153,7 @@ Session::Session(std::vector<SessionBody> bodies, std::unique_ptr<haptics::Devic
   for (const BodyRuntime& r : bodies_) current_settings_.materials.push_back(r.body.material.value_or(config_.haptics.material));
   loop_ = std::make_unique<haptics::HapticLoop>(*device_, std::span<TripleBuffer<haptics::SurfaceSnapshot>* const>(buffers),
                                                 config_.haptics, &settings_);
+  last_device_ = device_.get();
   publish_settings();
 }
 
@@ -297,6 +298,13 @@ void Session::publish_settings() {
 }
 
 void Session::apply_commands(SessionReport& report) {
+  // A device the haptic loop has switched away from is closed (its threads, its port): the
+  // tick let it go at zero force and no longer reads it.
+  haptics::Device* current = &loop_->device();
+  if (current != last_device_) {
+    if (last_device_) last_device_->close();
+    last_device_ = current;
+  }
   std::vector<Command> commands;
   {
     std::lock_guard lock(commands_mutex_);

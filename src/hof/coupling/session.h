@@ -232,6 +232,7 @@ class Session {
   std::vector<BodyRuntime> bodies_;
   std::unique_ptr<haptics::Device> device_;
   std::vector<std::shared_ptr<haptics::Device>> switched_devices_;  // kept until the loop is gone
+  haptics::Device* last_device_{nullptr};  // the device the ticks used at the last step
   SessionConfig config_;
   std::atomic<double> dt_{0.01};  // written by the simulation (a dt command), read anywhere
   double time_s_{0.0};       // simulated time of the world
