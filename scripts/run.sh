@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The main job. Does all set-up on a fresh Debian 12 machine, builds `hof`, then runs a
 # headless haptic session on the bundled medium liver (physiologic tissue: co-rotational FEM,
-# E = 5.4 kPa, nu = 0.45; the default probe presses it about 2 cm deep at about 2 N) and
+# E = 5.4 kPa, nu = 0.45; the default probe presses it about 1.5 cm deep at about 1 N) and
 # writes its report to out/report/ (telemetry, summary, final state, plots). Deterministic (virtual time): the same report every run.
 # Usage: scripts/run.sh [PROJECT.hof] [OUT_DIR]   (the GUI is a later issue)
 set -euo pipefail
