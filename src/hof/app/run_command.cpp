@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "hof/core/progress.h"
+#include "hof/core/text.h"
 #include "hof/coupling/session.h"
 #include "hof/haptics/device.h"
 #include "hof/mechanics/step.h"
@@ -35,25 +36,9 @@ int fail(const std::string& message) {
   return 1;
 }
 
-// Text as UTF-8: bytes that are not (a Latin-1 name, say) become U+FFFD, so that a report
-// (JSON, CSV, the terminal) is never refused for a name.
-std::string json_safe(std::string_view text) {
-  std::string out;
-  for (std::size_t i = 0; i < text.size();) {
-    const auto c = static_cast<unsigned char>(text[i]);
-    const std::size_t length = c < 0x80 ? 1 : (c >> 5) == 0x6 ? 2 : (c >> 4) == 0xE ? 3 : (c >> 3) == 0x1E ? 4 : 0;
-    bool valid = length > 0 && i + length <= text.size();
-    for (std::size_t k = 1; valid && k < length; ++k) valid = (static_cast<unsigned char>(text[i + k]) >> 6) == 0x2;
-    if (!valid) {
-      out += "\xEF\xBF\xBD";
-      ++i;
-      continue;
-    }
-    out.append(text.substr(i, length));
-    i += length;
-  }
-  return out;
-}
+// Text as UTF-8 (a Latin-1 name's bytes become U+FFFD), so that a report (JSON, CSV, the
+// terminal) is never refused for a name.
+std::string json_safe(std::string_view text) { return valid_utf8(text); }
 
 // A body name as a file name: letters, digits, '-', '_' and '.' kept, anything else '_'.
 std::string file_safe(const std::string& name) {

@@ -1,5 +1,7 @@
 #include "hof/scene/project.h"
 
+#include "hof/core/text.h"
+
 #include "hof/scene/x3d_scene.h"
 
 #include <fmt/format.h>
@@ -134,24 +136,14 @@ namespace {
 // Latin-1 name, say) written as U+FFFD so the file stays well-formed.
 std::string xml_escape(std::string_view text) {
   std::string out;
-  for (std::size_t i = 0; i < text.size();) {
-    const auto c = static_cast<unsigned char>(text[i]);
-    std::size_t length = c < 0x80 ? 1 : (c >> 5) == 0x6 ? 2 : (c >> 4) == 0xE ? 3 : (c >> 3) == 0x1E ? 4 : 0;
-    bool valid = length > 0 && i + length <= text.size();
-    for (std::size_t k = 1; valid && k < length; ++k) valid = (static_cast<unsigned char>(text[i + k]) >> 6) == 0x2;
-    if (!valid) {
-      out += "\xEF\xBF\xBD";
-      ++i;
-      continue;
-    }
+  for (const char c : valid_utf8(text)) {
     switch (c) {
       case '&': out += "&amp;"; break;
       case '<': out += "&lt;"; break;
       case '>': out += "&gt;"; break;
       case '"': out += "&quot;"; break;
-      default: out.append(text.substr(i, length));
+      default: out += c;
     }
-    i += length;
   }
   return out;
 }

@@ -1,0 +1,15 @@
+#pragma once
+/// @file
+/// Text from users' files, made safe to write: names in a Latin-1 file (`Größe`) are not
+/// UTF-8, and JSON, XML and the terminal refuse or garble them.
+
+#include <string>
+#include <string_view>
+
+namespace hof {
+
+/// `text` with every byte that does not start a well-formed UTF-8 sequence replaced by
+/// U+FFFD (the replacement character); valid text is returned unchanged.
+[[nodiscard]] std::string valid_utf8(std::string_view text);
+
+}  // namespace hof
