@@ -103,6 +103,8 @@ Session::Session(std::vector<SessionBody> bodies, std::unique_ptr<haptics::Devic
     has_mechanics_.push_back(r.body.deformable() && r.body.config ? 1 : 0);
     bodies_.push_back(std::move(r));
   }
+  due_.reserve(bodies_.size());
+  step_ok_.reserve(bodies_.size());
   // A world of rigid shapes (or of force effects only) still steps, to publish and report.
   dt_ = std::isfinite(dt) ? dt : 0.01;
 
@@ -468,7 +470,8 @@ void Session::count_fall_through(SessionReport& report) {
 
 bool Session::advance_bodies(SessionReport& report) {
   const double next_time = time_s_ + dt_;
-  std::vector<BodyRuntime*> due;
+  std::vector<BodyRuntime*>& due = due_;  // reserved at construction: a step does not allocate
+  due.clear();
   for (BodyRuntime& r : bodies_) {
     if (r.body.deformable() && r.next_step_s <= next_time + 1e-9 * dt_) due.push_back(&r);
   }
@@ -497,7 +500,8 @@ bool Session::advance_bodies(SessionReport& report) {
   }
   // Every due body steps; several in parallel (each body's own loops are thread-count
   // independent, so results do not depend on how they are spread).
-  std::vector<char> ok(due.size(), 1);
+  std::vector<char>& ok = step_ok_;
+  ok.assign(due.size(), 1);
   const auto step_one = [&](std::size_t k) { ok[k] = mechanics::step(*due[k]->body.model, due[k]->state) ? 1 : 0; };
   if (due.size() > 1) {
     tbb::parallel_for(std::size_t{0}, due.size(), step_one);

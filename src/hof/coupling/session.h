@@ -230,6 +230,8 @@ class Session {
   void begin_run();
 
   std::vector<BodyRuntime> bodies_;
+  std::vector<BodyRuntime*> due_;  // the bodies stepping this step (scratch)
+  std::vector<char> step_ok_;      // their results (scratch)
   std::unique_ptr<haptics::Device> device_;
   std::vector<std::shared_ptr<haptics::Device>> switched_devices_;  // kept until the loop is gone
   haptics::Device* last_device_{nullptr};  // the device the ticks used at the last step

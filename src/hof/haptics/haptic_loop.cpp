@@ -91,9 +91,8 @@ HapticLoop::HapticLoop(Device& device, std::span<TripleBuffer<SurfaceSnapshot>* 
   Eigen::Matrix3d u = svd.matrixU();
   if ((u * svd.matrixV().transpose()).determinant() < 0.0) u.col(2) = -u.col(2);
   world_to_device_ = (u * svd.matrixV().transpose()).transpose();
-  for (HapticRenderer& r : renderers_) {
-    r.set_world_scale(std::cbrt(std::abs(config_.calibration.position.topLeftCorner<3, 3>().determinant())));
-  }
+  const double world_scale = std::cbrt(std::abs(config_.calibration.position.topLeftCorner<3, 3>().determinant()));
+  for (HapticRenderer& r : renderers_) r.set_world_scale(world_scale);
 }
 
 HapticLoop::~HapticLoop() { stop(); }
@@ -120,18 +119,13 @@ void HapticLoop::take_settings() {
     if (renderer_changed) r.reconfigure(s.renderer);
     r.set_part_materials(s.materials);
   }
-  // Copies within the reserved capacity (the producer validated the counts); a spring's
-  // active state survives when the same spring is still there.
+  // Copied into the capacity reserved at construction (the producer validated the counts, and
+  // assign() within capacity does not allocate); a spring keeps its active state.
   const auto copy_within = [](auto& to, const auto& from) {
-    const std::size_t n = std::min(from.size(), to.capacity());
-    to.resize(std::min(to.size(), n));
-    for (std::size_t i = 0; i < n; ++i) {
-      if (i < to.size()) to[i] = from[i];
-      else to.push_back(from[i]);
-    }
+    to.assign(from.begin(), from.begin() + static_cast<std::ptrdiff_t>(std::min(from.size(), to.capacity())));
   };
   std::array<bool, kMaxEffectsEach> was_active{};
-  for (std::size_t i = 0; i < effects_.springs.size() && i < kMaxEffectsEach; ++i) was_active[i] = effects_.springs[i].active;
+  for (std::size_t i = 0; i < effects_.springs.size(); ++i) was_active[i] = effects_.springs[i].active;
   copy_within(effects_.springs, s.effects.springs);
   for (std::size_t i = 0; i < effects_.springs.size(); ++i) effects_.springs[i].active = was_active[i];
   copy_within(effects_.viscosities, s.effects.viscosities);
