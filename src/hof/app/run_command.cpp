@@ -80,7 +80,7 @@ void write_plots(const std::filesystem::path& dir, const coupling::SessionReport
        "set datafile separator ','\nset xlabel 'time (s)'\nset ylabel 'force (N)'\n"
        "plot 'telemetry.csv' every ::1 using 1:(sqrt($8**2+$9**2+$10**2)) with lines title '|F| sent to the device'\n"},
       {"force_vs_indentation",
-       fmt::format("set datafile separator ','\nset xlabel 'tissue indentation at the contact ({})'\nset ylabel 'force (N)'\n"
+       fmt::format("set datafile separator ','\nset xlabel 'tissue indentation at the contact, since it began ({})'\nset ylabel 'force (N)'\n"
                    "plot 'telemetry.csv' every ::1 using ($11 > 0 ? $14{} : 1/0):(sqrt($8**2+$9**2+$10**2)) with points pt 7 "
                    "ps 0.3 title 'surface displacement at the contact (in contact)'\n",
                    length, scale)},
@@ -173,6 +173,8 @@ int run_session(const RunOptions& options) {
   for (std::size_t i = 0; i < session.body_count(); ++i) body_names.push_back(csv_text(json_safe(session.body(i).name)));
   double next_row = 0.0;
   std::int64_t ended_rows = 0;
+  bool was_in_contact = false;
+  double displaced_at_contact = 0.0;
   auto on_sample = [&](const haptics::HapticSample& s) {
     if (!telemetry) return;
     // No reading (a script that has ended, a device gone): not a device at the origin.
@@ -180,17 +182,23 @@ int run_session(const RunOptions& options) {
       ++ended_rows;
       return;
     }
-    if (options.telemetry_rate_hz > 0.0) {
-      if (s.time_s + 1e-12 < next_row) return;
-      next_row += 1.0 / options.telemetry_rate_hz;
-    }
-    // Indentation: how far the tissue surface at the contact moved inward from its rest place.
+    // Indentation: how far the tissue surface at the contact has moved inward since the
+    // contact began (its displacement from rest, less what it had moved before — a body that
+    // sagged under gravity before the probe arrived is not indented by the sag). Negative
+    // when the body moves into the probe (a swinging body coming back).
     double indentation = 0.0;
     std::string body;
     if (s.contact && s.triangle >= 0) {
-      indentation = std::max(0.0, (session.rest_point(s.triangle, s.barycentric, s.layer) - s.contact_point).dot(s.contact_normal));
+      const double from_rest = (session.rest_point(s.triangle, s.barycentric, s.layer) - s.contact_point).dot(s.contact_normal);
+      if (!was_in_contact) displaced_at_contact = from_rest;
+      indentation = from_rest - displaced_at_contact;
       const std::int32_t b = session.body_of_triangle(s.triangle, s.layer);
       if (b >= 0) body = body_names[static_cast<std::size_t>(b)];
+    }
+    was_in_contact = s.contact && s.triangle >= 0;
+    if (options.telemetry_rate_hz > 0.0) {
+      if (s.time_s + 1e-12 < next_row) return;
+      next_row += 1.0 / options.telemetry_rate_hz;
     }
     std::fputs(fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", csv_number(s.time_s), csv_number(s.device.x()),
                            csv_number(s.device.y()), csv_number(s.device.z()), csv_number(s.proxy.x()),
