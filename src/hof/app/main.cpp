@@ -6,6 +6,7 @@
 
 #include "hof/app/mesh_commands.h"
 #include "hof/app/bench_command.h"
+#include "hof/app/gui/gui_app.h"
 #include "hof/app/run_command.h"
 
 namespace {
@@ -76,7 +77,7 @@ void add_run_commands(CLI::App& app, int& status) {
   static std::string out;
   CLI::App* run_cmd = app.add_subcommand("run", "Run a haptic session on a project (.hof), SOFA scene (.scn) or X3D scene (.x3d)");
   run_cmd->add_option("file", run.file, "Project (.hof), SOFA scene (.scn) or X3D scene (.x3d)")->required();
-  run_cmd->add_flag("--headless", run.headless, "No window (the default: the GUI is not built yet)");
+  run_cmd->add_flag("--headless", run.headless, "No window (the default; `hof gui` is the window)");
   run_cmd->add_flag("--deterministic", run.deterministic, "Virtual time: loops in lock-step, identical output every run");
   auto* seconds_opt = run_cmd->add_option("--seconds", seconds, "Length of the run in seconds (default 5)");
   auto* steps_opt = run_cmd->add_option("--steps", steps, "Length of the run in simulation steps");
@@ -101,6 +102,30 @@ void add_run_commands(CLI::App& app, int& status) {
   bench_cmd->add_option("--threads", bench.threads, "Threads (0 = all cores)")->capture_default_str();
   bench_cmd->add_flag("--json", bench.json, "Print the figures as JSON");
   bench_cmd->callback([&] { status = hof::app::run_bench(bench); });
+
+  static hof::app::GuiOptions gui;
+  static std::string gui_file, gui_script, gui_size;
+  CLI::App* gui_cmd = app.add_subcommand("gui", "The window: see, touch (the mouse is the stylus when no device is connected), tune, save");
+  gui_cmd->add_option("file", gui_file, "Project (.hof), SOFA scene (.scn) or X3D scene (.x3d)");
+  gui_cmd->add_option("--device", gui.device, "Device spec (default: the project's; the mouse when it has none)");
+  gui_cmd->add_option("--script", gui_script, "Run the actions of this file (one per line), then exit");
+  gui_cmd->add_option("--size", gui_size, "Window size WIDTHxHEIGHT (default 1280x720)");
+  gui_cmd->add_flag("-q,--quiet", gui.quiet, "No messages on the terminal");
+  gui_cmd->callback([&] {
+    if (!gui_file.empty()) gui.file = gui_file;
+    if (!gui_script.empty()) gui.script = gui_script;
+    if (!gui_size.empty()) {
+      int w = 0, h = 0;
+      if (std::sscanf(gui_size.c_str(), "%dx%d", &w, &h) != 2 || w < 320 || h < 240 || w > 8192 || h > 8192) {
+        std::fprintf(stderr, "hof: --size must be WIDTHxHEIGHT within 320x240 and 8192x8192, got '%s'\n", gui_size.c_str());
+        status = 2;
+        return;
+      }
+      gui.width = w;
+      gui.height = h;
+    }
+    status = hof::app::run_gui(gui);
+  });
 
   static hof::app::CheckOptions check;
   CLI::App* check_cmd = app.add_subcommand("check", "Validate a project, scene or mesh and print every problem");

@@ -347,4 +347,21 @@ std::size_t AabbTree::triangles_near(const Vec3& center, double radius,
   return n;
 }
 
+std::vector<std::pair<Vec3, Vec3>> AabbTree::boxes(int max_depth) const {
+  std::vector<std::pair<Vec3, Vec3>> out;
+  if (nodes_.empty()) return out;
+  std::vector<std::pair<std::int32_t, int>> stack{{0, 0}};
+  while (!stack.empty()) {
+    const auto [index, level] = stack.back();
+    stack.pop_back();
+    const Node& n = nodes_[static_cast<std::size_t>(index)];
+    out.emplace_back(n.lo, n.hi);
+    if (n.count == 0 && level < max_depth) {
+      stack.emplace_back(n.first, level + 1);
+      stack.emplace_back(n.first + 1, level + 1);
+    }
+  }
+  return out;
+}
+
 }  // namespace hof::collision

@@ -9,6 +9,7 @@
 
 #include <cstdint>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "hof/collision/triangle_mesh_view.h"
@@ -66,6 +67,8 @@ class AabbTree {
   [[nodiscard]] const AabbTreeOptions& options() const { return options_; }
   [[nodiscard]] std::size_t node_count() const { return nodes_.size(); }
   [[nodiscard]] int depth() const { return depth_; }
+  /// The boxes (lo, hi) of the nodes down to `max_depth` (0 = the root), for drawing.
+  [[nodiscard]] std::vector<std::pair<Vec3, Vec3>> boxes(int max_depth) const;
 
  private:
   // Nodes are stored parents before children, so a reverse loop over nodes_ visits children

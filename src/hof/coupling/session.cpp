@@ -602,6 +602,7 @@ bool Session::step_world(SessionReport& report, StateTimer& timer, double clock_
     if (paused_) --single_steps_;
     if (!advance_bodies(report)) return false;
     ++report.simulation_steps;
+    steps_taken_.fetch_add(1, std::memory_order_relaxed);
   }
   // Published while paused too: the haptic loop's watchdog sees a live simulation.
   publish(clock_s);
@@ -678,7 +679,10 @@ void Session::simulation_thread(double) {
   while (!stop_sim_.load(std::memory_order_acquire)) {
     if (!step_world(rt_report_, *rt_timer_, seconds_between(rt_start_, Clock::now()))) break;
     next += std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(dt_));
-    if (next > Clock::now()) {
+    if (!paced_.load(std::memory_order_relaxed)) {
+      next = Clock::now();
+      std::this_thread::yield();
+    } else if (next > Clock::now()) {
       std::this_thread::sleep_until(next);
     } else {
       next = Clock::now();

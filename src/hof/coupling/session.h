@@ -181,6 +181,14 @@ class Session {
   /// Stops both threads (joins) and returns the report. Idempotent.
   SessionReport stop_realtime(const std::function<void(const haptics::HapticSample&)>& on_sample = {});
   [[nodiscard]] bool realtime_running() const { return sim_thread_.joinable(); }
+  /// The simulation thread has ended on its own (it diverged): stop_realtime() says why.
+  [[nodiscard]] bool simulation_ended() const { return sim_finished_.load(std::memory_order_acquire) && !stop_sim_.load(); }
+  /// Real time: pace the simulation to the wall clock (true, the default) or step as fast as
+  /// it goes (the haptic loop still runs at its own rate). Any thread.
+  void set_realtime_pacing(bool paced) { paced_.store(paced, std::memory_order_relaxed); }
+  [[nodiscard]] bool realtime_pacing() const { return paced_.load(std::memory_order_relaxed); }
+  /// Simulation steps taken since the session was made (any thread: for a live steps/s).
+  [[nodiscard]] std::uint64_t steps_taken() const { return steps_taken_.load(std::memory_order_relaxed); }
 
   /// The command seam: validates `command` now (a clear error, nothing changed, when it is
   /// wrong) and queues it; the simulation applies it before its next step. Any thread.
@@ -266,6 +274,8 @@ class Session {
   std::thread sim_thread_;
   std::atomic<bool> stop_sim_{false};
   std::atomic<bool> sim_finished_{false};
+  std::atomic<bool> paced_{true};
+  std::atomic<std::uint64_t> steps_taken_{0};
   SessionReport rt_report_;
   std::unique_ptr<StateTimer> rt_timer_;
   std::chrono::steady_clock::time_point rt_start_;

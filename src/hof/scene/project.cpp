@@ -230,8 +230,12 @@ std::string to_xml(const HofProject& p) {
     out += "    </effects>\n";
   }
   out += "  </haptics>\n";
-  out += fmt::format("  <graphics viewpoint=\"{}\" lookAt=\"{}\" renderMode=\"{}\"/>\n", vec(p.graphics.viewpoint_m),
-                     vec(p.graphics.look_at_m), p.graphics.render_mode);
+  out += fmt::format("  <graphics viewpoint=\"{}\" lookAt=\"{}\" renderMode=\"{}\" colorBy=\"{}\">\n", vec(p.graphics.viewpoint_m),
+                     vec(p.graphics.look_at_m), p.graphics.render_mode, p.graphics.color_by);
+  out += fmt::format("    <material diffuseColor=\"{}\" specularColor=\"{}\" shininess=\"{}\" transparency=\"{}\"/>\n",
+                     vec(p.graphics.diffuse_color), vec(p.graphics.specular_color), number(p.graphics.shininess),
+                     number(p.graphics.transparency));
+  out += "  </graphics>\n";
   out += "</hof>\n";
   return out;
 }
@@ -241,7 +245,61 @@ Expected<HofProject> read_project(const std::filesystem::path& path) {
   if (!in) return make_error(ErrorCode::kIo, "cannot open the project file", path.string());
   std::stringstream buffer;
   buffer << in.rdbuf();
-  const std::string text = buffer.str();
+  return parse_project(buffer.str(), path);
+}
+
+Expected<void> set_project_attribute(HofProject& project, const std::filesystem::path& path, std::string_view element,
+                                     std::string_view attribute, std::string_view value) {
+  // Through the canonical text and the reader: the names are the file's own, and a value is
+  // checked exactly as when a file is read.
+  const std::string name = fmt::format("{}@{}", element, attribute);
+  pugi::xml_document doc;
+  const std::string text = to_xml(project);
+  if (!doc.load_buffer(text.data(), text.size())) return make_error(ErrorCode::kParse, "the project does not serialise", path.string());
+  pugi::xml_node node = doc.child("hof");
+  std::string walked = "hof";
+  std::size_t start = 0;
+  while (!element.empty() && start <= element.size()) {
+    const std::size_t slash = element.find('/', start);
+    const std::string part(element.substr(start, slash == std::string_view::npos ? std::string_view::npos : slash - start));
+    pugi::xml_node child = node.child(part.c_str());
+    if (!child) {
+      std::string known;
+      for (const pugi::xml_node c : node.children()) {
+        if (c.type() != pugi::node_element) continue;
+        if (known.find(std::string(c.name()) + ",") == std::string::npos) known += std::string(c.name()) + ", ";
+      }
+      if (known.size() >= 2) known.resize(known.size() - 2);
+      return make_error(ErrorCode::kInvalidArgument,
+                        fmt::format("'{}': no element <{}> in <{}> (it has: {})", name, part, walked, known.empty() ? "none" : known));
+    }
+    node = child;
+    walked += "/" + part;
+    if (slash == std::string_view::npos) break;
+    start = slash + 1;
+  }
+  pugi::xml_attribute a = node.attribute(std::string(attribute).c_str());
+  if (!a) {
+    std::string known;
+    for (const pugi::xml_attribute k : node.attributes()) known += std::string(known.empty() ? "" : ", ") + k.name();
+    return make_error(ErrorCode::kInvalidArgument,
+                      fmt::format("'{}': <{}> has no attribute '{}' (it has: {})", name, walked, attribute, known.empty() ? "none" : known));
+  }
+  a.set_value(std::string(value).c_str());
+  std::ostringstream out;
+  doc.save(out, "  ");
+  auto changed = parse_project(out.str(), path);
+  if (!changed) {
+    Error e = changed.error();
+    e.message = fmt::format("'{}' = '{}': {}", name, value, e.message);
+    e.line = 0;
+    return std::unexpected(e);
+  }
+  project = std::move(*changed);
+  return {};
+}
+
+Expected<HofProject> parse_project(const std::string& text, const std::filesystem::path& path) {
   pugi::xml_document doc;
   const pugi::xml_parse_result parsed = doc.load_buffer(text.data(), text.size());
   if (!parsed) {
@@ -402,6 +460,36 @@ Expected<HofProject> read_project(const std::filesystem::path& path) {
     p.graphics.viewpoint_m = r.get_vec(g, "viewpoint", p.graphics.viewpoint_m);
     p.graphics.look_at_m = r.get_vec(g, "lookAt", p.graphics.look_at_m);
     p.graphics.render_mode = g.attribute("renderMode").as_string(p.graphics.render_mode.c_str());
+    if (p.graphics.render_mode != "shaded" && p.graphics.render_mode != "wireframe" &&
+        p.graphics.render_mode != "shaded+wireframe" && p.graphics.render_mode != "points") {
+      r.fail(g, fmt::format("unknown renderMode \"{}\" (shaded, wireframe, shaded+wireframe, points)", p.graphics.render_mode));
+    }
+    p.graphics.color_by = g.attribute("colorBy").as_string(p.graphics.color_by.c_str());
+    if (p.graphics.color_by != "material" && p.graphics.color_by != "displacement") {
+      r.fail(g, fmt::format("unknown colorBy \"{}\" (material, displacement)", p.graphics.color_by));
+    }
+    if (const pugi::xml_node m = g.child("material")) {
+      const auto unit_colour = [&](const char* name, const Vec3& fallback) {
+        const Vec3 c = r.get_vec(m, name, fallback);
+        if (!((c.array() >= 0.0).all() && (c.array() <= 1.0).all())) {
+          r.fail(m, fmt::format("<material> {} must be three numbers in [0, 1]", name));
+          return fallback;
+        }
+        return c;
+      };
+      const auto unit_number = [&](const char* name, double fallback) {
+        const double v = r.get(m, name, fallback);
+        if (!(v >= 0.0 && v <= 1.0)) {
+          r.fail(m, fmt::format("<material> {} must be in [0, 1], got {}", name, v));
+          return fallback;
+        }
+        return v;
+      };
+      p.graphics.diffuse_color = unit_colour("diffuseColor", p.graphics.diffuse_color);
+      p.graphics.specular_color = unit_colour("specularColor", p.graphics.specular_color);
+      p.graphics.shininess = unit_number("shininess", p.graphics.shininess);
+      p.graphics.transparency = unit_number("transparency", p.graphics.transparency);
+    }
   }
   if (r.error) return std::unexpected(*r.error);
   if (!(p.haptic_rate_hz >= 100.0 && p.haptic_rate_hz <= 20000.0)) {

@@ -10,6 +10,7 @@
 #include <optional>
 #include <filesystem>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "hof/core/error.h"
@@ -24,7 +25,14 @@ namespace hof::scene {
 struct GraphicsSetup {
   Vec3 viewpoint_m{0.0, -0.45, 0.25};
   Vec3 look_at_m{0.0, 0.0, 0.0};
-  std::string render_mode{"shaded"};  ///< shaded | wireframe | shaded+wireframe
+  std::string render_mode{"shaded"};  ///< shaded | wireframe | shaded+wireframe | points
+  /// What colours the deformable bodies: their material, or their displacement from rest.
+  std::string color_by{"material"};   ///< material | displacement
+  /// X3D Material of the deformable bodies; the default is the thesis' liver (§ appearance).
+  Vec3 diffuse_color{0.36, 0.11, 0.04};
+  Vec3 specular_color{0.7, 0.7, 0.7};
+  double shininess{0.2};
+  double transparency{0.0};
 };
 
 /// Settings of one body of the scene (by its name), written in <bodies>.
@@ -77,6 +85,15 @@ struct HofProject {
 
 /// Reads a project. Errors name the file, line and attribute.
 [[nodiscard]] Expected<HofProject> read_project(const std::filesystem::path& path);
+/// A project from its XML text; `path` names it in errors and anchors relative files.
+[[nodiscard]] Expected<HofProject> parse_project(const std::string& text, const std::filesystem::path& path);
+/// Sets one attribute by the file's own names, e.g. ("haptics/surface", "stiffness", "0.4"),
+/// ("haptics", "renderer", "GodObjectRenderer"), ("graphics", "renderMode", "wireframe"): the
+/// value is checked as when the file is read. Errors name the element and attribute and list
+/// the known ones; `project` is unchanged on error.
+[[nodiscard]] Expected<void> set_project_attribute(HofProject& project, const std::filesystem::path& path,
+                                                   std::string_view element, std::string_view attribute,
+                                                   std::string_view value);
 /// The canonical XML text of a project.
 [[nodiscard]] std::string to_xml(const HofProject& project);
 /// Writes to_xml(project) to `path` (via a temporary file and a rename: never a half file).

@@ -495,50 +495,36 @@ void record_changes(HofProject& project, const coupling::Session& session) {
   }
 }
 
-Expected<World> build_world(const std::filesystem::path& file, const std::string& device_override) {
-  World w;
-  w.file = file;
-  w.scene_path = file;
-  const std::string ext = file.extension().string();
-  std::error_code ec;
-  if (std::filesystem::is_directory(file, ec)) return make_error(ErrorCode::kIo, "is a folder, not a scene or project file", file.string());
-  if (!std::filesystem::exists(file, ec)) return make_error(ErrorCode::kIo, "no such file", file.string());
-  bool bare = true;
-  if (ext == ".hof") {
-    auto project = read_project(file);
-    if (!project) return std::unexpected(project.error());
-    w.project = std::move(*project);
-    w.scene_path = scene_file(w.project, file);
-    bare = w.project.device == "auto";
-    if (auto ok = add_sofa(w, w.scene_path); !ok) {
-      // The project first, then the scene it points to (resolved), then what is wrong there.
-      Error inner = ok.error();
-      if (w.scene_path == file) return std::unexpected(inner);
-      std::error_code canonical_error;
-      const std::filesystem::path resolved = std::filesystem::weakly_canonical(w.scene_path, canonical_error);
-      if (!canonical_error && (inner.file.empty() || inner.file == w.scene_path.string())) inner.file = resolved.string();
-      Error e;
-      e.code = inner.code;
-      e.file = file.string();
-      e.message = "its scene " + inner.to_string();
-      return std::unexpected(e);
-    }
-  } else if (ext == ".scn") {
-    w.project.name = file.stem().string();
-    w.project.mechanics_scene = file.filename();
-    if (auto ok = add_sofa(w, file); !ok) return std::unexpected(ok.error());
-  } else if (ext == ".x3d") {
-    w.project.name = file.stem().string();
-    if (auto ok = add_x3d(w, file); !ok) return std::unexpected(ok.error());
-  } else {
-    return make_error(ErrorCode::kUnsupported, "expected a .hof project, a .scn SOFA scene or an .x3d scene", file.string());
+namespace {
+
+/// The project's scene (its errors: the project first, then the scene resolved, then what is
+/// wrong there).
+Expected<void> add_project_scene(World& w, const std::filesystem::path& file) {
+  w.scene_path = scene_file(w.project, file);
+  if (auto ok = add_sofa(w, w.scene_path); !ok) {
+    Error inner = ok.error();
+    if (w.scene_path == file) return std::unexpected(inner);
+    std::error_code canonical_error;
+    const std::filesystem::path resolved = std::filesystem::weakly_canonical(w.scene_path, canonical_error);
+    if (!canonical_error && (inner.file.empty() || inner.file == w.scene_path.string())) inner.file = resolved.string();
+    Error e;
+    e.code = inner.code;
+    e.file = file.string();
+    e.message = "its scene " + inner.to_string();
+    return std::unexpected(e);
   }
+  return {};
+}
+
+/// What every input shares once its bodies are read: the project's settings, the unit, the
+/// device (the default probe when the world is bare).
+Expected<World> finish_world(World w, bool sofa_scene, bool bare, const std::string& device_override) {
   if (auto ok = apply_parameters(w); !ok) return std::unexpected(ok.error());
   if (auto ok = apply_bodies(w); !ok) return std::unexpected(ok.error());
   w.name = w.project.name;
   // A SOFA scene carries no unit; X3D and .hof worlds are in metres (a project may declare
   // its scene's unit).
-  w.length_unit = ext == ".scn" ? "scene units" : (w.project.scene_unit.empty() ? "m" : w.project.scene_unit);
+  w.length_unit = sofa_scene ? "scene units" : (w.project.scene_unit.empty() ? "m" : w.project.scene_unit);
 
   std::string device = device_override.empty() ? (bare ? std::string("auto") : w.project.device) : device_override;
   if (device == "auto") {
@@ -560,6 +546,43 @@ Expected<World> build_world(const std::filesystem::path& file, const std::string
   w.device = device;
   w.config = session_config(w.project);
   return w;
+}
+
+}  // namespace
+
+Expected<World> build_world(const std::filesystem::path& file, const std::string& device_override) {
+  World w;
+  w.file = file;
+  w.scene_path = file;
+  const std::string ext = file.extension().string();
+  std::error_code ec;
+  if (std::filesystem::is_directory(file, ec)) return make_error(ErrorCode::kIo, "is a folder, not a scene or project file", file.string());
+  if (!std::filesystem::exists(file, ec)) return make_error(ErrorCode::kIo, "no such file", file.string());
+  if (ext == ".hof") {
+    auto project = read_project(file);
+    if (!project) return std::unexpected(project.error());
+    return build_world(*project, file, device_override);
+  }
+  if (ext == ".scn") {
+    w.project.name = file.stem().string();
+    w.project.mechanics_scene = file.filename();
+    if (auto ok = add_sofa(w, file); !ok) return std::unexpected(ok.error());
+    return finish_world(std::move(w), true, true, device_override);
+  }
+  if (ext == ".x3d") {
+    w.project.name = file.stem().string();
+    if (auto ok = add_x3d(w, file); !ok) return std::unexpected(ok.error());
+    return finish_world(std::move(w), false, true, device_override);
+  }
+  return make_error(ErrorCode::kUnsupported, "expected a .hof project, a .scn SOFA scene or an .x3d scene", file.string());
+}
+
+Expected<World> build_world(const HofProject& project, const std::filesystem::path& file, const std::string& device_override) {
+  World w;
+  w.file = file;
+  w.project = project;
+  if (auto ok = add_project_scene(w, file); !ok) return std::unexpected(ok.error());
+  return finish_world(std::move(w), false, project.device == "auto", device_override);
 }
 
 }  // namespace hof::scene

@@ -63,6 +63,10 @@ struct World {
 /// Builds the world of `file`. `device_override` (the --device option) replaces the file's
 /// device. Errors start with the file (the project, then the scene with its resolved path).
 [[nodiscard]] Expected<World> build_world(const std::filesystem::path& file, const std::string& device_override = {});
+/// The world of a project held in memory (the window's, edited since it was read); `file` is
+/// where it lives (its scene and meshes are relative to it).
+[[nodiscard]] Expected<World> build_world(const HofProject& project, const std::filesystem::path& file,
+                                          const std::string& device_override = {});
 
 /// Writes what a session changed through its command seam into `project` (parameters as
 /// <set> elements, replacing an earlier value of the same parameter; surfaces in <bodies>),

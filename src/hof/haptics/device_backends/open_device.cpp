@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "hof/haptics/device.h"
+#include "hof/haptics/device_backends/mouse_device.h"
 #include "hof/haptics/device_backends/replay_device.h"
 #include "hof/haptics/device_backends/scripted_device.h"
 #include "hof/haptics/device_backends/spacemouse_device.h"
@@ -406,6 +407,22 @@ Expected<std::unique_ptr<Device>> open_spacemouse(const SpecParser& p) {
   return std::unique_ptr<Device>(std::move(*device));
 }
 
+Expected<std::unique_ptr<Device>> open_mouse(const SpecParser& p) {
+  static constexpr std::string_view kKeys[] = {"model"};
+  if (p.has_argument()) return p.fail(fmt::format("mouse takes no argument (got '{}')", p.argument()));
+  DeviceSpec spec;
+  for (const Option& o : p.options()) {
+    Expected<void> r;
+    if (o.key == "model") {
+      r = apply_model(p, o, spec);
+    } else {
+      r = p.unknown_key(o, "mouse", kKeys);
+    }
+    if (!r) return std::unexpected(r.error());
+  }
+  return std::unique_ptr<Device>(std::make_unique<MouseDevice>(spec));
+}
+
 }  // namespace
 
 Expected<std::unique_ptr<Device>> open_device(std::string_view spec) {
@@ -417,8 +434,9 @@ Expected<std::unique_ptr<Device>> open_device(std::string_view spec) {
   if (backend == "virtual-hand") return open_simulated(p, true);
   if (backend == "udp") return open_udp(p);
   if (backend == "spacemouse") return open_spacemouse(p);
-  if (backend.empty()) return p.fail("empty backend (known: replay, scripted, virtual-hand, udp, spacemouse)");
-  return p.fail(fmt::format("unknown backend '{}' (known: replay, scripted, virtual-hand, udp, spacemouse)", backend));
+  if (backend == "mouse") return open_mouse(p);
+  if (backend.empty()) return p.fail("empty backend (known: replay, scripted, virtual-hand, udp, spacemouse, mouse)");
+  return p.fail(fmt::format("unknown backend '{}' (known: replay, scripted, virtual-hand, udp, spacemouse, mouse)", backend));
 }
 
 }  // namespace hof::haptics

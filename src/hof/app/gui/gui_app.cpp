@@ -1,0 +1,1411 @@
+// The window: GLFW + Dear ImGui 1.86 + OpenGL 3.3 (libepoxy). Threads: this one (the window)
+// draws and reads; the session's haptic thread renders forces at 1 kHz; its simulation thread
+// steps the bodies. What crosses: snapshots (triple buffers), telemetry (an SPSC ring), and
+// commands (the session's seam). Nothing here waits on the haptic loop.
+#include <epoxy/gl.h>
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>
+#include <backends/imgui_impl_glfw.h>
+#include <backends/imgui_impl_opengl3.h>
+#include <fmt/format.h>
+#include <imgui.h>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <deque>
+#include <charconv>
+#include <fstream>
+#include <functional>
+#include <limits>
+#include <memory>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "hof/app/gui/gui_app.h"
+#include "hof/app/gui/gui_script.h"
+#include "hof/coupling/session.h"
+#include "hof/haptics/device_backends/mouse_device.h"
+#include "hof/mechanics/model_parameters.h"
+#include "hof/mesh/mesh_io.h"
+#include "hof/render/camera.h"
+#include "hof/render/colormap.h"
+#include "hof/render/gl_renderer.h"
+#include "hof/render/image.h"
+#include "hof/scene/project.h"
+#include "hof/scene/world.h"
+
+namespace hof::app {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+constexpr float kPanelWidth = 390.0f;
+constexpr double kPlotSeconds = 5.0;
+constexpr double kPlotRateHz = 100.0;
+constexpr std::size_t kPlotPoints = static_cast<std::size_t>(kPlotSeconds * kPlotRateHz);
+constexpr double kMaxFrameRateHz = 60.0;  // the window leaves the cores to the loops
+
+double seconds_between(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
+
+render::RenderMode render_mode_of(const std::string& mode) {
+  if (mode == "wireframe") return render::RenderMode::kWireframe;
+  if (mode == "points") return render::RenderMode::kPoints;
+  if (mode == "shaded+wireframe") return render::RenderMode::kShadedWireframe;
+  return render::RenderMode::kShaded;
+}
+
+std::string number_text(double v) { return fmt::format("{}", v); }
+
+/// A snapshot layer as the window draws it.
+struct LayerView {
+  render::MeshBuffer mesh;
+  std::vector<haptics::SurfacePart> parts;
+  std::vector<Vec3> rest;
+  std::vector<render::Rgba> colours;
+  const haptics::SurfaceSnapshot* latest{nullptr};  // valid until the next acquire (this thread)
+  double max_displacement_m{0.0};
+};
+
+struct BodyView {
+  std::string name;
+  bool deformable{false};
+  int layer{0};
+  std::optional<mechanics::ModelConfig> config;  // as the accepted commands leave it
+  std::vector<std::string> parameters;           // "component/parameter"
+  std::vector<Vec3> fixed_points;
+};
+
+/// Live figures over the last second (or the last samples).
+struct LiveStats {
+  std::deque<Clock::time_point> frames;
+  std::deque<std::pair<Clock::time_point, std::uint64_t>> sim_sequences;
+  std::deque<std::pair<Clock::time_point, std::uint64_t>> haptic_ticks;
+  std::vector<double> periods;  // ring
+  std::size_t period_next{0};
+  std::uint64_t samples{0}, clamped{0}, invalid{0}, non_finite{0};
+  double fps{0.0}, steps_per_s{0.0}, haptic_hz{0.0}, period_p50_ms{0.0}, period_p99_ms{0.0};
+  Clock::time_point last_percentiles{};
+
+  void add_period(double s) {
+    if (periods.size() < 4000) {
+      periods.push_back(s);
+    } else {
+      periods[period_next] = s;
+      period_next = (period_next + 1) % periods.size();
+    }
+  }
+  void update(Clock::time_point now) {
+    while (!frames.empty() && seconds_between(frames.front(), now) > 1.0) frames.pop_front();
+    fps = static_cast<double>(frames.size()) / std::clamp(frames.empty() ? 1.0 : seconds_between(frames.front(), now), 0.25, 1.0);
+    const auto rate = [&](auto& q) {
+      while (q.size() > 2 && seconds_between(q.front().first, now) > 1.0) q.pop_front();
+      if (q.size() < 2) return 0.0;
+      const double span = seconds_between(q.front().first, q.back().first);
+      return span > 0.0 ? static_cast<double>(q.back().second - q.front().second) / span : 0.0;
+    };
+    steps_per_s = rate(sim_sequences);
+    haptic_hz = rate(haptic_ticks);
+    if (seconds_between(last_percentiles, now) > 0.5 && !periods.empty()) {
+      std::vector<double> sorted = periods;
+      std::sort(sorted.begin(), sorted.end());
+      period_p50_ms = 1e3 * sorted[sorted.size() / 2];
+      period_p99_ms = 1e3 * sorted[std::min(sorted.size() - 1, sorted.size() * 99 / 100)];
+      last_percentiles = now;
+    }
+  }
+};
+
+/// A minimal file chooser (ImGui has none): a folder listing and a name field.
+struct FileDialog {
+  bool open{false};
+  bool saving{false};
+  std::string title;
+  std::vector<std::string> extensions;
+  std::filesystem::path folder{std::filesystem::current_path()};
+  std::array<char, 512> name{};
+  std::function<void(const std::filesystem::path&)> on_choose;
+
+  void show(const std::string& t, bool save, std::vector<std::string> exts, std::function<void(const std::filesystem::path&)> f,
+            const std::string& suggested = {}) {
+    open = true;
+    saving = save;
+    title = t;
+    extensions = std::move(exts);
+    on_choose = std::move(f);
+    name.fill('\0');
+    std::copy_n(suggested.begin(), std::min(suggested.size(), name.size() - 1), name.begin());
+    ImGui::OpenPopup("##file");
+  }
+
+  void draw() {
+    if (!open) return;
+    ImGui::SetNextWindowSize(ImVec2(560, 420), ImGuiCond_Appearing);
+    if (!ImGui::BeginPopupModal("##file", &open)) return;
+    ImGui::TextUnformatted(title.c_str());
+    ImGui::TextDisabled("%s", folder.string().c_str());
+    ImGui::BeginChild("entries", ImVec2(0, -60), true);
+    if (ImGui::Selectable("..")) folder = folder.parent_path();
+    std::error_code ec;
+    std::vector<std::filesystem::directory_entry> entries;
+    for (const auto& e : std::filesystem::directory_iterator(folder, ec)) entries.push_back(e);
+    std::sort(entries.begin(), entries.end(), [](const auto& a, const auto& b) { return a.path().filename() < b.path().filename(); });
+    for (const auto& e : entries) {
+      const std::string file = e.path().filename().string();
+      if (file.starts_with('.')) continue;
+      if (e.is_directory(ec)) {
+        if (ImGui::Selectable((file + "/").c_str())) folder = e.path();
+      } else if (std::find(extensions.begin(), extensions.end(), e.path().extension().string()) != extensions.end()) {
+        if (ImGui::Selectable(file.c_str())) {
+          name.fill('\0');
+          std::copy_n(file.begin(), std::min(file.size(), name.size() - 1), name.begin());
+        }
+      }
+    }
+    ImGui::EndChild();
+    ImGui::InputText("file", name.data(), name.size());
+    if (ImGui::Button(saving ? "Save" : "Open") && name[0] != '\0') {
+      const std::filesystem::path chosen = folder / std::string(name.data());
+      open = false;
+      ImGui::CloseCurrentPopup();
+      if (on_choose) on_choose(chosen);
+    }
+    ImGui::SameLine();
+    if (ImGui::Button("Cancel")) {
+      open = false;
+      ImGui::CloseCurrentPopup();
+    }
+    ImGui::EndPopup();
+  }
+};
+
+std::filesystem::path recent_files_path() {
+  const char* config = std::getenv("XDG_CONFIG_HOME");
+  const char* home = std::getenv("HOME");
+  if (config && *config) return std::filesystem::path(config) / "hof" / "recent-files";
+  if (home && *home) return std::filesystem::path(home) / ".config" / "hof" / "recent-files";
+  return {};
+}
+
+class Gui {
+ public:
+  explicit Gui(const GuiOptions& options) : options_(options) {}
+  ~Gui() { shut_down(); }
+  Gui(const Gui&) = delete;
+  Gui& operator=(const Gui&) = delete;
+
+  Expected<void> create_window();
+  Expected<void> open(const std::filesystem::path& file);
+  int run(std::vector<ScriptAction> script, const std::string& script_name);
+
+ private:
+  // World.
+  void close_session();
+  void update_from_loops();
+  void upload_layer(LayerView& layer, const haptics::SurfaceSnapshot& s);
+  Expected<void> apply_set(const std::string& element, const std::string& attribute, const std::string& value);
+  Expected<void> save(const std::filesystem::path& path);
+  Expected<void> export_shape(const std::filesystem::path& path);
+  void set_animating(bool on);
+  void report(const std::string& message, bool error);
+  // Stylus from the mouse.
+  std::optional<Vec3> pick(double x_px, double y_px) const;
+  void mouse_to(double window_x, double window_y, double depth_m, bool new_plane);
+  void set_mouse_target(const Vec3& world);
+  // Drawing.
+  void frame();
+  void draw_scene(int width, int height);
+  void draw_panels();
+  void draw_legend();
+  void draw_mechanics_panel();
+  void draw_haptics_panel();
+  void draw_graphics_panel();
+  void handle_input();
+  void reset_camera();
+  [[nodiscard]] double scene_size() const { return std::max((bounds_max_ - bounds_min_).norm(), 1e-6); }
+  // Script.
+  bool step_script(std::vector<ScriptAction>& script, std::size_t& next, const std::string& name, int& status);
+  void remember_recent(const std::filesystem::path& file);
+  void shut_down();
+
+  GuiOptions options_;
+  GLFWwindow* window_{nullptr};
+  bool imgui_ready_{false};
+  std::unique_ptr<render::GlRenderer> renderer_;  // made once the context exists
+  render::OrbitCamera camera_;
+  int view_x_{0}, view_w_{1}, view_h_{1};
+
+  // The world on screen.
+  std::filesystem::path file_;
+  scene::HofProject project_;  // what a save writes (the file's, with the changes made here)
+  std::string world_name_, length_unit_{"m"}, device_spec_;
+  bool default_probe_{false};
+  std::unique_ptr<coupling::Session> session_;
+  haptics::MouseDevice* mouse_{nullptr};
+  haptics::Calibration calibration_;
+  double max_force_n_{8.0};
+  std::vector<LayerView> layers_;
+  std::vector<BodyView> bodies_;
+  Vec3 bounds_min_{Vec3::Constant(-0.1)}, bounds_max_{Vec3::Constant(0.1)};
+  bool animating_{true};
+  bool dirty_{false};
+  bool realtime_pacing_{true};
+
+  // Telemetry.
+  haptics::HapticSample last_{};
+  LiveStats stats_;
+  std::vector<float> plot_force_, plot_indentation_;
+  double next_plot_time_{0.0};
+  bool was_in_contact_{false};
+  double displaced_at_contact_{0.0};
+  double indentation_m_{0.0};
+  double max_force_seen_n_{0.0};
+  double max_displacement_seen_m_{0.0};
+  std::uint64_t contact_ticks_{0};
+  std::int32_t contact_body_{-1};
+
+  // Mouse stylus.
+  Vec3 plane_point_{Vec3::Zero()};
+  Vec3 mouse_world_{Vec3::Zero()};
+  double mouse_depth_m_{0.0};
+  bool dragging_stylus_{false};
+  double last_x_{0.0}, last_y_{0.0};
+
+  // View options (not saved: debugging aids).
+  bool show_bound_tree_{false};
+  int bound_tree_depth_{4};
+  bool show_contact_triangle_{true};
+  bool show_fixed_nodes_{false};
+  bool show_device_{true};
+  float arrow_m_per_n_{0.0f};  // 0: automatic (an 8 N force as long as a third of the scene)
+
+  // Messages and dialogs.
+  std::string error_;
+  std::deque<std::string> log_;
+  FileDialog dialog_;
+  bool want_open_dialog_{false}, want_save_dialog_{false}, want_export_dialog_{false}, want_screenshot_dialog_{false};
+  bool confirm_quit_{false};
+  bool quit_{false};
+  std::optional<std::filesystem::path> pending_screenshot_;
+  std::vector<std::filesystem::path> recent_;
+  std::optional<std::filesystem::path> dropped_;
+  std::optional<std::filesystem::path> pending_open_;  // waits for the user's answer about unsaved changes
+  Clock::time_point script_wait_until_{};
+  bool script_waiting_{false};
+};
+
+// ---------------------------------------------------------------------------------------------
+// Window
+
+Expected<void> Gui::create_window() {
+  glfwSetErrorCallback([](int code, const char* text) { std::fprintf(stderr, "hof gui: GLFW error %d: %s\n", code, text); });
+  if (!glfwInit()) {
+    return make_error(ErrorCode::kUnsupported, "no display: the window needs X11 (run `hof run --headless`, or under xvfb-run)");
+  }
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 3);
+  glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
+  glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
+  window_ = glfwCreateWindow(options_.width, options_.height, "HoF", nullptr, nullptr);
+  if (!window_) {
+    glfwTerminate();
+    return make_error(ErrorCode::kUnsupported, "cannot open an OpenGL 3.3 window on this display");
+  }
+  glfwMakeContextCurrent(window_);
+  glfwSwapInterval(1);
+  glfwSetWindowUserPointer(window_, this);
+  glfwSetDropCallback(window_, [](GLFWwindow* w, int count, const char** paths) {
+    if (count > 0) static_cast<Gui*>(glfwGetWindowUserPointer(w))->dropped_ = std::filesystem::path(paths[0]);
+  });
+  glfwSetWindowCloseCallback(window_, [](GLFWwindow* w) {
+    auto* gui = static_cast<Gui*>(glfwGetWindowUserPointer(w));
+    if (gui->dirty_) {
+      glfwSetWindowShouldClose(w, GLFW_FALSE);  // ask first: unsaved changes are never lost silently
+      gui->confirm_quit_ = true;
+    }
+  });
+  renderer_ = std::make_unique<render::GlRenderer>();
+  if (auto ok = renderer_->init(); !ok) return ok;
+  IMGUI_CHECKVERSION();
+  ImGui::CreateContext();
+  ImGui::GetIO().IniFilename = nullptr;  // the layout is fixed; nothing written behind the user's back
+  ImGui::StyleColorsDark();
+  ImGui::GetStyle().WindowRounding = 0.0f;
+  ImGui_ImplGlfw_InitForOpenGL(window_, true);
+  ImGui_ImplOpenGL3_Init("#version 330 core");
+  imgui_ready_ = true;
+  // Recent files.
+  if (const auto path = recent_files_path(); !path.empty()) {
+    std::ifstream in(path);
+    for (std::string line; std::getline(in, line);) {
+      if (!line.empty()) recent_.emplace_back(line);
+    }
+  }
+  return {};
+}
+
+void Gui::shut_down() {
+  close_session();
+  layers_.clear();
+  if (imgui_ready_) {
+    ImGui_ImplOpenGL3_Shutdown();
+    ImGui_ImplGlfw_Shutdown();
+    ImGui::DestroyContext();
+    imgui_ready_ = false;
+  }
+  if (window_) {
+    renderer_.reset();  // GL objects go while the context exists
+    glfwDestroyWindow(window_);
+    glfwTerminate();
+    window_ = nullptr;
+  }
+}
+
+void Gui::report(const std::string& message, bool error) {
+  if (error) error_ = message;
+  log_.push_back(message);
+  while (log_.size() > 50) log_.pop_front();
+  if (!options_.quiet || error) std::fprintf(stderr, "hof gui: %s%s\n", error ? "error: " : "", message.c_str());
+}
+
+void Gui::remember_recent(const std::filesystem::path& file) {
+  std::error_code ec;
+  const std::filesystem::path absolute = std::filesystem::absolute(file, ec);
+  std::erase(recent_, absolute);
+  recent_.insert(recent_.begin(), absolute);
+  if (recent_.size() > 8) recent_.resize(8);
+  const auto path = recent_files_path();
+  if (path.empty()) return;
+  std::filesystem::create_directories(path.parent_path(), ec);
+  std::ofstream out(path);
+  for (const auto& r : recent_) out << r.string() << '\n';
+}
+
+// ---------------------------------------------------------------------------------------------
+// World
+
+void Gui::close_session() {
+  if (session_) {
+    session_->stop_realtime();
+    session_.reset();
+  }
+  mouse_ = nullptr;
+}
+
+Expected<void> Gui::open(const std::filesystem::path& file) {
+  // Everything is built beside the running world, which stays as it is if anything fails.
+  const bool is_project = file.extension() == ".hof";
+  scene::HofProject project;
+  Expected<scene::World> world = make_error(ErrorCode::kIo, "not read");
+  if (is_project) {
+    auto read = scene::read_project(file);
+    if (!read) return std::unexpected(read.error());
+    project = *read;
+    world = scene::build_world(project, file, options_.device);
+  } else {
+    const std::string ext = file.extension().string();
+    if (ext != ".scn" && ext != ".x3d") {
+      return make_error(ErrorCode::kUnsupported, "expected a .hof project, a .scn SOFA scene or an .x3d scene", file.string());
+    }
+    world = scene::build_world(file, options_.device);
+    if (world) project = world->project;
+  }
+  if (!world) return std::unexpected(world.error());
+  for (const std::string& w : world->warnings) report("warning: " + w, false);
+  // The builder's probe is for headless runs; here the user holds the stylus: the mouse, or
+  // the project's own device when it names one.
+  std::string spec = world->default_probe && options_.device.empty() ? std::string("mouse") : world->device;
+  auto device = haptics::open_device(spec);
+  if (!device && spec != "mouse") {
+    report(fmt::format("device '{}' does not answer ({}): the mouse holds the stylus", spec, device.error().to_string()), true);
+    spec = "mouse";
+    device = haptics::open_device(spec);
+  }
+  if (!device) return std::unexpected(device.error());
+  auto* mouse = dynamic_cast<haptics::MouseDevice*>(device->get());
+  const double max_force = (*device)->spec().max_force_n;
+  std::vector<BodyView> bodies;
+  for (const coupling::SessionBody& b : world->bodies) {
+    BodyView v;
+    v.name = b.name;
+    v.deformable = b.deformable();
+    v.layer = b.layer;
+    v.config = b.config;
+    if (v.config) {
+      v.parameters = mechanics::parameter_names(*v.config);
+      for (const auto& f : v.config->fixed) {
+        for (const std::int32_t i : f.indices) {
+          if (i >= 0 && static_cast<std::size_t>(i) < v.config->positions.size()) v.fixed_points.push_back(v.config->positions[static_cast<std::size_t>(i)]);
+        }
+      }
+    }
+    bodies.push_back(std::move(v));
+  }
+  coupling::SessionConfig config = world->config;
+  config.haptics.realtime_priority = true;
+  auto made = coupling::Session::make(std::move(world->bodies), std::move(*device), config);
+  if (!made) return std::unexpected(made.error());
+
+  // Accepted: the new world replaces the old one.
+  close_session();
+  session_ = std::move(*made);
+  mouse_ = mouse;
+  calibration_ = config.haptics.calibration;
+  max_force_n_ = max_force;
+  file_ = file;
+  project_ = std::move(project);
+  world_name_ = world->name;
+  length_unit_ = world->length_unit;
+  device_spec_ = spec;
+  default_probe_ = world->default_probe;
+  bodies_ = std::move(bodies);
+  dirty_ = false;
+  error_.clear();
+  layers_.clear();
+  layers_.resize(session_->layer_count());
+  bounds_min_ = Vec3::Constant(std::numeric_limits<double>::infinity());
+  bounds_max_ = -bounds_min_;
+  for (std::size_t l = 0; l < layers_.size(); ++l) {
+    auto& buffer = session_->graphics_surfaces(l);
+    buffer.acquire();
+    const haptics::SurfaceSnapshot& s = buffer.read();
+    LayerView& view = layers_[l];
+    view.parts = s.parts;
+    view.rest = s.vertices;
+    view.mesh.set_triangles(s.triangles);
+    upload_layer(view, s);
+    for (const Vec3& v : s.vertices) {
+      bounds_min_ = bounds_min_.cwiseMin(v);
+      bounds_max_ = bounds_max_.cwiseMax(v);
+    }
+  }
+  if (!bounds_min_.allFinite()) {  // a world of force effects only
+    bounds_min_ = Vec3::Constant(-0.05);
+    bounds_max_ = Vec3::Constant(0.05);
+  }
+  plot_force_.assign(kPlotPoints, 0.0f);
+  plot_indentation_.assign(kPlotPoints, 0.0f);
+  next_plot_time_ = 0.0;
+  stats_ = LiveStats{};
+  max_force_seen_n_ = max_displacement_seen_m_ = 0.0;
+  contact_ticks_ = 0;
+  last_ = haptics::HapticSample{};
+  was_in_contact_ = false;
+  reset_camera();
+  // The mouse stylus starts in front of the scene, between it and the eye.
+  if (mouse_) {
+    double nearest = std::numeric_limits<double>::infinity();
+    for (int c = 0; c < 8; ++c) {
+      const Vec3 corner((c & 1) ? bounds_max_.x() : bounds_min_.x(), (c & 2) ? bounds_max_.y() : bounds_min_.y(),
+                        (c & 4) ? bounds_max_.z() : bounds_min_.z());
+      nearest = std::min(nearest, (corner - camera_.eye()).dot(camera_.forward()));
+    }
+    mouse_world_ = camera_.eye() + camera_.forward() * std::max(nearest - 0.05 * scene_size(), 0.1 * camera_.distance());
+    plane_point_ = mouse_world_;
+    mouse_depth_m_ = 0.0;
+    mouse_->place((calibration_.position.inverse() * mouse_world_.homogeneous()).head<3>());
+  }
+  session_->set_realtime_pacing(realtime_pacing_);
+  session_->start_realtime();
+  if (!animating_) (void)session_->submit(coupling::command::Pause{});
+  remember_recent(file);
+  report(fmt::format("opened {} ({} bod{}, device {})", file.string(), bodies_.size(), bodies_.size() == 1 ? "y" : "ies", spec), false);
+  return {};
+}
+
+void Gui::reset_camera() {
+  // Up is the scene's: against gravity when it has gravity, else z (HoF's organs).
+  Vec3 up = Vec3::UnitZ();
+  for (const BodyView& b : bodies_) {
+    if (b.config && b.config->gravity_m_per_s2.norm() > 0.0) {
+      up = -b.config->gravity_m_per_s2.normalized();
+      break;
+    }
+  }
+  camera_.set_up(up);
+  const scene::GraphicsSetup defaults;
+  const Vec3 centre = 0.5 * (bounds_min_ + bounds_max_);
+  const double radius = 0.5 * scene_size();
+  const scene::GraphicsSetup& g = project_.graphics;
+  const double distance = (g.viewpoint_m - g.look_at_m).norm();
+  // The project's viewpoint, unless it is the format's default and does not frame this scene
+  // (a scene in millimetres, or somewhere else).
+  const bool is_default = g.viewpoint_m == defaults.viewpoint_m && g.look_at_m == defaults.look_at_m;
+  const bool frames = (centre - g.look_at_m).norm() < 0.5 * distance && radius > 0.05 * distance && radius < 2.0 * distance;
+  if (file_.extension() == ".hof" && (!is_default || frames)) {
+    camera_.look(g.viewpoint_m, g.look_at_m);
+  } else {
+    camera_.fit(bounds_min_, bounds_max_);
+  }
+}
+
+void Gui::upload_layer(LayerView& layer, const haptics::SurfaceSnapshot& s) {
+  layer.latest = &s;
+  layer.mesh.set_positions(s.vertices);
+  layer.mesh.set_normals(s.vertex_normals);
+  layer.max_displacement_m = 0.0;
+  if (layer.rest.size() == s.vertices.size()) {
+    for (std::size_t i = 0; i < s.vertices.size(); ++i) layer.max_displacement_m = std::max(layer.max_displacement_m, (s.vertices[i] - layer.rest[i]).norm());
+  }
+  if (project_.graphics.color_by != "displacement" || layer.rest.size() != s.vertices.size()) {
+    if (layer.mesh.has_colours()) layer.mesh.set_colours({});
+    return;
+  }
+  // Colour by displacement from rest on a fixed scale (1 % of the scene at least), so that a
+  // still body does not flicker through the colour map.
+  const double range = std::max(layer.max_displacement_m, 0.01 * scene_size());
+  layer.colours.resize(s.vertices.size());
+  for (std::size_t i = 0; i < s.vertices.size(); ++i) {
+    const Eigen::Vector3f c = render::viridis(static_cast<float>((s.vertices[i] - layer.rest[i]).norm() / range));
+    layer.colours[i] = render::Rgba(c.x(), c.y(), c.z(), 1.0f);
+  }
+  layer.mesh.set_colours(layer.colours);
+}
+
+void Gui::update_from_loops() {
+  if (!session_) return;
+  const auto now = Clock::now();
+  // Telemetry: every tick since the last frame.
+  std::uint64_t last_tick = 0;
+  bool any = false;
+  session_->poll([&](const haptics::HapticSample& s) {
+    any = true;
+    last_tick = s.tick;
+    ++stats_.samples;
+    if (!s.valid) {
+      ++stats_.invalid;
+      return;
+    }
+    if (!s.force.allFinite() || !s.requested_force.allFinite()) ++stats_.non_finite;
+    if (s.requested_force.norm() > s.force.norm() + 1e-9) ++stats_.clamped;
+    if (s.period_s > 0.0) stats_.add_period(s.period_s);
+    max_force_seen_n_ = std::max(max_force_seen_n_, s.force.norm());
+    if (s.contact) ++contact_ticks_;
+    // Indentation: as `hof run` (telemetry.csv) counts it, from where the contact began.
+    double indentation = 0.0;
+    if (s.contact && s.triangle >= 0) {
+      const double from_rest = (session_->rest_point(s.triangle, s.barycentric, s.layer) - s.contact_point).dot(s.contact_normal);
+      if (!was_in_contact_) displaced_at_contact_ = from_rest;
+      indentation = from_rest - displaced_at_contact_;
+      contact_body_ = session_->body_of_triangle(s.triangle, s.layer);
+    }
+    was_in_contact_ = s.contact && s.triangle >= 0;
+    indentation_m_ = indentation;
+    if (s.time_s >= next_plot_time_) {
+      next_plot_time_ = s.time_s + 1.0 / kPlotRateHz;
+      std::rotate(plot_force_.begin(), plot_force_.begin() + 1, plot_force_.end());
+      std::rotate(plot_indentation_.begin(), plot_indentation_.begin() + 1, plot_indentation_.end());
+      plot_force_.back() = static_cast<float>(s.force.norm());
+      plot_indentation_.back() = static_cast<float>(1e3 * indentation);
+    }
+    last_ = s;
+  });
+  if (any) stats_.haptic_ticks.emplace_back(now, last_tick);
+  // The latest shapes.
+  for (std::size_t l = 0; l < layers_.size(); ++l) {
+    auto& buffer = session_->graphics_surfaces(l);
+    if (buffer.acquire()) {
+      upload_layer(layers_[l], buffer.read());
+      max_displacement_seen_m_ = std::max(max_displacement_seen_m_, layers_[l].max_displacement_m);
+    } else {
+      layers_[l].latest = &buffer.read();
+    }
+  }
+  stats_.sim_sequences.emplace_back(now, session_->steps_taken());
+  stats_.frames.push_back(now);
+  stats_.update(now);
+  if (session_->simulation_ended()) {
+    const coupling::SessionReport r = session_->stop_realtime();
+    report(fmt::format("the simulation stopped: {} — change a setting and press Reset", r.divergence.empty() ? "it ended" : r.divergence),
+           true);
+    // The haptic loop has stopped with it (zero force sent); Reset starts both again.
+  }
+}
+
+void Gui::set_animating(bool on) {
+  animating_ = on;
+  if (!session_) return;
+  (void)session_->submit(on ? coupling::Command{coupling::command::Resume{}} : coupling::Command{coupling::command::Pause{}});
+}
+
+Expected<void> Gui::apply_set(const std::string& element, const std::string& attribute, const std::string& value) {
+  if (!session_) return make_error(ErrorCode::kInvalidArgument, "no world is open");
+  const std::string name = element + "@" + attribute;
+  // mechanics/BODY/COMPONENT@PARAMETER (or mechanics/BODY@PARAMETER for the model's own).
+  if (element == "mechanics" || element.starts_with("mechanics/")) {
+    const std::string rest = element.size() > 10 ? element.substr(10) : std::string();
+    const std::size_t slash = rest.find('/');
+    const std::string body = rest.substr(0, slash);
+    const std::string component = slash == std::string::npos ? std::string() : rest.substr(slash + 1);
+    if (body.empty()) return make_error(ErrorCode::kInvalidArgument, fmt::format("'{}': name a body: mechanics/BODY/COMPONENT@PARAMETER", name));
+    double v = 0.0;
+    const auto parsed = std::from_chars(value.data(), value.data() + value.size(), v);
+    if (parsed.ec != std::errc() || parsed.ptr != value.data() + value.size() || !std::isfinite(v)) {
+      return make_error(ErrorCode::kInvalidArgument, fmt::format("'{}': '{}' is not a number", name, value));
+    }
+    if (auto ok = session_->submit(coupling::command::SetParameter{body, component, attribute, v}); !ok) {
+      Error e = ok.error();
+      e.message = fmt::format("'{}': {}", name, e.message);
+      return std::unexpected(e);
+    }
+    for (BodyView& b : bodies_) {
+      if (b.name == body && b.config) (void)mechanics::set_parameter(*b.config, component, attribute, v);
+    }
+    dirty_ = true;
+    return {};
+  }
+  scene::HofProject next = project_;
+  if (auto ok = scene::set_project_attribute(next, file_, element, attribute, value); !ok) return ok;
+  const coupling::SessionConfig config = scene::session_config(next);
+  if (element == "haptics/surface") {
+    for (const BodyView& b : bodies_) {
+      const bool own = std::any_of(next.bodies.begin(), next.bodies.end(), [&](const auto& s) { return s.name == b.name && s.surface; }) ||
+                       std::any_of(next.obstacles.begin(), next.obstacles.end(), [&](const auto& o) { return o.name == b.name && o.surface; });
+      if (own) continue;
+      if (auto ok = session_->submit(coupling::command::SetMaterial{b.name, next.surface}); !ok) return ok;
+    }
+  } else if (element == "haptics" &&
+             (attribute == "renderer" || attribute == "proxyRadius" || attribute == "forceShading" || attribute == "touchableFace")) {
+    haptics::RendererConfig r = config.haptics.renderer;
+    if (auto ok = session_->submit(coupling::command::SetRenderer{r}); !ok) return ok;
+  } else if (element.starts_with("haptics/effects")) {
+    if (auto ok = session_->submit(coupling::command::SetEffects{config.effects}); !ok) return ok;
+  } else if (element == "haptics" && attribute == "device") {
+    const std::string spec = next.device == "auto" ? std::string("mouse") : next.device;
+    coupling::command::SetDevice command{spec, nullptr};
+    if (auto ok = session_->submit(command); !ok) return ok;
+    device_spec_ = spec;
+    mouse_ = nullptr;  // the mouse device (if any) of a switch is a new one; see below
+    if (spec == "mouse") report("the mouse stylus is back when the project is reopened", false);
+  } else if (element == "graphics" || element.starts_with("graphics/") || element == "haptics/stylus") {
+    // Drawn by this window only.
+  } else {
+    report(fmt::format("'{}' is saved; it takes effect when the project is reopened", name), false);
+  }
+  project_ = std::move(next);
+  dirty_ = true;
+  return {};
+}
+
+Expected<void> Gui::save(const std::filesystem::path& path) {
+  if (!session_) return make_error(ErrorCode::kInvalidArgument, "no world is open");
+  scene::HofProject out = project_;
+  // The scene path is relative to the project: re-anchor it where the project goes.
+  std::error_code ec;
+  if (out.mechanics_inline.empty() && !out.mechanics_scene.empty()) {
+    const std::filesystem::path scene = std::filesystem::absolute(scene::scene_file(project_, file_), ec);
+    const std::filesystem::path folder = std::filesystem::absolute(path, ec).parent_path();
+    out.mechanics_scene = std::filesystem::relative(scene, folder, ec);
+    if (ec || out.mechanics_scene.empty()) out.mechanics_scene = scene;
+  }
+  if (file_.extension() == ".x3d") {
+    return make_error(ErrorCode::kUnsupported, "an X3D scene cannot be saved as a project yet (the project format holds SOFA scenes)",
+                      path.string());
+  }
+  // Parameters changed through the seam, as <set> elements.
+  for (const coupling::ParameterChange& change : session_->parameter_changes()) {
+    auto same = std::find_if(out.parameters.begin(), out.parameters.end(), [&](const auto& p) {
+      return p.body == change.body && p.component == change.component && p.parameter == change.parameter;
+    });
+    if (same != out.parameters.end()) {
+      same->value = change.value;
+    } else {
+      out.parameters.push_back(change);
+    }
+  }
+  if (auto ok = scene::write_project(out, path); !ok) return ok;
+  if (std::filesystem::absolute(path, ec) == std::filesystem::absolute(file_, ec)) {
+    project_ = out;
+    dirty_ = false;
+  } else {
+    dirty_ = false;
+  }
+  remember_recent(path);
+  report("saved " + path.string(), false);
+  return {};
+}
+
+Expected<void> Gui::export_shape(const std::filesystem::path& path) {
+  mesh::Mesh m;
+  for (const LayerView& l : layers_) {
+    if (!l.latest) continue;
+    const auto offset = static_cast<mesh::NodeIndex>(m.nodes.size());
+    m.nodes.insert(m.nodes.end(), l.latest->vertices.begin(), l.latest->vertices.end());
+    for (const mesh::Tri& t : l.latest->triangles) m.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+  }
+  if (auto ok = mesh::write_mesh(m, path); !ok) return ok;
+  report("exported the current shape to " + path.string(), false);
+  return {};
+}
+
+// ---------------------------------------------------------------------------------------------
+// The mouse stylus
+
+std::optional<Vec3> Gui::pick(double x_px, double y_px) const {
+  const auto [origin, direction] = camera_.ray(x_px, y_px, view_w_, view_h_);
+  const Vec3 far = origin + direction * (camera_.distance() * 20.0);
+  std::optional<Vec3> best;
+  double best_t = 2.0;
+  for (const LayerView& l : layers_) {
+    if (!l.latest || l.latest->triangles.empty()) continue;
+    const collision::SweepHit hit = l.latest->tree.first_hit_segment(l.latest->view(), origin, far, collision::TouchableFace::kFrontAndBack);
+    if (hit.triangle >= 0 && hit.t < best_t) {
+      best_t = hit.t;
+      best = hit.point;
+    }
+  }
+  return best;
+}
+
+void Gui::set_mouse_target(const Vec3& world) {
+  mouse_world_ = world;
+  if (mouse_) mouse_->set_target((calibration_.position.inverse() * world.homogeneous()).head<3>());
+}
+
+void Gui::mouse_to(double window_x, double window_y, double depth_m, bool new_plane) {
+  const double x = window_x - view_x_, y = window_y;
+  if (new_plane) {
+    // The plane faces the camera and passes just in front of the surface under the cursor
+    // (by the proxy's radius), or through the current stylus when there is none.
+    const double clearance = std::max(project_.proxy_radius_m, 0.002 * scene_size()) * 1.5;
+    if (const auto hit = pick(x, y)) {
+      plane_point_ = *hit - camera_.forward() * clearance;
+    } else {
+      plane_point_ = mouse_world_;
+    }
+    mouse_depth_m_ = 0.0;
+  }
+  mouse_depth_m_ = depth_m;
+  const auto [origin, direction] = camera_.ray(x, y, view_w_, view_h_);
+  const Vec3 f = camera_.forward();
+  const double plane_depth = (plane_point_ - origin).dot(f) + mouse_depth_m_;
+  const double along = direction.dot(f);
+  if (!(along > 1e-9)) return;
+  set_mouse_target(origin + direction * (plane_depth / along));
+}
+
+void Gui::handle_input() {
+  ImGuiIO& io = ImGui::GetIO();
+  double x = 0.0, y = 0.0;
+  glfwGetCursorPos(window_, &x, &y);
+  const double dx = x - last_x_, dy = y - last_y_;
+  last_x_ = x;
+  last_y_ = y;
+  // Depth: the wheel while the stylus is held, or W/S at any time.
+  const double depth_step = 0.01 * scene_size();
+  double push = 0.0;
+  if (!io.WantCaptureKeyboard && !io.KeyCtrl) {
+    if (ImGui::IsKeyPressed(GLFW_KEY_W)) push += depth_step;
+    if (ImGui::IsKeyPressed(GLFW_KEY_S)) push -= depth_step;
+  }
+  if (io.WantCaptureMouse && !dragging_stylus_) {
+    if (push != 0.0 && mouse_) {
+      mouse_depth_m_ += push;
+      set_mouse_target(mouse_world_ + camera_.forward() * push);
+    }
+    return;
+  }
+  const bool left = glfwGetMouseButton(window_, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS;
+  const bool right = glfwGetMouseButton(window_, GLFW_MOUSE_BUTTON_RIGHT) == GLFW_PRESS;
+  const bool middle = glfwGetMouseButton(window_, GLFW_MOUSE_BUTTON_MIDDLE) == GLFW_PRESS;
+  const bool shift = io.KeyShift;
+  // Left: the stylus follows the cursor on a plane facing the camera (set where the drag
+  // starts, just in front of the surface under the cursor). Right: orbit; middle or
+  // shift+right: pan; wheel: zoom (while the stylus is held: depth).
+  if (left && mouse_) {
+    if (!dragging_stylus_) {
+      mouse_to(x, y, 0.0, true);
+      dragging_stylus_ = true;
+    }
+    mouse_to(x, y, mouse_depth_m_ + push + depth_step * io.MouseWheel, false);
+    return;
+  }
+  dragging_stylus_ = false;
+  if (push != 0.0 && mouse_) {
+    mouse_depth_m_ += push;
+    set_mouse_target(mouse_world_ + camera_.forward() * push);
+  }
+  if ((right && shift) || middle) {
+    camera_.pan(dx, dy, view_h_);
+  } else if (right) {
+    camera_.orbit(dx, dy);
+  }
+  if (io.MouseWheel != 0.0f) camera_.zoom(std::pow(0.9, io.MouseWheel));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Drawing
+
+void Gui::draw_scene(int width, int height) {
+  view_x_ = static_cast<int>(kPanelWidth);
+  view_w_ = std::max(width - view_x_, 1);
+  view_h_ = std::max(height, 1);
+  glViewport(0, 0, width, height);
+  glClearColor(0.12f, 0.13f, 0.15f, 1.0f);
+  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  renderer_->begin(camera_, view_x_, 0, view_w_, view_h_, render::Rgba(0.16f, 0.18f, 0.22f, 1.0f));
+
+  const scene::GraphicsSetup& g = project_.graphics;
+  render::Material tissue;
+  tissue.diffuse = render::Rgba(static_cast<float>(g.diffuse_color.x()), static_cast<float>(g.diffuse_color.y()),
+                                static_cast<float>(g.diffuse_color.z()), static_cast<float>(1.0 - g.transparency));
+  tissue.specular = g.specular_color.cast<float>();
+  tissue.shininess = static_cast<float>(g.shininess);
+  render::Material rigid;
+  rigid.diffuse = render::Rgba(0.62f, 0.64f, 0.68f, 1.0f);
+  rigid.specular = {0.3f, 0.3f, 0.3f};
+  const render::RenderMode mode = render_mode_of(g.render_mode);
+  const double size = scene_size();
+  // Opaque parts first, then transparent ones.
+  for (int pass = 0; pass < 2; ++pass) {
+    for (LayerView& l : layers_) {
+      for (const haptics::SurfacePart& part : l.parts) {
+        const render::Material& m = part.is_static ? rigid : tissue;
+        if ((m.diffuse.w() < 0.999f) != (pass == 1)) continue;
+        renderer_->draw(l.mesh, m, part.is_static ? render::RenderMode::kShaded : mode, Eigen::Matrix4f::Identity(),
+                       static_cast<std::size_t>(part.first_triangle), static_cast<std::size_t>(part.triangle_count));
+      }
+    }
+  }
+  // Debug views.
+  if (show_bound_tree_) {
+    std::vector<Vec3> lines;
+    for (const LayerView& l : layers_) {
+      if (!l.latest) continue;
+      for (const auto& [lo, hi] : l.latest->tree.boxes(bound_tree_depth_)) {
+        for (int a = 0; a < 3; ++a) {
+          for (int c = 0; c < 4; ++c) {
+            Vec3 p = lo;
+            const int b1 = (a + 1) % 3, b2 = (a + 2) % 3;
+            p[b1] = (c & 1) ? hi[b1] : lo[b1];
+            p[b2] = (c & 2) ? hi[b2] : lo[b2];
+            Vec3 q = p;
+            q[a] = hi[a];
+            lines.push_back(p);
+            lines.push_back(q);
+          }
+        }
+      }
+    }
+    renderer_->draw_lines(lines, render::Rgba(0.3f, 0.9f, 0.4f, 1.0f));
+  }
+  if (show_fixed_nodes_) {
+    for (const BodyView& b : bodies_) renderer_->draw_points(b.fixed_points, render::Rgba(0.2f, 0.6f, 1.0f, 1.0f), 5.0f);
+  }
+  // The stylus, the proxy, the device, the contact.
+  const double proxy_radius = std::max(project_.renderer == haptics::RendererKind::kRuspini ? project_.proxy_radius_m : project_.stylus_radius_m,
+                                       0.004 * size);
+  if (last_.valid) {
+    const Vec3 shaft = (camera_.up_on_screen() * 0.8 - camera_.forward() * 0.6).normalized();
+    const double length = std::clamp(project_.stylus_length_m, 0.05 * size, 0.6 * size);
+    renderer_->draw_cylinder(last_.proxy, last_.proxy + shaft * length, proxy_radius * 0.45, render::Rgba(0.75f, 0.78f, 0.82f, 1.0f));
+    renderer_->draw_sphere(last_.proxy, proxy_radius, render::Rgba(0.35f, 0.75f, 1.0f, 1.0f));
+    if (show_device_) {
+      renderer_->draw_sphere(last_.device, proxy_radius * 0.6, render::Rgba(0.95f, 0.95f, 0.3f, 1.0f));
+      const Vec3 segment[2] = {last_.proxy, last_.device};
+      renderer_->draw_lines(segment, render::Rgba(0.95f, 0.95f, 0.3f, 1.0f));
+    }
+    if (last_.contact) {
+      renderer_->draw_sphere(last_.contact_point, proxy_radius * 0.5, render::Rgba(1.0f, 0.85f, 0.1f, 1.0f));
+      const Vec3 normal[2] = {last_.contact_point, last_.contact_point + last_.contact_normal * 0.08 * size};
+      renderer_->draw_lines(normal, render::Rgba(0.3f, 1.0f, 0.3f, 1.0f));
+      const double per_n = arrow_m_per_n_ > 0.0f ? arrow_m_per_n_ : size / 3.0 / std::max(max_force_n_, 1e-6);
+      const Vec3 force = last_.force;
+      if (force.norm() > 1e-6) {
+        renderer_->draw_arrow(last_.proxy, last_.proxy + force * per_n, proxy_radius * 0.35, render::Rgba(1.0f, 0.25f, 0.2f, 1.0f));
+      }
+      if (show_contact_triangle_ && last_.triangle >= 0 && static_cast<std::size_t>(last_.layer) < layers_.size()) {
+        const haptics::SurfaceSnapshot* s = layers_[static_cast<std::size_t>(last_.layer)].latest;
+        if (s && static_cast<std::size_t>(last_.triangle) < s->triangles.size()) {
+          const mesh::Tri& t = s->triangles[static_cast<std::size_t>(last_.triangle)];
+          const Vec3 lift = last_.contact_normal * 0.001 * size;
+          const Vec3 a = s->vertices[static_cast<std::size_t>(t[0])] + lift, b = s->vertices[static_cast<std::size_t>(t[1])] + lift,
+                     c = s->vertices[static_cast<std::size_t>(t[2])] + lift;
+          const Vec3 edges[6] = {a, b, b, c, c, a};
+          renderer_->draw_lines(edges, render::Rgba(0.2f, 1.0f, 1.0f, 1.0f));
+        }
+      }
+    }
+  }
+  glViewport(0, 0, width, height);
+}
+
+void Gui::draw_legend() {
+  if (project_.graphics.color_by != "displacement" || layers_.empty()) return;
+  double range = 0.0;
+  for (const LayerView& l : layers_) range = std::max(range, l.max_displacement_m);
+  range = std::max(range, 0.01 * scene_size());
+  const ImVec2 size(260, 58);
+  ImGui::SetNextWindowPos(ImVec2(ImGui::GetIO().DisplaySize.x - size.x - 10, ImGui::GetIO().DisplaySize.y - size.y - 10));
+  ImGui::SetNextWindowSize(size);
+  ImGui::Begin("##legend", nullptr, ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_NoInputs | ImGuiWindowFlags_NoSavedSettings);
+  const double scale = length_unit_ == "m" ? 1e3 : 1.0;
+  ImGui::Text("displacement from rest (%s)", length_unit_ == "m" ? "mm" : length_unit_.c_str());
+  ImDrawList* draw = ImGui::GetWindowDrawList();
+  const ImVec2 p = ImGui::GetCursorScreenPos();
+  constexpr int kSteps = 32;
+  const float w = (size.x - 80) / kSteps;
+  for (int i = 0; i < kSteps; ++i) {
+    const Eigen::Vector3f c = render::viridis(static_cast<float>(i) / (kSteps - 1));
+    const float x0 = p.x + static_cast<float>(i) * w;
+    draw->AddRectFilled(ImVec2(x0, p.y), ImVec2(x0 + w, p.y + 14), ImColor(c.x(), c.y(), c.z()));
+  }
+  ImGui::Dummy(ImVec2(size.x - 80, 14));
+  ImGui::SameLine();
+  ImGui::Text("0 - %.3g", range * scale);
+  ImGui::End();
+}
+
+void Gui::draw_mechanics_panel() {
+  for (BodyView& b : bodies_) {
+    const std::string label = fmt::format("{} ({})", b.name, b.deformable ? "deformable" : "rigid");
+    if (!ImGui::TreeNode(label.c_str())) continue;
+    if (!b.config) {
+      ImGui::TextDisabled("fixed shape: touchable, never deforms");
+    } else {
+      ImGui::TextDisabled("%zu nodes, %zu tetrahedra", b.config->positions.size(), b.config->tets.size());
+      for (const std::string& p : b.parameters) {
+        const std::size_t slash = p.find('/');
+        const std::string component = p.substr(0, slash), parameter = p.substr(slash + 1);
+        const auto value = mechanics::get_parameter(*b.config, component, parameter);
+        if (!value) continue;
+        double v = *value;
+        ImGui::SetNextItemWidth(130);
+        const std::string id = fmt::format("{}##{}/{}", p, b.name, p);
+        if (ImGui::InputDouble(id.c_str(), &v, 0.0, 0.0, "%.6g", ImGuiInputTextFlags_EnterReturnsTrue)) {
+          const std::string element = component.empty() ? "mechanics/" + b.name : "mechanics/" + b.name + "/" + component;
+          if (auto ok = apply_set(element, parameter, number_text(v)); !ok) report(ok.error().to_string(), true);
+        }
+      }
+    }
+    ImGui::TreePop();
+  }
+}
+
+void Gui::draw_haptics_panel() {
+  const auto set = [&](const char* element, const char* attribute, const std::string& value) {
+    if (auto ok = apply_set(element, attribute, value); !ok) report(ok.error().to_string(), true);
+  };
+  ImGui::Text("device: %s", device_spec_.c_str());
+  if (session_) {
+    ImGui::TextDisabled("max force %.3g N; %s", max_force_n_, mouse_ ? "left-drag in the view moves the stylus" : "");
+  }
+  static std::array<char, 256> spec{};
+  ImGui::SetNextItemWidth(220);
+  ImGui::InputTextWithHint("##spec", "udp:5005, spacemouse, mouse", spec.data(), spec.size());
+  ImGui::SameLine();
+  if (ImGui::Button("Connect") && spec[0] != '\0') set("haptics", "device", spec.data());
+  int renderer = static_cast<int>(project_.renderer);
+  const char* renderers[] = {"PenaltyRenderer", "GodObjectRenderer", "RuspiniRenderer"};
+  ImGui::SetNextItemWidth(200);
+  if (ImGui::Combo("renderer", &renderer, renderers, 3)) set("haptics", "renderer", renderers[renderer]);
+  double radius = project_.proxy_radius_m;
+  ImGui::SetNextItemWidth(200);
+  if (ImGui::InputDouble("proxyRadius (m)", &radius, 0.0, 0.0, "%.4g", ImGuiInputTextFlags_EnterReturnsTrue)) {
+    set("haptics", "proxyRadius", number_text(radius));
+  }
+  bool shading = project_.force_shading;
+  if (ImGui::Checkbox("forceShading", &shading)) set("haptics", "forceShading", shading ? "true" : "false");
+  int face = static_cast<int>(project_.touchable_face);
+  const char* faces[] = {"FRONT", "BACK", "FRONT_AND_BACK"};
+  ImGui::SetNextItemWidth(200);
+  if (ImGui::Combo("touchableFace", &face, faces, 3)) set("haptics", "touchableFace", faces[face]);
+  ImGui::Separator();
+  ImGui::TextDisabled("surface");
+  int kind = static_cast<int>(project_.surface.kind);
+  const char* kinds[] = {"SmoothSurface", "FrictionalSurface", "MagneticSurface"};
+  ImGui::SetNextItemWidth(200);
+  if (kind >= 0 && kind < 3 && ImGui::Combo("type", &kind, kinds, 3)) set("haptics/surface", "type", kinds[kind]);
+  const auto number = [&](const char* label, const char* attribute, double value) {
+    ImGui::SetNextItemWidth(200);
+    if (ImGui::InputDouble(label, &value, 0.0, 0.0, "%.4g", ImGuiInputTextFlags_EnterReturnsTrue)) {
+      set("haptics/surface", attribute, number_text(value));
+    }
+  };
+  number("stiffness", "stiffness", project_.surface.stiffness);
+  number("damping (N s/m)", "damping", project_.surface.damping_n_s_per_m);
+  number("staticFriction", "staticFriction", project_.surface.static_friction);
+  number("dynamicFriction", "dynamicFriction", project_.surface.dynamic_friction);
+  bool relative = project_.surface.use_relative_values;
+  if (ImGui::Checkbox("useRelativeValues", &relative)) set("haptics/surface", "useRelativeValues", relative ? "true" : "false");
+  ImGui::Separator();
+  ImGui::TextDisabled("options (saved; they apply when the project is reopened)");
+  bool tree = project_.use_bound_tree;
+  if (ImGui::Checkbox("useBoundTree", &tree)) set("haptics/options", "useBoundTree", tree ? "true" : "false");
+  ImGui::TextDisabled("effects: %zu spring, %zu viscosity, %zu force field", project_.effects.springs.size(),
+                      project_.effects.viscosities.size(), project_.effects.constants.size());
+}
+
+void Gui::draw_graphics_panel() {
+  const auto set = [&](const char* element, const char* attribute, const std::string& value) {
+    if (auto ok = apply_set(element, attribute, value); !ok) report(ok.error().to_string(), true);
+  };
+  scene::GraphicsSetup& g = project_.graphics;
+  const char* modes[] = {"shaded", "wireframe", "shaded+wireframe", "points"};
+  int mode = static_cast<int>(std::find(std::begin(modes), std::end(modes), g.render_mode) - std::begin(modes));
+  ImGui::SetNextItemWidth(200);
+  if (ImGui::Combo("renderMode", &mode, modes, 4)) set("graphics", "renderMode", modes[mode]);
+  const char* colourings[] = {"material", "displacement"};
+  int colouring = g.color_by == "displacement" ? 1 : 0;
+  ImGui::SetNextItemWidth(200);
+  if (ImGui::Combo("colorBy", &colouring, colourings, 2)) set("graphics", "colorBy", colourings[colouring]);
+  float diffuse[3] = {static_cast<float>(g.diffuse_color.x()), static_cast<float>(g.diffuse_color.y()), static_cast<float>(g.diffuse_color.z())};
+  if (ImGui::ColorEdit3("diffuseColor", diffuse)) {
+    set("graphics/material", "diffuseColor", fmt::format("{} {} {}", diffuse[0], diffuse[1], diffuse[2]));
+  }
+  float shininess = static_cast<float>(g.shininess), transparency = static_cast<float>(g.transparency);
+  ImGui::SetNextItemWidth(200);
+  if (ImGui::SliderFloat("shininess", &shininess, 0.0f, 1.0f)) set("graphics/material", "shininess", number_text(shininess));
+  ImGui::SetNextItemWidth(200);
+  if (ImGui::SliderFloat("transparency", &transparency, 0.0f, 0.9f)) set("graphics/material", "transparency", number_text(transparency));
+  if (ImGui::Button("Reset view")) reset_camera();
+  ImGui::SameLine();
+  if (ImGui::Button("Keep this view in the project")) {
+    const Vec3 eye = camera_.eye(), target = camera_.target();
+    set("graphics", "viewpoint", fmt::format("{} {} {}", eye.x(), eye.y(), eye.z()));
+    set("graphics", "lookAt", fmt::format("{} {} {}", target.x(), target.y(), target.z()));
+  }
+  ImGui::Separator();
+  ImGui::TextDisabled("debug views");
+  ImGui::Checkbox("bound-tree boxes", &show_bound_tree_);
+  if (show_bound_tree_) {
+    ImGui::SameLine();
+    ImGui::SetNextItemWidth(100);
+    ImGui::SliderInt("depth", &bound_tree_depth_, 0, 12);
+  }
+  ImGui::Checkbox("contact triangle", &show_contact_triangle_);
+  ImGui::Checkbox("fixed nodes", &show_fixed_nodes_);
+  ImGui::Checkbox("device position", &show_device_);
+  ImGui::SetNextItemWidth(200);
+  ImGui::SliderFloat("force arrow (m/N, 0 = auto)", &arrow_m_per_n_, 0.0f, 0.1f, "%.3f");
+}
+
+void Gui::draw_panels() {
+  ImGuiIO& io = ImGui::GetIO();
+  // Menu.
+  float menu_height = 0.0f;
+  if (ImGui::BeginMainMenuBar()) {
+    if (ImGui::BeginMenu("File")) {
+      if (ImGui::MenuItem("Open...", "Ctrl+O")) want_open_dialog_ = true;
+      if (ImGui::BeginMenu("Open recent", !recent_.empty())) {
+        for (const auto& r : recent_) {
+          if (ImGui::MenuItem(r.string().c_str())) dropped_ = r;
+        }
+        ImGui::EndMenu();
+      }
+      if (ImGui::MenuItem("Save", "Ctrl+S", false, session_ && file_.extension() == ".hof")) {
+        if (auto ok = save(file_); !ok) report(ok.error().to_string(), true);
+      }
+      if (ImGui::MenuItem("Save as...", nullptr, false, session_ != nullptr)) want_save_dialog_ = true;
+      if (ImGui::MenuItem("Export shape (.obj, .vtu)...", nullptr, false, session_ != nullptr)) want_export_dialog_ = true;
+      if (ImGui::MenuItem("Screenshot (.png)...")) want_screenshot_dialog_ = true;
+      ImGui::Separator();
+      if (ImGui::MenuItem("Quit", "Ctrl+Q")) {
+        if (dirty_) confirm_quit_ = true;
+        else quit_ = true;
+      }
+      ImGui::EndMenu();
+    }
+    menu_height = ImGui::GetWindowSize().y;
+    ImGui::EndMainMenuBar();
+  }
+  if (want_open_dialog_) {
+    want_open_dialog_ = false;
+    dialog_.show("Open a project, SOFA scene or X3D scene", false, {".hof", ".scn", ".x3d"}, [this](const std::filesystem::path& p) { dropped_ = p; });
+  }
+  if (want_save_dialog_) {
+    want_save_dialog_ = false;
+    dialog_.show("Save the project", true, {".hof"}, [this](const std::filesystem::path& p) {
+      std::filesystem::path target = p.extension() == ".hof" ? p : std::filesystem::path(p.string() + ".hof");
+      if (auto ok = save(target); !ok) report(ok.error().to_string(), true);
+    }, file_.stem().string() + ".hof");
+  }
+  if (want_export_dialog_) {
+    want_export_dialog_ = false;
+    dialog_.show("Export the current shape", true, {".obj", ".vtu"}, [this](const std::filesystem::path& p) {
+      if (auto ok = export_shape(p); !ok) report(ok.error().to_string(), true);
+    }, file_.stem().string() + "-shape.obj");
+  }
+  if (want_screenshot_dialog_) {
+    want_screenshot_dialog_ = false;
+    dialog_.show("Save a screenshot", true, {".png"}, [this](const std::filesystem::path& p) { pending_screenshot_ = p; },
+                 file_.stem().string() + ".png");
+  }
+  dialog_.draw();
+  if (pending_open_ && !ImGui::IsPopupOpen("Open another file")) ImGui::OpenPopup("Open another file");
+  if (ImGui::BeginPopupModal("Open another file", nullptr, ImGuiWindowFlags_AlwaysAutoResize)) {
+    ImGui::Text("%s has changes that are not saved.", file_.filename().string().c_str());
+    const auto go = [&] {
+      if (auto ok = open(*pending_open_); !ok) report(ok.error().to_string(), true);
+      pending_open_.reset();
+      ImGui::CloseCurrentPopup();
+    };
+    if (ImGui::Button("Save, then open") ) {
+      if (auto ok = file_.extension() == ".hof" ? save(file_) : save(std::filesystem::path(file_).replace_extension(".hof")); ok) go();
+      else report(ok.error().to_string(), true);
+    }
+    ImGui::SameLine();
+    if (ImGui::Button("Discard them and open")) go();
+    ImGui::SameLine();
+    if (ImGui::Button("Cancel")) {
+      pending_open_.reset();
+      ImGui::CloseCurrentPopup();
+    }
+    ImGui::EndPopup();
+  }
+  if (confirm_quit_) {
+    ImGui::OpenPopup("Unsaved changes");
+    confirm_quit_ = false;
+  }
+  if (ImGui::BeginPopupModal("Unsaved changes", nullptr, ImGuiWindowFlags_AlwaysAutoResize)) {
+    ImGui::Text("%s has changes that are not saved.", file_.filename().string().c_str());
+    if (ImGui::Button("Save and quit")) {
+      auto ok = file_.extension() == ".hof" ? save(file_) : save(std::filesystem::path(file_).replace_extension(".hof"));
+      if (ok) quit_ = true;
+      else report(ok.error().to_string(), true);
+      ImGui::CloseCurrentPopup();
+    }
+    ImGui::SameLine();
+    if (ImGui::Button("Quit without saving")) {
+      quit_ = true;
+      ImGui::CloseCurrentPopup();
+    }
+    ImGui::SameLine();
+    if (ImGui::Button("Cancel")) ImGui::CloseCurrentPopup();
+    ImGui::EndPopup();
+  }
+
+  ImGui::SetNextWindowPos(ImVec2(0, menu_height));
+  ImGui::SetNextWindowSize(ImVec2(kPanelWidth, io.DisplaySize.y - menu_height));
+  ImGui::Begin("HoF", nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse | ImGuiWindowFlags_NoTitleBar);
+  ImGui::Text("%s%s", world_name_.empty() ? "(nothing open: File > Open, or drop a file here)" : world_name_.c_str(), dirty_ ? " *" : "");
+  ImGui::TextDisabled("%s", file_.string().c_str());
+  if (!error_.empty()) {
+    ImGui::PushStyleColor(ImGuiCol_Text, ImVec4(1.0f, 0.45f, 0.4f, 1.0f));
+    ImGui::TextWrapped("%s", error_.c_str());
+    ImGui::PopStyleColor();
+    if (ImGui::SmallButton("dismiss")) error_.clear();
+  }
+  // Controls.
+  if (ImGui::Button(animating_ ? "Stop" : "Animate")) set_animating(!animating_);
+  ImGui::SameLine();
+  ImGui::BeginDisabled(animating_);
+  if (ImGui::Button("Step") && session_) (void)session_->submit(coupling::command::SingleStep{1});
+  ImGui::EndDisabled();
+  ImGui::SameLine();
+  if (ImGui::Button("Reset") && session_) {
+    if (!session_->realtime_running()) session_->start_realtime();
+    (void)session_->submit(coupling::command::Reset{});
+    if (!animating_) (void)session_->submit(coupling::command::Pause{});
+  }
+  ImGui::SameLine();
+  if (ImGui::Checkbox("real time", &realtime_pacing_) && session_) session_->set_realtime_pacing(realtime_pacing_);
+  // Live figures.
+  ImGui::Text("%.0f frames/s   %.0f steps/s (dt %.3g s)", stats_.fps, stats_.steps_per_s, session_ ? session_->dt() : 0.0);
+  ImGui::Text("haptic %.0f Hz, period p50 %.3f ms, p99 %.3f ms", stats_.haptic_hz, stats_.period_p50_ms, stats_.period_p99_ms);
+  ImGui::Text("safety: %llu clamped, %llu non-finite, %llu without reading", static_cast<unsigned long long>(stats_.clamped),
+              static_cast<unsigned long long>(stats_.non_finite), static_cast<unsigned long long>(stats_.invalid));
+  const float top = *std::max_element(plot_force_.begin(), plot_force_.end());
+  ImGui::PlotLines("##force", plot_force_.data(), static_cast<int>(plot_force_.size()), 0,
+                   fmt::format("|F| (N), last {:.0f} s, now {:.2f}", kPlotSeconds, last_.force.norm()).c_str(), 0.0f,
+                   std::max(top * 1.1f, 0.5f), ImVec2(kPanelWidth - 20, 70));
+  const auto [lo, hi] = std::minmax_element(plot_indentation_.begin(), plot_indentation_.end());
+  const double unit = length_unit_ == "m" ? 1.0 : 1e-3;  // telemetry is in scene units for a SOFA scene
+  ImGui::PlotLines("##indentation", plot_indentation_.data(), static_cast<int>(plot_indentation_.size()), 0,
+                   fmt::format("indentation ({}), now {:.2f}", length_unit_ == "m" ? "mm" : "scene units / 1000", 1e3 * indentation_m_ * unit).c_str(),
+                   std::min(*lo, 0.0f), std::max(*hi * 1.1f, 1.0f), ImVec2(kPanelWidth - 20, 70));
+  // Touch.
+  if (ImGui::CollapsingHeader("Touch", ImGuiTreeNodeFlags_DefaultOpen)) {
+    if (last_.contact) {
+      const std::string body = contact_body_ >= 0 && static_cast<std::size_t>(contact_body_) < bodies_.size()
+                                   ? bodies_[static_cast<std::size_t>(contact_body_)].name
+                                   : "?";
+      ImGui::Text("body %s, triangle %d", body.c_str(), last_.triangle);
+      ImGui::Text("point  %.4f %.4f %.4f", last_.contact_point.x(), last_.contact_point.y(), last_.contact_point.z());
+      ImGui::Text("normal %.3f %.3f %.3f", last_.contact_normal.x(), last_.contact_normal.y(), last_.contact_normal.z());
+      ImGui::Text("force  %.3f N  (%.2f %.2f %.2f)", last_.force.norm(), last_.force.x(), last_.force.y(), last_.force.z());
+      ImGui::Text("indentation %.2f mm, proxy-device %.2f mm", 1e3 * indentation_m_ * unit, 1e3 * last_.penetration_m * unit);
+    } else {
+      ImGui::TextDisabled("no contact%s", mouse_ ? " (left-drag onto a body, wheel or W/S to press)" : "");
+    }
+  }
+  if (ImGui::CollapsingHeader("Mechanics")) draw_mechanics_panel();
+  if (ImGui::CollapsingHeader("Haptics")) draw_haptics_panel();
+  if (ImGui::CollapsingHeader("Graphics")) draw_graphics_panel();
+  if (ImGui::CollapsingHeader("Messages")) {
+    for (const std::string& m : log_) ImGui::TextWrapped("%s", m.c_str());
+  }
+  ImGui::End();
+  draw_legend();
+}
+
+void Gui::frame() {
+  const auto start = Clock::now();
+  glfwPollEvents();
+  ImGui_ImplOpenGL3_NewFrame();
+  ImGui_ImplGlfw_NewFrame();
+  ImGui::NewFrame();
+  if (dropped_) {
+    const std::filesystem::path file = *dropped_;
+    dropped_.reset();
+    if (dirty_) {
+      pending_open_ = file;  // asked in draw_panels()
+    } else if (auto ok = open(file); !ok) {
+      report(ok.error().to_string(), true);
+    }
+  }
+  ImGuiIO& io = ImGui::GetIO();
+  if (!io.WantCaptureKeyboard && io.KeyCtrl) {
+    if (ImGui::IsKeyPressed(GLFW_KEY_S) && file_.extension() == ".hof") {
+      if (auto ok = save(file_); !ok) report(ok.error().to_string(), true);
+    }
+    if (ImGui::IsKeyPressed(GLFW_KEY_O)) want_open_dialog_ = true;
+    if (ImGui::IsKeyPressed(GLFW_KEY_Q)) {
+      if (dirty_) confirm_quit_ = true;
+      else quit_ = true;
+    }
+  } else if (!io.WantCaptureKeyboard && ImGui::IsKeyPressed(GLFW_KEY_SPACE)) {
+    set_animating(!animating_);
+  }
+  handle_input();
+  update_from_loops();
+  draw_panels();
+  ImGui::Render();
+  int width = 0, height = 0;
+  glfwGetFramebufferSize(window_, &width, &height);
+  draw_scene(width, height);
+  ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+  if (pending_screenshot_) {
+    render::Image image{width, height, renderer_->read_pixels(width, height)};
+    if (auto ok = render::write_png(image, *pending_screenshot_); !ok) {
+      report(ok.error().to_string(), true);
+    } else {
+      report("screenshot " + pending_screenshot_->string(), false);
+    }
+    pending_screenshot_.reset();
+  }
+  glfwSwapBuffers(window_);
+  // At most kMaxFrameRateHz: the cores are the haptic and simulation loops' first.
+  const auto budget = std::chrono::duration<double>(1.0 / kMaxFrameRateHz);
+  const auto spent = Clock::now() - start;
+  if (spent < budget) std::this_thread::sleep_for(budget - spent);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Script and main loop
+
+bool Gui::step_script(std::vector<ScriptAction>& script, std::size_t& next, const std::string& name, int& status) {
+  while (next < script.size()) {
+    const ScriptAction& a = script[next];
+    const auto fail = [&](const Error& e) {
+      std::fprintf(stderr, "hof gui: %s:%d: '%s': %s\n", name.c_str(), a.line, a.text.c_str(), e.to_string().c_str());
+      status = 1;
+      return false;
+    };
+    switch (a.kind) {
+      case ScriptAction::Kind::kWait:
+        if (!script_waiting_) {
+          script_waiting_ = true;
+          script_wait_until_ = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(a.number));
+        }
+        if (Clock::now() < script_wait_until_) return true;
+        script_waiting_ = false;
+        break;
+      case ScriptAction::Kind::kAnimate:
+        set_animating(a.on);
+        break;
+      case ScriptAction::Kind::kStep:
+        if (session_) {
+          if (auto ok = session_->submit(coupling::command::SingleStep{static_cast<int>(a.number)}); !ok) return fail(ok.error());
+        }
+        break;
+      case ScriptAction::Kind::kReset:
+        if (session_) (void)session_->submit(coupling::command::Reset{});
+        break;
+      case ScriptAction::Kind::kSet:
+        if (auto ok = apply_set(a.element, a.attribute, a.value); !ok) return fail(ok.error());
+        break;
+      case ScriptAction::Kind::kMouse:
+        if (!mouse_) return fail(Error{ErrorCode::kInvalidArgument, "the stylus is not the mouse (device " + device_spec_ + ")", "", 0, -1});
+        mouse_to(a.number, a.y, 0.0, true);
+        mouse_to(a.number, a.y, a.depth, false);
+        break;
+      case ScriptAction::Kind::kScreenshot:
+        pending_screenshot_ = a.file;
+        ++next;
+        return true;  // taken at the end of the next frame
+      case ScriptAction::Kind::kSave:
+        if (auto ok = save(a.file); !ok) return fail(ok.error());
+        break;
+      case ScriptAction::Kind::kQuit:
+        next = script.size();
+        return false;
+    }
+    ++next;
+  }
+  return false;
+}
+
+int Gui::run(std::vector<ScriptAction> script, const std::string& script_name) {
+  const bool scripted = !script_name.empty();
+  std::size_t next = 0;
+  int status = 0;
+  const auto started = Clock::now();
+  std::uint64_t frames = 0;
+  while (!quit_) {
+    if (glfwWindowShouldClose(window_)) break;
+    frame();
+    ++frames;
+    if (scripted && !step_script(script, next, script_name, status)) {
+      if (pending_screenshot_) continue;  // the last action was a screenshot: draw it first
+      break;
+    }
+  }
+  if (scripted && !options_.quiet) {
+    const double wall = seconds_between(started, Clock::now());
+    std::printf("hof gui: %llu frames in %.2f s (%.1f frames/s); last second: %.0f frames/s, %.0f simulation steps/s, haptic %.0f Hz, "
+                "period p99 %.3f ms\n",
+                static_cast<unsigned long long>(frames), wall, static_cast<double>(frames) / std::max(wall, 1e-9), stats_.fps,
+                stats_.steps_per_s, stats_.haptic_hz, stats_.period_p99_ms);
+    std::printf("hof gui: contact %.3f s, max force %.3f N, max surface displacement %.3f %s, %llu ticks clamped\n",
+                static_cast<double>(contact_ticks_) * 1e-3, max_force_seen_n_,
+                length_unit_ == "m" ? 1e3 * max_displacement_seen_m_ : max_displacement_seen_m_, length_unit_ == "m" ? "mm" : length_unit_.c_str(),
+                static_cast<unsigned long long>(stats_.clamped));
+  }
+  return status;
+}
+
+}  // namespace
+
+int run_gui(const GuiOptions& options) {
+  std::vector<ScriptAction> script;
+  std::string script_name;
+  if (options.script) {
+    auto read = read_script(*options.script);
+    if (!read) {
+      std::fprintf(stderr, "hof gui: %s\n", read.error().to_string().c_str());
+      return 1;
+    }
+    script = std::move(*read);
+    script_name = options.script->string();
+  }
+  Gui gui(options);
+  if (auto ok = gui.create_window(); !ok) {
+    std::fprintf(stderr, "hof gui: %s\n", ok.error().to_string().c_str());
+    return 1;
+  }
+  if (options.file) {
+    if (auto ok = gui.open(*options.file); !ok) {
+      std::fprintf(stderr, "hof gui: %s\n", ok.error().to_string().c_str());
+      if (options.script) return 1;  // a script cannot go on without its world
+    }
+  }
+  return gui.run(std::move(script), script_name);
+}
+
+}  // namespace hof::app

@@ -1,0 +1,26 @@
+#pragma once
+/// @file
+/// `hof gui [FILE]`: the window (GLFW, Dear ImGui, OpenGL 3.3). It is a client of the world:
+/// it builds it with scene::build_world, starts the session's haptic and simulation threads,
+/// draws the latest snapshots, and changes settings only through the command seam. It never
+/// steps the simulation and never holds a lock that the haptic loop could wait on.
+
+#include <filesystem>
+#include <optional>
+#include <string>
+
+namespace hof::app {
+
+struct GuiOptions {
+  std::optional<std::filesystem::path> file;    ///< project, SOFA or X3D scene
+  std::string device;                           ///< overrides the project's ("" = its own, or the mouse)
+  std::optional<std::filesystem::path> script;  ///< run these actions, then exit
+  int width{1280}, height{720};
+  bool quiet{false};
+};
+
+/// Runs the window until it is closed (or the script ends). Returns the exit status: 0, or 1
+/// after an error (no display, a script error, a file that does not load under a script).
+int run_gui(const GuiOptions& options);
+
+}  // namespace hof::app

@@ -1,0 +1,109 @@
+#include "hof/app/gui/gui_script.h"
+
+#include <fmt/format.h>
+
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+namespace hof::app {
+
+namespace {
+
+std::vector<std::string> words(const std::string& line) {
+  std::istringstream in(line);
+  std::vector<std::string> out;
+  for (std::string w; in >> w;) out.push_back(w);
+  return out;
+}
+
+bool to_number(const std::string& s, double& v) {
+  const auto r = std::from_chars(s.data(), s.data() + s.size(), v);
+  return r.ec == std::errc() && r.ptr == s.data() + s.size() && std::isfinite(v);
+}
+
+}  // namespace
+
+Expected<std::vector<ScriptAction>> parse_script(const std::string& text, const std::string& name) {
+  std::vector<ScriptAction> actions;
+  std::istringstream in(text);
+  std::string line;
+  int number = 0;
+  while (std::getline(in, line)) {
+    ++number;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    const std::vector<std::string> w = words(line);
+    if (w.empty() || w[0].starts_with('#')) continue;
+    const auto fail = [&](const std::string& what) {
+      return make_error(ErrorCode::kParse, fmt::format("'{}': {}", line, what), name, number);
+    };
+    ScriptAction a;
+    a.line = number;
+    a.text = line;
+    const std::string& verb = w[0];
+    if (verb == "wait") {
+      a.kind = ScriptAction::Kind::kWait;
+      if (w.size() != 2 || !to_number(w[1], a.number) || a.number < 0.0 || a.number > 3600.0) {
+        return fail("wait takes seconds in [0, 3600]");
+      }
+    } else if (verb == "animate") {
+      a.kind = ScriptAction::Kind::kAnimate;
+      if (w.size() != 2 || (w[1] != "on" && w[1] != "off")) return fail("animate takes on or off");
+      a.on = w[1] == "on";
+    } else if (verb == "step") {
+      a.kind = ScriptAction::Kind::kStep;
+      a.number = 1.0;
+      if (w.size() > 2 || (w.size() == 2 && (!to_number(w[1], a.number) || a.number < 1.0 || a.number > 1e6 ||
+                                              a.number != std::floor(a.number)))) {
+        return fail("step takes a number of steps in [1, 1000000]");
+      }
+    } else if (verb == "reset") {
+      a.kind = ScriptAction::Kind::kReset;
+      if (w.size() != 1) return fail("reset takes nothing");
+    } else if (verb == "set") {
+      a.kind = ScriptAction::Kind::kSet;
+      if (w.size() < 3) return fail("set takes ELEMENT@ATTRIBUTE VALUE, e.g. set haptics/surface@stiffness 0.4");
+      const std::size_t at = w[1].find('@');
+      if (at == std::string::npos || at == 0 || at + 1 == w[1].size()) {
+        return fail("set takes ELEMENT@ATTRIBUTE VALUE, e.g. set haptics/surface@stiffness 0.4");
+      }
+      a.element = w[1].substr(0, at);
+      a.attribute = w[1].substr(at + 1);
+      // The value is the rest of the line (a vector has spaces).
+      const std::size_t start = line.find(w[1]) + w[1].size();
+      a.value = line.substr(line.find_first_not_of(" \t", start));
+      while (!a.value.empty() && (a.value.back() == ' ' || a.value.back() == '\t')) a.value.pop_back();
+    } else if (verb == "mouse") {
+      a.kind = ScriptAction::Kind::kMouse;
+      if (w.size() < 3 || w.size() > 4 || !to_number(w[1], a.number) || !to_number(w[2], a.y) ||
+          (w.size() == 4 && !to_number(w[3], a.depth))) {
+        return fail("mouse takes X Y [DEPTH]: window pixels and metres beyond the touch plane");
+      }
+    } else if (verb == "screenshot" || verb == "save") {
+      a.kind = verb == "save" ? ScriptAction::Kind::kSave : ScriptAction::Kind::kScreenshot;
+      if (w.size() != 2) return fail(verb + " takes one file name (no spaces)");
+      a.file = w[1];
+      const std::string ext = a.file.extension().string();
+      if (verb == "screenshot" && ext != ".png") return fail("a screenshot is a .png file");
+      if (verb == "save" && ext != ".hof") return fail("a project is saved as a .hof file");
+    } else if (verb == "quit") {
+      a.kind = ScriptAction::Kind::kQuit;
+      if (w.size() != 1) return fail("quit takes nothing");
+    } else {
+      return fail(fmt::format("unknown action '{}' (known: wait, animate, step, reset, set, mouse, screenshot, save, quit)", verb));
+    }
+    actions.push_back(std::move(a));
+  }
+  return actions;
+}
+
+Expected<std::vector<ScriptAction>> read_script(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return make_error(ErrorCode::kIo, "cannot open the script", path.string());
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  return parse_script(buffer.str(), path.string());
+}
+
+}  // namespace hof::app

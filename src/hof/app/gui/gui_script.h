@@ -1,0 +1,45 @@
+#pragma once
+/// @file
+/// The window's scripts (`hof gui FILE --script ACTIONS.txt`): one action per line, for tests,
+/// demonstrations and the documentation's screenshots. Blank lines and lines starting with
+/// '#' are skipped.
+///
+///   wait SECONDS                 wall time, the window running (animating or not)
+///   animate on|off               run or pause the simulation
+///   step [N]                     N simulation steps while paused (default 1)
+///   reset                        bodies back to rest
+///   set ELEMENT@ATTRIBUTE VALUE  a setting by the project file's names:
+///                                  haptics/surface@stiffness 0.4, haptics@renderer GodObjectRenderer,
+///                                  graphics@renderMode wireframe, mechanics/BODY/COMPONENT@PARAMETER 8000
+///   mouse X Y [DEPTH]            the mouse stylus under window pixel (X, Y), DEPTH metres
+///                                beyond the touch plane (default 0)
+///   screenshot FILE.png          the window as it is drawn
+///   save FILE.hof                the project with every change made so far
+///   quit                         close the window (the script's end does too)
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "hof/core/error.h"
+
+namespace hof::app {
+
+struct ScriptAction {
+  enum class Kind { kWait, kAnimate, kStep, kReset, kSet, kMouse, kScreenshot, kSave, kQuit };
+  Kind kind{Kind::kWait};
+  int line{0};
+  double number{0.0};          ///< wait: seconds; step: steps; mouse: x
+  double y{0.0}, depth{0.0};   ///< mouse
+  bool on{false};              ///< animate
+  std::string element, attribute, value;  ///< set
+  std::filesystem::path file;  ///< screenshot, save
+  std::string text;            ///< the line as written
+};
+
+/// Reads and checks a script. Errors name the file and line.
+[[nodiscard]] Expected<std::vector<ScriptAction>> read_script(const std::filesystem::path& path);
+/// The same from text (`name` is used in errors).
+[[nodiscard]] Expected<std::vector<ScriptAction>> parse_script(const std::string& text, const std::string& name);
+
+}  // namespace hof::app

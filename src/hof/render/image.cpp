@@ -1,0 +1,40 @@
+// stb_image and stb_image_write come from Debian's libstb (the implementation is in libstb.a).
+#include "hof/render/image.h"
+
+#include <stb_image.h>
+#include <stb_image_write.h>
+
+#include <system_error>
+
+namespace hof::render {
+
+Expected<void> write_png(const Image& image, const std::filesystem::path& path) {
+  if (image.width <= 0 || image.height <= 0 ||
+      image.rgb.size() != static_cast<std::size_t>(image.width) * static_cast<std::size_t>(image.height) * 3) {
+    return make_error(ErrorCode::kInvalidArgument, "no image to write", path.string());
+  }
+  std::error_code ec;
+  if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path(), ec);
+  std::filesystem::path temporary = path;
+  temporary += ".part";
+  if (!stbi_write_png(temporary.c_str(), image.width, image.height, 3, image.rgb.data(), image.width * 3)) {
+    return make_error(ErrorCode::kIo, "cannot write the PNG", path.string());
+  }
+  std::filesystem::rename(temporary, path, ec);
+  if (ec) return make_error(ErrorCode::kIo, "cannot write the PNG: " + ec.message(), path.string());
+  return {};
+}
+
+Expected<Image> read_png(const std::filesystem::path& path) {
+  int w = 0, h = 0, channels = 0;
+  unsigned char* data = stbi_load(path.c_str(), &w, &h, &channels, 3);
+  if (!data) return make_error(ErrorCode::kIo, std::string("cannot read the image: ") + stbi_failure_reason(), path.string());
+  Image image;
+  image.width = w;
+  image.height = h;
+  image.rgb.assign(data, data + static_cast<std::size_t>(w) * static_cast<std::size_t>(h) * 3);
+  stbi_image_free(data);
+  return image;
+}
+
+}  // namespace hof::render

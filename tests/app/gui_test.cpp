@@ -1,0 +1,209 @@
+// `hof gui` under Xvfb: the bundled liver project is drawn, pressed with the mouse stylus,
+// tuned and saved through the window's script — the path a user (and the docs' screenshots)
+// take. The checks read the PNGs the window wrote and the project it saved.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <sstream>
+#include <string>
+
+#include "hof/app/gui/gui_script.h"
+#include "hof/render/image.h"
+#include "hof/scene/project.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using hof::app::ScriptAction;
+
+const fs::path kLiverProject = fs::path(HOF_SOURCE_DIR) / "examples/liver-palpation-medium-fem.hof";
+constexpr int kPanelWidth = 390;  // the left panel; the 3D view is to its right
+
+fs::path scratch(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("hof-gui-test-" + std::to_string(::getpid())) / name;
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+struct GuiRun {
+  int status{-1};
+  std::string output;
+};
+
+/// Runs `hof gui PROJECT --script SCRIPT` in a virtual X server.
+GuiRun run_gui(const fs::path& dir, const std::string& script, const fs::path& project = kLiverProject) {
+  const fs::path script_file = dir / "actions.txt";
+  std::ofstream(script_file) << script;
+  const fs::path log = dir / "output.txt";
+  const std::string command = "xvfb-run -a -s '-screen 0 1280x720x24' '" + std::string(HOF_BIN) + "' gui '" + project.string() +
+                              "' --size 1280x720 --script '" + script_file.string() + "' > '" + log.string() + "' 2>&1";
+  GuiRun r;
+  r.status = std::system(command.c_str());
+  std::ifstream in(log);
+  std::stringstream text;
+  text << in.rdbuf();
+  r.output = text.str();
+  return r;
+}
+
+bool is_tissue(const std::uint8_t* p) {
+  // The thesis' liver material (diffuse 0.36 0.11 0.04) lit: red well above green and blue.
+  return p[0] > 40 && p[0] > 2 * p[1] && p[0] > 2 * p[2];
+}
+
+struct Coverage {
+  double share{0.0};  // of the 3D view
+  double cx{0.0}, cy{0.0};
+};
+
+Coverage tissue_coverage(const hof::render::Image& image) {
+  Coverage c;
+  std::size_t count = 0, view = 0;
+  for (int y = 0; y < image.height; ++y) {
+    for (int x = kPanelWidth; x < image.width; ++x) {
+      ++view;
+      if (is_tissue(&image.rgb[3 * (static_cast<std::size_t>(y) * image.width + x)])) {
+        ++count;
+        c.cx += x;
+        c.cy += y;
+      }
+    }
+  }
+  if (count) {
+    c.cx /= static_cast<double>(count);
+    c.cy /= static_cast<double>(count);
+  }
+  c.share = view ? static_cast<double>(count) / static_cast<double>(view) : 0.0;
+  return c;
+}
+
+double mean_difference(const hof::render::Image& a, const hof::render::Image& b, int cx, int cy, int half) {
+  double sum = 0.0;
+  std::size_t n = 0;
+  for (int y = std::max(cy - half, 0); y < std::min(cy + half, a.height); ++y) {
+    for (int x = std::max(cx - half, kPanelWidth); x < std::min(cx + half, a.width); ++x) {
+      for (int k = 0; k < 3; ++k) {
+        const std::size_t i = 3 * (static_cast<std::size_t>(y) * a.width + x) + k;
+        sum += std::abs(static_cast<int>(a.rgb[i]) - static_cast<int>(b.rgb[i]));
+        ++n;
+      }
+    }
+  }
+  return n ? sum / static_cast<double>(n) : 0.0;
+}
+
+double number_after(const std::string& text, const std::string& pattern) {
+  std::smatch m;
+  if (!std::regex_search(text, m, std::regex(pattern + " ([0-9.]+)"))) return -1.0;
+  return std::stod(m[1]);
+}
+
+TEST(GuiScript, ReadsEveryActionAndNamesTheLineOfAnError) {
+  auto ok = hof::app::parse_script(
+      "# a demo\nwait 0.5\nanimate off\nstep 3\nset haptics/surface@stiffness 0.4\nset graphics@viewpoint 0 -0.4 0.2\n"
+      "mouse 640 360 0.01\nscreenshot a.png\nsave b.hof\nreset\nquit\n",
+      "demo.txt");
+  ASSERT_TRUE(ok) << ok.error().to_string();
+  ASSERT_EQ(ok->size(), 10u);
+  EXPECT_EQ((*ok)[0].kind, ScriptAction::Kind::kWait);
+  EXPECT_DOUBLE_EQ((*ok)[0].number, 0.5);
+  EXPECT_FALSE((*ok)[1].on);
+  EXPECT_DOUBLE_EQ((*ok)[2].number, 3.0);
+  EXPECT_EQ((*ok)[3].element, "haptics/surface");
+  EXPECT_EQ((*ok)[3].attribute, "stiffness");
+  EXPECT_EQ((*ok)[3].value, "0.4");
+  EXPECT_EQ((*ok)[4].value, "0 -0.4 0.2");
+  EXPECT_DOUBLE_EQ((*ok)[5].depth, 0.01);
+  EXPECT_EQ((*ok)[6].file, "a.png");
+  EXPECT_EQ((*ok)[7].line, 9);
+
+  for (const char* bad : {"wait\n", "wait -1\n", "animate maybe\n", "set stiffness 0.4\n", "mouse 1\n", "screenshot a.jpg\n",
+                          "save a.scn\n", "frobnicate\n", "step 0\n"}) {
+    auto e = hof::app::parse_script(std::string("wait 0\n") + bad, "s.txt");
+    ASSERT_FALSE(e) << bad;
+    EXPECT_EQ(e.error().line, 2) << bad;
+    EXPECT_EQ(e.error().file, "s.txt");
+  }
+}
+
+TEST(GuiWindow, DrawsTheLiverAndTheMouseStylusPressesItVisibly) {
+  const fs::path dir = scratch("press");
+  // 1. Where is the organ? (the view is the project's; find the liver's pixels)
+  const GuiRun first = run_gui(dir, "wait 1\nscreenshot " + (dir / "before.png").string() + "\nquit\n");
+  ASSERT_EQ(first.status, 0) << first.output;
+  auto before = hof::render::read_png(dir / "before.png");
+  ASSERT_TRUE(before) << before.error().to_string();
+  ASSERT_EQ(before->width, 1280);
+  const Coverage organ = tissue_coverage(*before);
+  EXPECT_GT(organ.share, 0.04) << "the liver covers too little of the view";
+  EXPECT_LT(organ.share, 0.7) << "the liver fills the view: the camera is inside or too close";
+  // 2. Press it with the mouse stylus 12 mm deep at its centre.
+  const int x = static_cast<int>(organ.cx), y = static_cast<int>(organ.cy);
+  const GuiRun press = run_gui(dir, "wait 1\nscreenshot " + (dir / "rest.png").string() + "\nmouse " + std::to_string(x) + " " +
+                                     std::to_string(y) + " 0.012\nwait 2.5\nscreenshot " + (dir / "pressed.png").string() +
+                                     "\nquit\n");
+  ASSERT_EQ(press.status, 0) << press.output;
+  auto rest = hof::render::read_png(dir / "rest.png");
+  auto pressed = hof::render::read_png(dir / "pressed.png");
+  ASSERT_TRUE(rest && pressed);
+  EXPECT_GT(tissue_coverage(*pressed).share, 0.5 * organ.share) << "the liver is no longer drawn";
+  // The picture changes where the organ is pressed (the stylus, the dent), and much less far from it.
+  const double near = mean_difference(*rest, *pressed, x, y, 40);
+  const double far = mean_difference(*rest, *pressed, 1280 - 60, 720 - 60, 40);
+  EXPECT_GT(near, 4.0) << press.output;
+  EXPECT_GT(near, 4.0 * far + 1.0);
+  // Contact, force and deformation, as the window measured them.
+  EXPECT_GT(number_after(press.output, "contact"), 0.2) << press.output;
+  EXPECT_GT(number_after(press.output, "max force"), 0.05) << press.output;
+  EXPECT_GT(number_after(press.output, "max surface displacement"), 1.0) << press.output;
+  EXPECT_LT(number_after(press.output, "max force"), 8.0 + 1e-9) << "above the device's force limit";
+}
+
+TEST(GuiWindow, ScriptChangesSettingsAndTheSavedProjectReloadsToExactlyThem) {
+  const fs::path dir = scratch("save");
+  const fs::path saved = dir / "tuned.hof";
+  const GuiRun run = run_gui(dir,
+                          "set haptics/surface@stiffness 0.4\nset haptics@renderer GodObjectRenderer\n"
+                          "set mechanics/Liver/FEM@youngModulus 8000\nwait 0.3\nsave " + saved.string() + "\nquit\n");
+  ASSERT_EQ(run.status, 0) << run.output;
+  auto original = hof::scene::read_project(kLiverProject);
+  auto reloaded = hof::scene::read_project(saved);
+  ASSERT_TRUE(original && reloaded) << (reloaded ? "" : reloaded.error().to_string());
+  EXPECT_DOUBLE_EQ(reloaded->surface.stiffness, 0.4);
+  EXPECT_EQ(reloaded->renderer, hof::haptics::RendererKind::kGodObject);
+  ASSERT_EQ(reloaded->parameters.size(), 1u);
+  EXPECT_EQ(reloaded->parameters[0].body, "Liver");
+  EXPECT_EQ(reloaded->parameters[0].component, "FEM");
+  EXPECT_EQ(reloaded->parameters[0].parameter, "youngModulus");
+  EXPECT_DOUBLE_EQ(reloaded->parameters[0].value, 8000.0);
+  // The scene is the same file, referred to from where the project now is.
+  EXPECT_EQ(fs::canonical(hof::scene::scene_file(*reloaded, saved)), fs::canonical(hof::scene::scene_file(*original, kLiverProject)));
+  // Everything else is as it was.
+  hof::scene::HofProject expected = *original;
+  expected.surface.stiffness = 0.4;
+  expected.renderer = hof::haptics::RendererKind::kGodObject;
+  expected.parameters = reloaded->parameters;
+  expected.mechanics_scene = reloaded->mechanics_scene;
+  EXPECT_EQ(hof::scene::to_xml(*reloaded), hof::scene::to_xml(expected));
+}
+
+TEST(GuiWindow, AScriptErrorNamesItsLineAndTheKnownNames) {
+  const fs::path dir = scratch("errors");
+  const GuiRun unknown_name = run_gui(dir, "wait 0\nset haptics/surface@stifness 0.4\nquit\n");
+  EXPECT_NE(unknown_name.status, 0);
+  EXPECT_NE(unknown_name.output.find("actions.txt:2"), std::string::npos) << unknown_name.output;
+  EXPECT_NE(unknown_name.output.find("stiffness"), std::string::npos) << "the known attributes are listed: " << unknown_name.output;
+  const GuiRun bad_value = run_gui(dir, "set haptics@renderer FastRenderer\n");
+  EXPECT_NE(bad_value.status, 0);
+  EXPECT_NE(bad_value.output.find("RuspiniRenderer"), std::string::npos) << bad_value.output;
+  const GuiRun unknown_action = run_gui(dir, "wait 0\n\nfrobnicate\n");
+  EXPECT_NE(unknown_action.status, 0);
+  EXPECT_NE(unknown_action.output.find("actions.txt:3"), std::string::npos) << unknown_action.output;
+}
+
+}  // namespace
