@@ -1,0 +1,28 @@
+#!/usr/bin/env bash
+# Regenerates the screenshots of README.md and docs/user-guide.md through the window's own
+# scripted path (hof gui --script) in a virtual X server: nothing is drawn by hand.
+# Usage: scripts/screenshots.sh   (writes docs/images/*.png)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bash scripts/install-deps.sh
+cmake --preset release >/dev/null
+cmake --build --preset release --target hof
+mkdir -p docs/images
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+cat > "$work/press.txt" <<'ACTIONS'
+# the liver at rest, then pressed 15 mm deep by the mouse stylus
+wait 1
+screenshot docs/images/gui-liver.png
+mouse 800 330 0.015
+wait 2.5
+screenshot docs/images/gui-press.png
+set graphics@colorBy displacement
+set graphics@renderMode shaded+wireframe
+wait 0.5
+screenshot docs/images/gui-displacement.png
+quit
+ACTIONS
+xvfb-run -a -s "-screen 0 1280x720x24" build/release/bin/hof gui examples/liver-palpation-medium-fem.hof \
+  --size 1280x720 --script "$work/press.txt"
+echo "screenshots: docs/images/gui-liver.png gui-press.png gui-displacement.png"
