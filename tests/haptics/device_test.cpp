@@ -26,6 +26,7 @@
 #include <thread>
 
 #include "hof/haptics/device.h"
+#include "hof/haptics/device_backends/mouse_device.h"
 #include "hof/haptics/device_backends/replay_device.h"
 #include "hof/haptics/device_backends/scripted_device.h"
 #include "hof/haptics/device_backends/virtual_hand_device.h"
@@ -683,6 +684,38 @@ TEST(DeviceBackends, ReadAndWriteForceNeverAllocate) {
   }
   EXPECT_EQ(hof::testing::thread_allocation_count() - before, 0);
   EXPECT_TRUE(std::isfinite(sum));
+}
+
+TEST(MouseDevice, FollowsItsTargetSmoothlyAndJumpsWhenPlaced) {
+  auto opened = open_device("mouse");
+  ASSERT_TRUE(opened) << opened.error().to_string();
+  auto* mouse = dynamic_cast<MouseDevice*>(opened->get());
+  ASSERT_NE(mouse, nullptr);
+  EXPECT_EQ((*opened)->backend(), "mouse");
+  mouse->place(Vec3(0.0, 0.0, 0.05));
+  DeviceReading r = mouse->read(0.0);
+  ASSERT_TRUE(r.valid);
+  EXPECT_EQ(r.position_m, Vec3(0.0, 0.0, 0.05));
+  // A target 2 cm away: first-order approach with tau = 20 ms (1 - e^-1 of the way after 20 ms),
+  // never overshooting, velocity toward it.
+  mouse->set_target(Vec3(0.0, 0.0, 0.03), 1);
+  double t = 0.0;
+  for (int i = 0; i < 20; ++i) r = mouse->read(t += 0.001);
+  EXPECT_NEAR(r.position_m.z(), 0.05 - 0.02 * (1.0 - std::exp(-1.0)), 1e-9);
+  EXPECT_LT(r.velocity_m_per_s.z(), 0.0);
+  EXPECT_EQ(r.buttons, 1u);
+  for (int i = 0; i < 500; ++i) r = mouse->read(t += 0.001);
+  EXPECT_NEAR(r.position_m.z(), 0.03, 1e-9);
+  EXPECT_GE(r.position_m.z(), 0.03);
+  mouse->place(Vec3(0.1, 0.0, 0.0));
+  r = mouse->read(t += 0.001);
+  EXPECT_EQ(r.position_m, Vec3(0.1, 0.0, 0.0));
+  // A non-finite target is ignored (never a NaN position).
+  mouse->set_target(Vec3(std::nan(""), 0.0, 0.0));
+  r = mouse->read(t += 0.001);
+  EXPECT_TRUE(r.position_m.allFinite());
+  EXPECT_FALSE(open_device("mouse:extra"));
+  EXPECT_FALSE(open_device("mouse,speed=2"));
 }
 
 }  // namespace

@@ -133,5 +133,38 @@ TEST(Project, ThesisAppendixFormatIsRead) {
   std::filesystem::remove_all(dir);
 }
 
+TEST(ProjectAttribute, SetsByTheFilesOwnNamesAndChecksAsTheReaderDoes) {
+  HofProject p;
+  p.mechanics_scene = "liver.scn";
+  const std::filesystem::path file = "memory.hof";
+  ASSERT_TRUE(set_project_attribute(p, file, "haptics/surface", "stiffness", "0.4"));
+  EXPECT_DOUBLE_EQ(p.surface.stiffness, 0.4);
+  ASSERT_TRUE(set_project_attribute(p, file, "haptics", "renderer", "GodObjectRenderer"));
+  EXPECT_EQ(p.renderer, haptics::RendererKind::kGodObject);
+  ASSERT_TRUE(set_project_attribute(p, file, "graphics", "viewpoint", "0 -0.4 0.2"));
+  EXPECT_EQ(p.graphics.viewpoint_m, Vec3(0.0, -0.4, 0.2));
+  ASSERT_TRUE(set_project_attribute(p, file, "graphics/material", "diffuseColor", "0.5 0.2 0.1"));
+  EXPECT_EQ(p.graphics.diffuse_color, Vec3(0.5, 0.2, 0.1));
+
+  const std::string before = to_xml(p);
+  // Wrong names list the right ones; wrong values say what is allowed; nothing changes.
+  auto e = set_project_attribute(p, file, "haptics/surface", "stifness", "0.4");
+  ASSERT_FALSE(e);
+  EXPECT_NE(e.error().message.find("stiffness"), std::string::npos) << e.error().message;
+  e = set_project_attribute(p, file, "haptics/surfac", "stiffness", "0.4");
+  ASSERT_FALSE(e);
+  EXPECT_NE(e.error().message.find("surface"), std::string::npos) << e.error().message;
+  e = set_project_attribute(p, file, "haptics", "renderer", "FastRenderer");
+  ASSERT_FALSE(e);
+  EXPECT_NE(e.error().message.find("RuspiniRenderer"), std::string::npos) << e.error().message;
+  e = set_project_attribute(p, file, "graphics/material", "shininess", "2");
+  ASSERT_FALSE(e);
+  e = set_project_attribute(p, file, "graphics", "renderMode", "cartoon");
+  ASSERT_FALSE(e);
+  e = set_project_attribute(p, file, "haptics/surface", "stiffness", "a lot");
+  ASSERT_FALSE(e);
+  EXPECT_EQ(to_xml(p), before);
+}
+
 }  // namespace
 }  // namespace hof::scene
