@@ -82,6 +82,7 @@ class Device {
 ///   virtual-hand:MOTION[,key=value...]           compliant hand following a scripted motion
 ///   udp:[HOST:]PORT[,timeout=S]                  datagram bridge (docs/device-protocol.md)
 ///   spacemouse[,scale=M]                         3Dconnexion SpaceMouse via spacenavd (input only)
+///   mouse                                        the window's cursor (hof gui; input only)
 /// Every backend also takes model=virtual|falcon|omni|touch (device_spec_for_model(); for
 /// udp, a hello packet received within hello_wait=S overrides it). Keys and motions are listed
 /// in docs/device-protocol.md ("Spec strings").
