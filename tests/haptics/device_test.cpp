@@ -710,6 +710,13 @@ TEST(MouseDevice, FollowsItsTargetSmoothlyAndJumpsWhenPlaced) {
   mouse->place(Vec3(0.1, 0.0, 0.0));
   r = mouse->read(t += 0.001);
   EXPECT_EQ(r.position_m, Vec3(0.1, 0.0, 0.0));
+  // Placed, then given a target before any reading (the window placing a new mouse stylus and
+  // moving it in the same frame): the first reading is where it was placed.
+  MouseDevice fresh;
+  fresh.place(Vec3(0.0, 0.0, 0.05));
+  fresh.set_target(Vec3(0.0, 0.0, -0.05));
+  EXPECT_EQ(fresh.read(0.0).position_m, Vec3(0.0, 0.0, 0.05));
+  EXPECT_LT(fresh.read(0.001).position_m.z(), 0.05);
   // A non-finite target is ignored (never a NaN position).
   mouse->set_target(Vec3(std::nan(""), 0.0, 0.0));
   r = mouse->read(t += 0.001);

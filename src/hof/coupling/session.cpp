@@ -222,7 +222,7 @@ TripleBuffer<haptics::SurfaceSnapshot>& Session::graphics_surfaces(std::size_t l
 
 Expected<void> Session::submit(const Command& submitted) {
   Command command = submitted;
-  if (auto* device = std::get_if<command::SetDevice>(&command)) {
+  if (auto* device = std::get_if<command::SetDevice>(&command); device && !device->opened) {
     // Opened here, on the caller's thread (a network device may wait for its first packet).
     auto opened = haptics::open_device(device->spec);
     if (!opened) return std::unexpected(opened.error());

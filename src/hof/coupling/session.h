@@ -141,7 +141,9 @@ struct SetRenderer {
 /// not there is refused then), switched to between two ticks with its own force limit.
 struct SetDevice {
   std::string spec;
-  std::shared_ptr<haptics::Device> opened;  ///< filled by submit()
+  /// Filled by submit(); a caller that opened the device itself (to keep a handle on it,
+  /// as the window does for the mouse) passes it here.
+  std::shared_ptr<haptics::Device> opened;
 };
 }  // namespace command
 using Command = std::variant<command::SetParameter, command::Pause, command::Resume, command::SingleStep, command::Reset,

@@ -216,7 +216,7 @@ void MeshBuffer::set_triangles(std::span<const mesh::Tri> triangles) {
 }
 
 namespace {
-void upload_vec3(GLuint buffer, std::span<const Vec3> values, std::vector<float>& scratch) {
+void upload_vec3(GLuint buffer, std::span<const Vec3> values, std::vector<float>& scratch, GLenum usage = GL_DYNAMIC_DRAW) {
   scratch.resize(values.size() * 3);
   for (std::size_t i = 0; i < values.size(); ++i) {
     scratch[3 * i] = static_cast<float>(values[i].x());
@@ -224,7 +224,7 @@ void upload_vec3(GLuint buffer, std::span<const Vec3> values, std::vector<float>
     scratch[3 * i + 2] = static_cast<float>(values[i].z());
   }
   glBindBuffer(GL_ARRAY_BUFFER, buffer);
-  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(scratch.size() * sizeof(float)), scratch.data(), GL_DYNAMIC_DRAW);
+  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(scratch.size() * sizeof(float)), scratch.data(), usage);
 }
 }  // namespace
 
@@ -372,39 +372,24 @@ void GlRenderer::draw(const MeshBuffer& mesh, const Material& material, RenderMo
   }
 }
 
-void GlRenderer::draw_lines(std::span<const Vec3> segment_points, const Rgba& colour) {
-  if (segment_points.empty()) return;
-  line_scratch_.resize(segment_points.size() * 3);
-  for (std::size_t i = 0; i < segment_points.size(); ++i) {
-    for (int k = 0; k < 3; ++k) line_scratch_[3 * i + static_cast<std::size_t>(k)] = static_cast<float>(segment_points[i][k]);
-  }
+void GlRenderer::draw_loose(std::span<const Vec3> points, const Rgba& colour, GLenum primitive, float point_size_px) {
+  if (points.empty()) return;
+  upload_vec3(lines_vbo_, points, line_scratch_, GL_STREAM_DRAW);
   Material m;
   m.diffuse = colour;
   use_mesh_program(Eigen::Matrix4f::Identity(), m, false, false);
+  glUniform1f(u_point_size_, point_size_px);
   glBindVertexArray(lines_vao_);
-  glBindBuffer(GL_ARRAY_BUFFER, lines_vbo_);
-  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(line_scratch_.size() * sizeof(float)), line_scratch_.data(),
-               GL_STREAM_DRAW);
-  glDrawArrays(GL_LINES, 0, static_cast<GLsizei>(segment_points.size()));
+  glDrawArrays(primitive, 0, static_cast<GLsizei>(points.size()));
   glBindVertexArray(0);
 }
 
+void GlRenderer::draw_lines(std::span<const Vec3> segment_points, const Rgba& colour) {
+  draw_loose(segment_points, colour, GL_LINES, 1.0f);
+}
+
 void GlRenderer::draw_points(std::span<const Vec3> points, const Rgba& colour, float size_px) {
-  if (points.empty()) return;
-  line_scratch_.resize(points.size() * 3);
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    for (int k = 0; k < 3; ++k) line_scratch_[3 * i + static_cast<std::size_t>(k)] = static_cast<float>(points[i][k]);
-  }
-  Material m;
-  m.diffuse = colour;
-  use_mesh_program(Eigen::Matrix4f::Identity(), m, false, false);
-  glUniform1f(u_point_size_, size_px);
-  glBindVertexArray(lines_vao_);
-  glBindBuffer(GL_ARRAY_BUFFER, lines_vbo_);
-  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(line_scratch_.size() * sizeof(float)), line_scratch_.data(),
-               GL_STREAM_DRAW);
-  glDrawArrays(GL_POINTS, 0, static_cast<GLsizei>(points.size()));
-  glBindVertexArray(0);
+  draw_loose(points, colour, GL_POINTS, size_px);
 }
 
 void GlRenderer::draw_sphere(const Vec3& centre, double radius, const Rgba& colour) {

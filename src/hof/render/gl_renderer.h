@@ -94,6 +94,8 @@ class GlRenderer {
 
  private:
   void use_mesh_program(const Eigen::Matrix4f& model, const Material& material, bool lit, bool vertex_colours);
+  // Lines or points straight from world positions (unlit).
+  void draw_loose(std::span<const Vec3> points, const Rgba& colour, GLenum primitive, float point_size_px);
   GLuint mesh_program_{0};
   GLint u_mvp_{-1}, u_model_{-1}, u_normal_matrix_{-1}, u_colour_{-1}, u_specular_{-1}, u_shininess_{-1}, u_lit_{-1},
       u_vertex_colours_{-1}, u_eye_{-1}, u_point_size_{-1};

@@ -469,8 +469,8 @@ DefaultProbe default_probe(const std::vector<coupling::SessionBody>& bodies, dou
   return probe;
 }
 
-void record_changes(HofProject& project, const coupling::Session& session) {
-  for (const coupling::ParameterChange& change : session.parameter_changes()) {
+void record_parameters(HofProject& project, const std::vector<coupling::ParameterChange>& changes) {
+  for (const coupling::ParameterChange& change : changes) {
     auto same = std::find_if(project.parameters.begin(), project.parameters.end(), [&](const auto& p) {
       return p.body == change.body && p.component == change.component && p.parameter == change.parameter;
     });
@@ -480,6 +480,10 @@ void record_changes(HofProject& project, const coupling::Session& session) {
       project.parameters.push_back(change);
     }
   }
+}
+
+void record_changes(HofProject& project, const coupling::Session& session) {
+  record_parameters(project, session.parameter_changes());
   for (const auto& [name, material] : session.material_changes()) {
     auto obstacle = std::find_if(project.obstacles.begin(), project.obstacles.end(), [&](const auto& o) { return o.name == name; });
     if (obstacle != project.obstacles.end()) {

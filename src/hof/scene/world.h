@@ -72,6 +72,8 @@ struct World {
 /// <set> elements, replacing an earlier value of the same parameter; surfaces in <bodies>),
 /// so that the next save holds them.
 void record_changes(HofProject& project, const coupling::Session& session);
+/// The parameter part of record_changes(): each change as a <set>, replacing an earlier value.
+void record_parameters(HofProject& project, const std::vector<coupling::ParameterChange>& changes);
 
 /// The spec of the default probe for `bodies` under `calibration` (a scripted poke in the
 /// device frame), and a calibration that fits the device workspace to the bodies' bounds.

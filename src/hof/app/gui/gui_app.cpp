@@ -582,7 +582,9 @@ void Gui::update_from_loops() {
       return;
     }
     if (!s.force.allFinite() || !s.requested_force.allFinite()) ++stats_.non_finite;
-    if (s.requested_force.norm() > s.force.norm() + 1e-9) ++stats_.clamped;
+    // At the device's force limit (a fade-in after a device switch lowers the force too, but
+    // is not the limit).
+    if (s.requested_force.norm() > s.force.norm() + 1e-9 && s.force.norm() >= 0.999 * max_force_n_) ++stats_.clamped;
     if (s.period_s > 0.0) stats_.add_period(s.period_s);
     max_force_seen_n_ = std::max(max_force_seen_n_, s.force.norm());
     if (s.contact) ++contact_ticks_;
@@ -676,12 +678,16 @@ Expected<void> Gui::apply_set(const std::string& element, const std::string& att
   } else if (element.starts_with("haptics/effects")) {
     if (auto ok = session_->submit(coupling::command::SetEffects{config.effects}); !ok) return ok;
   } else if (element == "haptics" && attribute == "device") {
+    // Opened here so that the window keeps a handle on a mouse stylus.
     const std::string spec = next.device == "auto" ? std::string("mouse") : next.device;
-    coupling::command::SetDevice command{spec, nullptr};
-    if (auto ok = session_->submit(command); !ok) return ok;
+    auto opened = haptics::open_device(spec);
+    if (!opened) return std::unexpected(opened.error());
+    std::shared_ptr<haptics::Device> device(std::move(*opened));
+    if (auto ok = session_->submit(coupling::command::SetDevice{spec, device}); !ok) return ok;
+    mouse_ = dynamic_cast<haptics::MouseDevice*>(device.get());  // the session keeps the device alive
+    if (mouse_) mouse_->place((calibration_.position.inverse() * mouse_world_.homogeneous()).head<3>());
     device_spec_ = spec;
-    mouse_ = nullptr;  // the mouse device (if any) of a switch is a new one; see below
-    if (spec == "mouse") report("the mouse stylus is back when the project is reopened", false);
+    max_force_n_ = device->spec().max_force_n;
   } else if (element == "graphics" || element.starts_with("graphics/") || element == "haptics/stylus") {
     // Drawn by this window only.
   } else {
@@ -694,6 +700,10 @@ Expected<void> Gui::apply_set(const std::string& element, const std::string& att
 
 Expected<void> Gui::save(const std::filesystem::path& path) {
   if (!session_) return make_error(ErrorCode::kInvalidArgument, "no world is open");
+  if (file_.extension() == ".x3d") {
+    return make_error(ErrorCode::kUnsupported, "an X3D scene cannot be saved as a project yet (the project format holds SOFA scenes)",
+                      path.string());
+  }
   scene::HofProject out = project_;
   // The scene path is relative to the project: re-anchor it where the project goes.
   std::error_code ec;
@@ -703,28 +713,12 @@ Expected<void> Gui::save(const std::filesystem::path& path) {
     out.mechanics_scene = std::filesystem::relative(scene, folder, ec);
     if (ec || out.mechanics_scene.empty()) out.mechanics_scene = scene;
   }
-  if (file_.extension() == ".x3d") {
-    return make_error(ErrorCode::kUnsupported, "an X3D scene cannot be saved as a project yet (the project format holds SOFA scenes)",
-                      path.string());
-  }
-  // Parameters changed through the seam, as <set> elements.
-  for (const coupling::ParameterChange& change : session_->parameter_changes()) {
-    auto same = std::find_if(out.parameters.begin(), out.parameters.end(), [&](const auto& p) {
-      return p.body == change.body && p.component == change.component && p.parameter == change.parameter;
-    });
-    if (same != out.parameters.end()) {
-      same->value = change.value;
-    } else {
-      out.parameters.push_back(change);
-    }
-  }
+  scene::record_parameters(out, session_->parameter_changes());  // as <set> elements
   if (auto ok = scene::write_project(out, path); !ok) return ok;
-  if (std::filesystem::absolute(path, ec) == std::filesystem::absolute(file_, ec)) {
-    project_ = out;
-    dirty_ = false;
-  } else {
-    dirty_ = false;
-  }
+  // As in any editor, the saved file is now the one open (Ctrl+S writes it again).
+  project_ = std::move(out);
+  file_ = path;
+  dirty_ = false;
   remember_recent(path);
   report("saved " + path.string(), false);
   return {};
@@ -778,7 +772,6 @@ void Gui::mouse_to(double window_x, double window_y, double depth_m, bool new_pl
     } else {
       plane_point_ = mouse_world_;
     }
-    mouse_depth_m_ = 0.0;
   }
   mouse_depth_m_ = depth_m;
   const auto [origin, direction] = camera_.ray(x, y, view_w_, view_h_);
@@ -1208,7 +1201,7 @@ void Gui::draw_panels() {
   // Live figures.
   ImGui::Text("%.0f frames/s   %.0f steps/s (dt %.3g s)", stats_.fps, stats_.steps_per_s, session_ ? session_->dt() : 0.0);
   ImGui::Text("haptic %.0f Hz, period p50 %.3f ms, p99 %.3f ms", stats_.haptic_hz, stats_.period_p50_ms, stats_.period_p99_ms);
-  ImGui::Text("safety: %llu clamped, %llu non-finite, %llu without reading", static_cast<unsigned long long>(stats_.clamped),
+  ImGui::Text("safety: %llu ticks at limit, %llu non-finite, %llu unread", static_cast<unsigned long long>(stats_.clamped),
               static_cast<unsigned long long>(stats_.non_finite), static_cast<unsigned long long>(stats_.invalid));
   const float top = *std::max_element(plot_force_.begin(), plot_force_.end());
   ImGui::PlotLines("##force", plot_force_.data(), static_cast<int>(plot_force_.size()), 0,
@@ -1372,7 +1365,7 @@ int Gui::run(std::vector<ScriptAction> script, const std::string& script_name) {
                 "period p99 %.3f ms\n",
                 static_cast<unsigned long long>(frames), wall, static_cast<double>(frames) / std::max(wall, 1e-9), stats_.fps,
                 stats_.steps_per_s, stats_.haptic_hz, stats_.period_p99_ms);
-    std::printf("hof gui: contact %.3f s, max force %.3f N, max surface displacement %.3f %s, %llu ticks clamped\n",
+    std::printf("hof gui: contact %.3f s, max force %.3f N, max surface displacement %.3f %s, %llu ticks at the force limit\n",
                 static_cast<double>(contact_ticks_) * 1e-3, max_force_seen_n_,
                 length_unit_ == "m" ? 1e3 * max_displacement_seen_m_ : max_displacement_seen_m_, length_unit_ == "m" ? "mm" : length_unit_.c_str(),
                 static_cast<unsigned long long>(stats_.clamped));

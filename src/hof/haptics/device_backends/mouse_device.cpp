@@ -20,6 +20,7 @@ void MouseDevice::set_target(const Vec3& position_m, std::uint32_t buttons) {
 void MouseDevice::place(const Vec3& position_m) {
   if (!position_m.allFinite()) return;
   writer_.position = position_m;
+  writer_.placed_at = position_m;
   ++writer_.placed;
   target_.write_slot() = writer_;
   target_.publish();
@@ -31,7 +32,7 @@ DeviceReading MouseDevice::read(double time_s) {
   const double dt = last_time_s_ < 0.0 ? 0.0 : std::max(time_s - last_time_s_, 0.0);
   last_time_s_ = time_s;
   if (!started_ || target.placed != last_placed_) {
-    position_ = target.position;
+    position_ = target.placed ? target.placed_at : target.position;
     velocity_.setZero();
     last_placed_ = target.placed;
     started_ = true;

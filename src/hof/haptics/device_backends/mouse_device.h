@@ -28,12 +28,14 @@ class MouseDevice final : public Device {
   /// Where the stylus should go (device frame, m) and the buttons held. One writer thread
   /// (the window); never blocks the haptic thread.
   void set_target(const Vec3& position_m, std::uint32_t buttons = 0);
-  /// Jumps to `position_m` at once (no filtering): the stylus placed anew.
+  /// Jumps to `position_m` at once (no filtering): the stylus placed anew. The first reading
+  /// is there even if a target was set since (it is then followed from there).
   void place(const Vec3& position_m);
 
  private:
   struct Target {
     Vec3 position{Vec3::Zero()};
+    Vec3 placed_at{Vec3::Zero()};  // where the stylus starts after place() (the target may have moved on)
     std::uint32_t buttons{0};
     std::uint64_t placed{0};  // changes when place() asks for a jump
   };
