@@ -7,11 +7,13 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <regex>
 #include <sstream>
 #include <string>
 
 #include "hof/app/gui/gui_script.h"
+#include "hof/haptics/device_backends/replay_device.h"
 #include "hof/render/image.h"
 #include "hof/scene/project.h"
 
@@ -123,7 +125,7 @@ TEST(GuiScript, ReadsEveryActionAndNamesTheLineOfAnError) {
   EXPECT_EQ((*ok)[7].line, 9);
 
   for (const char* bad : {"wait\n", "wait -1\n", "animate maybe\n", "set stiffness 0.4\n", "mouse 1\n", "screenshot a.jpg\n",
-                          "save a.scn\n", "frobnicate\n", "step 0\n"}) {
+                          "save a.scn\n", "frobnicate\n", "step 0\n", "record a.txt\n", "record\n"}) {
     auto e = hof::app::parse_script(std::string("wait 0\n") + bad, "s.txt");
     ASSERT_FALSE(e) << bad;
     EXPECT_EQ(e.error().line, 2) << bad;
@@ -204,6 +206,54 @@ TEST(GuiWindow, AScriptErrorNamesItsLineAndTheKnownNames) {
   const GuiRun unknown_action = run_gui(dir, "wait 0\n\nfrobnicate\n");
   EXPECT_NE(unknown_action.status, 0);
   EXPECT_NE(unknown_action.output.find("actions.txt:3"), std::string::npos) << unknown_action.output;
+}
+
+TEST(GuiWindow, ARecordedDemonstrationReplaysHeadless) {
+  const fs::path dir = scratch("record");
+  const fs::path csv = dir / "demo.csv";
+  // Find the organ, then press it for 1.5 s while recording; change a setting meanwhile.
+  const GuiRun first = run_gui(dir, "wait 0.5\nscreenshot " + (dir / "view.png").string() + "\nquit\n");
+  ASSERT_EQ(first.status, 0) << first.output;
+  auto view = hof::render::read_png(dir / "view.png");
+  ASSERT_TRUE(view);
+  const Coverage organ = tissue_coverage(*view);
+  const GuiRun demo = run_gui(dir, "wait 0.3\nrecord " + csv.string() + "\nmouse " + std::to_string(static_cast<int>(organ.cx)) + " " +
+                                       std::to_string(static_cast<int>(organ.cy)) +
+                                       " 0.012\nwait 1.5\nset haptics/surface@stiffness 0.3\nwait 0.3\nrecord off\nquit\n");
+  ASSERT_EQ(demo.status, 0) << demo.output;
+  const double touched_live = number_after(demo.output, "contact");
+  ASSERT_GT(touched_live, 1.0) << demo.output;
+
+  // The recording is a valid replay file at the haptic rate, with the event noted.
+  auto samples = hof::haptics::load_replay(csv);
+  ASSERT_TRUE(samples) << samples.error().to_string();
+  EXPECT_GT(samples->size(), 1000u);
+  EXPECT_GT(samples->back().t_s, 1.5);
+  EXPECT_GT((samples->back().position_m - samples->front().position_m).norm(), 0.005) << "the stylus did not move";
+  std::ifstream in(csv);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("# event "), std::string::npos);
+  EXPECT_NE(text.find("haptics/surface@stiffness 0.3"), std::string::npos);
+
+  // Its project replays it headless, deterministically: the liver is touched for about as long
+  // (the stylus reaches it through the same path; the live run's simulation may lag a little).
+  auto project = hof::scene::read_project(dir / "demo.hof");
+  ASSERT_TRUE(project) << project.error().to_string();
+  EXPECT_EQ(project->device, "replay:demo.csv");
+  EXPECT_DOUBLE_EQ(project->surface.stiffness, 0.2) << "the project holds the settings the recording began with";
+  for (const std::string& run : {"'" + (dir / "demo.hof").string() + "'",
+                                 "'" + kLiverProject.string() + "' --device 'replay:" + csv.string() + "'"}) {
+    const fs::path out = dir / "replay";
+    fs::remove_all(out);
+    const std::string command = "'" + std::string(HOF_BIN) + "' run " + run + " --deterministic --seconds 2 --quiet --out '" + out.string() + "'";
+    ASSERT_EQ(std::system(command.c_str()), 0) << command;
+    std::ifstream summary_file(out / "summary.json");
+    const std::string summary((std::istreambuf_iterator<char>(summary_file)), std::istreambuf_iterator<char>());
+    std::smatch m;
+    ASSERT_TRUE(std::regex_search(summary, m, std::regex("\"contact_time_s\": ([0-9.e-]+)"))) << summary;
+    EXPECT_NEAR(std::stod(m[1]), touched_live, 0.3) << command;
+    EXPECT_NE(summary.find("\"fall_through_events\": 0"), std::string::npos) << summary;
+  }
 }
 
 }  // namespace

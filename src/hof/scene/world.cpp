@@ -530,6 +530,7 @@ Expected<World> finish_world(World w, bool sofa_scene, bool bare, const std::str
   // its scene's unit).
   w.length_unit = sofa_scene ? "scene units" : (w.project.scene_unit.empty() ? "m" : w.project.scene_unit);
 
+  w.file_calibration = w.project.position_calibration;
   std::string device = device_override.empty() ? (bare ? std::string("auto") : w.project.device) : device_override;
   if (device == "auto") {
     const auto model_spec = haptics::device_spec_for_model("virtual");
@@ -585,6 +586,12 @@ Expected<World> build_world(const HofProject& project, const std::filesystem::pa
   World w;
   w.file = file;
   w.project = project;
+  // A recording the project replays is found beside it, as its scene is.
+  if (const std::string_view replay = "replay:"; w.project.device.starts_with(replay)) {
+    const std::string rest = w.project.device.substr(replay.size());
+    const std::filesystem::path recording = rest.substr(0, rest.find(','));
+    if (recording.is_relative() && !file.parent_path().empty()) w.project.device = std::string(replay) + (file.parent_path() / rest).string();
+  }
   if (auto ok = add_project_scene(w, file); !ok) return std::unexpected(ok.error());
   return finish_world(std::move(w), false, project.device == "auto", device_override);
 }

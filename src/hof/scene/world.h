@@ -58,6 +58,8 @@ struct World {
   std::vector<std::string> skipped;  ///< components not simulated, "TYPE 'name' (line N)"
   std::vector<std::string> warnings;
   std::vector<std::string> defaults; ///< "what = value (why)" for every default the builder used
+  /// The calibration the file gave (identity when none), before the default probe fitted one.
+  std::array<double, 16> file_calibration{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
 };
 
 /// Builds the world of `file`. `device_override` (the --device option) replaces the file's

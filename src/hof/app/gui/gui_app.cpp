@@ -16,6 +16,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <ctime>
 #include <deque>
 #include <charconv>
 #include <fstream>
@@ -31,6 +32,7 @@
 #include "hof/app/gui/gui_script.h"
 #include "hof/coupling/session.h"
 #include "hof/haptics/device_backends/mouse_device.h"
+#include "hof/haptics/device_backends/replay_device.h"
 #include "hof/mechanics/model_parameters.h"
 #include "hof/mesh/mesh_io.h"
 #include "hof/render/camera.h"
@@ -192,6 +194,18 @@ std::filesystem::path recent_files_path() {
   return {};
 }
 
+/// A stylus trajectory being recorded (the replay format, device frame) and the settings
+/// changed meanwhile.
+struct Recording {
+  std::filesystem::path file;
+  std::vector<haptics::ReplaySample> samples;
+  std::vector<std::string> events;  // "t: what"
+  double start_s{-1.0};             // haptic time of the first sample
+  Eigen::Matrix4d world_to_device{Eigen::Matrix4d::Identity()};
+  std::optional<scene::HofProject> project;  // the settings when it began (SOFA-based worlds)
+  [[nodiscard]] double seconds() const { return samples.empty() ? 0.0 : samples.back().t_s; }
+};
+
 class Gui {
  public:
   explicit Gui(const GuiOptions& options) : options_(options) {}
@@ -210,6 +224,10 @@ class Gui {
   void upload_layer(LayerView& layer, const haptics::SurfaceSnapshot& s);
   Expected<void> apply_set(const std::string& element, const std::string& attribute, const std::string& value);
   Expected<void> save(const std::filesystem::path& path);
+  /// The project as it would be saved at `path` (scene re-anchored, parameters as <set>).
+  scene::HofProject project_for(const std::filesystem::path& path) const;
+  Expected<void> start_recording(const std::filesystem::path& file);
+  Expected<void> stop_recording();
   Expected<void> export_shape(const std::filesystem::path& path);
   void set_animating(bool on);
   void report(const std::string& message, bool error);
@@ -294,7 +312,9 @@ class Gui {
   std::optional<std::filesystem::path> pending_screenshot_;
   std::vector<std::filesystem::path> recent_;
   std::optional<std::filesystem::path> dropped_;
-  std::optional<std::filesystem::path> pending_open_;  // waits for the user's answer about unsaved changes
+  std::optional<std::filesystem::path> pending_open_;
+  std::optional<Recording> recording_;
+  bool want_replay_dialog_{false};  // waits for the user's answer about unsaved changes
   Clock::time_point script_wait_until_{};
   bool script_waiting_{false};
 };
@@ -390,6 +410,9 @@ void Gui::remember_recent(const std::filesystem::path& file) {
 // World
 
 void Gui::close_session() {
+  if (recording_) {
+    if (auto ok = stop_recording(); !ok) report(ok.error().to_string(), true);
+  }
   if (session_) {
     session_->stop_realtime();
     session_.reset();
@@ -448,6 +471,13 @@ Expected<void> Gui::open(const std::filesystem::path& file) {
   }
   coupling::SessionConfig config = world->config;
   config.haptics.realtime_priority = true;
+  // The builder fitted the probe's workspace to the world. The mouse reaches anywhere, so a
+  // world in metres keeps the file's own calibration (a recording then replays with
+  // `hof run FILE --device replay:REC.csv` just as it was made); a SOFA scene, which has no
+  // unit, keeps the fit: it gives the world its scale.
+  if (spec == "mouse" && world->default_probe && world->length_unit == "m") {
+    for (int i = 0; i < 16; ++i) config.haptics.calibration.position(i / 4, i % 4) = world->file_calibration[static_cast<std::size_t>(i)];
+  }
   auto made = coupling::Session::make(std::move(world->bodies), std::move(*device), config);
   if (!made) return std::unexpected(made.error());
 
@@ -586,6 +616,18 @@ void Gui::update_from_loops() {
     // is not the limit).
     if (s.requested_force.norm() > s.force.norm() + 1e-9 && s.force.norm() >= 0.999 * max_force_n_) ++stats_.clamped;
     if (s.period_s > 0.0) stats_.add_period(s.period_s);
+    if (recording_) {
+      Recording& r = *recording_;
+      if (r.start_s < 0.0) r.start_s = s.time_s;
+      const double t = s.time_s - r.start_s;
+      if (r.samples.empty() || t > r.samples.back().t_s) {
+        haptics::ReplaySample sample;
+        sample.t_s = t;
+        sample.position_m = (r.world_to_device * s.device.homogeneous()).head<3>();
+        sample.buttons = s.buttons;
+        r.samples.push_back(sample);
+      }
+    }
     max_force_seen_n_ = std::max(max_force_seen_n_, s.force.norm());
     if (s.contact) ++contact_ticks_;
     // Indentation: as `hof run` (telemetry.csv) counts it, from where the contact began.
@@ -658,6 +700,7 @@ Expected<void> Gui::apply_set(const std::string& element, const std::string& att
     for (BodyView& b : bodies_) {
       if (b.name == body && b.config) (void)mechanics::set_parameter(*b.config, component, attribute, v);
     }
+    if (recording_) recording_->events.push_back(fmt::format("{:.3f}: set {} {}", recording_->seconds(), name, value));
     dirty_ = true;
     return {};
   }
@@ -694,6 +737,7 @@ Expected<void> Gui::apply_set(const std::string& element, const std::string& att
     report(fmt::format("'{}' is saved; it takes effect when the project is reopened", name), false);
   }
   project_ = std::move(next);
+  if (recording_) recording_->events.push_back(fmt::format("{:.3f}: set {} {}", recording_->seconds(), name, value));
   dirty_ = true;
   return {};
 }
@@ -704,6 +748,18 @@ Expected<void> Gui::save(const std::filesystem::path& path) {
     return make_error(ErrorCode::kUnsupported, "an X3D scene cannot be saved as a project yet (the project format holds SOFA scenes)",
                       path.string());
   }
+  scene::HofProject out = project_for(path);
+  if (auto ok = scene::write_project(out, path); !ok) return ok;
+  // As in any editor, the saved file is now the one open (Ctrl+S writes it again).
+  project_ = std::move(out);
+  file_ = path;
+  dirty_ = false;
+  remember_recent(path);
+  report("saved " + path.string(), false);
+  return {};
+}
+
+scene::HofProject Gui::project_for(const std::filesystem::path& path) const {
   scene::HofProject out = project_;
   // The scene path is relative to the project: re-anchor it where the project goes.
   std::error_code ec;
@@ -713,14 +769,63 @@ Expected<void> Gui::save(const std::filesystem::path& path) {
     out.mechanics_scene = std::filesystem::relative(scene, folder, ec);
     if (ec || out.mechanics_scene.empty()) out.mechanics_scene = scene;
   }
-  scene::record_parameters(out, session_->parameter_changes());  // as <set> elements
-  if (auto ok = scene::write_project(out, path); !ok) return ok;
-  // As in any editor, the saved file is now the one open (Ctrl+S writes it again).
-  project_ = std::move(out);
-  file_ = path;
-  dirty_ = false;
-  remember_recent(path);
-  report("saved " + path.string(), false);
+  if (session_) scene::record_parameters(out, session_->parameter_changes());  // as <set> elements
+  return out;
+}
+
+Expected<void> Gui::start_recording(const std::filesystem::path& file) {
+  if (!session_) return make_error(ErrorCode::kInvalidArgument, "no world is open");
+  if (recording_) return make_error(ErrorCode::kInvalidArgument, "already recording to " + recording_->file.string());
+  Recording r;
+  r.file = file;
+  r.world_to_device = calibration_.position.inverse();
+  r.samples.reserve(60000);
+  if (file_.extension() != ".x3d") r.project = project_for(std::filesystem::path(file).replace_extension(".hof"));
+  recording_ = std::move(r);
+  report("recording the stylus to " + file.string(), false);
+  return {};
+}
+
+Expected<void> Gui::stop_recording() {
+  if (!recording_) return make_error(ErrorCode::kInvalidArgument, "not recording");
+  Recording r = std::move(*recording_);
+  recording_.reset();
+  if (r.samples.size() < 2) return make_error(ErrorCode::kInvalidArgument, "nothing recorded (the stylus sent no reading)", r.file.string());
+  std::error_code ec;
+  if (r.file.has_parent_path()) std::filesystem::create_directories(r.file.parent_path(), ec);
+  // The trajectory, in the replay format (docs/device-protocol.md), written whole then renamed.
+  std::string text = fmt::format("# hof gui recording of {} ({}), device {}\n# t s, x y z m in the device frame; calibration (row-major):", file_.string(),
+                                 world_name_, device_spec_);
+  for (int i = 0; i < 16; ++i) text += fmt::format(" {}", calibration_.position(i / 4, i % 4));
+  text += "\n";
+  for (const std::string& e : r.events) text += "# event " + e + "\n";
+  text += "t,x,y,z,button\n";
+  for (const haptics::ReplaySample& s : r.samples) {
+    text += fmt::format("{:.6f},{:.9g},{:.9g},{:.9g},{}\n", s.t_s, s.position_m.x(), s.position_m.y(), s.position_m.z(), s.buttons);
+  }
+  const std::filesystem::path part = r.file.string() + ".part";
+  {
+    std::ofstream out(part, std::ios::binary | std::ios::trunc);
+    out << text;
+    if (!out) return make_error(ErrorCode::kIo, "cannot write the recording", r.file.string());
+  }
+  std::filesystem::rename(part, r.file, ec);
+  if (ec) return make_error(ErrorCode::kIo, "cannot write the recording: " + ec.message(), r.file.string());
+  // Beside it, the project that replays it with the settings it began with and the calibration
+  // the window used: `hof run NAME.hof --deterministic` reproduces the demonstration (the
+  // settings changed meanwhile are listed as events in the recording's comments).
+  std::string replay_project;
+  if (r.project) {
+    std::filesystem::path project_file = r.file;
+    project_file.replace_extension(".hof");
+    scene::HofProject out = *r.project;
+    out.device = "replay:" + r.file.filename().string();
+    for (int i = 0; i < 16; ++i) out.position_calibration[static_cast<std::size_t>(i)] = calibration_.position(i / 4, i % 4);
+    if (auto ok = scene::write_project(out, project_file); !ok) return ok;
+    replay_project = fmt::format("; replay it with `hof run {} --deterministic`", project_file.string());
+  }
+  report(fmt::format("recorded {:.2f} s of the stylus ({} samples) to {}{}", r.seconds(), r.samples.size(), r.file.string(), replay_project),
+         false);
   return {};
 }
 
@@ -1096,6 +1201,7 @@ void Gui::draw_panels() {
       }
       if (ImGui::MenuItem("Save as...", nullptr, false, session_ != nullptr)) want_save_dialog_ = true;
       if (ImGui::MenuItem("Export shape (.obj, .vtu)...", nullptr, false, session_ != nullptr)) want_export_dialog_ = true;
+      if (ImGui::MenuItem("Replay a recording (.csv)...", nullptr, false, session_ != nullptr)) want_replay_dialog_ = true;
       if (ImGui::MenuItem("Screenshot (.png)...")) want_screenshot_dialog_ = true;
       ImGui::Separator();
       if (ImGui::MenuItem("Quit", "Ctrl+Q")) {
@@ -1123,6 +1229,12 @@ void Gui::draw_panels() {
     dialog_.show("Export the current shape", true, {".obj", ".vtu"}, [this](const std::filesystem::path& p) {
       if (auto ok = export_shape(p); !ok) report(ok.error().to_string(), true);
     }, file_.stem().string() + "-shape.obj");
+  }
+  if (want_replay_dialog_) {
+    want_replay_dialog_ = false;
+    dialog_.show("Replay a recorded stylus trajectory", false, {".csv"}, [this](const std::filesystem::path& p) {
+      if (auto ok = apply_set("haptics", "device", "replay:" + std::filesystem::absolute(p).string()); !ok) report(ok.error().to_string(), true);
+    });
   }
   if (want_screenshot_dialog_) {
     want_screenshot_dialog_ = false;
@@ -1198,6 +1310,23 @@ void Gui::draw_panels() {
   }
   ImGui::SameLine();
   if (ImGui::Checkbox("real time", &realtime_pacing_) && session_) session_->set_realtime_pacing(realtime_pacing_);
+  if (!recording_) {
+    if (ImGui::Button("Record") && session_) {
+      const auto now = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
+      std::array<char, 32> stamp{};
+      std::strftime(stamp.data(), stamp.size(), "%Y%m%d-%H%M%S", std::localtime(&now));
+      const std::filesystem::path file = std::filesystem::path("recordings") / fmt::format("{}-{}.csv", file_.stem().string(), stamp.data());
+      if (auto ok = start_recording(file); !ok) report(ok.error().to_string(), true);
+    }
+    ImGui::SameLine();
+    ImGui::TextDisabled("the stylus, to replay (File > Replay)");
+  } else {
+    if (ImGui::Button("Stop recording")) {
+      if (auto ok = stop_recording(); !ok) report(ok.error().to_string(), true);
+    }
+    ImGui::SameLine();
+    ImGui::TextColored(ImVec4(1.0f, 0.35f, 0.3f, 1.0f), "recording %.1f s", recording_ ? recording_->seconds() : 0.0);
+  }
   // Live figures.
   ImGui::Text("%.0f frames/s   %.0f steps/s (dt %.3g s)", stats_.fps, stats_.steps_per_s, session_ ? session_->dt() : 0.0);
   ImGui::Text("haptic %.0f Hz, period p50 %.3f ms, p99 %.3f ms", stats_.haptic_hz, stats_.period_p50_ms, stats_.period_p99_ms);
@@ -1327,6 +1456,9 @@ bool Gui::step_script(std::vector<ScriptAction>& script, std::size_t& next, cons
         if (!mouse_) return fail(Error{ErrorCode::kInvalidArgument, "the stylus is not the mouse (device " + device_spec_ + ")", "", 0, -1});
         mouse_to(a.number, a.y, 0.0, true);
         mouse_to(a.number, a.y, a.depth, false);
+        break;
+      case ScriptAction::Kind::kRecord:
+        if (auto ok = a.on ? start_recording(a.file) : stop_recording(); !ok) return fail(ok.error());
         break;
       case ScriptAction::Kind::kScreenshot:
         pending_screenshot_ = a.file;

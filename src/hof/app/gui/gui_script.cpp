@@ -80,6 +80,14 @@ Expected<std::vector<ScriptAction>> parse_script(const std::string& text, const 
           (w.size() == 4 && !to_number(w[3], a.depth))) {
         return fail("mouse takes X Y [DEPTH]: window pixels and metres beyond the touch plane");
       }
+    } else if (verb == "record") {
+      a.kind = ScriptAction::Kind::kRecord;
+      if (w.size() != 2) return fail("record takes FILE.csv (start) or off (stop and write)");
+      a.on = w[1] != "off";
+      if (a.on) {
+        a.file = w[1];
+        if (a.file.extension() != ".csv") return fail("a recording is a .csv file (the replay format)");
+      }
     } else if (verb == "screenshot" || verb == "save") {
       a.kind = verb == "save" ? ScriptAction::Kind::kSave : ScriptAction::Kind::kScreenshot;
       if (w.size() != 2) return fail(verb + " takes one file name (no spaces)");
@@ -91,7 +99,7 @@ Expected<std::vector<ScriptAction>> parse_script(const std::string& text, const 
       a.kind = ScriptAction::Kind::kQuit;
       if (w.size() != 1) return fail("quit takes nothing");
     } else {
-      return fail(fmt::format("unknown action '{}' (known: wait, animate, step, reset, set, mouse, screenshot, save, quit)", verb));
+      return fail(fmt::format("unknown action '{}' (known: wait, animate, step, reset, set, mouse, record, screenshot, save, quit)", verb));
     }
     actions.push_back(std::move(a));
   }

@@ -13,6 +13,7 @@
 ///                                  graphics@renderMode wireframe, mechanics/BODY/COMPONENT@PARAMETER 8000
 ///   mouse X Y [DEPTH]            the mouse stylus under window pixel (X, Y), DEPTH metres
 ///                                beyond the touch plane (default 0)
+///   record FILE.csv | off        start recording the stylus (replay format), or stop and write it
 ///   screenshot FILE.png          the window as it is drawn
 ///   save FILE.hof                the project with every change made so far
 ///   quit                         close the window (the script's end does too)
@@ -26,14 +27,14 @@
 namespace hof::app {
 
 struct ScriptAction {
-  enum class Kind { kWait, kAnimate, kStep, kReset, kSet, kMouse, kScreenshot, kSave, kQuit };
+  enum class Kind { kWait, kAnimate, kStep, kReset, kSet, kMouse, kRecord, kScreenshot, kSave, kQuit };
   Kind kind{Kind::kWait};
   int line{0};
   double number{0.0};          ///< wait: seconds; step: steps; mouse: x
   double y{0.0}, depth{0.0};   ///< mouse
-  bool on{false};              ///< animate
+  bool on{false};              ///< animate; record (false: stop)
   std::string element, attribute, value;  ///< set
-  std::filesystem::path file;  ///< screenshot, save
+  std::filesystem::path file;  ///< screenshot, save, record
   std::string text;            ///< the line as written
 };
 
