@@ -1,6 +1,7 @@
 // Sessions on worlds of several bodies: rigid shapes, two livers, force effects only, and the
 // command seam — in virtual time (lock-step, deterministic) and in real time (two threads).
 
+#include <array>
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -114,6 +115,34 @@ TEST(WorldSession, RigidShapePushedAtTheDeviceLimitStaysPutAndTheForceIsClamped)
   EXPECT_GT(clamped, 100);
   EXPECT_EQ(run.report.fall_through_events, 0);
   EXPECT_GT(run.report.clamped_contact_ticks, 100);
+}
+
+TEST(CommandSeam, ALowerForceLimitHoldsFromTheNextStepAndIsLiftedAgain) {
+  // The box pressed 3 cm deep (45 N requested): 8 N (the device), then 2 N (the user's limit),
+  // then 8 N again once the limit is lifted (0).
+  std::vector<SessionBody> bodies(1);
+  bodies[0].name = "box";
+  bodies[0].surface = box(Vec3(-0.02, -0.04, -0.02), Vec3(0.02, 0.0, 0.02));
+  auto session = Session::make(std::move(bodies), poke_device(Vec3(0, 0.05, 0), Vec3(0, -1, 0), 0.05, 0.03, 0.05, 10.0),
+                               god_object_config());
+  ASSERT_TRUE(session) << session.error().to_string();
+  EXPECT_FALSE((*session)->submit(command::SetForceLimit{-1.0}));
+  EXPECT_FALSE((*session)->submit(command::SetForceLimit{std::nan("")}));
+  // Held 3 cm deep from 1.6 s on; the limit is set at 2.5 s and lifted at 4 s (from the
+  // telemetry callback: any thread may submit).
+  std::array<double, 3> top{};
+  bool lowered = false, lifted = false;
+  (*session)->run_virtual(6.0, [&](const haptics::HapticSample& s) {
+    if (s.time_s >= 2.5 && !lowered) lowered = static_cast<bool>((*session)->submit(command::SetForceLimit{2.0}));
+    if (s.time_s >= 4.0 && !lifted) lifted = static_cast<bool>((*session)->submit(command::SetForceLimit{0.0}));
+    const int window = s.time_s > 1.9 && s.time_s < 2.5 ? 0 : s.time_s > 2.6 && s.time_s < 4.0 ? 1 : s.time_s > 4.6 ? 2 : -1;
+    if (window >= 0) top[static_cast<std::size_t>(window)] = std::max(top[static_cast<std::size_t>(window)], s.force.norm());
+  });
+  ASSERT_TRUE(lowered && lifted);
+  EXPECT_NEAR(top[0], 8.0, 1e-6);
+  EXPECT_LE(top[1], 2.0 + 1e-9);
+  EXPECT_NEAR(top[1], 2.0, 1e-6);
+  EXPECT_NEAR(top[2], 8.0, 1e-6);
 }
 
 TEST(WorldSession, RigidShapeCrossedInOneTickDoesNotLetTheProxyThrough) {

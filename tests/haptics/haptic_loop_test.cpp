@@ -146,6 +146,24 @@ TEST(Safety, RepeatedOverrunsFadeTheForceOut) {
   EXPECT_NEAR(f.z(), 2.0, 1e-12);  // and recovers once it keeps its rate
 }
 
+TEST(Safety, AUserForceLimitBelowTheDevicesHoldsAndOneAboveDoesNot) {
+  SafetyConfig config;
+  config.fade_in_s = 0.0;
+  config.max_force_n = 1.5;  // below the Omni's 3.3 N
+  SafetyFilter filter(omni(), config);
+  EXPECT_DOUBLE_EQ(filter.force_limit_n(), 1.5);
+  Vec3 f = Vec3::Zero();
+  for (int i = 0; i < 50; ++i) f = filter.filter(Vec3(0, 0, 3), SafetyFilter::Reading::kValid, 0.0, false, 1e-3);
+  EXPECT_LE(f.norm(), 1.5);
+  EXPECT_NEAR(f.norm(), 1.5, 1e-9);
+  filter.set_max_force(10.0);  // above the device: the device's limit
+  EXPECT_DOUBLE_EQ(filter.force_limit_n(), omni().max_force_n);
+  for (int i = 0; i < 50; ++i) f = filter.filter(Vec3(0, 0, 5), SafetyFilter::Reading::kValid, 0.0, false, 1e-3);
+  EXPECT_NEAR(f.norm(), omni().max_force_n, 1e-9);
+  filter.set_max_force(0.0);  // 0: the device's
+  EXPECT_DOUBLE_EQ(filter.force_limit_n(), omni().max_force_n);
+}
+
 TEST(Safety, MissingReadingsAreCountedApartFromNonFiniteOnes) {
   SafetyConfig config;
   config.fade_in_s = 0.0;

@@ -149,7 +149,9 @@ int run_session(const RunOptions& options) {
   }
   coupling::SessionConfig config = world->config;
   config.haptics.realtime_priority = !options.deterministic;
-  const double max_force = (*device)->spec().max_force_n;
+  // The limit the safety filter holds: the device's, or the project's when lower.
+  const double device_max = (*device)->spec().max_force_n;
+  const double max_force = config.haptics.safety.max_force_n > 0.0 ? std::min(device_max, config.haptics.safety.max_force_n) : device_max;
   auto made = coupling::Session::make(std::move(world->bodies), std::move(*device), config);
   if (!made) return fail(made.error());
   coupling::Session& session = **made;

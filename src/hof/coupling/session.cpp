@@ -152,6 +152,7 @@ Session::Session(std::vector<SessionBody> bodies, std::unique_ptr<haptics::Devic
   current_settings_.valid = true;
   current_settings_.renderer = config_.haptics.renderer;
   current_settings_.effects = config_.effects;
+  current_settings_.max_force_n = config_.haptics.safety.max_force_n;
   for (const BodyRuntime& r : bodies_) current_settings_.materials.push_back(r.body.material.value_or(config_.haptics.material));
   loop_ = std::make_unique<haptics::HapticLoop>(*device_, std::span<TripleBuffer<haptics::SurfaceSnapshot>* const>(buffers),
                                                 config_.haptics, &settings_);
@@ -267,6 +268,11 @@ Expected<void> Session::submit(const Command& submitted) {
     }
   } else if (const auto* effects = std::get_if<command::SetEffects>(&command)) {
     if (auto ok = haptics::validate_effects(effects->effects); !ok) return std::unexpected(ok.error());
+  } else if (const auto* limit = std::get_if<command::SetForceLimit>(&command)) {
+    if (!(limit->max_force_n >= 0.0 && std::isfinite(limit->max_force_n))) {
+      return make_error(ErrorCode::kInvalidArgument,
+                        fmt::format("force limit: maxForce must be >= 0 N (0: the device's own), got {}", limit->max_force_n));
+    }
   } else if (const auto* renderer = std::get_if<command::SetRenderer>(&command)) {
     const haptics::RendererConfig& r = renderer->renderer;
     if (!(r.proxy_radius_m >= 0.0 && r.proxy_radius_m < 1.0) || r.max_iterations < 1 || r.max_iterations > 64 ||
@@ -385,6 +391,10 @@ void Session::apply_commands(SessionReport& report) {
       current_settings_.renderer = renderer->renderer;
       settings_changed = true;
       report.applied_commands.push_back(fmt::format("step {}: renderer", at));
+    } else if (const auto* limit = std::get_if<command::SetForceLimit>(&command)) {
+      current_settings_.max_force_n = limit->max_force_n;
+      settings_changed = true;
+      report.applied_commands.push_back(fmt::format("step {}: force limit {} N", at, limit->max_force_n));
     } else if (const auto* device = std::get_if<command::SetDevice>(&command)) {
       if (!loop_->switch_device(*device->opened)) {
         // The previous switch has not reached a tick yet: this command and the ones after it

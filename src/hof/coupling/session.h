@@ -137,6 +137,10 @@ struct SetEffects {
 struct SetRenderer {
   haptics::RendererConfig renderer;
 };
+/// A force limit below the device's (haptics::SafetyConfig::max_force_n; 0: the device's).
+struct SetForceLimit {
+  double max_force_n{0.0};
+};
 /// Another device (a spec, see haptics::open_device): opened when submitted (a device that is
 /// not there is refused then), switched to between two ticks with its own force limit.
 struct SetDevice {
@@ -147,7 +151,8 @@ struct SetDevice {
 };
 }  // namespace command
 using Command = std::variant<command::SetParameter, command::Pause, command::Resume, command::SingleStep, command::Reset,
-                             command::SetMaterial, command::SetEffects, command::SetRenderer, command::SetDevice>;
+                             command::SetMaterial, command::SetEffects, command::SetRenderer, command::SetForceLimit,
+                             command::SetDevice>;
 
 /// A parameter changed through the seam, as a project saves it.
 struct ParameterChange {

@@ -86,7 +86,8 @@ HapticLoop::HapticLoop(Device& device, std::span<TripleBuffer<SurfaceSnapshot>* 
       telemetry_(config.telemetry_capacity),
       contacts_(config.telemetry_capacity),
       settings_(settings),
-      last_renderer_(config.renderer) {
+      last_renderer_(config.renderer),
+      max_force_n_(config.safety.max_force_n) {
   bindings_.push_back(std::make_unique<DeviceBinding>(DeviceBinding{&device, SafetyFilter(device.spec(), config_.safety)}));
   binding_.store(bindings_.back().get(), std::memory_order_release);
   // Room for changed effects, so that taking new settings in the tick never allocates.
@@ -127,6 +128,10 @@ void HapticLoop::take_settings() {
     if (renderer_changed) r.reconfigure(s.renderer);
     r.set_part_materials(s.materials);
   }
+  if (s.max_force_n != max_force_n_) {
+    max_force_n_ = s.max_force_n;
+    binding_.load(std::memory_order_relaxed)->safety.set_max_force(max_force_n_);
+  }
   // Copied into the capacity reserved at construction (the producer validated the counts, and
   // assign() within capacity does not allocate); a spring keeps its active state.
   const auto copy_within = [](auto& to, const auto& from) {
@@ -156,6 +161,7 @@ void HapticLoop::tick_impl(double time_s, double period_s, bool overrun) {
     DeviceBinding* old = binding_.load(std::memory_order_relaxed);
     old->device->write_force(Vec3::Zero(), Vec3::Zero());
     next->safety.add_counters(old->safety.counters());
+    next->safety.set_max_force(max_force_n_);
     for (HapticRenderer& r : renderers_) r.set_device_max_stiffness(next->device->spec().max_stiffness_n_per_m);
     proxy_initialised_ = false;
     binding_.store(next, std::memory_order_release);

@@ -58,6 +58,7 @@ struct HapticSettings {
   RendererConfig renderer;
   std::vector<SurfaceMaterial> materials;   ///< per snapshot part (body); empty: config material
   ForceEffects effects;
+  double max_force_n{0.0};                  ///< the user's force limit (SafetyConfig::max_force_n)
 };
 inline constexpr std::size_t kMaxEffectsEach = 32;
 /// Checks counts and values of a set of effects (finite, non-negative constants).
@@ -180,6 +181,7 @@ class HapticLoop {
   SpscRing<HapticContact> contacts_;
   TripleBuffer<HapticSettings>* settings_{nullptr};
   RendererConfig last_renderer_;  // the last renderer configuration taken from the settings
+  double max_force_n_{0.0};       // the user's force limit (tick thread), kept across device switches
   std::atomic<bool> running_{false};
   std::atomic<bool> stop_requested_{false};
   std::atomic<std::uint64_t> ticks_{0};

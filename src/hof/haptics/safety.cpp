@@ -5,7 +5,14 @@
 
 namespace hof::haptics {
 
-SafetyFilter::SafetyFilter(const DeviceSpec& spec, const SafetyConfig& config) : spec_(spec), config_(config) {}
+SafetyFilter::SafetyFilter(const DeviceSpec& spec, const SafetyConfig& config) : spec_(spec), config_(config) {
+  set_max_force(config.max_force_n);
+}
+
+void SafetyFilter::set_max_force(double max_force_n) {
+  config_.max_force_n = max_force_n;
+  limit_n_ = max_force_n > 0.0 && std::isfinite(max_force_n) ? std::min(max_force_n, spec_.max_force_n) : spec_.max_force_n;
+}
 
 void SafetyFilter::reset() {
   gain_ = 0.0;
@@ -48,10 +55,10 @@ Vec3 SafetyFilter::filter(const Vec3& requested, Reading reading, double snapsho
   }
   // Magnitude clamp, last.
   const double magnitude = force.norm();
-  if (magnitude > spec_.max_force_n) {
-    force *= spec_.max_force_n / magnitude;
+  if (magnitude > limit_n_) {
+    force *= limit_n_ / magnitude;
     // Rounding can leave |F| one ulp above the limit: shave until it is not.
-    for (int i = 0; i < 4 && force.norm() > spec_.max_force_n; ++i) force *= 1.0 - 1e-15;
+    for (int i = 0; i < 4 && force.norm() > limit_n_; ++i) force *= 1.0 - 1e-15;
     ++counters_.clamped;
   }
   if (!force.allFinite()) force.setZero();  // cannot happen; never let it through regardless

@@ -22,6 +22,9 @@ struct SafetyConfig {
   double fade_out_s{0.05};
   double max_snapshot_age_s{0.25};
   int max_consecutive_overruns{20};
+  /// A force limit below the device's (a fragile device, a first lesson), N; 0: the device's.
+  /// The force sent never exceeds the smaller of the two.
+  double max_force_n{0.0};
 };
 
 /// Counters of what the filter had to do (read by reports; written by the haptic thread).
@@ -54,6 +57,10 @@ class SafetyFilter {
   [[nodiscard]] const SafetyCounters& counters() const { return counters_; }
   [[nodiscard]] double gain() const { return gain_; }
   [[nodiscard]] const Vec3& last_force() const { return last_; }
+  /// The limit |F| is clamped to: the device's, or the configured one when smaller.
+  [[nodiscard]] double force_limit_n() const { return limit_n_; }
+  /// Changes the configured limit (0: the device's); a limit above the device's is the device's.
+  void set_max_force(double max_force_n);
   void reset();
   /// Adds counts kept by an earlier filter (the loop's totals survive a device switch).
   void add_counters(const SafetyCounters& earlier) {
@@ -67,6 +74,7 @@ class SafetyFilter {
  private:
   DeviceSpec spec_;
   SafetyConfig config_;
+  double limit_n_{0.0};
   SafetyCounters counters_;
   double gain_{0.0};  // fade factor in [0, 1]
   int consecutive_overruns_{0};

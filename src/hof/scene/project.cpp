@@ -206,9 +206,9 @@ std::string to_xml(const HofProject& p) {
   for (std::size_t i = 0; i < 16; ++i) calibration += (i ? " " : "") + number(p.position_calibration[i]);
   out += fmt::format("    <calibration positionCalibration=\"{}\"/>\n", calibration);
   out += surface_xml(p.surface, "    ");
-  out += fmt::format("    <safety fadeIn=\"{}\" fadeOut=\"{}\" maxSnapshotAge=\"{}\" maxConsecutiveOverruns=\"{}\"/>\n",
+  out += fmt::format("    <safety fadeIn=\"{}\" fadeOut=\"{}\" maxSnapshotAge=\"{}\" maxConsecutiveOverruns=\"{}\" maxForce=\"{}\"/>\n",
                      number(p.safety.fade_in_s), number(p.safety.fade_out_s), number(p.safety.max_snapshot_age_s),
-                     p.safety.max_consecutive_overruns);
+                     p.safety.max_consecutive_overruns, number(p.safety.max_force_n));
   out += fmt::format("    <options useBoundTree=\"{}\" maxTrianglesInLeaf=\"{}\"/>\n", p.use_bound_tree ? "true" : "false",
                      p.max_triangles_in_leaf);
   out += fmt::format("    <stylus radius=\"{}\" length=\"{}\"/>\n", number(p.stylus_radius_m), number(p.stylus_length_m));
@@ -430,6 +430,8 @@ Expected<HofProject> parse_project(const std::string& text, const std::filesyste
       p.safety.fade_out_s = r.get(s, "fadeOut", p.safety.fade_out_s);
       p.safety.max_snapshot_age_s = r.get(s, "maxSnapshotAge", p.safety.max_snapshot_age_s);
       p.safety.max_consecutive_overruns = static_cast<int>(r.get(s, "maxConsecutiveOverruns", p.safety.max_consecutive_overruns));
+      p.safety.max_force_n = r.get(s, "maxForce", p.safety.max_force_n);
+      if (!(p.safety.max_force_n >= 0.0)) r.fail(s, fmt::format("<safety> maxForce must be >= 0 N (0: the device's own limit), got {}", p.safety.max_force_n));
     }
   }
   // The thesis' appendix project: <h3d><haptics><device filename="DeviceX.x3d"/>…

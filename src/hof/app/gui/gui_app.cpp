@@ -245,6 +245,10 @@ class Gui {
   void draw_graphics_panel();
   void handle_input();
   void reset_camera();
+  /// The limit the safety filter holds: the device's, or the project's when lower.
+  [[nodiscard]] double force_limit_n() const {
+    return project_.safety.max_force_n > 0.0 ? std::min(max_force_n_, project_.safety.max_force_n) : max_force_n_;
+  }
   [[nodiscard]] double scene_size() const { return std::max((bounds_max_ - bounds_min_).norm(), 1e-6); }
   // Script.
   bool step_script(std::vector<ScriptAction>& script, std::size_t& next, const std::string& name, int& status);
@@ -614,7 +618,7 @@ void Gui::update_from_loops() {
     if (!s.force.allFinite() || !s.requested_force.allFinite()) ++stats_.non_finite;
     // At the device's force limit (a fade-in after a device switch lowers the force too, but
     // is not the limit).
-    if (s.requested_force.norm() > s.force.norm() + 1e-9 && s.force.norm() >= 0.999 * max_force_n_) ++stats_.clamped;
+    if (s.requested_force.norm() > s.force.norm() + 1e-9 && s.force.norm() >= 0.999 * force_limit_n()) ++stats_.clamped;
     if (s.period_s > 0.0) stats_.add_period(s.period_s);
     if (recording_) {
       Recording& r = *recording_;
@@ -720,6 +724,8 @@ Expected<void> Gui::apply_set(const std::string& element, const std::string& att
     if (auto ok = session_->submit(coupling::command::SetRenderer{r}); !ok) return ok;
   } else if (element.starts_with("haptics/effects")) {
     if (auto ok = session_->submit(coupling::command::SetEffects{config.effects}); !ok) return ok;
+  } else if (element == "haptics/safety" && attribute == "maxForce") {
+    if (auto ok = session_->submit(coupling::command::SetForceLimit{next.safety.max_force_n}); !ok) return ok;
   } else if (element == "haptics" && attribute == "device") {
     // Opened here so that the window keeps a handle on a mouse stylus.
     const std::string spec = next.device == "auto" ? std::string("mouse") : next.device;
@@ -1091,7 +1097,7 @@ void Gui::draw_haptics_panel() {
   };
   ImGui::Text("device: %s", device_spec_.c_str());
   if (session_) {
-    ImGui::TextDisabled("max force %.3g N; %s", max_force_n_, mouse_ ? "left-drag in the view moves the stylus" : "");
+    ImGui::TextDisabled("device limit %.3g N; %s", max_force_n_, mouse_ ? "left-drag in the view moves the stylus" : "");
   }
   static std::array<char, 256> spec{};
   ImGui::SetNextItemWidth(220);
@@ -1106,6 +1112,11 @@ void Gui::draw_haptics_panel() {
   ImGui::SetNextItemWidth(200);
   if (ImGui::InputDouble("proxyRadius (m)", &radius, 0.0, 0.0, "%.4g", ImGuiInputTextFlags_EnterReturnsTrue)) {
     set("haptics", "proxyRadius", number_text(radius));
+  }
+  double limit = project_.safety.max_force_n;
+  ImGui::SetNextItemWidth(200);
+  if (ImGui::InputDouble("force limit (N, 0: device's)", &limit, 0.0, 0.0, "%.3g", ImGuiInputTextFlags_EnterReturnsTrue)) {
+    set("haptics/safety", "maxForce", number_text(limit));
   }
   bool shading = project_.force_shading;
   if (ImGui::Checkbox("forceShading", &shading)) set("haptics", "forceShading", shading ? "true" : "false");
