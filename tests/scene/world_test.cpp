@@ -407,5 +407,24 @@ TEST(World, MissingOrFolderInputsAreClearErrors) {
   EXPECT_NE(folder.error().message.find("folder"), std::string::npos);
 }
 
+TEST(World, X3dShapesWithoutASurfaceAreSeenNotTouchedAndMaterialsAreKept) {
+  const fs::path file = write("appearance.x3d", x3d(R"(
+    <Shape DEF="TABLE"><Appearance><Material diffuseColor="0.2 0.4 0.6" transparency="0.5"/></Appearance>
+      <Box size="0.3 0.01 0.3"/></Shape>
+    <Shape DEF="BALL"><Appearance><Material diffuseColor="1 0 0"/><SmoothSurface/></Appearance><Sphere radius="0.03"/></Shape>
+    <Shape DEF="PLAIN"><Appearance><SmoothSurface/></Appearance><Sphere radius="0.02"/></Shape>)"));
+  auto world = build_world(file);
+  ASSERT_TRUE(world) << world.error().to_string();
+  ASSERT_EQ(world->bodies.size(), 2u) << "only the shapes with a haptic surface are bodies";
+  ASSERT_EQ(world->visuals.size(), 1u);
+  EXPECT_EQ(world->visuals[0].name, "TABLE");
+  EXPECT_EQ(world->visuals[0].mesh.triangles.size(), 12u);
+  EXPECT_EQ(world->visuals[0].appearance.diffuse_color, Vec3(0.2, 0.4, 0.6));
+  EXPECT_DOUBLE_EQ(world->visuals[0].appearance.transparency, 0.5);
+  ASSERT_EQ(world->appearances.count("BALL"), 1u);
+  EXPECT_EQ(world->appearances.at("BALL").diffuse_color, Vec3(1.0, 0.0, 0.0));
+  EXPECT_EQ(world->appearances.count("PLAIN"), 0u) << "no Material: the window's own";
+}
+
 }  // namespace
 }  // namespace hof::scene

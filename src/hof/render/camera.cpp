@@ -37,8 +37,10 @@ void OrbitCamera::fit(const Vec3& box_min, const Vec3& box_max) {
   const double radius = std::max(0.5 * (box_max - box_min).norm(), 1e-6);
   // The bounding sphere fills the vertical field of view with a margin.
   distance_ = 1.15 * radius / std::sin(0.5 * fov_y_rad_);
-  // From the front (−e2, as the standard liver's −y) and 30° above.
-  yaw_ = -1.5707963267948966;
+  // From the front and 30° above: −y for a z-up scene (the standard liver), +z for a y-up
+  // one (X3D's viewer looks along −z).
+  const Vec3 front = std::abs(up_.y()) > 0.9 ? Vec3::UnitZ() : Vec3(-Vec3::UnitY());
+  yaw_ = std::atan2(front.dot(e2_), front.dot(e1_));
   pitch_ = 0.52;
 }
 

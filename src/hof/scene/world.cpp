@@ -157,10 +157,16 @@ Expected<void> add_x3d(World& w, const std::filesystem::path& file) {
     // deformable one is simulated on its geometry (the mesh that deforms).
     const mesh::TriMesh& geometry =
         shape.deformable || shape.haptic_mesh_W.triangles.empty() ? shape.mesh_W : shape.haptic_mesh_W;
-    if (!shape.touchable || geometry.triangles.empty()) continue;
-    if (!shape.solid) w.project.touchable_face = collision::TouchableFace::kFrontAndBack;  // X3D solid='false'
+    if (geometry.triangles.empty()) continue;
     const std::string name = unique_name(
         w.bodies, !shape.def.empty() ? shape.def : fmt::format("{}@{}", shape.geometry_type.empty() ? "Shape" : shape.geometry_type, shape.line));
+    const Appearance appearance{shape.diffuse_color, shape.transparency};
+    if (!shape.touchable) {
+      w.visuals.push_back(VisualShape{name, shape.mesh_W, appearance});  // seen, not felt
+      continue;
+    }
+    if (shape.has_material) w.appearances[name] = appearance;
+    if (!shape.solid) w.project.touchable_face = collision::TouchableFace::kFrontAndBack;  // X3D solid='false'
     if (!shape.deformable) {
       // A plain Shape: rigid and fixed, as H3D renders it.
       coupling::SessionBody body;

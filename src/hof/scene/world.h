@@ -21,6 +21,7 @@
 
 #include <array>
 #include <filesystem>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -45,6 +46,19 @@ struct X3dDeformableDefaults {
   double dt_s{0.01};
 };
 
+/// How a shape looks (an X3D Material).
+struct Appearance {
+  Vec3 diffuse_color{0.8, 0.8, 0.8};
+  double transparency{0.0};
+};
+
+/// A shape that is only seen: no haptic surface (an X3D Shape without one), never touched.
+struct VisualShape {
+  std::string name;
+  mesh::TriMesh mesh;  ///< world frame, m
+  Appearance appearance;
+};
+
 struct World {
   std::string name;
   std::filesystem::path file;        ///< what the user gave
@@ -56,6 +70,8 @@ struct World {
   bool default_probe{false};         ///< the device is the builder's probe
   std::string length_unit{"m"};      ///< "m", or "scene units" for a SOFA scene (no unit)
   std::vector<std::string> skipped;  ///< components not simulated, "TYPE 'name' (line N)"
+  std::map<std::string, Appearance> appearances;  ///< by body name, where the file gives one
+  std::vector<VisualShape> visuals;               ///< shapes only seen
   std::vector<std::string> warnings;
   std::vector<std::string> defaults; ///< "what = value (why)" for every default the builder used
   /// The calibration the file gave (identity when none), before the default probe fitted one.

@@ -456,6 +456,8 @@ class Reader {
       const std::string_view t = c.name();
       if (t == "Material") {
         s.diffuse_color = vec3(c, "diffuseColor", s.diffuse_color);
+        s.transparency = std::clamp(c.attribute("transparency").as_double(0.0), 0.0, 1.0);
+        s.has_material = true;
       } else if (t == "SmoothSurface" || t == "FrictionalSurface" || t == "MagneticSurface" ||
                  t == "OpenHapticsSurface" || t == "DepthMapSurface" || t == "HapticTexturesSurface") {
         s.touchable = true;

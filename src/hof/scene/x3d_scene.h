@@ -76,6 +76,8 @@ struct X3dShape {
   int layer{0};                ///< haptic layer: index of its HapticLayeredGroup child (0 outside one)
   std::string deformer_type;   ///< e.g. "CoordinateDeformer" ("" = no deformation)
   Vec3 diffuse_color{0.8, 0.8, 0.8};  ///< Material.diffuseColor (X3D default 0.8 0.8 0.8)
+  double transparency{0.0};           ///< Material.transparency (X3D default 0)
+  bool has_material{false};           ///< an Appearance.material was given
   std::optional<X3dHapticsOptions> haptics_options;      ///< from the geometry's `options`
   std::optional<X3dBoundTreeOptions> bound_tree_options;  ///< from the geometry's `options`
 };

@@ -32,6 +32,7 @@
 #include "hof/app/gui/gui_script.h"
 #include "hof/coupling/session.h"
 #include "hof/haptics/device_backends/mouse_device.h"
+#include "hof/haptics/surface_snapshot.h"
 #include "hof/haptics/device_backends/replay_device.h"
 #include "hof/mechanics/model_parameters.h"
 #include "hof/mesh/mesh_io.h"
@@ -74,8 +75,15 @@ struct LayerView {
   double max_displacement_m{0.0};
 };
 
+/// A shape only seen (no haptic surface).
+struct VisualView {
+  render::MeshBuffer mesh;
+  render::Material material;
+};
+
 struct BodyView {
   std::string name;
+  std::optional<render::Material> material;  // the file's (an X3D Material), else the project's
   bool deformable{false};
   int layer{0};
   std::optional<mechanics::ModelConfig> config;  // as the accepted commands leave it
@@ -273,6 +281,7 @@ class Gui {
   double max_force_n_{8.0};
   std::vector<LayerView> layers_;
   std::vector<BodyView> bodies_;
+  std::vector<VisualView> visuals_;
   Vec3 bounds_min_{Vec3::Constant(-0.1)}, bounds_max_{Vec3::Constant(0.1)};
   bool animating_{true};
   bool dirty_{false};
@@ -471,6 +480,12 @@ Expected<void> Gui::open(const std::filesystem::path& file) {
         }
       }
     }
+    if (const auto a = world->appearances.find(b.name); a != world->appearances.end()) {
+      render::Material m;
+      m.diffuse = render::Rgba(static_cast<float>(a->second.diffuse_color.x()), static_cast<float>(a->second.diffuse_color.y()),
+                               static_cast<float>(a->second.diffuse_color.z()), static_cast<float>(1.0 - a->second.transparency));
+      v.material = m;
+    }
     bodies.push_back(std::move(v));
   }
   coupling::SessionConfig config = world->config;
@@ -498,6 +513,18 @@ Expected<void> Gui::open(const std::filesystem::path& file) {
   device_spec_ = spec;
   default_probe_ = world->default_probe;
   bodies_ = std::move(bodies);
+  visuals_.clear();
+  for (const scene::VisualShape& shape : world->visuals) {
+    VisualView v;
+    const haptics::SurfaceSnapshot s = haptics::make_snapshot(shape.mesh);  // for its vertex normals
+    v.mesh.set_triangles(s.triangles);
+    v.mesh.set_positions(s.vertices);
+    v.mesh.set_normals(s.vertex_normals);
+    const Vec3& c = shape.appearance.diffuse_color;
+    v.material.diffuse = render::Rgba(static_cast<float>(c.x()), static_cast<float>(c.y()), static_cast<float>(c.z()),
+                                      static_cast<float>(1.0 - shape.appearance.transparency));
+    visuals_.push_back(std::move(v));
+  }
   dirty_ = false;
   error_.clear();
   layers_.clear();
@@ -514,6 +541,12 @@ Expected<void> Gui::open(const std::filesystem::path& file) {
     view.mesh.set_triangles(s.triangles);
     upload_layer(view, s);
     for (const Vec3& v : s.vertices) {
+      bounds_min_ = bounds_min_.cwiseMin(v);
+      bounds_max_ = bounds_max_.cwiseMax(v);
+    }
+  }
+  for (const scene::VisualShape& shape : world->visuals) {
+    for (const Vec3& v : shape.mesh.vertices) {
       bounds_min_ = bounds_min_.cwiseMin(v);
       bounds_max_ = bounds_max_.cwiseMax(v);
     }
@@ -553,10 +586,11 @@ Expected<void> Gui::open(const std::filesystem::path& file) {
 }
 
 void Gui::reset_camera() {
-  // Up is the scene's: against gravity when it has gravity, else z (HoF's organs).
-  Vec3 up = Vec3::UnitZ();
+  // Up is the scene's: y in X3D; against gravity when it has gravity; else z (HoF's organs).
+  const bool x3d = file_.extension() == ".x3d";
+  Vec3 up = x3d ? Vec3::UnitY() : Vec3::UnitZ();
   for (const BodyView& b : bodies_) {
-    if (b.config && b.config->gravity_m_per_s2.norm() > 0.0) {
+    if (!x3d && b.config && b.config->gravity_m_per_s2.norm() > 0.0) {
       up = -b.config->gravity_m_per_s2.normalized();
       break;
     }
@@ -573,6 +607,9 @@ void Gui::reset_camera() {
   const bool frames = (centre - g.look_at_m).norm() < 0.5 * distance && radius > 0.05 * distance && radius < 2.0 * distance;
   if (file_.extension() == ".hof" && (!is_default || frames)) {
     camera_.look(g.viewpoint_m, g.look_at_m);
+  } else if (x3d && g.viewpoint_m != defaults.viewpoint_m) {
+    // The scene's X3D Viewpoint, which looks along −z (its orientation is not applied).
+    camera_.look(g.viewpoint_m, g.viewpoint_m - Vec3::UnitZ() * std::max((centre - g.viewpoint_m).norm(), 1e-3));
   } else {
     camera_.fit(bounds_min_, bounds_max_);
   }
@@ -965,11 +1002,15 @@ void Gui::draw_scene(int width, int height) {
   rigid.specular = {0.3f, 0.3f, 0.3f};
   const render::RenderMode mode = render_mode_of(g.render_mode);
   const double size = scene_size();
-  // Opaque parts first, then transparent ones.
+  // Opaque parts first, then transparent ones (shapes only seen among them).
   for (int pass = 0; pass < 2; ++pass) {
+    for (const VisualView& v : visuals_) {
+      if ((v.material.diffuse.w() < 0.999f) == (pass == 1)) renderer_->draw(v.mesh, v.material, render::RenderMode::kShaded);
+    }
     for (LayerView& l : layers_) {
       for (const haptics::SurfacePart& part : l.parts) {
-        const render::Material& m = part.is_static ? rigid : tissue;
+        const BodyView* body = part.body >= 0 && static_cast<std::size_t>(part.body) < bodies_.size() ? &bodies_[static_cast<std::size_t>(part.body)] : nullptr;
+        const render::Material& m = body && body->material ? *body->material : part.is_static ? rigid : tissue;
         if ((m.diffuse.w() < 0.999f) != (pass == 1)) continue;
         renderer_->draw(l.mesh, m, part.is_static ? render::RenderMode::kShaded : mode, Eigen::Matrix4f::Identity(),
                        static_cast<std::size_t>(part.first_triangle), static_cast<std::size_t>(part.triangle_count));
