@@ -21,8 +21,11 @@ set graphics@colorBy displacement
 set graphics@renderMode shaded+wireframe
 wait 0.5
 screenshot docs/images/gui-displacement.png
+show mechanics
+wait 0.3
+screenshot docs/images/gui-mechanics.png
 quit
 ACTIONS
 xvfb-run -a -s "-screen 0 1280x720x24" build/release/bin/hof gui examples/liver-palpation-medium-fem.hof \
   --size 1280x720 --script "$work/press.txt"
-echo "screenshots: docs/images/gui-liver.png gui-press.png gui-displacement.png"
+echo "screenshots: docs/images/gui-liver.png gui-press.png gui-displacement.png gui-mechanics.png"

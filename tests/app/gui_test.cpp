@@ -125,7 +125,7 @@ TEST(GuiScript, ReadsEveryActionAndNamesTheLineOfAnError) {
   EXPECT_EQ((*ok)[7].line, 9);
 
   for (const char* bad : {"wait\n", "wait -1\n", "animate maybe\n", "set stiffness 0.4\n", "mouse 1\n", "screenshot a.jpg\n",
-                          "save a.scn\n", "frobnicate\n", "step 0\n", "record a.txt\n", "record\n"}) {
+                          "save a.scn\n", "frobnicate\n", "step 0\n", "record a.txt\n", "record\n", "show toolbar\n"}) {
     auto e = hof::app::parse_script(std::string("wait 0\n") + bad, "s.txt");
     ASSERT_FALSE(e) << bad;
     EXPECT_EQ(e.error().line, 2) << bad;

@@ -143,6 +143,8 @@ std::vector<std::string> parameter_names(const ModelConfig& c) {
   names.push_back(c.linear.name + "/threshold");
   names.push_back(c.mass.name + "/totalMass");
   names.push_back(c.mass.name + "/massDensity");
+  // The model's own (component ""): "/dt", ...
+  for (const char* own : {"dt", "maxSpeed", "gravityX", "gravityY", "gravityZ"}) names.push_back(std::string("/") + own);
   return names;
 }
 

@@ -30,7 +30,8 @@ namespace hof::mechanics {
 [[nodiscard]] Expected<double> get_parameter(const ModelConfig& config, std::string_view component,
                                              std::string_view parameter);
 
-/// "component/parameter" pairs that set_parameter accepts for this model (for help texts).
+/// "component/parameter" pairs that set_parameter accepts for this model (for help texts and
+/// the window's scene tree); the model's own parameters have an empty component ("/dt").
 [[nodiscard]] std::vector<std::string> parameter_names(const ModelConfig& config);
 
 }  // namespace hof::mechanics

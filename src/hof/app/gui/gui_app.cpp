@@ -330,6 +330,7 @@ class Gui {
   bool want_replay_dialog_{false};  // waits for the user's answer about unsaved changes
   Clock::time_point script_wait_until_{};
   bool script_waiting_{false};
+  std::optional<std::string> open_panel_;  // a panel a script opened (taken by the next frame)
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -1106,27 +1107,66 @@ void Gui::draw_legend() {
   ImGui::End();
 }
 
+namespace {
+
+/// The scene-tree rows of a model: each component with its SOFA type, in the order a scene
+/// lists them ("" is the node itself: dt, gravity, ...).
+std::vector<std::pair<std::string, std::string>> components_of(const mechanics::ModelConfig& c) {
+  std::vector<std::pair<std::string, std::string>> out;
+  out.emplace_back("", "Node");
+  const char* ode = c.ode.kind == mechanics::OdeSolverKind::kEulerExplicit ? "EulerExplicitSolver"
+                    : c.ode.kind == mechanics::OdeSolverKind::kRungeKutta4 ? "RungeKutta4Solver"
+                    : c.ode.kind == mechanics::OdeSolverKind::kStatic      ? "StaticSolver"
+                                                                           : "EulerImplicitSolver";
+  out.emplace_back(c.ode.name, ode);
+  out.emplace_back(c.linear.name, c.linear.kind == mechanics::LinearSolverKind::kSparseLdlt ? "SparseLDLSolver" : "CGLinearSolver");
+  out.emplace_back(c.mass.name, c.mass.kind == mechanics::MassKind::kUniform ? "UniformMass" : "DiagonalMass");
+  for (const mechanics::ForceFieldConfig& f : c.force_fields) {
+    const char* type = f.mesh_springs      ? "MeshSpringForceField"
+                       : f.tetrahedron_fem ? "TetrahedronFEMForceField"
+                       : f.neo_hookean     ? "TetrahedronHyperelasticityFEMForceField (NeoHookean)"
+                                           : "ConstantForceField";
+    out.emplace_back(f.name, type);
+  }
+  for (const mechanics::FixedConstraintConfig& f : c.fixed) out.emplace_back(f.name, "FixedProjectiveConstraint");
+  return out;
+}
+
+}  // namespace
+
 void Gui::draw_mechanics_panel() {
+  ImGui::TextDisabled("Enter applies a value (validated; saved with the project)");
   for (BodyView& b : bodies_) {
     const std::string label = fmt::format("{} ({})", b.name, b.deformable ? "deformable" : "rigid");
-    if (!ImGui::TreeNode(label.c_str())) continue;
+    if (!ImGui::TreeNodeEx(label.c_str(), ImGuiTreeNodeFlags_DefaultOpen)) continue;
     if (!b.config) {
       ImGui::TextDisabled("fixed shape: touchable, never deforms");
-    } else {
-      ImGui::TextDisabled("%zu nodes, %zu tetrahedra", b.config->positions.size(), b.config->tets.size());
+      ImGui::TreePop();
+      continue;
+    }
+    ImGui::TextDisabled("%zu nodes, %zu tetrahedra, %zu fixed", b.config->positions.size(), b.config->tets.size(), b.fixed_points.size());
+    for (const auto& [component, type] : components_of(*b.config)) {
+      const std::string prefix = component + "/";
+      const bool has_parameters = std::any_of(b.parameters.begin(), b.parameters.end(), [&](const std::string& p) { return p.starts_with(prefix); });
+      const std::string node = fmt::format("{} {}##{}/{}", type, component.empty() ? b.name : component, b.name, component);
+      // The force fields (what is tuned most) start open.
+      const bool force_field = type.find("ForceField") != std::string::npos;
+      const ImGuiTreeNodeFlags flags = !has_parameters ? ImGuiTreeNodeFlags_Leaf : force_field ? ImGuiTreeNodeFlags_DefaultOpen : ImGuiTreeNodeFlags_None;
+      if (!ImGui::TreeNodeEx(node.c_str(), flags)) continue;
       for (const std::string& p : b.parameters) {
-        const std::size_t slash = p.find('/');
-        const std::string component = p.substr(0, slash), parameter = p.substr(slash + 1);
+        if (!p.starts_with(prefix)) continue;
+        const std::string parameter = p.substr(prefix.size());
         const auto value = mechanics::get_parameter(*b.config, component, parameter);
         if (!value) continue;
         double v = *value;
         ImGui::SetNextItemWidth(130);
-        const std::string id = fmt::format("{}##{}/{}", p, b.name, p);
+        const std::string id = fmt::format("{}##{}/{}", parameter, b.name, p);
         if (ImGui::InputDouble(id.c_str(), &v, 0.0, 0.0, "%.6g", ImGuiInputTextFlags_EnterReturnsTrue)) {
           const std::string element = component.empty() ? "mechanics/" + b.name : "mechanics/" + b.name + "/" + component;
           if (auto ok = apply_set(element, parameter, number_text(v)); !ok) report(ok.error().to_string(), true);
         }
       }
+      ImGui::TreePop();
     }
     ImGui::TreePop();
   }
@@ -1408,9 +1448,14 @@ void Gui::draw_panels() {
       ImGui::TextDisabled("no contact%s", mouse_ ? " (left-drag onto a body, wheel or W/S to press)" : "");
     }
   }
+  if (open_panel_ == "mechanics") ImGui::SetNextItemOpen(true);
   if (ImGui::CollapsingHeader("Mechanics")) draw_mechanics_panel();
+  if (open_panel_ == "haptics") ImGui::SetNextItemOpen(true);
   if (ImGui::CollapsingHeader("Haptics")) draw_haptics_panel();
+  if (open_panel_ == "graphics") ImGui::SetNextItemOpen(true);
   if (ImGui::CollapsingHeader("Graphics")) draw_graphics_panel();
+  if (open_panel_ == "messages") ImGui::SetNextItemOpen(true);
+  open_panel_.reset();
   if (ImGui::CollapsingHeader("Messages")) {
     for (const std::string& m : log_) ImGui::TextWrapped("%s", m.c_str());
   }
@@ -1508,6 +1553,9 @@ bool Gui::step_script(std::vector<ScriptAction>& script, std::size_t& next, cons
         if (!mouse_) return fail(Error{ErrorCode::kInvalidArgument, "the stylus is not the mouse (device " + device_spec_ + ")", "", 0, -1});
         mouse_to(a.number, a.y, 0.0, true);
         mouse_to(a.number, a.y, a.depth, false);
+        break;
+      case ScriptAction::Kind::kShow:
+        open_panel_ = a.value;
         break;
       case ScriptAction::Kind::kRecord:
         if (auto ok = a.on ? start_recording(a.file) : stop_recording(); !ok) return fail(ok.error());

@@ -80,6 +80,12 @@ Expected<std::vector<ScriptAction>> parse_script(const std::string& text, const 
           (w.size() == 4 && !to_number(w[3], a.depth))) {
         return fail("mouse takes X Y [DEPTH]: window pixels and metres beyond the touch plane");
       }
+    } else if (verb == "show") {
+      a.kind = ScriptAction::Kind::kShow;
+      if (w.size() != 2 || (w[1] != "mechanics" && w[1] != "haptics" && w[1] != "graphics" && w[1] != "messages")) {
+        return fail("show takes a panel: mechanics, haptics, graphics or messages");
+      }
+      a.value = w[1];
     } else if (verb == "record") {
       a.kind = ScriptAction::Kind::kRecord;
       if (w.size() != 2) return fail("record takes FILE.csv (start) or off (stop and write)");
@@ -99,7 +105,7 @@ Expected<std::vector<ScriptAction>> parse_script(const std::string& text, const 
       a.kind = ScriptAction::Kind::kQuit;
       if (w.size() != 1) return fail("quit takes nothing");
     } else {
-      return fail(fmt::format("unknown action '{}' (known: wait, animate, step, reset, set, mouse, record, screenshot, save, quit)", verb));
+      return fail(fmt::format("unknown action '{}' (known: wait, animate, step, reset, set, mouse, show, record, screenshot, save, quit)", verb));
     }
     actions.push_back(std::move(a));
   }

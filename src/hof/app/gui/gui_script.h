@@ -13,6 +13,7 @@
 ///                                  graphics@renderMode wireframe, mechanics/BODY/COMPONENT@PARAMETER 8000
 ///   mouse X Y [DEPTH]            the mouse stylus under window pixel (X, Y), DEPTH metres
 ///                                beyond the touch plane (default 0)
+///   show PANEL                   opens a panel: mechanics, haptics, graphics, messages
 ///   record FILE.csv | off        start recording the stylus (replay format), or stop and write it
 ///   screenshot FILE.png          the window as it is drawn
 ///   save FILE.hof                the project with every change made so far
@@ -27,7 +28,7 @@
 namespace hof::app {
 
 struct ScriptAction {
-  enum class Kind { kWait, kAnimate, kStep, kReset, kSet, kMouse, kRecord, kScreenshot, kSave, kQuit };
+  enum class Kind { kWait, kAnimate, kStep, kReset, kSet, kMouse, kShow, kRecord, kScreenshot, kSave, kQuit };
   Kind kind{Kind::kWait};
   int line{0};
   double number{0.0};          ///< wait: seconds; step: steps; mouse: x
