@@ -146,6 +146,19 @@ TEST(ProjectAttribute, SetsByTheFilesOwnNamesAndChecksAsTheReaderDoes) {
   ASSERT_TRUE(set_project_attribute(p, file, "graphics/material", "diffuseColor", "0.5 0.2 0.1"));
   EXPECT_EQ(p.graphics.diffuse_color, Vec3(0.5, 0.2, 0.1));
 
+  // The n-th of several elements of a kind.
+  p.effects.springs.resize(2);
+  ASSERT_TRUE(set_project_attribute(p, file, "haptics/effects/SpringEffect[2]", "springConstant", "250"));
+  EXPECT_DOUBLE_EQ(p.effects.springs[1].spring_constant_n_per_m, 250.0);
+  EXPECT_DOUBLE_EQ(p.effects.springs[0].spring_constant_n_per_m, haptics::SpringEffect{}.spring_constant_n_per_m);
+  ASSERT_TRUE(set_project_attribute(p, file, "haptics/effects/SpringEffect", "position", "0 0.1 0"));
+  EXPECT_EQ(p.effects.springs[0].position_m, Vec3(0.0, 0.1, 0.0));
+  auto third = set_project_attribute(p, file, "haptics/effects/SpringEffect[3]", "springConstant", "1");
+  ASSERT_FALSE(third);
+  EXPECT_NE(third.error().message.find("has 2 <SpringEffect>"), std::string::npos) << third.error().message;
+  EXPECT_FALSE(set_project_attribute(p, file, "haptics/effects/SpringEffect[0]", "springConstant", "1"));
+  EXPECT_FALSE(set_project_attribute(p, file, "haptics/effects/SpringEffect[x]", "springConstant", "1"));
+
   const std::string before = to_xml(p);
   // Wrong names list the right ones; wrong values say what is allowed; nothing changes.
   auto e = set_project_attribute(p, file, "haptics/surface", "stifness", "0.4");

@@ -261,8 +261,24 @@ Expected<void> set_project_attribute(HofProject& project, const std::filesystem:
   std::size_t start = 0;
   while (!element.empty() && start <= element.size()) {
     const std::size_t slash = element.find('/', start);
-    const std::string part(element.substr(start, slash == std::string_view::npos ? std::string_view::npos : slash - start));
+    std::string part(element.substr(start, slash == std::string_view::npos ? std::string_view::npos : slash - start));
+    // NAME[n]: the n-th such element (from 1, as XPath), e.g. haptics/effects/SpringEffect[2].
+    int index = 1;
+    if (const std::size_t open = part.find('['); open != std::string::npos && part.ends_with(']')) {
+      const std::string number = part.substr(open + 1, part.size() - open - 2);
+      const auto parsed = std::from_chars(number.data(), number.data() + number.size(), index);
+      if (parsed.ec != std::errc() || parsed.ptr != number.data() + number.size() || index < 1) {
+        return make_error(ErrorCode::kInvalidArgument, fmt::format("'{}': '{}' is not NAME[n] with n >= 1", name, part));
+      }
+      part.resize(open);
+    }
     pugi::xml_node child = node.child(part.c_str());
+    for (int k = 1; child && k < index; ++k) child = child.next_sibling(part.c_str());
+    if (!child && index > 1 && node.child(part.c_str())) {
+      int count = 0;
+      for (pugi::xml_node c = node.child(part.c_str()); c; c = c.next_sibling(part.c_str())) ++count;
+      return make_error(ErrorCode::kInvalidArgument, fmt::format("'{}': <{}> has {} <{}>, not {}", name, walked, count, part, index));
+    }
     if (!child) {
       std::string known;
       for (const pugi::xml_node c : node.children()) {
@@ -274,7 +290,7 @@ Expected<void> set_project_attribute(HofProject& project, const std::filesystem:
                         fmt::format("'{}': no element <{}> in <{}> (it has: {})", name, part, walked, known.empty() ? "none" : known));
     }
     node = child;
-    walked += "/" + part;
+    walked += "/" + part + (index > 1 ? fmt::format("[{}]", index) : std::string());
     if (slash == std::string_view::npos) break;
     start = slash + 1;
   }

@@ -88,7 +88,8 @@ struct HofProject {
 /// A project from its XML text; `path` names it in errors and anchors relative files.
 [[nodiscard]] Expected<HofProject> parse_project(const std::string& text, const std::filesystem::path& path);
 /// Sets one attribute by the file's own names, e.g. ("haptics/surface", "stiffness", "0.4"),
-/// ("haptics", "renderer", "GodObjectRenderer"), ("graphics", "renderMode", "wireframe"): the
+/// ("haptics", "renderer", "GodObjectRenderer"), ("graphics", "renderMode", "wireframe"),
+/// ("haptics/effects/SpringEffect[2]", "springConstant", "200") (the n-th such element): the
 /// value is checked as when the file is read. Errors name the element and attribute and list
 /// the known ones; `project` is unchanged on error.
 [[nodiscard]] Expected<void> set_project_attribute(HofProject& project, const std::filesystem::path& path,

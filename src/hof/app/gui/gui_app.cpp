@@ -250,6 +250,7 @@ class Gui {
   void draw_legend();
   void draw_mechanics_panel();
   void draw_haptics_panel();
+  void draw_effects_editor();
   void draw_graphics_panel();
   void handle_input();
   void reset_camera();
@@ -1043,6 +1044,11 @@ void Gui::draw_scene(int width, int height) {
   if (show_fixed_nodes_) {
     for (const BodyView& b : bodies_) renderer_->draw_points(b.fixed_points, render::Rgba(0.2f, 0.6f, 1.0f, 1.0f), 5.0f);
   }
+  // Spring effects: the anchor, and the sphere within which the spring catches the stylus.
+  for (const haptics::SpringEffect& e : project_.effects.springs) {
+    renderer_->draw_sphere(e.position_m, std::max(0.003 * size, 1e-6), render::Rgba(0.3f, 0.9f, 0.5f, 1.0f));
+    renderer_->draw_sphere(e.position_m, e.start_distance_m, render::Rgba(0.3f, 0.9f, 0.5f, 0.25f));
+  }
   // The stylus, the proxy, the device, the contact.
   const double proxy_radius = std::max(project_.renderer == haptics::RendererKind::kRuspini ? project_.proxy_radius_m : project_.stylus_radius_m,
                                        0.004 * size);
@@ -1172,8 +1178,89 @@ void Gui::draw_mechanics_panel() {
   }
 }
 
+void Gui::draw_effects_editor() {
+  ImGui::Separator();
+  ImGui::TextDisabled("force effects (H3D; Enter applies)");
+  const auto set = [&](const std::string& element, const char* attribute, const std::string& value) {
+    if (auto ok = apply_set(element, attribute, value); !ok) report(ok.error().to_string(), true);
+  };
+  const auto number = [&](const std::string& element, const char* attribute, double value) {
+    ImGui::SetNextItemWidth(160);
+    if (ImGui::InputDouble(attribute, &value, 0.0, 0.0, "%.4g", ImGuiInputTextFlags_EnterReturnsTrue)) set(element, attribute, number_text(value));
+  };
+  const auto vector = [&](const std::string& element, const char* attribute, const Vec3& value) {
+    double v[3] = {value.x(), value.y(), value.z()};
+    ImGui::SetNextItemWidth(240);
+    if (ImGui::InputScalarN(attribute, ImGuiDataType_Double, v, 3, nullptr, nullptr, "%.4g", ImGuiInputTextFlags_EnterReturnsTrue)) {
+      set(element, attribute, fmt::format("{} {} {}", v[0], v[1], v[2]));
+    }
+  };
+  // Adding or removing an effect changes the list as a whole (one command).
+  const auto change = [&](const auto& mutate) {
+    haptics::ForceEffects effects = project_.effects;
+    mutate(effects);
+    if (auto ok = session_->submit(coupling::command::SetEffects{effects}); !ok) {
+      report(ok.error().to_string(), true);
+      return;
+    }
+    project_.effects = std::move(effects);
+    dirty_ = true;
+  };
+  std::optional<std::function<void(haptics::ForceEffects&)>> pending;  // applied after the loops below
+  for (std::size_t i = 0; i < project_.effects.springs.size(); ++i) {
+    const haptics::SpringEffect e = project_.effects.springs[i];
+    const std::string element = fmt::format("haptics/effects/SpringEffect[{}]", i + 1);
+    ImGui::PushID(element.c_str());
+    ImGui::Text("SpringEffect %zu", i + 1);
+    ImGui::SameLine();
+    if (ImGui::SmallButton("remove")) pending = [i](haptics::ForceEffects& f) { f.springs.erase(f.springs.begin() + static_cast<std::ptrdiff_t>(i)); };
+    vector(element, "position", e.position_m);
+    number(element, "springConstant", e.spring_constant_n_per_m);
+    number(element, "startDistance", e.start_distance_m);
+    number(element, "escapeDistance", e.escape_distance_m);
+    number(element, "damping", e.damping_n_s_per_m);
+    ImGui::PopID();
+  }
+  for (std::size_t i = 0; i < project_.effects.viscosities.size(); ++i) {
+    const haptics::ViscosityEffect e = project_.effects.viscosities[i];
+    const std::string element = fmt::format("haptics/effects/ViscosityEffect[{}]", i + 1);
+    ImGui::PushID(element.c_str());
+    ImGui::Text("ViscosityEffect %zu", i + 1);
+    ImGui::SameLine();
+    if (ImGui::SmallButton("remove")) pending = [i](haptics::ForceEffects& f) { f.viscosities.erase(f.viscosities.begin() + static_cast<std::ptrdiff_t>(i)); };
+    number(element, "viscosity", e.viscosity_pa_s);
+    number(element, "radius", e.radius_m);
+    number(element, "dampingFactor", e.damping_factor);
+    bool enabled = e.enabled;
+    if (ImGui::Checkbox("enabled", &enabled)) set(element, "enabled", enabled ? "true" : "false");
+    ImGui::PopID();
+  }
+  for (std::size_t i = 0; i < project_.effects.constants.size(); ++i) {
+    const std::string element = fmt::format("haptics/effects/ForceField[{}]", i + 1);
+    ImGui::PushID(element.c_str());
+    ImGui::Text("ForceField %zu", i + 1);
+    ImGui::SameLine();
+    if (ImGui::SmallButton("remove")) pending = [i](haptics::ForceEffects& f) { f.constants.erase(f.constants.begin() + static_cast<std::ptrdiff_t>(i)); };
+    vector(element, "force", project_.effects.constants[i].force_n);
+    ImGui::PopID();
+  }
+  // New effects start where the stylus is (a spring holds it there at once) and with H3D's defaults.
+  if (ImGui::SmallButton("+ spring")) {
+    pending = [at = last_.valid ? last_.proxy : mouse_world_](haptics::ForceEffects& f) {
+      haptics::SpringEffect spring;
+      spring.position_m = at;
+      f.springs.push_back(spring);
+    };
+  }
+  ImGui::SameLine();
+  if (ImGui::SmallButton("+ viscosity")) pending = [](haptics::ForceEffects& f) { f.viscosities.emplace_back(); };
+  ImGui::SameLine();
+  if (ImGui::SmallButton("+ force field")) pending = [](haptics::ForceEffects& f) { f.constants.emplace_back(); };
+  if (pending && session_) change(*pending);
+}
+
 void Gui::draw_haptics_panel() {
-  const auto set = [&](const char* element, const char* attribute, const std::string& value) {
+  const auto set = [&](const std::string& element, const char* attribute, const std::string& value) {
     if (auto ok = apply_set(element, attribute, value); !ok) report(ok.error().to_string(), true);
   };
   ImGui::Text("device: %s", device_spec_.c_str());
@@ -1227,8 +1314,7 @@ void Gui::draw_haptics_panel() {
   ImGui::TextDisabled("options (saved; they apply when the project is reopened)");
   bool tree = project_.use_bound_tree;
   if (ImGui::Checkbox("useBoundTree", &tree)) set("haptics/options", "useBoundTree", tree ? "true" : "false");
-  ImGui::TextDisabled("effects: %zu spring, %zu viscosity, %zu force field", project_.effects.springs.size(),
-                      project_.effects.viscosities.size(), project_.effects.constants.size());
+  draw_effects_editor();
 }
 
 void Gui::draw_graphics_panel() {
