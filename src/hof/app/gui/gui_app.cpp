@@ -297,6 +297,7 @@ class Gui {
   double displaced_at_contact_{0.0};
   double indentation_m_{0.0};
   double max_force_seen_n_{0.0};
+  bool reading_{false};  // the device's latest tick had a reading
   double max_displacement_seen_m_{0.0};
   std::uint64_t contact_ticks_{0};
   std::int32_t contact_body_{-1};
@@ -650,6 +651,7 @@ void Gui::update_from_loops() {
     any = true;
     last_tick = s.tick;
     ++stats_.samples;
+    reading_ = s.valid;
     if (!s.valid) {
       ++stats_.invalid;
       return;
@@ -1264,6 +1266,12 @@ void Gui::draw_haptics_panel() {
     if (auto ok = apply_set(element, attribute, value); !ok) report(ok.error().to_string(), true);
   };
   ImGui::Text("device: %s", device_spec_.c_str());
+  ImGui::SameLine();
+  if (reading_) {
+    ImGui::TextColored(ImVec4(0.4f, 0.9f, 0.4f, 1.0f), "reading");
+  } else {
+    ImGui::TextColored(ImVec4(1.0f, 0.45f, 0.4f, 1.0f), "no reading (absent, timed out or ended): no force");
+  }
   if (session_) {
     ImGui::TextDisabled("device limit %.3g N; %s", max_force_n_, mouse_ ? "left-drag in the view moves the stylus" : "");
   }
