@@ -36,6 +36,7 @@
 #include "hof/haptics/device_backends/replay_device.h"
 #include "hof/mechanics/model_parameters.h"
 #include "hof/mesh/mesh_io.h"
+#include "hof/mesh/surface_strain.h"
 #include "hof/render/camera.h"
 #include "hof/render/colormap.h"
 #include "hof/render/gl_renderer.h"
@@ -73,6 +74,9 @@ struct LayerView {
   std::vector<render::Rgba> colours;
   const haptics::SurfaceSnapshot* latest{nullptr};  // valid until the next acquire (this thread)
   double max_displacement_m{0.0};
+  double max_strain{0.0};
+  std::vector<double> strain;  // per vertex (colorBy strain)
+  std::vector<double> ranked;  // scratch for its percentile
 };
 
 /// A shape only seen (no haptic surface).
@@ -626,16 +630,27 @@ void Gui::upload_layer(LayerView& layer, const haptics::SurfaceSnapshot& s) {
   if (layer.rest.size() == s.vertices.size()) {
     for (std::size_t i = 0; i < s.vertices.size(); ++i) layer.max_displacement_m = std::max(layer.max_displacement_m, (s.vertices[i] - layer.rest[i]).norm());
   }
-  if (project_.graphics.color_by != "displacement" || layer.rest.size() != s.vertices.size()) {
+  const std::string& by = project_.graphics.color_by;
+  if ((by != "displacement" && by != "strain") || layer.rest.size() != s.vertices.size()) {
     if (layer.mesh.has_colours()) layer.mesh.set_colours({});
     return;
   }
-  // Colour by displacement from rest on a fixed scale (1 % of the scene at least), so that a
+  // A scale that grows with the field and has a floor (1 % of the scene; 1 % strain), so that a
   // still body does not flicker through the colour map.
-  const double range = std::max(layer.max_displacement_m, 0.01 * scene_size());
   layer.colours.resize(s.vertices.size());
+  if (by == "strain") {
+    mesh::vertex_strain_magnitude(layer.rest, s.vertices, s.triangles, layer.strain);
+    // The scale: the 98th percentile, not the maximum — a point load strains the triangles
+    // under it far more than the rest, which would leave the whole body one colour.
+    layer.ranked = layer.strain;
+    const auto at = layer.ranked.begin() + static_cast<std::ptrdiff_t>(0.98 * static_cast<double>(layer.ranked.size() - 1));
+    std::nth_element(layer.ranked.begin(), at, layer.ranked.end());
+    layer.max_strain = layer.ranked.empty() ? 0.0 : *at;
+  }
+  const double range = by == "strain" ? std::max(layer.max_strain, 0.01) : std::max(layer.max_displacement_m, 0.01 * scene_size());
   for (std::size_t i = 0; i < s.vertices.size(); ++i) {
-    const Eigen::Vector3f c = render::viridis(static_cast<float>((s.vertices[i] - layer.rest[i]).norm() / range));
+    const double value = by == "strain" ? layer.strain[i] : (s.vertices[i] - layer.rest[i]).norm();
+    const Eigen::Vector3f c = render::viridis(static_cast<float>(value / range));
     layer.colours[i] = render::Rgba(c.x(), c.y(), c.z(), 1.0f);
   }
   layer.mesh.set_colours(layer.colours);
@@ -1090,16 +1105,22 @@ void Gui::draw_scene(int width, int height) {
 }
 
 void Gui::draw_legend() {
-  if (project_.graphics.color_by != "displacement" || layers_.empty()) return;
+  const std::string& by = project_.graphics.color_by;
+  if ((by != "displacement" && by != "strain") || layers_.empty()) return;
+  const bool strain = by == "strain";
   double range = 0.0;
-  for (const LayerView& l : layers_) range = std::max(range, l.max_displacement_m);
-  range = std::max(range, 0.01 * scene_size());
-  const ImVec2 size(260, 58);
+  for (const LayerView& l : layers_) range = std::max(range, strain ? l.max_strain : l.max_displacement_m);
+  range = std::max(range, strain ? 0.01 : 0.01 * scene_size());
+  const ImVec2 size(290, 58);
   ImGui::SetNextWindowPos(ImVec2(ImGui::GetIO().DisplaySize.x - size.x - 10, ImGui::GetIO().DisplaySize.y - size.y - 10));
   ImGui::SetNextWindowSize(size);
   ImGui::Begin("##legend", nullptr, ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_NoInputs | ImGuiWindowFlags_NoSavedSettings);
-  const double scale = length_unit_ == "m" ? 1e3 : 1.0;
-  ImGui::Text("displacement from rest (%s)", length_unit_ == "m" ? "mm" : length_unit_.c_str());
+  const double scale = strain ? 100.0 : length_unit_ == "m" ? 1e3 : 1.0;
+  if (strain) {
+    ImGui::Text("surface strain (%%, to its 98th pct)");
+  } else {
+    ImGui::Text("displacement from rest (%s)", length_unit_ == "m" ? "mm" : length_unit_.c_str());
+  }
   ImDrawList* draw = ImGui::GetWindowDrawList();
   const ImVec2 p = ImGui::GetCursorScreenPos();
   constexpr int kSteps = 32;
@@ -1334,10 +1355,10 @@ void Gui::draw_graphics_panel() {
   int mode = static_cast<int>(std::find(std::begin(modes), std::end(modes), g.render_mode) - std::begin(modes));
   ImGui::SetNextItemWidth(200);
   if (ImGui::Combo("renderMode", &mode, modes, 4)) set("graphics", "renderMode", modes[mode]);
-  const char* colourings[] = {"material", "displacement"};
-  int colouring = g.color_by == "displacement" ? 1 : 0;
+  const char* colourings[] = {"material", "displacement", "strain"};
+  int colouring = g.color_by == "displacement" ? 1 : g.color_by == "strain" ? 2 : 0;
   ImGui::SetNextItemWidth(200);
-  if (ImGui::Combo("colorBy", &colouring, colourings, 2)) set("graphics", "colorBy", colourings[colouring]);
+  if (ImGui::Combo("colorBy", &colouring, colourings, 3)) set("graphics", "colorBy", colourings[colouring]);
   float diffuse[3] = {static_cast<float>(g.diffuse_color.x()), static_cast<float>(g.diffuse_color.y()), static_cast<float>(g.diffuse_color.z())};
   if (ImGui::ColorEdit3("diffuseColor", diffuse)) {
     set("graphics/material", "diffuseColor", fmt::format("{} {} {}", diffuse[0], diffuse[1], diffuse[2]));
