@@ -37,13 +37,14 @@ struct GuiRun {
   std::string output;
 };
 
-/// Runs `hof gui PROJECT --script SCRIPT` in a virtual X server.
+/// Runs `hof gui PROJECT --script SCRIPT` in a virtual X server (no project: an empty window).
 GuiRun run_gui(const fs::path& dir, const std::string& script, const fs::path& project = kLiverProject) {
   const fs::path script_file = dir / "actions.txt";
   std::ofstream(script_file) << script;
   const fs::path log = dir / "output.txt";
-  const std::string command = "xvfb-run -a -s '-screen 0 1280x720x24' '" + std::string(HOF_BIN) + "' gui '" + project.string() +
-                              "' --size 1280x720 --script '" + script_file.string() + "' > '" + log.string() + "' 2>&1";
+  const std::string file = project.empty() ? std::string() : " '" + project.string() + "'";
+  const std::string command = "xvfb-run -a -s '-screen 0 1280x720x24' '" + std::string(HOF_BIN) + "' gui" + file +
+                              " --size 1280x720 --script '" + script_file.string() + "' > '" + log.string() + "' 2>&1";
   GuiRun r;
   r.status = std::system(command.c_str());
   std::ifstream in(log);
@@ -254,6 +255,30 @@ TEST(GuiWindow, ARecordedDemonstrationReplaysHeadless) {
     EXPECT_NEAR(std::stod(m[1]), touched_live, 0.3) << command;
     EXPECT_NE(summary.find("\"fall_through_events\": 0"), std::string::npos) << summary;
   }
+}
+
+TEST(GuiWindow, StartsEmptyOpensAFileAndAFileThatDoesNotLoadLeavesTheWorldAsItWas) {
+  const fs::path dir = scratch("open");
+  const fs::path broken = dir / "broken.hof";
+  std::ofstream(broken) << "<hof><mechanics scene='missing.scn'/></hof>\n";
+  const GuiRun run = run_gui(dir,
+                             "wait 0.3\nscreenshot " + (dir / "empty.png").string() + "\nopen " + kLiverProject.string() +
+                                 "\nwait 0.5\nscreenshot " + (dir / "opened.png").string() + "\nopen " + broken.string() +
+                                 "\nopen /nonexistent/liver.hof\nwait 0.5\nscreenshot " + (dir / "after.png").string() + "\nquit\n",
+                             fs::path());
+  ASSERT_EQ(run.status, 0) << run.output;
+  auto empty = hof::render::read_png(dir / "empty.png");
+  auto opened = hof::render::read_png(dir / "opened.png");
+  auto after = hof::render::read_png(dir / "after.png");
+  ASSERT_TRUE(empty && opened && after);
+  EXPECT_LT(tissue_coverage(*empty).share, 0.001) << "an empty window draws no organ";
+  const double share = tissue_coverage(*opened).share;
+  EXPECT_GT(share, 0.04);
+  EXPECT_NEAR(tissue_coverage(*after).share, share, 0.2 * share) << "a failed open changed the world";
+  // Both failures are reported, naming the file.
+  EXPECT_NE(run.output.find("broken.hof"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("missing.scn"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("/nonexistent/liver.hof"), std::string::npos) << run.output;
 }
 
 }  // namespace

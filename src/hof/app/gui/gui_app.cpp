@@ -295,7 +295,8 @@ class Gui {
   // Telemetry.
   haptics::HapticSample last_{};
   LiveStats stats_;
-  std::vector<float> plot_force_, plot_indentation_;
+  std::vector<float> plot_force_ = std::vector<float>(kPlotPoints, 0.0f);  // the last kPlotSeconds, oldest first
+  std::vector<float> plot_indentation_ = std::vector<float>(kPlotPoints, 0.0f);
   double next_plot_time_{0.0};
   bool was_in_contact_{false};
   double displaced_at_contact_{0.0};
@@ -1668,6 +1669,10 @@ bool Gui::step_script(std::vector<ScriptAction>& script, std::size_t& next, cons
         if (!mouse_) return fail(Error{ErrorCode::kInvalidArgument, "the stylus is not the mouse (device " + device_spec_ + ")", "", 0, -1});
         mouse_to(a.number, a.y, 0.0, true);
         mouse_to(a.number, a.y, a.depth, false);
+        break;
+      case ScriptAction::Kind::kOpen:
+        // The window's own error path: shown, and the world stays as it was.
+        if (auto ok = open(a.file); !ok) report(ok.error().to_string(), true);
         break;
       case ScriptAction::Kind::kShow:
         open_panel_ = a.value;

@@ -80,6 +80,10 @@ Expected<std::vector<ScriptAction>> parse_script(const std::string& text, const 
           (w.size() == 4 && !to_number(w[3], a.depth))) {
         return fail("mouse takes X Y [DEPTH]: window pixels and metres beyond the touch plane");
       }
+    } else if (verb == "open") {
+      a.kind = ScriptAction::Kind::kOpen;
+      if (w.size() != 2) return fail("open takes one file name (no spaces)");
+      a.file = w[1];
     } else if (verb == "show") {
       a.kind = ScriptAction::Kind::kShow;
       if (w.size() != 2 || (w[1] != "mechanics" && w[1] != "haptics" && w[1] != "graphics" && w[1] != "messages")) {
@@ -105,7 +109,7 @@ Expected<std::vector<ScriptAction>> parse_script(const std::string& text, const 
       a.kind = ScriptAction::Kind::kQuit;
       if (w.size() != 1) return fail("quit takes nothing");
     } else {
-      return fail(fmt::format("unknown action '{}' (known: wait, animate, step, reset, set, mouse, show, record, screenshot, save, quit)", verb));
+      return fail(fmt::format("unknown action '{}' (known: wait, animate, step, reset, set, mouse, open, show, record, screenshot, save, quit)", verb));
     }
     actions.push_back(std::move(a));
   }

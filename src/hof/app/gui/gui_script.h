@@ -13,6 +13,8 @@
 ///                                  graphics@renderMode wireframe, mechanics/BODY/COMPONENT@PARAMETER 8000
 ///   mouse X Y [DEPTH]            the mouse stylus under window pixel (X, Y), DEPTH metres
 ///                                beyond the touch plane (default 0)
+///   open FILE                    as File > Open: a file that does not load shows its error and
+///                                leaves the world as it was (the script goes on)
 ///   show PANEL                   opens a panel: mechanics, haptics, graphics, messages
 ///   record FILE.csv | off        start recording the stylus (replay format), or stop and write it
 ///   screenshot FILE.png          the window as it is drawn
@@ -28,7 +30,7 @@
 namespace hof::app {
 
 struct ScriptAction {
-  enum class Kind { kWait, kAnimate, kStep, kReset, kSet, kMouse, kShow, kRecord, kScreenshot, kSave, kQuit };
+  enum class Kind { kWait, kAnimate, kStep, kReset, kSet, kMouse, kShow, kOpen, kRecord, kScreenshot, kSave, kQuit };
   Kind kind{Kind::kWait};
   int line{0};
   double number{0.0};          ///< wait: seconds; step: steps; mouse: x
