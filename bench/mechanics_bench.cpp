@@ -51,10 +51,10 @@ ForceFieldConfig field_config(Field f) {
   c.name = "tissue";
   switch (f) {
     case Field::kSprings: c.mesh_springs = MeshSpringConfig{5000.0, 25.0, 1.0}; break;  // the thesis' settings
-    case Field::kSmall: c.tetrahedron_fem = TetrahedronFemConfig{30000.0, 0.45, FemMethod::kSmall}; break;
-    case Field::kLarge: c.tetrahedron_fem = TetrahedronFemConfig{30000.0, 0.45, FemMethod::kLarge}; break;
-    case Field::kPolar: c.tetrahedron_fem = TetrahedronFemConfig{30000.0, 0.45, FemMethod::kPolar}; break;
-    case Field::kNeoHookean: c.neo_hookean = NeoHookeanConfig{30000.0, 0.45}; break;
+    case Field::kSmall: c.tetrahedron_fem = TetrahedronFemConfig{30000.0, 0.45, FemMethod::kSmall, {}}; break;
+    case Field::kLarge: c.tetrahedron_fem = TetrahedronFemConfig{30000.0, 0.45, FemMethod::kLarge, {}}; break;
+    case Field::kPolar: c.tetrahedron_fem = TetrahedronFemConfig{30000.0, 0.45, FemMethod::kPolar, {}}; break;
+    case Field::kNeoHookean: c.neo_hookean = NeoHookeanConfig{30000.0, 0.45, {}}; break;
   }
   return c;
 }
@@ -136,7 +136,7 @@ void BM_SofaLiverScn(benchmark::State& bench) {
   c.mass.mass_density_kg_per_m3 = 1.0;
   ForceFieldConfig fem;
   fem.name = "FEM";
-  fem.tetrahedron_fem = TetrahedronFemConfig{3000.0, 0.3, FemMethod::kLarge};
+  fem.tetrahedron_fem = TetrahedronFemConfig{3000.0, 0.3, FemMethod::kLarge, {}};
   c.force_fields.push_back(fem);
   c.fixed.push_back(FixedConstraintConfig{"fixed", {3, 39, 64}, std::nullopt, false, {true, true, true}});
   c.ode.rayleigh_mass = c.ode.rayleigh_stiffness = 0.1;

@@ -7,6 +7,7 @@
 #include <numbers>
 
 #include "hof/mechanics/step.h"
+#include "hof/mechanics/von_mises_stress.h"
 #include "hof/mesh/boundary.h"
 #include "test_meshes.h"
 
@@ -25,7 +26,7 @@ ModelConfig static_config(const BoxMesh& box, FemMethod method, double young = 1
   c.gravity_m_per_s2 = Vec3::Zero();
   ForceFieldConfig fem;
   fem.name = "FEM";
-  fem.tetrahedron_fem = TetrahedronFemConfig{young, poisson, method};
+  fem.tetrahedron_fem = TetrahedronFemConfig{young, poisson, method, {}};
   c.force_fields.push_back(fem);
   c.ode.kind = OdeSolverKind::kStatic;
   c.ode.newton_iterations = 20;
@@ -182,6 +183,119 @@ TEST_P(UniaxialTest, StressOverStrainIsTheModulus) {
 INSTANTIATE_TEST_SUITE_P(Cases, UniaxialTest,
                          ::testing::Values(UniaxialCase{FemMethod::kSmall, false}, UniaxialCase{FemMethod::kSmall, true},
                                            UniaxialCase{FemMethod::kLarge, false}, UniaxialCase{FemMethod::kPolar, true}));
+
+// Material regions (SOFA's per-element youngModulus): a bar of two materials in series under
+// uniaxial stress σ stretches by σ (L₁/E₁ + L₂/E₂). With ν = 0 the two halves do not contract
+// sideways, so the linear elements represent the solution exactly.
+class TwoMaterialBarTest : public ::testing::TestWithParam<int> {};
+
+TEST_P(TwoMaterialBarTest, StretchesAsTwoSpringsInSeries) {
+  const double soft = 3000.0, stiff = 12000.0, stress = 30.0;
+  const Vec3 size(0.2, 0.1, 0.1);
+  const BoxMesh box = box_mesh(6, 3, 3, size);
+  ModelConfig c = static_config(box, FemMethod::kSmall, soft, 0.0);
+  // Elements whose centroid lies beyond x = 2/3 L are stiff (the mesh has a node plane there).
+  std::vector<double> per_element(box.tets.size(), 0.0);
+  for (std::size_t t = 0; t < box.tets.size(); ++t) {
+    Vec3 centroid = Vec3::Zero();
+    for (const std::int32_t n : box.tets[t]) centroid += box.nodes[static_cast<std::size_t>(n)] / 4.0;
+    if (centroid.x() > size.x() * 2.0 / 3.0) per_element[t] = stiff;
+  }
+  if (GetParam() == 0) {
+    c.force_fields[0].tetrahedron_fem->element_young_modulus_pa = per_element;
+  } else {
+    ForceFieldConfig neo;
+    neo.name = "FEM";
+    neo.neo_hookean = NeoHookeanConfig{soft, 0.0, per_element};
+    c.force_fields[0] = neo;
+  }
+  for (int axis = 0; axis < 3; ++axis) {
+    FixedConstraintConfig roller;
+    roller.directions = {axis == 0, axis == 1, axis == 2};
+    roller.indices = nodes_where(box, [&](const Vec3& p) { return p[axis] == 0.0; });
+    c.fixed.push_back(roller);
+  }
+  ForceFieldConfig load;
+  load.name = "traction";
+  load.constant_force = traction(box, Vec3(stress, 0, 0), [&](const Vec3& p) { return p.x() == size.x(); });
+  c.force_fields.push_back(load);
+  auto model = build_model(c);
+  ASSERT_TRUE(model) << model.error().to_string();
+  MechanicalState state = make_state(*model);
+  ASSERT_TRUE(step(*model, state)) << state.divergence.reason;
+  const auto end_nodes = nodes_where(box, [&](const Vec3& p) { return p.x() == size.x(); });
+  double stretch = 0.0;
+  for (std::int32_t n : end_nodes) stretch += state.position(n).x() - box.nodes[n].x();
+  stretch /= static_cast<double>(end_nodes.size());
+  const double expected = stress * (size.x() * 2.0 / 3.0 / soft + size.x() / 3.0 / stiff);
+  // Neo-Hookean is nonlinear: at 1% strain it departs from Hooke by about a percent.
+  EXPECT_NEAR(stretch, expected, (GetParam() == 0 ? 1e-6 : 0.02) * expected);
+  // All soft would stretch 25% more: the regions matter.
+  EXPECT_LT(stretch, 0.9 * stress * size.x() / soft);
+}
+
+INSTANTIATE_TEST_SUITE_P(LinearAndNeoHookean, TwoMaterialBarTest, ::testing::Values(0, 1));
+
+TEST(MaterialRegions, AListOfTheWrongLengthOrANegativeModulusIsRefused) {
+  const BoxMesh box = box_mesh(2, 1, 1, Vec3(0.2, 0.1, 0.1));
+  ModelConfig c = static_config(box, FemMethod::kLarge);
+  c.force_fields[0].tetrahedron_fem->element_young_modulus_pa.assign(box.tets.size() - 1, 1000.0);
+  auto short_list = build_model(c);
+  ASSERT_FALSE(short_list);
+  EXPECT_NE(short_list.error().message.find("one per tetrahedron"), std::string::npos) << short_list.error().message;
+  c.force_fields[0].tetrahedron_fem->element_young_modulus_pa.assign(box.tets.size(), 1000.0);
+  c.force_fields[0].tetrahedron_fem->element_young_modulus_pa[3] = -1.0;
+  auto negative = build_model(c);
+  ASSERT_FALSE(negative);
+  EXPECT_NE(negative.error().message.find("tetrahedron 3"), std::string::npos) << negative.error().message;
+}
+
+// Display stress: under a uniform stretch ε along x (others held), σ = diag(λ+2μ, λ, λ) ε, whose
+// von Mises value is 2με; a rigid rotation has none; a region with 4E has 4 times the stress.
+TEST(VonMisesStress, MatchesTheAnalyticValueOfAUniformStretchAndIgnoresRotation) {
+  const BoxMesh box = box_mesh(3, 2, 2, Vec3(0.3, 0.2, 0.2));
+  ModelConfig c = static_config(box, FemMethod::kLarge, 3000.0, 0.3);
+  std::vector<double> per_element(box.tets.size(), 0.0);
+  per_element[5] = 12000.0;
+  c.force_fields[0].tetrahedron_fem->element_young_modulus_pa = per_element;
+  const VonMisesStress stress(c);
+  ASSERT_TRUE(stress.available());
+  EXPECT_EQ(stress.source(), "FEM");
+  const double strain = 0.01;
+  std::vector<double> x;
+  for (const Vec3& p : box.nodes) {
+    x.push_back((1.0 + strain) * p.x());
+    x.push_back(p.y());
+    x.push_back(p.z());
+  }
+  std::vector<double> element;
+  stress.element_stress(x, element);
+  const Lame lame = lame_parameters(3000.0, 0.3);
+  ASSERT_EQ(element.size(), box.tets.size());
+  for (std::size_t t = 0; t < element.size(); ++t) {
+    EXPECT_NEAR(element[t], (t == 5 ? 4.0 : 1.0) * 2.0 * lame.mu * strain, 1e-9) << "element " << t;
+  }
+  // Per node: the volume-weighted mean, so a node away from element 5 reads exactly 2με.
+  std::vector<double> node;
+  stress.node_stress(x, node);
+  EXPECT_NEAR(node[static_cast<std::size_t>(box.index(3, 2, 2))], 2.0 * lame.mu * strain, 1e-9);
+
+  const Mat3 rotation = Eigen::AngleAxisd(0.7, Vec3(1, 2, 3).normalized()).toRotationMatrix();
+  x.clear();
+  for (const Vec3& p : box.nodes) {
+    const Vec3 q = rotation * p + Vec3(0.1, -0.2, 0.3);
+    x.insert(x.end(), {q.x(), q.y(), q.z()});
+  }
+  stress.element_stress(x, element);
+  for (const double s : element) EXPECT_NEAR(s, 0.0, 1e-9);
+}
+
+TEST(VonMisesStress, IsUnavailableForASpringModel) {
+  const BoxMesh box = box_mesh(1, 1, 1, Vec3(0.1, 0.1, 0.1));
+  ModelConfig c = static_config(box, FemMethod::kLarge);
+  c.force_fields[0] = ForceFieldConfig{"springs", MeshSpringConfig{}, {}, {}, {}};
+  EXPECT_FALSE(VonMisesStress(c).available());
+}
 
 // Cantilever L/h = 10 clamped at x = 0, shear load P at the free end. Linear tets lock in
 // bending, so the tip deflection approaches Timoshenko's from below as elements are added

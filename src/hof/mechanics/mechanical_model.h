@@ -43,6 +43,8 @@ struct MassConfig {
 struct NeoHookeanConfig {
   double young_modulus_pa{5000.0};
   double poisson_ratio{0.45};
+  /// Per tetrahedron (Pa; 0: youngModulus), or empty: material regions.
+  std::vector<double> element_young_modulus_pa;
 };
 
 /// One force field of the model; exactly one member is set.

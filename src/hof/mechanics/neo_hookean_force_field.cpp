@@ -171,13 +171,16 @@ Expected<std::unique_ptr<NeoHookeanForceField>> NeoHookeanForceField::make(const
   const Lame lame = lame_parameters(config.young_modulus_pa, config.poisson_ratio);
   field->lambda_ = lame.lambda;
   field->mu_ = lame.mu;
+  const auto weights = element_modulus_weights(config.element_young_modulus_pa, config.young_modulus_pa, tets.size(), who);
+  if (!weights) return std::unexpected(weights.error());
   field->elements_.reserve(tets.size());
   for (std::size_t t = 0; t < tets.size(); ++t) {
     auto rest = tet_rest_geometry(rest_positions, tets[t], t, who);
     if (!rest) return std::unexpected(rest.error());
     Element e{};
     e.nodes = rest->nodes;
-    e.volume = rest->volume;
+    // The element's modulus as a weight on its volume (see element_modulus_weights).
+    e.volume = rest->volume * (*weights)[t];
     e.gradients = rest->gradients;
     e.slots.fill(-1);
     field->elements_.push_back(e);

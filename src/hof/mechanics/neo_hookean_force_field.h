@@ -48,7 +48,7 @@ class NeoHookeanForceField final : public ForceField {
  private:
   struct Element {
     std::array<std::int32_t, 4> nodes;
-    double volume;
+    double volume;  // rest volume × modulus weight (element_modulus_weights), m^3
     std::array<Vec3, 4> gradients;
     std::array<std::int32_t, 16> slots;
   };

@@ -42,4 +42,24 @@ Expected<TetRestGeometry> tet_rest_geometry(const std::vector<Vec3>& rest_positi
   return g;
 }
 
+Expected<std::vector<double>> element_modulus_weights(const std::vector<double>& per_element, double young_modulus_pa,
+                                                     std::size_t element_count, const std::string& who) {
+  std::vector<double> weights(element_count, 1.0);
+  if (per_element.empty()) return weights;
+  if (per_element.size() != element_count) {
+    return make_error(ErrorCode::kInvalidArgument,
+                      fmt::format("{}: youngModulus lists {} values; a per-element list needs one per tetrahedron ({})", who,
+                                  per_element.size(), element_count));
+  }
+  for (std::size_t t = 0; t < element_count; ++t) {
+    const double e = per_element[t];
+    if (!(e >= 0.0) || !std::isfinite(e)) {
+      return make_error(ErrorCode::kInvalidArgument,
+                        fmt::format("{}: youngModulus of tetrahedron {} must be > 0 Pa, got {}", who, t, e));
+    }
+    weights[t] = e > 0.0 ? e / young_modulus_pa : 1.0;
+  }
+  return weights;
+}
+
 }  // namespace hof::mechanics

@@ -27,6 +27,17 @@ struct TetRestGeometry {
 [[nodiscard]] Expected<TetRestGeometry> tet_rest_geometry(const std::vector<Vec3>& rest_positions, const mesh::Tet& tet,
                                                           std::size_t index, const std::string& who);
 
+/// Per-element stiffness weights for a Young's modulus that varies by element (SOFA's
+/// `youngModulus` given as a vector; HoF's material regions): element t's weight is
+/// E_t / E, with E_t = `per_element[t]`, or `young_modulus_pa` where that is 0. Since λ and μ
+/// are both proportional to E at fixed ν, an element's forces, stiffness and energy are its
+/// weight times those at E: the force fields fold the weight into the element's volume.
+/// Empty `per_element`: every weight is 1. Errors (naming `who`): a list whose length is not
+/// the number of elements, or an entry that is negative or not finite.
+[[nodiscard]] Expected<std::vector<double>> element_modulus_weights(const std::vector<double>& per_element,
+                                                                    double young_modulus_pa, std::size_t element_count,
+                                                                    const std::string& who);
+
 /// Position of node n in a flat 3N vector.
 [[nodiscard]] inline Vec3 node(const Eigen::VectorXd& x, std::int32_t n) {
   return x.segment<3>(3 * static_cast<Eigen::Index>(n));

@@ -33,6 +33,8 @@ struct TetrahedronFemConfig {
   double young_modulus_pa{5000.0};  ///< SOFA default 5000
   double poisson_ratio{0.45};       ///< SOFA default 0.45; must be in (−1, 0.5)
   FemMethod method{FemMethod::kLarge};
+  /// Per tetrahedron (Pa; 0: youngModulus), or empty: material regions, SOFA's vector form.
+  std::vector<double> element_young_modulus_pa;
 };
 
 /// Lamé parameters from E and ν: λ = Eν/((1+ν)(1−2ν)), μ = E/(2(1+ν)).
@@ -69,7 +71,7 @@ class TetrahedronFemForceField final : public ForceField {
  private:
   struct Element {
     std::array<std::int32_t, 4> nodes;
-    double volume;                       // rest volume, m^3
+    double volume;                       // rest volume × modulus weight (element_modulus_weights), m^3
     std::array<Vec3, 4> gradients;       // shape-function gradients b_i at rest, 1/m
     Mat3 rest_frame_transposed;          // QR frame of the rest element, transposed
   };
