@@ -172,6 +172,15 @@ std::string to_xml(const HofProject& p) {
     sets += fmt::format("    <set body=\"{}\" component=\"{}\" parameter=\"{}\" value=\"{}\"/>\n", xml_escape(c.body),
                         xml_escape(c.component), xml_escape(c.parameter), number(c.value));
   }
+  for (const MaterialRegion& region : p.regions) {
+    const std::string force_field =
+        region.force_field.empty() ? std::string() : fmt::format(" forceField=\"{}\"", xml_escape(region.force_field));
+    const std::string shape = region.shape == MaterialRegion::Shape::kSphere
+                                  ? fmt::format("shape=\"sphere\" center=\"{}\" radius=\"{}\"", vec(region.center), number(region.radius))
+                                  : fmt::format("shape=\"box\" min=\"{}\" max=\"{}\"", vec(region.box_min), vec(region.box_max));
+    sets += fmt::format("    <region name=\"{}\" body=\"{}\"{} {} youngModulus=\"{}\"/>\n", xml_escape(region.name),
+                        xml_escape(region.body), force_field, shape, number(region.young_modulus_pa));
+  }
   const std::string unit = p.scene_unit.empty() ? std::string() : fmt::format(" unit=\"{}\"", xml_escape(p.scene_unit));
   if (!p.mechanics_inline.empty()) {
     out += fmt::format("  <mechanics{}>\n", unit) + p.mechanics_inline + sets + "  </mechanics>\n";
@@ -353,6 +362,30 @@ Expected<HofProject> parse_project(const std::string& text, const std::filesyste
       return std::unexpected(r.at(set, "<set> needs body, parameter and value (and component, unless the parameter is the model's own)"));
     }
     p.parameters.push_back(std::move(c));
+  }
+  for (const pugi::xml_node node : mechanics.children("region")) {
+    MaterialRegion region;
+    region.name = node.attribute("name").as_string("region");
+    region.body = node.attribute("body").as_string("");
+    region.force_field = node.attribute("forceField").as_string("");
+    if (region.body.empty()) r.fail(node, "<region> needs body=\"NAME\" (the body whose tetrahedra it holds)");
+    const std::string shape = node.attribute("shape").as_string("sphere");
+    if (shape == "sphere") {
+      region.shape = MaterialRegion::Shape::kSphere;
+      region.center = r.get_vec(node, "center", Vec3::Zero());
+      region.radius = r.get(node, "radius", 0.0);
+      if (!(region.radius > 0.0)) r.fail(node, "<region shape=\"sphere\"> needs radius > 0");
+    } else if (shape == "box") {
+      region.shape = MaterialRegion::Shape::kBox;
+      region.box_min = r.get_vec(node, "min", Vec3::Zero());
+      region.box_max = r.get_vec(node, "max", Vec3::Zero());
+      if (!(region.box_max.array() > region.box_min.array()).all()) r.fail(node, "<region shape=\"box\"> needs min < max on every axis");
+    } else {
+      r.fail(node, fmt::format("<region> shape=\"{}\": expected sphere or box", shape));
+    }
+    region.young_modulus_pa = r.get(node, "youngModulus", 0.0);
+    if (!(region.young_modulus_pa > 0.0)) r.fail(node, "<region> needs youngModulus > 0 (Pa)");
+    p.regions.push_back(std::move(region));
   }
   for (const pugi::xml_node b : root.child("bodies").children()) {
     if (b.type() != pugi::node_element) continue;

@@ -7,6 +7,7 @@
 /// round-trip numbers, so save → load → save gives the same bytes.
 
 #include <array>
+#include <cstdint>
 #include <optional>
 #include <filesystem>
 #include <string>
@@ -50,6 +51,21 @@ struct ObstacleSetup {
   std::optional<haptics::SurfaceMaterial> surface;  ///< else the project's
 };
 
+/// A material region (a tumour, a stiffer lobe): the tetrahedra of a body whose centroid lies
+/// in a sphere or a box take their own Young's modulus (SOFA's per-element youngModulus),
+/// applied after the scene and its <set> parameters. Written <region> in <mechanics>.
+struct MaterialRegion {
+  enum class Shape : std::uint8_t { kSphere, kBox };
+  std::string name{"region"};
+  std::string body;          ///< the body (its SOFA node name)
+  std::string force_field;   ///< the force field ("": every tetrahedral force field of the body)
+  Shape shape{Shape::kSphere};
+  Vec3 center{Vec3::Zero()};  ///< sphere centre, m (scene units)
+  double radius{0.01};        ///< sphere radius
+  Vec3 box_min{Vec3::Zero()}, box_max{Vec3::Zero()};  ///< box corners
+  double young_modulus_pa{20000.0};
+};
+
 struct HofProject {
   std::string name{"untitled"};
   std::filesystem::path mechanics_scene;  ///< as written in the file (relative to it); empty when inline
@@ -62,6 +78,7 @@ struct HofProject {
   /// Parameters of the scene's bodies set by the project (<set> in <mechanics>), applied
   /// after the scene is read — what a session's command seam changed, saved.
   std::vector<coupling::ParameterChange> parameters;
+  std::vector<MaterialRegion> regions;    ///< material regions (<region> in <mechanics>), in order
   /// The length unit of the scene ("" = metres); stated in reports.
   std::string scene_unit;
   std::vector<BodySetup> bodies;          ///< per-body settings (<bodies><body>)

@@ -89,11 +89,13 @@ std::string lower(std::string s) {
 
 Expected<SofaScene> Reader::run() {
   scene_.file = path_;
-  std::ifstream in(path_, std::ios::binary);
-  if (!in) return make_error(ErrorCode::kIo, fmt::format("cannot open scene '{}'", path_.string()), path_.string());
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  text_ = ss.str();
+  if (!have_text_) {
+    std::ifstream in(path_, std::ios::binary);
+    if (!in) return make_error(ErrorCode::kIo, fmt::format("cannot open scene '{}'", path_.string()), path_.string());
+    std::ostringstream ss;
+    ss << in.rdbuf();
+    text_ = ss.str();
+  }
   line_starts_.push_back(0);
   for (std::size_t i = 0; i < text_.size(); ++i)
     if (text_[i] == '\n') line_starts_.push_back(i + 1);
@@ -567,5 +569,9 @@ void Reader::list_skipped(const SceneNode& node) {
 namespace hof::scene {
 
 Expected<SofaScene> read_sofa_scene(const std::filesystem::path& path) { return detail::Reader(path).run(); }
+
+Expected<SofaScene> read_sofa_scene_text(const std::string& text, const std::filesystem::path& path) {
+  return detail::Reader(path, text).run();
+}
 
 }  // namespace hof::scene

@@ -46,5 +46,8 @@ struct SofaScene {
 /// Reads and validates a scene. Errors name the file, the line and the component
 /// (malformed XML, a missing mesh, a bad attribute value, an unresolved @link).
 [[nodiscard]] Expected<SofaScene> read_sofa_scene(const std::filesystem::path& path);
+/// A scene held in memory (a project's inline scene, as edited in the window): `path` names
+/// it in errors and its folder anchors the scene's relative files.
+[[nodiscard]] Expected<SofaScene> read_sofa_scene_text(const std::string& text, const std::filesystem::path& path);
 
 }  // namespace hof::scene

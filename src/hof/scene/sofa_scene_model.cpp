@@ -1,10 +1,10 @@
 #include <algorithm>
-#include <cmath>
-
-#include "hof/scene/sofa_scene_reader.h"
-#include "hof/mesh/mesh_io.h"
-
 #include <array>
+#include <cmath>
+#include <map>
+
+#include "hof/mesh/mesh_io.h"
+#include "hof/scene/sofa_scene_reader.h"
 
 // Maps the components of a model node to mechanics configs (SOFA names and defaults from
 // sofa-components.md).
@@ -99,7 +99,7 @@ Expected<SofaSceneModel> Reader::make_model(SceneNode& node, Component* state) {
       if (auto r = apply_mass(*c, m, m.positions.size()); !r) return std::unexpected(r.error());
       have_mass = true;
     } else if (t == "TetrahedronFEMForceField" || t == "FastTetrahedralCorotationalForceField" ||
-               t == "MeshSpringForceField" || t == "ConstantForceField") {
+               t == "TetrahedronHyperelasticityFEMForceField" || t == "MeshSpringForceField" || t == "ConstantForceField") {
       if (auto r = apply_force_field(*c, m); !r) return std::unexpected(r.error());
     } else if (t == "FixedProjectiveConstraint" || t == "PartialFixedProjectiveConstraint") {
       if (auto r = apply_fixed(*c, m); !r) return std::unexpected(r.error());
@@ -322,12 +322,31 @@ Expected<void> Reader::apply_force_field(Component& c, ModelConfig& m) {
   ff.name = c.name;
   if (c.type == "TetrahedronFEMForceField" || c.type == "FastTetrahedralCorotationalForceField") {
     mechanics::TetrahedronFemConfig fem;
-    auto e = number(c, "youngModulus");
     auto nu = number(c, "poissonRatio");
-    if (!e) return std::unexpected(e.error());
     if (!nu) return std::unexpected(nu.error());
-    fem.young_modulus_pa = e->value_or(5000.0);
+    fem.young_modulus_pa = 5000.0;
     fem.poisson_ratio = nu->value_or(0.45);
+    // youngModulus: one value, or (SOFA's vector form) one per tetrahedron: material regions.
+    if (const std::string* text = c.attr("youngModulus")) {
+      auto values = numbers(c, "youngModulus", *text);
+      if (!values) return std::unexpected(values.error());
+      if (values->empty()) return fail(c, "attribute youngModulus: empty, expected a number");
+      fem.young_modulus_pa = values->front();
+      const bool uniform = std::ranges::all_of(*values, [&](double v) { return v == values->front(); });
+      if (!uniform) {
+        if (values->size() != m.tets.size()) {
+          return fail(c, fmt::format("attribute youngModulus: {} values; one per tetrahedron ({}) or a single one", values->size(),
+                                     m.tets.size()),
+                      ErrorCode::kInvalidArgument);
+        }
+        // The most common value is the field's own (what a user tunes); the others are regions.
+        std::map<double, std::size_t> counts;
+        for (const double v : *values) ++counts[v];
+        fem.young_modulus_pa = std::ranges::max_element(counts, {}, [](const auto& kv) { return kv.second; })->first;
+        fem.element_young_modulus_pa.reserve(values->size());
+        for (const double v : *values) fem.element_young_modulus_pa.push_back(v == fem.young_modulus_pa ? 0.0 : v);
+      }
+    }
     const std::string method = c.attr("method") ? lower(std::string(trim(*c.attr("method")))) : std::string("large");
     if (method == "small" || method == "none") fem.method = mechanics::FemMethod::kSmall;
     else if (method == "large" || method == "qr") fem.method = mechanics::FemMethod::kLarge;
@@ -340,6 +359,32 @@ Expected<void> Reader::apply_force_field(Component& c, ModelConfig& m) {
     }
     if (c.written != c.type) warn(c.line, fmt::format("{}: read as TetrahedronFEMForceField", c.label()));
     ff.tetrahedron_fem = fem;
+  } else if (c.type == "TetrahedronHyperelasticityFEMForceField") {
+    // SOFA's NeoHookean takes ParameterSet = [μ, k] (shear and bulk moduli). HoF's Neo-Hookean
+    // (neo_hookean_force_field.h) is the compressible form with λ = k − 2μ/3: the same small-
+    // strain response (E = 9kμ/(3k + μ), ν = (3k − 2μ)/(2(3k + μ))), a different volumetric term.
+    const std::string material = c.attr("materialName") ? std::string(trim(*c.attr("materialName"))) : std::string("ArrudaBoyce");
+    if (material != "NeoHookean") {
+      return fail(c, fmt::format("materialName '{}': HoF simulates NeoHookean (and the linear and co-rotational "
+                                 "TetrahedronFEMForceField)", material),
+                  ErrorCode::kUnsupported);
+    }
+    const std::string* text = c.attr("ParameterSet");
+    if (!text) return fail(c, "NeoHookean needs ParameterSet=\"mu k\" (shear and bulk moduli, Pa)");
+    auto values = numbers(c, "ParameterSet", *text);
+    if (!values) return std::unexpected(values.error());
+    if (values->size() != 2) return fail(c, fmt::format("attribute ParameterSet: NeoHookean takes 2 values (mu k), got {}", values->size()));
+    const double mu = (*values)[0], bulk = (*values)[1];
+    if (!(mu > 0.0) || !(bulk > 2.0 * mu / 3.0) || !std::isfinite(bulk)) {
+      return fail(c, fmt::format("attribute ParameterSet: needs mu > 0 and k > 2mu/3 (a Poisson ratio above 0), got {} {}", mu, bulk),
+                  ErrorCode::kInvalidArgument);
+    }
+    mechanics::NeoHookeanConfig neo;
+    neo.young_modulus_pa = 9.0 * bulk * mu / (3.0 * bulk + mu);
+    neo.poisson_ratio = (3.0 * bulk - 2.0 * mu) / (2.0 * (3.0 * bulk + mu));
+    warn(c.line, fmt::format("{}: read as HoF's compressible Neo-Hookean with E = {:.6g} Pa, nu = {:.6g}", c.label(),
+                             neo.young_modulus_pa, neo.poisson_ratio));
+    ff.neo_hookean = neo;
   } else if (c.type == "MeshSpringForceField") {
     // HoF has one stiffness for all springs: the generic value, else that of the element kind.
     mechanics::MeshSpringConfig s;

@@ -93,6 +93,8 @@ void fill_missing(MeshData& d, const MeshData& from);
 class Reader {
  public:
   explicit Reader(fs::path path) : path_(std::move(path)) {}
+  /// A scene held in memory (`text`); `path` names it in errors and anchors relative files.
+  Reader(fs::path path, std::string text) : path_(std::move(path)), text_(std::move(text)), have_text_(true) {}
 
   Expected<SofaScene> run();
 
@@ -146,6 +148,7 @@ class Reader {
 
   fs::path path_;
   std::string text_;
+  bool have_text_{false};
   std::vector<std::size_t> line_starts_;
   bool legacy_{false};  ///< the file uses 2008 syntax (Object tags or 2008-only names)
   std::unique_ptr<SceneNode> root_;

@@ -111,6 +111,25 @@ Expected<void> apply_parameters(World& w) {
   return {};
 }
 
+Expected<void> apply_regions(World& w) {
+  for (const MaterialRegion& region : w.project.regions) {
+    auto it = std::find_if(w.bodies.begin(), w.bodies.end(), [&](const auto& b) { return b.name == region.body; });
+    const std::string who = fmt::format("<region name=\"{}\" body=\"{}\">", region.name, region.body);
+    if (it == w.bodies.end() || !it->config) {
+      return make_error(ErrorCode::kInvalidArgument, fmt::format("{}: no deformable body of that name in the scene", who), w.file.string());
+    }
+    mechanics::ModelConfig config = *it->config;
+    auto count = apply_material_region(config, region);
+    if (!count) return make_error(ErrorCode::kInvalidArgument, fmt::format("{}: {}", who, count.error().message), w.file.string());
+    if (*count == 0) w.warnings.push_back(fmt::format("{}: no tetrahedron has its centroid inside; it changes nothing", who));
+    auto rebuilt = make_deformable(config, std::nullopt, false);
+    if (!rebuilt) return std::unexpected(rebuilt.error());
+    it->model.emplace(std::move(*rebuilt->model));
+    it->config = std::move(config);
+  }
+  return {};
+}
+
 // The project's per-body settings and obstacles.
 Expected<void> apply_bodies(World& w) {
   for (const BodySetup& setup : w.project.bodies) {
@@ -244,8 +263,9 @@ Expected<void> add_x3d(World& w, const std::filesystem::path& file) {
   return {};
 }
 
-Expected<void> add_sofa(World& w, const std::filesystem::path& scene_path) {
-  auto sofa = read_sofa_scene(scene_path);
+/// `text`: the scene held in memory (else it is read from `scene_path`).
+Expected<void> add_sofa(World& w, const std::filesystem::path& scene_path, const std::string* text = nullptr) {
+  auto sofa = text ? read_sofa_scene_text(*text, scene_path) : read_sofa_scene(scene_path);
   if (!sofa) return std::unexpected(sofa.error());
   w.skipped = sofa->skipped;
   w.warnings = sofa->warnings;
@@ -511,7 +531,14 @@ namespace {
 /// wrong there).
 Expected<void> add_project_scene(World& w, const std::filesystem::path& file) {
   w.scene_path = scene_file(w.project, file);
-  if (auto ok = add_sofa(w, w.scene_path); !ok) {
+  // An inline scene is read from the file when the file holds this very scene (errors then
+  // give the file's line numbers), else from memory (the window edited it).
+  const std::string* text = nullptr;
+  if (!w.project.mechanics_inline.empty()) {
+    const auto on_disk = read_project(file);
+    if (!on_disk || on_disk->mechanics_inline != w.project.mechanics_inline) text = &w.project.mechanics_inline;
+  }
+  if (auto ok = add_sofa(w, w.scene_path, text); !ok) {
     Error inner = ok.error();
     if (w.scene_path == file) return std::unexpected(inner);
     std::error_code canonical_error;
@@ -530,6 +557,7 @@ Expected<void> add_project_scene(World& w, const std::filesystem::path& file) {
 /// device (the default probe when the world is bare).
 Expected<World> finish_world(World w, bool sofa_scene, bool bare, const std::string& device_override) {
   if (auto ok = apply_parameters(w); !ok) return std::unexpected(ok.error());
+  if (auto ok = apply_regions(w); !ok) return std::unexpected(ok.error());
   if (auto ok = apply_bodies(w); !ok) return std::unexpected(ok.error());
   w.name = w.project.name;
   // A SOFA scene carries no unit; X3D and .hof worlds are in metres (a project may declare
@@ -600,6 +628,43 @@ Expected<World> build_world(const HofProject& project, const std::filesystem::pa
   }
   if (auto ok = add_project_scene(w, file); !ok) return std::unexpected(ok.error());
   return finish_world(std::move(w), false, project.device == "auto", device_override);
+}
+
+Expected<std::size_t> apply_material_region(mechanics::ModelConfig& config, const MaterialRegion& region) {
+  if (!(region.young_modulus_pa > 0.0) || !std::isfinite(region.young_modulus_pa)) {
+    return make_error(ErrorCode::kInvalidArgument, fmt::format("youngModulus must be > 0 Pa, got {}", region.young_modulus_pa));
+  }
+  std::vector<std::vector<double>*> targets;
+  std::string names;
+  for (mechanics::ForceFieldConfig& f : config.force_fields) {
+    if (!f.tetrahedron_fem && !f.neo_hookean) continue;
+    names += (names.empty() ? "" : ", ") + f.name;
+    if (!region.force_field.empty() && f.name != region.force_field) continue;
+    targets.push_back(f.tetrahedron_fem ? &f.tetrahedron_fem->element_young_modulus_pa : &f.neo_hookean->element_young_modulus_pa);
+  }
+  if (targets.empty()) {
+    return make_error(ErrorCode::kInvalidArgument,
+                      region.force_field.empty()
+                          ? std::string("the body has no tetrahedral force field (TetrahedronFEMForceField or Neo-Hookean)")
+                          : fmt::format("no tetrahedral force field '{}' (the body has: {})", region.force_field,
+                                        names.empty() ? std::string("none") : names));
+  }
+  std::size_t count = 0;
+  for (std::vector<double>* list : targets) list->resize(config.tets.size(), 0.0);
+  for (std::size_t t = 0; t < config.tets.size(); ++t) {
+    Vec3 centroid = Vec3::Zero();
+    for (const std::int32_t n : config.tets[t]) {
+      if (n < 0 || static_cast<std::size_t>(n) >= config.positions.size()) return make_error(ErrorCode::kInvalidMesh, "a tetrahedron refers to a missing node");
+      centroid += config.positions[static_cast<std::size_t>(n)] / 4.0;
+    }
+    const bool inside = region.shape == MaterialRegion::Shape::kSphere
+                            ? (centroid - region.center).norm() <= region.radius
+                            : (centroid.array() >= region.box_min.array()).all() && (centroid.array() <= region.box_max.array()).all();
+    if (!inside) continue;
+    ++count;
+    for (std::vector<double>* list : targets) (*list)[t] = region.young_modulus_pa;
+  }
+  return count;
 }
 
 }  // namespace hof::scene

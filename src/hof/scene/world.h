@@ -93,6 +93,11 @@ void record_changes(HofProject& project, const coupling::Session& session);
 /// The parameter part of record_changes(): each change as a <set>, replacing an earlier value.
 void record_parameters(HofProject& project, const std::vector<coupling::ParameterChange>& changes);
 
+/// Gives the tetrahedra of `config` whose centroid lies in `region` the region's Young's
+/// modulus (in its force field, or every tetrahedral one); returns how many. Errors: no such
+/// force field, a modulus that is not positive.
+[[nodiscard]] Expected<std::size_t> apply_material_region(mechanics::ModelConfig& config, const MaterialRegion& region);
+
 /// The spec of the default probe for `bodies` under `calibration` (a scripted poke in the
 /// device frame), and a calibration that fits the device workspace to the bodies' bounds.
 struct DefaultProbe {
