@@ -355,6 +355,59 @@ TEST(CommandSeam, AStiffnessChangedInVirtualTimeActsAtTheNextStep) {
   EXPECT_EQ(b->parameter_changes()[0].value, 500.0);
 }
 
+TEST(CommandSeam, AModelSwitchedMidRunStartsFromTheCurrentShapeAndActsAtTheNextStep) {
+  // Springs → co-rotational FEM at 1 s, while pressed (contact from 0.8 s): the switched run agrees with the
+  // other to that step, continues from the same shape (no jump), and then follows the FEM.
+  auto a = springs_liver_session(poke_device(Vec3(0.03, 0, 0.09), Vec3(0, 0, -1), 0.04, 0.01, 0.05, 0.3));
+  auto b = springs_liver_session(poke_device(Vec3(0.03, 0, 0.09), Vec3(0, 0, -1), 0.04, 0.01, 0.05, 0.3));
+  a->run_virtual(1.0, {});
+  b->run_virtual(1.0, {});
+  ASSERT_TRUE(b->submit(command::SetParameter{"Liver", "springs", "stiffness", 80.0}));
+  b->run_virtual(0.01, {});
+  ASSERT_EQ(b->parameter_changes().size(), 1u);
+  const Eigen::VectorXd before = b->state().x;
+  mechanics::ModelConfig fem = *b->body().config;
+  fem.force_fields[0] = mechanics::ForceFieldConfig{"FEM", {}, mechanics::TetrahedronFemConfig{3000.0, 0.45, mechanics::FemMethod::kLarge, {}}, {}, {}};
+  ASSERT_TRUE(b->submit(command::SetModel{"Liver", fem, nullptr}));
+  const SessionReport rb = b->run_virtual(0.01, {});
+  ASSERT_EQ(rb.applied_commands.size(), 1u);
+  EXPECT_EQ(rb.applied_commands[0], "step 0: Liver has a new model");
+  EXPECT_TRUE(b->body().config->force_fields[0].tetrahedron_fem.has_value());
+  EXPECT_EQ(b->model().force_fields[0]->type_name(), "TetrahedronFEMForceField");
+  EXPECT_TRUE(b->parameter_changes().empty()) << "the body's earlier changes are part of the new model";
+  // One step from the same shape: no node moves more than a step's worth.
+  EXPECT_LT((b->state().x - before).cwiseAbs().maxCoeff(), 2e-3);
+  b->run_virtual(0.05, {});
+  a->run_virtual(0.07, {});  // both at 1.07 s
+  EXPECT_GT((a->state().x - b->state().x).cwiseAbs().maxCoeff(), 1e-5);
+  EXPECT_TRUE(b->state().x.allFinite());
+
+  // Another mesh, an unbuildable model, a rigid or unknown body: refused, nothing changes.
+  mechanics::ModelConfig fewer = fem;
+  fewer.positions.pop_back();
+  auto other_mesh = b->submit(command::SetModel{"Liver", fewer, nullptr});
+  ASSERT_FALSE(other_mesh);
+  EXPECT_NE(other_mesh.error().message.find("another mesh"), std::string::npos) << other_mesh.error().message;
+  mechanics::ModelConfig bad = fem;
+  bad.force_fields[0].tetrahedron_fem->poisson_ratio = 0.7;
+  auto unbuildable = b->submit(command::SetModel{"Liver", bad, nullptr});
+  ASSERT_FALSE(unbuildable);
+  EXPECT_NE(unbuildable.error().message.find("poissonRatio"), std::string::npos) << unbuildable.error().message;
+  EXPECT_FALSE(b->submit(command::SetModel{"Spleen", fem, nullptr}));
+  EXPECT_TRUE(b->run_virtual(0.02, {}).applied_commands.empty());
+}
+
+TEST(CommandSeam, NodePositionsArePublishedForAReaderOnceAsked) {
+  auto session = springs_liver_session(poke_device(Vec3(0.03, 0, 0.09), Vec3(0, 0, -1), 0.04, 0.01, 0.05, 0.3));
+  TripleBuffer<std::vector<std::vector<double>>>& states = session->graphics_states();
+  session->run_virtual(0.4, {});
+  ASSERT_TRUE(states.acquire());
+  ASSERT_EQ(states.read().size(), 1u);
+  const Eigen::VectorXd& x = session->state().x;
+  ASSERT_EQ(states.read()[0].size(), static_cast<std::size_t>(x.size()));
+  for (Eigen::Index i = 0; i < x.size(); ++i) ASSERT_EQ(states.read()[0][static_cast<std::size_t>(i)], x[i]);
+}
+
 TEST(CommandSeam, CommandsDuringARealTimeRunAreAppliedBetweenSteps) {
   haptics::MotionConfig hold;
   hold.kind = haptics::MotionKind::kHold;

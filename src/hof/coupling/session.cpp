@@ -219,6 +219,11 @@ TripleBuffer<haptics::SurfaceSnapshot>& Session::graphics_surfaces(std::size_t l
   return layers_[std::min(layer, layers_.size() - 1)]->graphics;
 }
 
+TripleBuffer<std::vector<std::vector<double>>>& Session::graphics_states() {
+  states_wanted_.store(true, std::memory_order_release);
+  return graphics_states_;
+}
+
 // ---- The command seam
 
 Expected<void> Session::submit(const Command& submitted) {
@@ -254,6 +259,25 @@ Expected<void> Session::submit(const Command& submitted) {
       return make_error(ErrorCode::kInvalidArgument, fmt::format("body '{}': {}", set->body, ok.error().message));
     }
     // Recorded as a change (to be saved) once the simulation has applied it.
+  } else if (auto* model = std::get_if<command::SetModel>(&command)) {
+    const std::int32_t i = find_body(model->body);
+    if (i < 0) return make_error(ErrorCode::kInvalidArgument, fmt::format("no body '{}' (bodies: {})", model->body, body_names()));
+    if (!has_mechanics_[static_cast<std::size_t>(i)]) {
+      return make_error(ErrorCode::kInvalidArgument, fmt::format("body '{}' is rigid: it has no model to replace", model->body));
+    }
+    const mechanics::ModelConfig& now = validated_configs_[static_cast<std::size_t>(i)];
+    // The surface follows the nodes through a mapping made for this mesh: it must stay.
+    if (model->config.positions != now.positions || model->config.tets != now.tets) {
+      return make_error(ErrorCode::kInvalidArgument,
+                        fmt::format("body '{}': the new model has another mesh ({} nodes, {} tetrahedra; the body has {} and {}): "
+                                    "reopen the project to change the mesh",
+                                    model->body, model->config.positions.size(), model->config.tets.size(), now.positions.size(),
+                                    now.tets.size()));
+    }
+    auto built = mechanics::build_model(model->config);
+    if (!built) return make_error(ErrorCode::kInvalidArgument, fmt::format("body '{}': {}", model->body, built.error().message));
+    model->built = std::make_shared<mechanics::MechanicalModel>(std::move(*built));
+    validated_configs_[static_cast<std::size_t>(i)] = model->config;
   } else if (const auto* steps = std::get_if<command::SingleStep>(&command)) {
     if (steps->steps < 1 || steps->steps > 1000000) {
       return make_error(ErrorCode::kInvalidArgument, fmt::format("single step: steps must be in [1, 1000000], got {}", steps->steps));
@@ -348,6 +372,26 @@ void Session::apply_commands(SessionReport& report) {
         report.applied_commands.push_back(fmt::format("step {}: {}", at, what));
         std::lock_guard lock(commands_mutex_);
         changes_.push_back(ParameterChange{set->body, set->component, set->parameter, set->value});
+      }
+      double dt = std::numeric_limits<double>::infinity();
+      for (const BodyRuntime& r : bodies_) {
+        if (r.body.deformable()) dt = std::min(dt, r.body.model->dt_s);
+      }
+      if (std::isfinite(dt)) dt_.store(dt, std::memory_order_relaxed);
+    } else if (const auto* model = std::get_if<command::SetModel>(&command)) {
+      for (BodyRuntime& r : bodies_) {
+        if (r.body.name != model->body || !r.body.config) continue;
+        // The new model starts from the current shape and motion (same nodes).
+        mechanics::MechanicalState state = mechanics::make_state(*model->built);
+        state.x = r.state.x;
+        state.v = r.state.v;
+        r.body.model.emplace(std::move(*model->built));
+        r.body.config = model->config;
+        r.state = std::move(state);
+        r.next_step_s = time_s_ + r.body.model->dt_s;
+        report.applied_commands.push_back(fmt::format("step {}: {} has a new model", at, model->body));
+        std::lock_guard lock(commands_mutex_);
+        std::erase_if(changes_, [&](const ParameterChange& c) { return c.body == model->body; });
       }
       double dt = std::numeric_limits<double>::infinity();
       for (const BodyRuntime& r : bodies_) {
@@ -589,6 +633,19 @@ void Session::publish(double clock_s) {
       haptics::update_snapshot(layer.graphics.write_slot(), layer.positions, layer.velocities, clock_s);
       layer.graphics.publish();
     }
+  }
+  if (states_wanted_.load(std::memory_order_acquire)) {
+    std::vector<std::vector<double>>& slot = graphics_states_.write_slot();
+    slot.resize(bodies_.size());
+    for (std::size_t i = 0; i < bodies_.size(); ++i) {
+      if (!bodies_[i].body.deformable()) {
+        slot[i].clear();
+        continue;
+      }
+      const Eigen::VectorXd& x = bodies_[i].state.x;
+      slot[i].assign(x.data(), x.data() + x.size());
+    }
+    graphics_states_.publish();
   }
   contact_ticks_since_publish_ = 0;
 }

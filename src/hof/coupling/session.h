@@ -149,10 +149,21 @@ struct SetDevice {
   /// as the window does for the mouse) passes it here.
   std::shared_ptr<haptics::Device> opened;
 };
+/// Another model for a deformable body, on the same mesh (a structural edit: a force field,
+/// solver, mass or constraint switched, added or removed; material regions). Built and
+/// checked when submitted (on the caller's thread); the simulation swaps it in between two
+/// steps, from the body's current shape and motion. The body's earlier parameter changes are
+/// taken as part of `config` (parameter_changes() forgets them).
+struct SetModel {
+  std::string body;
+  mechanics::ModelConfig config;
+  /// Filled by submit(): the model built from `config`.
+  std::shared_ptr<mechanics::MechanicalModel> built;
+};
 }  // namespace command
 using Command = std::variant<command::SetParameter, command::Pause, command::Resume, command::SingleStep, command::Reset,
                              command::SetMaterial, command::SetEffects, command::SetRenderer, command::SetForceLimit,
-                             command::SetDevice>;
+                             command::SetDevice, command::SetModel>;
 
 /// A parameter changed through the seam, as a project saves it.
 struct ParameterChange {
@@ -221,6 +232,9 @@ class Session {
   /// Latest surface snapshot of a haptic layer, for a reader thread (one reader: the window).
   /// Published with every step from the first call on (before it, nothing is copied for it).
   TripleBuffer<haptics::SurfaceSnapshot>& graphics_surfaces(std::size_t layer = 0);
+  /// Latest node positions of every body (3N flat; empty for a rigid body), for a reader
+  /// thread (the window's stress colours). Published with every step from the first call on.
+  TripleBuffer<std::vector<std::vector<double>>>& graphics_states();
   /// The world simulation step dt (the smallest body dt), s.
   [[nodiscard]] double dt() const { return dt_.load(std::memory_order_relaxed); }
   [[nodiscard]] const haptics::HapticLoop& haptic_loop() const { return *loop_; }
@@ -275,6 +289,8 @@ class Session {
   std::vector<char> has_mechanics_;                        // per body, fixed: a model and its config
   bool paused_{false};
   std::atomic<bool> graphics_wanted_{false};
+  std::atomic<bool> states_wanted_{false};
+  TripleBuffer<std::vector<std::vector<double>>> graphics_states_;
   std::int64_t contact_ticks_this_step_{0};
   int single_steps_{0};
   // Real time.
