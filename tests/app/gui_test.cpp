@@ -3,6 +3,8 @@
 // take. The checks read the PNGs the window wrote and the project it saved.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -16,6 +18,7 @@
 #include "hof/haptics/device_backends/replay_device.h"
 #include "hof/render/image.h"
 #include "hof/scene/project.h"
+#include "hof/scene/world.h"
 
 namespace {
 
@@ -125,8 +128,28 @@ TEST(GuiScript, ReadsEveryActionAndNamesTheLineOfAnError) {
   EXPECT_EQ((*ok)[6].file, "a.png");
   EXPECT_EQ((*ok)[7].line, 9);
 
+  auto edits = hof::app::parse_script(
+      "replace mechanics/Liver/FEM TetrahedronHyperelasticityFEMForceField materialName=NeoHookean \"ParameterSet=1 2\"\n"
+      "add mechanics/Liver FixedProjectiveConstraint pin indices=\"1 2\"\nremove mechanics/Liver/pin\n"
+      "region Liver box 0 0 0 0.1 0.1 0.1 9000\nregion clear\n",
+      "edits.txt");
+  ASSERT_TRUE(edits) << edits.error().to_string();
+  ASSERT_EQ(edits->size(), 5u);
+  EXPECT_EQ((*edits)[0].kind, ScriptAction::Kind::kEdit);
+  EXPECT_EQ((*edits)[0].type, "TetrahedronHyperelasticityFEMForceField");
+  ASSERT_EQ((*edits)[0].attributes.size(), 2u);
+  EXPECT_EQ((*edits)[0].attributes[1], (std::pair<std::string, std::string>{"ParameterSet", "1 2"}));
+  EXPECT_EQ((*edits)[1].name, "pin");
+  EXPECT_EQ((*edits)[1].attributes[0].second, "1 2");
+  EXPECT_EQ((*edits)[2].value, "remove");
+  EXPECT_TRUE((*edits)[3].box);
+  EXPECT_EQ((*edits)[3].numbers.size(), 7u);
+  EXPECT_TRUE((*edits)[4].numbers.empty());
+
   for (const char* bad : {"wait\n", "wait -1\n", "animate maybe\n", "set stiffness 0.4\n", "mouse 1\n", "screenshot a.jpg\n",
-                          "save a.scn\n", "frobnicate\n", "step 0\n", "record a.txt\n", "record\n", "show toolbar\n"}) {
+                          "save a.scn\n", "frobnicate\n", "step 0\n", "record a.txt\n", "record\n", "show toolbar\n",
+                          "replace mechanics/Liver TetrahedronFEMForceField\n", "add mechanics/Liver/FEM X y\n", "remove haptics/x\n",
+                          "replace mechanics/Liver/FEM T youngModulus\n", "region Liver sphere 0 0 0 1\n", "region Liver cube 0 0 0 1 2\n"}) {
     auto e = hof::app::parse_script(std::string("wait 0\n") + bad, "s.txt");
     ASSERT_FALSE(e) << bad;
     EXPECT_EQ(e.error().line, 2) << bad;
@@ -193,6 +216,63 @@ TEST(GuiWindow, ScriptChangesSettingsAndTheSavedProjectReloadsToExactlyThem) {
   expected.parameters = reloaded->parameters;
   expected.mechanics_scene = reloaded->mechanics_scene;
   EXPECT_EQ(hof::scene::to_xml(*reloaded), hof::scene::to_xml(expected));
+}
+
+TEST(GuiWindow, TheSceneTreeSwitchesTheForceFieldAddsARegionColoursByStressAndSavesTheScene) {
+  const fs::path dir = scratch("structure");
+  const fs::path saved = dir / "edited.hof";
+  const GuiRun first = run_gui(dir, "wait 0.5\nscreenshot " + (dir / "view.png").string() + "\nquit\n");
+  ASSERT_EQ(first.status, 0) << first.output;
+  auto view = hof::render::read_png(dir / "view.png");
+  ASSERT_TRUE(view);
+  const Coverage organ = tissue_coverage(*view);
+  // Neo-Hookean with the liver's E = 5.4 kPa, ν = 0.45 (SOFA's ParameterSet μ k), a stiff
+  // sphere in it, then a press with the colours by von Mises stress.
+  const GuiRun run = run_gui(
+      dir, "set mechanics/Liver/FEM@youngModulus 8000\nwait 0.2\n"
+           "replace mechanics/Liver/FEM TetrahedronHyperelasticityFEMForceField materialName=NeoHookean \"ParameterSet=1862.0689655172414 18000\"\n"
+           "region Liver sphere 0 0 0.04 0.025 54000\nset graphics@colorBy stress\nmouse " +
+               std::to_string(static_cast<int>(organ.cx)) + " " + std::to_string(static_cast<int>(organ.cy)) +
+               " 0.012\nwait 2\nscreenshot " + (dir / "stress.png").string() + "\nsave " + saved.string() + "\nquit\n");
+  ASSERT_EQ(run.status, 0) << run.output;
+  EXPECT_NE(run.output.find("Liver/FEM is now TetrahedronHyperelasticityFEMForceField"), std::string::npos) << run.output;
+  EXPECT_GT(number_after(run.output, "max surface displacement"), 1.0) << run.output;
+
+  // The stress view: no tissue colour left; the hot end of the map where it is pressed.
+  auto stress = hof::render::read_png(dir / "stress.png");
+  ASSERT_TRUE(stress);
+  EXPECT_LT(tissue_coverage(*stress).share, 0.01);
+  int hot = 0;
+  for (int y = 0; y < stress->height; ++y) {
+    for (int x = kPanelWidth; x < stress->width; ++x) {
+      const std::uint8_t* p = &stress->rgb[3 * (static_cast<std::size_t>(y) * static_cast<std::size_t>(stress->width) + static_cast<std::size_t>(x))];
+      if (p[0] > 170 && p[1] > 170 && p[2] < 110 && std::abs(x - organ.cx) < 150 && std::abs(y - organ.cy) < 150) ++hot;
+    }
+  }
+  EXPECT_GT(hot, 30) << "no high stress drawn near the press";
+
+  // The saved project holds the edited scene and the region, and builds that model.
+  auto reloaded = hof::scene::read_project(saved);
+  ASSERT_TRUE(reloaded) << reloaded.error().to_string();
+  EXPECT_TRUE(reloaded->mechanics_scene.empty());
+  EXPECT_NE(reloaded->mechanics_inline.find("TetrahedronHyperelasticityFEMForceField"), std::string::npos);
+  EXPECT_TRUE(reloaded->parameters.empty()) << "the youngModulus set on the replaced FEM went with it";
+  ASSERT_EQ(reloaded->regions.size(), 1u);
+  EXPECT_EQ(reloaded->regions[0].young_modulus_pa, 54000.0);
+  EXPECT_EQ(reloaded->graphics.color_by, "stress");
+  auto world = hof::scene::build_world(saved);
+  ASSERT_TRUE(world) << world.error().to_string();
+  const auto& config = *world->bodies[0].config;
+  ASSERT_TRUE(config.force_fields[0].neo_hookean.has_value());
+  EXPECT_NEAR(config.force_fields[0].neo_hookean->young_modulus_pa, 5400.0, 1.0);
+  EXPECT_TRUE(std::any_of(config.force_fields[0].neo_hookean->element_young_modulus_pa.begin(),
+                          config.force_fields[0].neo_hookean->element_young_modulus_pa.end(), [](double e) { return e == 54000.0; }));
+
+  // An edit that names nothing stops the script with the names there are.
+  const GuiRun refused = run_gui(dir, "remove mechanics/Liver/nothing\n");
+  EXPECT_NE(refused.status, 0);
+  EXPECT_NE(refused.output.find("no component 'nothing'"), std::string::npos) << refused.output;
+  EXPECT_NE(refused.output.find("FEM"), std::string::npos) << refused.output;
 }
 
 TEST(GuiWindow, AScriptErrorNamesItsLineAndTheKnownNames) {

@@ -278,6 +278,9 @@ Expected<void> Session::submit(const Command& submitted) {
     if (!built) return make_error(ErrorCode::kInvalidArgument, fmt::format("body '{}': {}", model->body, built.error().message));
     model->built = std::make_shared<mechanics::MechanicalModel>(std::move(*built));
     validated_configs_[static_cast<std::size_t>(i)] = model->config;
+    // The caller took the body's changes into `config`: from now on they are not changes
+    // (erased again when applied, for a parameter command still queued before this one).
+    std::erase_if(changes_, [&](const ParameterChange& c) { return c.body == model->body; });
   } else if (const auto* steps = std::get_if<command::SingleStep>(&command)) {
     if (steps->steps < 1 || steps->steps > 1000000) {
       return make_error(ErrorCode::kInvalidArgument, fmt::format("single step: steps must be in [1, 1000000], got {}", steps->steps));

@@ -516,8 +516,9 @@ Expected<HofProject> parse_project(const std::string& text, const std::filesyste
       r.fail(g, fmt::format("unknown renderMode \"{}\" (shaded, wireframe, shaded+wireframe, points)", p.graphics.render_mode));
     }
     p.graphics.color_by = g.attribute("colorBy").as_string(p.graphics.color_by.c_str());
-    if (p.graphics.color_by != "material" && p.graphics.color_by != "displacement" && p.graphics.color_by != "strain") {
-      r.fail(g, fmt::format("unknown colorBy \"{}\" (material, displacement, strain)", p.graphics.color_by));
+    if (p.graphics.color_by != "material" && p.graphics.color_by != "displacement" && p.graphics.color_by != "strain" &&
+        p.graphics.color_by != "stress") {
+      r.fail(g, fmt::format("unknown colorBy \"{}\" (material, displacement, strain, stress)", p.graphics.color_by));
     }
     if (const pugi::xml_node m = g.child("material")) {
       const auto unit_colour = [&](const char* name, const Vec3& fallback) {

@@ -28,7 +28,7 @@ struct GraphicsSetup {
   Vec3 look_at_m{0.0, 0.0, 0.0};
   std::string render_mode{"shaded"};  ///< shaded | wireframe | shaded+wireframe | points
   /// What colours the deformable bodies: their material, or their displacement from rest.
-  std::string color_by{"material"};   ///< material | displacement | strain (surface Green strain)
+  std::string color_by{"material"};   ///< material | displacement | strain (surface Green strain) | stress (von Mises)
   /// X3D Material of the deformable bodies; the default is the thesis' liver (§ appearance).
   Vec3 diffuse_color{0.36, 0.11, 0.04};
   Vec3 specular_color{0.7, 0.7, 0.7};

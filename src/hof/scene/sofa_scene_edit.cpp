@@ -58,8 +58,16 @@ void reanchor(pugi::xml_node node, const fs::path& from, const fs::path& to) {
     const auto now = resolve(to, value);
     if (now && *now == *was) continue;  // already resolves to the same file
     std::error_code ec;
-    fs::path relative = fs::relative(*was, fs::absolute(to, ec), ec);
-    a.set_value((ec || relative.empty() ? *was : relative).generic_string().c_str());
+    const fs::path folder = fs::weakly_canonical(fs::absolute(to, ec), ec);
+    const fs::path relative = fs::relative(*was, folder, ec);
+    // Relative when the two share a folder below the root; else absolute (../../../usr/...
+    // would break as soon as the project moves).
+    std::size_t climbs = 0;
+    for (const fs::path& part : relative) climbs += part == ".." ? 1 : 0;
+    std::size_t depth = 0;
+    for (const fs::path& part : folder.relative_path()) depth += part.empty() ? 0 : 1;
+    const bool via_root = climbs >= depth;
+    a.set_value((ec || relative.empty() || via_root ? *was : relative).generic_string().c_str());
   }
   for (pugi::xml_node child : node.children()) {
     if (child.type() == pugi::node_element) reanchor(child, from, to);

@@ -24,6 +24,7 @@
 #include <limits>
 #include <memory>
 #include <optional>
+#include <set>
 #include <string>
 #include <thread>
 #include <vector>
@@ -35,13 +36,16 @@
 #include "hof/haptics/surface_snapshot.h"
 #include "hof/haptics/device_backends/replay_device.h"
 #include "hof/mechanics/model_parameters.h"
+#include "hof/mechanics/von_mises_stress.h"
 #include "hof/mesh/mesh_io.h"
 #include "hof/mesh/surface_strain.h"
+#include "hof/mesh/tet_geometry.h"
 #include "hof/render/camera.h"
 #include "hof/render/colormap.h"
 #include "hof/render/gl_renderer.h"
 #include "hof/render/image.h"
 #include "hof/scene/project.h"
+#include "hof/scene/sofa_scene_edit.h"
 #include "hof/scene/world.h"
 
 namespace hof::app {
@@ -76,6 +80,8 @@ struct LayerView {
   double max_displacement_m{0.0};
   double max_strain{0.0};
   std::vector<double> strain;  // per vertex (colorBy strain)
+  std::vector<double> stress;  // per vertex, Pa (colorBy stress; from the bodies' node stress)
+  double max_stress_pa{0.0};
   std::vector<double> ranked;  // scratch for its percentile
 };
 
@@ -93,6 +99,21 @@ struct BodyView {
   std::optional<mechanics::ModelConfig> config;  // as the accepted commands leave it
   std::vector<std::string> parameters;           // "component/parameter"
   std::vector<Vec3> fixed_points;
+  std::shared_ptr<mechanics::VonMisesStress> stress;  // made on first use (colorBy stress)
+  std::vector<double> node_stress;                    // Pa, scratch
+
+  /// What the panels show of `c` (the model as the accepted commands leave it).
+  void set_config(const mechanics::ModelConfig& c) {
+    config = c;
+    parameters = mechanics::parameter_names(c);
+    fixed_points.clear();
+    for (const auto& f : c.fixed) {
+      for (const std::int32_t i : f.indices) {
+        if (i >= 0 && static_cast<std::size_t>(i) < c.positions.size()) fixed_points.push_back(c.positions[static_cast<std::size_t>(i)]);
+      }
+    }
+    stress.reset();
+  }
 };
 
 /// Live figures over the last second (or the last samples).
@@ -235,6 +256,13 @@ class Gui {
   void update_from_loops();
   void upload_layer(LayerView& layer, const haptics::SurfaceSnapshot& s);
   Expected<void> apply_set(const std::string& element, const std::string& attribute, const std::string& value);
+  /// A structural change (the scene made inline in the project and edited; and/or the material
+  /// regions replaced): the world's models are rebuilt from it and swapped in through the seam.
+  Expected<void> change_structure(const std::optional<scene::SceneEdit>& edit,
+                                  const std::optional<std::vector<scene::MaterialRegion>>& regions);
+  /// A component's switch to another type, with the values that carry over (E, ν, masses).
+  Expected<void> switch_component(const BodyView& body, const std::string& component, const std::string& choice);
+  void update_stress();
   Expected<void> save(const std::filesystem::path& path);
   /// The project as it would be saved at `path` (scene re-anchored, parameters as <set>).
   scene::HofProject project_for(const std::filesystem::path& path) const;
@@ -253,6 +281,7 @@ class Gui {
   void draw_panels();
   void draw_legend();
   void draw_mechanics_panel();
+  void draw_structure_editor(BodyView& body);
   void draw_haptics_panel();
   void draw_effects_editor();
   void draw_graphics_panel();
@@ -320,6 +349,13 @@ class Gui {
   bool show_contact_triangle_{true};
   bool show_fixed_nodes_{false};
   bool show_device_{true};
+  bool show_regions_{true};
+  std::set<std::string> warned_;  // warnings already shown for this world
+  Clock::time_point next_stress_{};
+  // Structure editor inputs.
+  float region_radius_m_{0.0f};  // 0: a tenth of the scene
+  float region_factor_{4.0f};    // × the force field's modulus
+  float pin_radius_m_{0.0f};     // 0: a twentieth of the scene
   float arrow_m_per_n_{0.0f};  // 0: automatic (an 8 N force as long as a third of the scene)
 
   // Messages and dialogs.
@@ -460,7 +496,11 @@ Expected<void> Gui::open(const std::filesystem::path& file) {
     if (world) project = world->project;
   }
   if (!world) return std::unexpected(world.error());
-  for (const std::string& w : world->warnings) report("warning: " + w, false);
+  warned_.clear();
+  for (const std::string& w : world->warnings) {
+    warned_.insert(w);
+    report("warning: " + w, false);
+  }
   // The builder's probe is for headless runs; here the user holds the stylus: the mouse, or
   // the project's own device when it names one.
   std::string spec = world->default_probe && options_.device.empty() ? std::string("mouse") : world->device;
@@ -479,15 +519,7 @@ Expected<void> Gui::open(const std::filesystem::path& file) {
     v.name = b.name;
     v.deformable = b.deformable();
     v.layer = b.layer;
-    v.config = b.config;
-    if (v.config) {
-      v.parameters = mechanics::parameter_names(*v.config);
-      for (const auto& f : v.config->fixed) {
-        for (const std::int32_t i : f.indices) {
-          if (i >= 0 && static_cast<std::size_t>(i) < v.config->positions.size()) v.fixed_points.push_back(v.config->positions[static_cast<std::size_t>(i)]);
-        }
-      }
-    }
+    if (b.config) v.set_config(*b.config);
     if (const auto a = world->appearances.find(b.name); a != world->appearances.end()) {
       render::Material m;
       m.diffuse = render::Rgba(static_cast<float>(a->second.diffuse_color.x()), static_cast<float>(a->second.diffuse_color.y()),
@@ -632,7 +664,8 @@ void Gui::upload_layer(LayerView& layer, const haptics::SurfaceSnapshot& s) {
     for (std::size_t i = 0; i < s.vertices.size(); ++i) layer.max_displacement_m = std::max(layer.max_displacement_m, (s.vertices[i] - layer.rest[i]).norm());
   }
   const std::string& by = project_.graphics.color_by;
-  if ((by != "displacement" && by != "strain") || layer.rest.size() != s.vertices.size()) {
+  if ((by != "displacement" && by != "strain" && by != "stress") || layer.rest.size() != s.vertices.size() ||
+      (by == "stress" && layer.stress.size() != s.vertices.size())) {
     if (layer.mesh.has_colours()) layer.mesh.set_colours({});
     return;
   }
@@ -648,13 +681,57 @@ void Gui::upload_layer(LayerView& layer, const haptics::SurfaceSnapshot& s) {
     std::nth_element(layer.ranked.begin(), at, layer.ranked.end());
     layer.max_strain = layer.ranked.empty() ? 0.0 : *at;
   }
-  const double range = by == "strain" ? std::max(layer.max_strain, 0.01) : std::max(layer.max_displacement_m, 0.01 * scene_size());
+  const double range = by == "strain"   ? std::max(layer.max_strain, 0.01)
+                       : by == "stress" ? std::max(layer.max_stress_pa, 1e-6)
+                                        : std::max(layer.max_displacement_m, 0.01 * scene_size());
   for (std::size_t i = 0; i < s.vertices.size(); ++i) {
-    const double value = by == "strain" ? layer.strain[i] : (s.vertices[i] - layer.rest[i]).norm();
+    const double value = by == "strain" ? layer.strain[i] : by == "stress" ? layer.stress[i] : (s.vertices[i] - layer.rest[i]).norm();
     const Eigen::Vector3f c = render::viridis(static_cast<float>(value / range));
     layer.colours[i] = render::Rgba(c.x(), c.y(), c.z(), 1.0f);
   }
   layer.mesh.set_colours(layer.colours);
+}
+
+void Gui::update_stress() {
+  // Von Mises stress from the bodies' node positions, on this thread, ten times a second.
+  if (project_.graphics.color_by != "stress" || !session_) return;
+  auto& states = session_->graphics_states();
+  const auto now = Clock::now();
+  if (now < next_stress_) return;
+  if (!states.acquire() && !layers_.empty() && !layers_[0].stress.empty()) return;
+  next_stress_ = now + std::chrono::milliseconds(100);
+  const std::vector<std::vector<double>>& x = states.read();
+  for (LayerView& layer : layers_) layer.stress.assign(layer.rest.size(), 0.0);
+  std::vector<double> node_values;
+  std::vector<Vec3> surface;
+  for (std::size_t i = 0; i < bodies_.size() && i < x.size(); ++i) {
+    BodyView& b = bodies_[i];
+    if (!b.config || x[i].size() != 3 * b.config->positions.size()) continue;
+    if (!b.stress) b.stress = std::make_shared<mechanics::VonMisesStress>(*b.config);
+    if (!b.stress->available()) continue;
+    b.stress->node_stress(x[i], b.node_stress);
+    // Node values to the surface through the body's own mapping (a scalar in x).
+    node_values.assign(3 * b.node_stress.size(), 0.0);
+    for (std::size_t n = 0; n < b.node_stress.size(); ++n) node_values[3 * n] = b.node_stress[n];
+    const coupling::SurfaceMapping& mapping = session_->body(i).mapping;
+    surface.resize(mapping.surface_vertex_count());
+    mapping.apply(node_values, surface);
+    if (static_cast<std::size_t>(b.layer) >= layers_.size()) continue;
+    LayerView& layer = layers_[static_cast<std::size_t>(b.layer)];
+    for (const haptics::SurfacePart& part : layer.parts) {
+      if (part.body != static_cast<std::int32_t>(i) || static_cast<std::size_t>(part.vertex_count) != surface.size()) continue;
+      for (std::size_t v = 0; v < surface.size(); ++v) layer.stress[static_cast<std::size_t>(part.first_vertex) + v] = std::max(surface[v].x(), 0.0);
+    }
+  }
+  for (LayerView& layer : layers_) {
+    // The scale: the 98th percentile, as for strain (the load point peaks far above the rest).
+    layer.ranked = layer.stress;
+    if (layer.ranked.empty()) continue;
+    const auto at = layer.ranked.begin() + static_cast<std::ptrdiff_t>(0.98 * static_cast<double>(layer.ranked.size() - 1));
+    std::nth_element(layer.ranked.begin(), at, layer.ranked.end());
+    layer.max_stress_pa = *at;
+    if (layer.latest) upload_layer(layer, *layer.latest);
+  }
 }
 
 void Gui::update_from_loops() {
@@ -721,6 +798,7 @@ void Gui::update_from_loops() {
       layers_[l].latest = &buffer.read();
     }
   }
+  update_stress();
   stats_.sim_sequences.emplace_back(now, session_->steps_taken());
   stats_.frames.push_back(now);
   stats_.update(now);
@@ -805,6 +883,164 @@ Expected<void> Gui::apply_set(const std::string& element, const std::string& att
   return {};
 }
 
+Expected<void> Gui::change_structure(const std::optional<scene::SceneEdit>& edit,
+                                     const std::optional<std::vector<scene::MaterialRegion>>& regions) {
+  if (!session_) return make_error(ErrorCode::kInvalidArgument, "no world is open");
+  if (file_.extension() == ".x3d") {
+    return make_error(ErrorCode::kUnsupported, "the scene tree edits SOFA scenes; an X3D scene's bodies are edited in its file", file_.string());
+  }
+  scene::HofProject next = project_;
+  // The values changed so far go with the new models (the seam forgets them at the switch).
+  scene::record_parameters(next, session_->parameter_changes());
+  if (next.mechanics_inline.empty()) {
+    // From now on the project holds its scene (the file it came from is left as it was).
+    auto text = scene::inline_scene(scene::scene_file(project_, file_), file_.parent_path());
+    if (!text) return std::unexpected(text.error());
+    next.mechanics_inline = std::move(*text);
+    next.mechanics_scene.clear();
+  }
+  if (edit) {
+    auto text = scene::edit_scene(next.mechanics_inline, *edit);
+    if (!text) return std::unexpected(text.error());
+    next.mechanics_inline = std::move(*text);
+    if (edit->action != scene::SceneEdit::Action::kAdd) {
+      std::erase_if(next.parameters, [&](const coupling::ParameterChange& c) { return c.body == edit->node && c.component == edit->component; });
+    }
+  }
+  if (regions) next.regions = *regions;
+  auto world = scene::build_world(next, file_, "mouse");
+  if (!world) {
+    Error e = world.error();
+    e.message = "the change is not made: " + e.message;
+    return std::unexpected(e);
+  }
+  for (const coupling::SessionBody& b : world->bodies) {
+    if (!b.config) continue;
+    if (auto ok = session_->submit(coupling::command::SetModel{b.name, *b.config, nullptr}); !ok) {
+      Error e = ok.error();
+      e.message = "the change is not made: " + e.message;
+      return std::unexpected(e);
+    }
+  }
+  for (const coupling::SessionBody& b : world->bodies) {
+    for (BodyView& v : bodies_) {
+      if (v.name == b.name && b.config) v.set_config(*b.config);
+    }
+  }
+  for (const std::string& w : world->warnings) {
+    if (warned_.insert(w).second) report("warning: " + w, false);  // each once, not with every edit
+  }
+  if (edit) {
+    const char* verb = edit->action == scene::SceneEdit::Action::kReplace ? "is now" : edit->action == scene::SceneEdit::Action::kAdd ? "added:" : "removed";
+    report(fmt::format("{}/{} {} {}", edit->node, edit->component, verb, edit->type), false);
+  }
+  if (recording_) {
+    recording_->events.push_back(fmt::format("{:.3f}: {}", recording_->seconds(),
+                                             edit ? fmt::format("scene edit {}/{}", edit->node, edit->component) : std::string("material regions")));
+  }
+  project_ = std::move(next);
+  dirty_ = true;
+  return {};
+}
+
+namespace {
+
+/// The types a component of each role can be switched to (the window's scene tree).
+const std::vector<std::string> kOdeSolvers{"EulerImplicitSolver", "EulerExplicitSolver", "RungeKutta4Solver", "StaticSolver"};
+const std::vector<std::string> kLinearSolvers{"CGLinearSolver", "SparseLDLSolver"};
+const std::vector<std::string> kMasses{"DiagonalMass", "UniformMass"};
+const std::vector<std::string> kForceFields{"TetrahedronFEMForceField large", "TetrahedronFEMForceField small",
+                                            "TetrahedronFEMForceField polar", "NeoHookean (TetrahedronHyperelasticityFEMForceField)",
+                                            "MeshSpringForceField"};
+
+/// E and ν of a model's first tetrahedral force field (SOFA's defaults otherwise).
+std::pair<double, double> elastic_moduli(const mechanics::ModelConfig& c) {
+  for (const mechanics::ForceFieldConfig& f : c.force_fields) {
+    if (f.tetrahedron_fem) return {f.tetrahedron_fem->young_modulus_pa, f.tetrahedron_fem->poisson_ratio};
+    if (f.neo_hookean) return {f.neo_hookean->young_modulus_pa, f.neo_hookean->poisson_ratio};
+  }
+  return {5000.0, 0.45};
+}
+
+double mean_edge_length(const mechanics::ModelConfig& c) {
+  double sum = 0.0;
+  std::size_t count = 0;
+  for (const mesh::Tet& t : c.tets) {
+    for (int i = 0; i < 4; ++i) {
+      for (int j = i + 1; j < 4; ++j) {
+        sum += (c.positions[static_cast<std::size_t>(t[static_cast<std::size_t>(i)])] - c.positions[static_cast<std::size_t>(t[static_cast<std::size_t>(j)])]).norm();
+        ++count;
+      }
+    }
+  }
+  return count ? sum / static_cast<double>(count) : 0.01;
+}
+
+}  // namespace
+
+Expected<void> Gui::switch_component(const BodyView& body, const std::string& component, const std::string& choice) {
+  if (!body.config) return make_error(ErrorCode::kInvalidArgument, fmt::format("body '{}' is rigid", body.name));
+  const mechanics::ModelConfig& c = *body.config;
+  scene::SceneEdit edit;
+  edit.action = scene::SceneEdit::Action::kReplace;
+  edit.node = body.name;
+  edit.component = component;
+  const auto num = [](double v) { return fmt::format("{}", v); };
+  const auto [young, poisson] = elastic_moduli(c);
+  if (choice.starts_with("TetrahedronFEMForceField")) {
+    edit.type = "TetrahedronFEMForceField";
+    edit.attributes = {{"youngModulus", num(young)}, {"poissonRatio", num(poisson)}, {"method", choice.substr(choice.find(' ') + 1)}};
+  } else if (choice.starts_with("NeoHookean")) {
+    // SOFA's NeoHookean ParameterSet is (μ, k): the same small-strain E and ν.
+    edit.type = "TetrahedronHyperelasticityFEMForceField";
+    const double mu = young / (2.0 * (1.0 + poisson)), bulk = young / (3.0 * (1.0 - 2.0 * poisson));
+    edit.attributes = {{"materialName", "NeoHookean"}, {"ParameterSet", num(mu) + " " + num(bulk)}};
+  } else if (choice == "MeshSpringForceField") {
+    // A starting point of the same order as the continuum (k ~ E·l over the mean edge l, a
+    // dimensional estimate; springs have no exact equivalent in 3D): tune it in the panel.
+    edit.type = "MeshSpringForceField";
+    edit.attributes = {{"stiffness", num(young * mean_edge_length(c))}, {"damping", "0"}};
+  } else if (choice == "EulerImplicitSolver") {
+    edit.type = choice;
+    const double rk = c.ode.kind == mechanics::OdeSolverKind::kEulerImplicit ? c.ode.rayleigh_stiffness : 0.1;
+    const double rm = c.ode.kind == mechanics::OdeSolverKind::kEulerImplicit ? c.ode.rayleigh_mass : 0.1;
+    edit.attributes = {{"rayleighStiffness", num(rk)}, {"rayleighMass", num(rm)}};
+  } else if (choice == "EulerExplicitSolver") {
+    edit.type = choice;
+    edit.attributes = {{"symplectic", "1"}};
+  } else if (choice == "RungeKutta4Solver" || choice == "StaticSolver") {
+    edit.type = choice;
+  } else if (choice == "CGLinearSolver") {
+    edit.type = choice;
+    edit.attributes = {{"iterations", num(c.linear.iterations)}, {"tolerance", num(c.linear.tolerance)}, {"threshold", num(c.linear.threshold)}};
+  } else if (choice == "SparseLDLSolver") {
+    edit.type = choice;
+  } else if (choice == "UniformMass") {
+    edit.type = choice;
+    double total = 0.0;
+    if (auto model = mechanics::build_model(c)) total = model->total_mass_kg();
+    edit.attributes = {{"totalMass", num(total > 0.0 ? total : 1.0)}};
+  } else if (choice == "DiagonalMass") {
+    edit.type = choice;
+    double total = 0.0, volume = 0.0;
+    if (auto model = mechanics::build_model(c)) total = model->total_mass_kg();
+    for (const mesh::Tet& t : c.tets) {
+      const auto corners = mesh::tet_corners(c.positions, t);
+      volume += std::abs(mesh::tet_signed_volume(corners[0], corners[1], corners[2], corners[3]));
+    }
+    edit.attributes = {{"massDensity", num(volume > 0.0 && total > 0.0 ? total / volume : 1000.0)}};
+  } else {
+    return make_error(ErrorCode::kInvalidArgument, fmt::format("no component type '{}'", choice));
+  }
+  auto done = change_structure(edit, std::nullopt);
+  if (!done && (choice == "CGLinearSolver" || choice == "SparseLDLSolver")) {
+    // The scene had no linear solver (its defaults were shown): add one.
+    edit.action = scene::SceneEdit::Action::kAdd;
+    return change_structure(edit, std::nullopt);
+  }
+  return done;
+}
+
 Expected<void> Gui::save(const std::filesystem::path& path) {
   if (!session_) return make_error(ErrorCode::kInvalidArgument, "no world is open");
   if (file_.extension() == ".x3d") {
@@ -831,6 +1067,10 @@ scene::HofProject Gui::project_for(const std::filesystem::path& path) const {
     const std::filesystem::path folder = std::filesystem::absolute(path, ec).parent_path();
     out.mechanics_scene = std::filesystem::relative(scene, folder, ec);
     if (ec || out.mechanics_scene.empty()) out.mechanics_scene = scene;
+  } else if (!out.mechanics_inline.empty()) {
+    // An inline scene's files are relative to the project too.
+    out.mechanics_inline = scene::reanchor_scene_files(out.mechanics_inline, std::filesystem::absolute(file_, ec).parent_path(),
+                                                       std::filesystem::absolute(path, ec).parent_path());
   }
   if (session_) scene::record_parameters(out, session_->parameter_changes());  // as <set> elements
   return out;
@@ -1062,6 +1302,28 @@ void Gui::draw_scene(int width, int height) {
   if (show_fixed_nodes_) {
     for (const BodyView& b : bodies_) renderer_->draw_points(b.fixed_points, render::Rgba(0.2f, 0.6f, 1.0f, 1.0f), 5.0f);
   }
+  if (show_regions_) {
+    for (const scene::MaterialRegion& r : project_.regions) {
+      if (r.shape == scene::MaterialRegion::Shape::kSphere) {
+        renderer_->draw_sphere(r.center, r.radius, render::Rgba(1.0f, 0.55f, 0.1f, 0.3f));
+        continue;
+      }
+      std::vector<Vec3> lines;
+      for (int a = 0; a < 3; ++a) {
+        for (int c = 0; c < 4; ++c) {
+          Vec3 p = r.box_min;
+          const int b1 = (a + 1) % 3, b2 = (a + 2) % 3;
+          p[b1] = (c & 1) ? r.box_max[b1] : r.box_min[b1];
+          p[b2] = (c & 2) ? r.box_max[b2] : r.box_min[b2];
+          Vec3 q = p;
+          q[a] = r.box_max[a];
+          lines.push_back(p);
+          lines.push_back(q);
+        }
+      }
+      renderer_->draw_lines(lines, render::Rgba(1.0f, 0.55f, 0.1f, 1.0f));
+    }
+  }
   // Spring effects: the anchor, and the sphere within which the spring catches the stylus.
   for (const haptics::SpringEffect& e : project_.effects.springs) {
     renderer_->draw_sphere(e.position_m, std::max(0.003 * size, 1e-6), render::Rgba(0.3f, 0.9f, 0.5f, 1.0f));
@@ -1107,18 +1369,21 @@ void Gui::draw_scene(int width, int height) {
 
 void Gui::draw_legend() {
   const std::string& by = project_.graphics.color_by;
-  if ((by != "displacement" && by != "strain") || layers_.empty()) return;
+  if ((by != "displacement" && by != "strain" && by != "stress") || layers_.empty()) return;
   const bool strain = by == "strain";
+  const bool stress = by == "stress";
   double range = 0.0;
-  for (const LayerView& l : layers_) range = std::max(range, strain ? l.max_strain : l.max_displacement_m);
-  range = std::max(range, strain ? 0.01 : 0.01 * scene_size());
+  for (const LayerView& l : layers_) range = std::max(range, strain ? l.max_strain : stress ? l.max_stress_pa : l.max_displacement_m);
+  range = std::max(range, strain ? 0.01 : stress ? 1e-6 : 0.01 * scene_size());
   const ImVec2 size(290, 58);
   ImGui::SetNextWindowPos(ImVec2(ImGui::GetIO().DisplaySize.x - size.x - 10, ImGui::GetIO().DisplaySize.y - size.y - 10));
   ImGui::SetNextWindowSize(size);
   ImGui::Begin("##legend", nullptr, ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_NoInputs | ImGuiWindowFlags_NoSavedSettings);
-  const double scale = strain ? 100.0 : length_unit_ == "m" ? 1e3 : 1.0;
+  const double scale = strain ? 100.0 : stress ? (range >= 1e3 ? 1e-3 : 1.0) : length_unit_ == "m" ? 1e3 : 1.0;
   if (strain) {
     ImGui::Text("surface strain (%%, to its 98th pct)");
+  } else if (stress) {
+    ImGui::Text("von Mises stress (%s, to its 98th pct)", range >= 1e3 ? "kPa" : "Pa");
   } else {
     ImGui::Text("displacement from rest (%s)", length_unit_ == "m" ? "mm" : length_unit_.c_str());
   }
@@ -1182,7 +1447,39 @@ void Gui::draw_mechanics_panel() {
       // The force fields (what is tuned most) start open.
       const bool force_field = type.find("ForceField") != std::string::npos;
       const ImGuiTreeNodeFlags flags = !has_parameters ? ImGuiTreeNodeFlags_Leaf : force_field ? ImGuiTreeNodeFlags_DefaultOpen : ImGuiTreeNodeFlags_None;
-      if (!ImGui::TreeNodeEx(node.c_str(), flags)) continue;
+      // Interactive: components can be opened (to switch or remove them) even without parameters.
+      const bool editable = !component.empty();
+      if (!ImGui::TreeNodeEx(node.c_str(), editable ? (flags & ~ImGuiTreeNodeFlags_Leaf) : flags)) continue;
+      if (editable) {
+        const std::vector<std::string>* choices = type.find("Solver") != std::string::npos && type != "CGLinearSolver" && type != "SparseLDLSolver"
+                                                      ? &kOdeSolvers
+                                                  : type == "CGLinearSolver" || type == "SparseLDLSolver" ? &kLinearSolvers
+                                                  : type.find("Mass") != std::string::npos                ? &kMasses
+                                                  : type.find("ForceField") != std::string::npos && type != "ConstantForceField" ? &kForceFields
+                                                                                                          : nullptr;
+        if (choices) {
+          ImGui::SetNextItemWidth(200);
+          const std::string combo = fmt::format("type##{}/{}", b.name, component);
+          if (ImGui::BeginCombo(combo.c_str(), "switch to...")) {
+            for (const std::string& choice : *choices) {
+              if (ImGui::Selectable(choice.c_str())) {
+                if (auto ok = switch_component(b, component, choice); !ok) report(ok.error().to_string(), true);
+              }
+            }
+            ImGui::EndCombo();
+          }
+        }
+        const bool removable = type.find("ForceField") != std::string::npos || type.find("Constraint") != std::string::npos;
+        if (removable) {
+          if (choices) ImGui::SameLine();
+          const std::string remove = fmt::format("remove##{}/{}", b.name, component);
+          if (ImGui::SmallButton(remove.c_str())) {
+            if (auto ok = change_structure(scene::SceneEdit{scene::SceneEdit::Action::kRemove, b.name, component, "", {}}, std::nullopt); !ok) {
+              report(ok.error().to_string(), true);
+            }
+          }
+        }
+      }
       for (const std::string& p : b.parameters) {
         if (!p.starts_with(prefix)) continue;
         const std::string parameter = p.substr(prefix.size());
@@ -1198,7 +1495,102 @@ void Gui::draw_mechanics_panel() {
       }
       ImGui::TreePop();
     }
+    draw_structure_editor(b);
     ImGui::TreePop();
+  }
+}
+
+void Gui::draw_structure_editor(BodyView& b) {
+  if (!b.config) return;
+  const double size = scene_size();
+  const std::string id = b.name;
+  // Add a component.
+  ImGui::SetNextItemWidth(200);
+  if (ImGui::BeginCombo(fmt::format("add##{}", id).c_str(), "add a component...")) {
+    const auto unique = [&](const std::string& base) {
+      std::string name = base;
+      for (int n = 2; std::any_of(b.parameters.begin(), b.parameters.end(), [&](const std::string& p) { return p.starts_with(name + "/"); }) ||
+                      std::any_of(b.config->fixed.begin(), b.config->fixed.end(), [&](const auto& f) { return f.name == name; }) ||
+                      std::any_of(b.config->force_fields.begin(), b.config->force_fields.end(), [&](const auto& f) { return f.name == name; });
+           ++n) {
+        name = base + std::to_string(n);
+      }
+      return name;
+    };
+    const auto [young, poisson] = elastic_moduli(*b.config);
+    scene::SceneEdit edit{scene::SceneEdit::Action::kAdd, b.name, "", "", {}};
+    if (ImGui::Selectable("TetrahedronFEMForceField")) {
+      edit.component = unique("FEM");
+      edit.type = "TetrahedronFEMForceField";
+      edit.attributes = {{"youngModulus", fmt::format("{}", young)}, {"poissonRatio", fmt::format("{}", poisson)}, {"method", "large"}};
+    }
+    if (ImGui::Selectable("MeshSpringForceField")) {
+      edit.component = unique("springs");
+      edit.type = "MeshSpringForceField";
+      edit.attributes = {{"stiffness", fmt::format("{}", young * mean_edge_length(*b.config))}};
+    }
+    const bool at_stylus = last_.valid;
+    if (ImGui::Selectable("FixedProjectiveConstraint: the nodes near the stylus", false, at_stylus ? 0 : ImGuiSelectableFlags_Disabled)) {
+      const double radius = pin_radius_m_ > 0.0f ? pin_radius_m_ : 0.05 * size;
+      std::string indices;
+      for (std::size_t i = 0; i < b.config->positions.size(); ++i) {
+        if ((b.config->positions[i] - last_.proxy).norm() <= radius) indices += (indices.empty() ? "" : " ") + std::to_string(i);
+      }
+      if (indices.empty()) {
+        report(fmt::format("no node of {} within {:.3g} of the stylus: nothing to pin", b.name, radius), true);
+      } else {
+        edit.component = unique("pin");
+        edit.type = "FixedProjectiveConstraint";
+        edit.attributes = {{"indices", indices}};
+      }
+    }
+    ImGui::EndCombo();
+    if (!edit.type.empty()) {
+      if (auto ok = change_structure(edit, std::nullopt); !ok) report(ok.error().to_string(), true);
+    }
+  }
+  ImGui::SetNextItemWidth(120);
+  ImGui::InputFloat(fmt::format("pin radius (0: auto)##{}", id).c_str(), &pin_radius_m_, 0.0f, 0.0f, "%.4g");
+
+  // Material regions.
+  ImGui::TextDisabled("material regions (tetrahedra whose centroid is inside)");
+  std::optional<std::vector<scene::MaterialRegion>> regions;
+  for (std::size_t i = 0; i < project_.regions.size(); ++i) {
+    const scene::MaterialRegion& r = project_.regions[i];
+    if (r.body != b.name) continue;
+    ImGui::BulletText("%s: %s, E = %.4g Pa", r.name.c_str(),
+                      r.shape == scene::MaterialRegion::Shape::kSphere ? fmt::format("sphere r {:.3g}", r.radius).c_str() : "box",
+                      r.young_modulus_pa);
+    ImGui::SameLine();
+    if (ImGui::SmallButton(fmt::format("remove##region{}", i).c_str())) {
+      regions = project_.regions;
+      regions->erase(regions->begin() + static_cast<std::ptrdiff_t>(i));
+    }
+  }
+  ImGui::SetNextItemWidth(90);
+  ImGui::InputFloat(fmt::format("radius##{}", id).c_str(), &region_radius_m_, 0.0f, 0.0f, "%.4g");
+  ImGui::SameLine();
+  ImGui::SetNextItemWidth(70);
+  ImGui::InputFloat(fmt::format("x E##{}", id).c_str(), &region_factor_, 0.0f, 0.0f, "%.3g");
+  const bool has_tets =
+      std::any_of(b.config->force_fields.begin(), b.config->force_fields.end(), [](const auto& f) { return f.tetrahedron_fem || f.neo_hookean; });
+  if (!has_tets) ImGui::TextDisabled("(regions need a tetrahedral force field)");
+  if (has_tets && ImGui::Button(fmt::format("+ region at the stylus##{}", id).c_str())) {
+    if (!last_.valid) {
+      report("the stylus has no position yet", true);
+    } else {
+      scene::MaterialRegion r;
+      r.name = fmt::format("region{}", project_.regions.size() + 1);
+      r.body = b.name;
+      r.center = last_.contact ? last_.contact_point : last_.proxy;
+      r.radius = region_radius_m_ > 0.0f ? region_radius_m_ : 0.1 * size;
+      r.young_modulus_pa = elastic_moduli(*b.config).first * std::max(static_cast<double>(region_factor_), 1e-3);
+      regions = project_.regions;
+      regions->push_back(r);
+    }
+  }
+  if (regions) {
+    if (auto ok = change_structure(std::nullopt, regions); !ok) report(ok.error().to_string(), true);
   }
 }
 
@@ -1356,10 +1748,10 @@ void Gui::draw_graphics_panel() {
   int mode = static_cast<int>(std::find(std::begin(modes), std::end(modes), g.render_mode) - std::begin(modes));
   ImGui::SetNextItemWidth(200);
   if (ImGui::Combo("renderMode", &mode, modes, 4)) set("graphics", "renderMode", modes[mode]);
-  const char* colourings[] = {"material", "displacement", "strain"};
-  int colouring = g.color_by == "displacement" ? 1 : g.color_by == "strain" ? 2 : 0;
+  const char* colourings[] = {"material", "displacement", "strain", "stress"};
+  int colouring = g.color_by == "displacement" ? 1 : g.color_by == "strain" ? 2 : g.color_by == "stress" ? 3 : 0;
   ImGui::SetNextItemWidth(200);
-  if (ImGui::Combo("colorBy", &colouring, colourings, 3)) set("graphics", "colorBy", colourings[colouring]);
+  if (ImGui::Combo("colorBy", &colouring, colourings, 4)) set("graphics", "colorBy", colourings[colouring]);
   float diffuse[3] = {static_cast<float>(g.diffuse_color.x()), static_cast<float>(g.diffuse_color.y()), static_cast<float>(g.diffuse_color.z())};
   if (ImGui::ColorEdit3("diffuseColor", diffuse)) {
     set("graphics/material", "diffuseColor", fmt::format("{} {} {}", diffuse[0], diffuse[1], diffuse[2]));
@@ -1386,6 +1778,7 @@ void Gui::draw_graphics_panel() {
   }
   ImGui::Checkbox("contact triangle", &show_contact_triangle_);
   ImGui::Checkbox("fixed nodes", &show_fixed_nodes_);
+  ImGui::Checkbox("material regions", &show_regions_);
   ImGui::Checkbox("device position", &show_device_);
   ImGui::SetNextItemWidth(200);
   ImGui::SliderFloat("force arrow (m/N, 0 = auto)", &arrow_m_per_n_, 0.0f, 0.1f, "%.3f");
@@ -1665,6 +2058,42 @@ bool Gui::step_script(std::vector<ScriptAction>& script, std::size_t& next, cons
       case ScriptAction::Kind::kSet:
         if (auto ok = apply_set(a.element, a.attribute, a.value); !ok) return fail(ok.error());
         break;
+      case ScriptAction::Kind::kEdit: {
+        // mechanics/BODY/COMPONENT (replace, remove) or mechanics/BODY (add).
+        const std::string path = a.element.substr(std::string("mechanics/").size());
+        const std::size_t slash = path.find('/');
+        scene::SceneEdit edit;
+        edit.action = a.value == "replace" ? scene::SceneEdit::Action::kReplace
+                      : a.value == "add"   ? scene::SceneEdit::Action::kAdd
+                                           : scene::SceneEdit::Action::kRemove;
+        edit.node = path.substr(0, slash);
+        edit.component = a.value == "add" ? a.name : path.substr(slash + 1);
+        edit.type = a.type;
+        edit.attributes = a.attributes;
+        if (auto ok = change_structure(edit, std::nullopt); !ok) return fail(ok.error());
+        break;
+      }
+      case ScriptAction::Kind::kRegion: {
+        std::vector<scene::MaterialRegion> regions;
+        if (!a.numbers.empty()) {
+          regions = project_.regions;
+          scene::MaterialRegion r;
+          r.name = fmt::format("region{}", regions.size() + 1);
+          r.body = a.element;
+          r.shape = a.box ? scene::MaterialRegion::Shape::kBox : scene::MaterialRegion::Shape::kSphere;
+          if (a.box) {
+            r.box_min = Vec3(a.numbers[0], a.numbers[1], a.numbers[2]);
+            r.box_max = Vec3(a.numbers[3], a.numbers[4], a.numbers[5]);
+          } else {
+            r.center = Vec3(a.numbers[0], a.numbers[1], a.numbers[2]);
+            r.radius = a.numbers[3];
+          }
+          r.young_modulus_pa = a.numbers.back();
+          regions.push_back(r);
+        }
+        if (auto ok = change_structure(std::nullopt, regions); !ok) return fail(ok.error());
+        break;
+      }
       case ScriptAction::Kind::kMouse:
         if (!mouse_) return fail(Error{ErrorCode::kInvalidArgument, "the stylus is not the mouse (device " + device_spec_ + ")", "", 0, -1});
         mouse_to(a.number, a.y, 0.0, true);

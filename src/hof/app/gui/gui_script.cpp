@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <fstream>
@@ -15,6 +16,28 @@ std::vector<std::string> words(const std::string& line) {
   std::istringstream in(line);
   std::vector<std::string> out;
   for (std::string w; in >> w;) out.push_back(w);
+  return out;
+}
+
+/// Words, with "double quotes" holding spaces (KEY="a b" or "KEY=a b").
+std::vector<std::string> quoted_words(const std::string& line) {
+  std::vector<std::string> out;
+  std::string word;
+  bool quoted = false, any = false;
+  for (const char c : line) {
+    if (c == '"') {
+      quoted = !quoted;
+      any = true;
+    } else if (!quoted && (c == ' ' || c == '\t')) {
+      if (any) out.push_back(word);
+      word.clear();
+      any = false;
+    } else {
+      word += c;
+      any = true;
+    }
+  }
+  if (any) out.push_back(word);
   return out;
 }
 
@@ -74,6 +97,41 @@ Expected<std::vector<ScriptAction>> parse_script(const std::string& text, const 
       const std::size_t start = line.find(w[1]) + w[1].size();
       a.value = line.substr(line.find_first_not_of(" \t", start));
       while (!a.value.empty() && (a.value.back() == ' ' || a.value.back() == '\t')) a.value.pop_back();
+    } else if (verb == "replace" || verb == "add" || verb == "remove") {
+      a.kind = ScriptAction::Kind::kEdit;
+      a.value = verb;
+      const std::vector<std::string> q = quoted_words(line);
+      const std::size_t fixed = verb == "replace" ? 3 : verb == "add" ? 4 : 2;
+      const char* usage = verb == "replace" ? "replace takes mechanics/BODY/COMPONENT TYPE [KEY=VALUE ...]"
+                          : verb == "add"   ? "add takes mechanics/BODY TYPE NAME [KEY=VALUE ...]"
+                                            : "remove takes mechanics/BODY/COMPONENT";
+      if (q.size() < fixed || (verb == "remove" && q.size() != fixed) || !q[1].starts_with("mechanics/")) return fail(usage);
+      a.element = q[1];
+      const std::size_t slashes = static_cast<std::size_t>(std::count(a.element.begin(), a.element.end(), '/'));
+      if (slashes != (verb == "add" ? 1u : 2u)) return fail(usage);
+      if (verb != "remove") a.type = q[2];
+      if (verb == "add") a.name = q[3];
+      for (std::size_t i = fixed; i < q.size(); ++i) {
+        const std::size_t eq = q[i].find('=');
+        if (eq == std::string::npos || eq == 0) return fail(fmt::format("'{}' is not KEY=VALUE", q[i]));
+        a.attributes.emplace_back(q[i].substr(0, eq), q[i].substr(eq + 1));
+      }
+    } else if (verb == "region") {
+      a.kind = ScriptAction::Kind::kRegion;
+      const char* usage = "region takes BODY sphere X Y Z RADIUS YOUNGMODULUS, BODY box X0 Y0 Z0 X1 Y1 Z1 YOUNGMODULUS, or clear";
+      if (w.size() == 2 && w[1] == "clear") {
+        actions.push_back(std::move(a));
+        continue;
+      }
+      if (w.size() < 3 || (w[2] != "sphere" && w[2] != "box")) return fail(usage);
+      a.element = w[1];
+      a.box = w[2] == "box";
+      if (w.size() != (a.box ? 10u : 8u)) return fail(usage);
+      for (std::size_t i = 3; i < w.size(); ++i) {
+        double v = 0.0;
+        if (!to_number(w[i], v)) return fail(fmt::format("'{}' is not a number", w[i]));
+        a.numbers.push_back(v);
+      }
     } else if (verb == "mouse") {
       a.kind = ScriptAction::Kind::kMouse;
       if (w.size() < 3 || w.size() > 4 || !to_number(w[1], a.number) || !to_number(w[2], a.y) ||
@@ -109,7 +167,7 @@ Expected<std::vector<ScriptAction>> parse_script(const std::string& text, const 
       a.kind = ScriptAction::Kind::kQuit;
       if (w.size() != 1) return fail("quit takes nothing");
     } else {
-      return fail(fmt::format("unknown action '{}' (known: wait, animate, step, reset, set, mouse, open, show, record, screenshot, save, quit)", verb));
+      return fail(fmt::format("unknown action '{}' (known: wait, animate, step, reset, set, replace, add, remove, region, mouse, open, show, record, screenshot, save, quit)", verb));
     }
     actions.push_back(std::move(a));
   }

@@ -11,6 +11,14 @@
 ///   set ELEMENT@ATTRIBUTE VALUE  a setting by the project file's names:
 ///                                  haptics/surface@stiffness 0.4, haptics@renderer GodObjectRenderer,
 ///                                  graphics@renderMode wireframe, mechanics/BODY/COMPONENT@PARAMETER 8000
+///   replace mechanics/BODY/COMPONENT TYPE [KEY=VALUE ...]
+///                                the component becomes another SOFA type (the scene tree's
+///                                switch): replace mechanics/Liver/FEM TetrahedronHyperelasticityFEMForceField
+///                                materialName=NeoHookean "ParameterSet=1862 18000"
+///   add mechanics/BODY TYPE NAME [KEY=VALUE ...]   a component added to the body's node
+///   remove mechanics/BODY/COMPONENT                a component removed
+///   region BODY sphere X Y Z RADIUS YOUNGMODULUS   a material region (box: X0 Y0 Z0 X1 Y1 Z1 E);
+///   region clear                                    every region removed
 ///   mouse X Y [DEPTH]            the mouse stylus under window pixel (X, Y), DEPTH metres
 ///                                beyond the touch plane (default 0)
 ///   open FILE                    as File > Open: a file that does not load shows its error and
@@ -23,6 +31,7 @@
 
 #include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "hof/core/error.h"
@@ -30,13 +39,17 @@
 namespace hof::app {
 
 struct ScriptAction {
-  enum class Kind { kWait, kAnimate, kStep, kReset, kSet, kMouse, kShow, kOpen, kRecord, kScreenshot, kSave, kQuit };
+  enum class Kind { kWait, kAnimate, kStep, kReset, kSet, kEdit, kRegion, kMouse, kShow, kOpen, kRecord, kScreenshot, kSave, kQuit };
   Kind kind{Kind::kWait};
   int line{0};
   double number{0.0};          ///< wait: seconds; step: steps; mouse: x
   double y{0.0}, depth{0.0};   ///< mouse
   bool on{false};              ///< animate; record (false: stop)
-  std::string element, attribute, value;  ///< set
+  std::string element, attribute, value;  ///< set; edit: element = the path, value = replace|add|remove
+  std::string type, name;                 ///< edit: the new component's type and (add) name
+  std::vector<std::pair<std::string, std::string>> attributes;  ///< edit: KEY=VALUE
+  std::vector<double> numbers;            ///< region: centre and radius, or corners; then E (empty: clear)
+  bool box{false};                        ///< region
   std::filesystem::path file;  ///< screenshot, save, record
   std::string text;            ///< the line as written
 };
