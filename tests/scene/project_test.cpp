@@ -145,6 +145,14 @@ TEST(ProjectAttribute, SetsByTheFilesOwnNamesAndChecksAsTheReaderDoes) {
   EXPECT_EQ(p.graphics.viewpoint_m, Vec3(0.0, -0.4, 0.2));
   ASSERT_TRUE(set_project_attribute(p, file, "graphics/material", "diffuseColor", "0.5 0.2 0.1"));
   EXPECT_EQ(p.graphics.diffuse_color, Vec3(0.5, 0.2, 0.1));
+  ASSERT_TRUE(set_project_attribute(p, file, "graphics/light", "headlight", "false"));
+  ASSERT_TRUE(set_project_attribute(p, file, "graphics/light", "direction", "0 0 -1"));
+  EXPECT_FALSE(p.graphics.headlight);
+  EXPECT_EQ(p.graphics.light_direction, Vec3(0.0, 0.0, -1.0));
+  EXPECT_FALSE(set_project_attribute(p, file, "graphics/light", "intensity", "1.5"));
+  EXPECT_FALSE(set_project_attribute(p, file, "graphics/light", "direction", "0 0 0"));
+  EXPECT_EQ(p.graphics.light_intensity, 0.3);
+  ASSERT_TRUE(set_project_attribute(p, file, "graphics", "colorBy", "stress"));
 
   // The n-th of several elements of a kind.
   p.effects.springs.resize(2);

@@ -30,7 +30,8 @@ void main() {
 }
 )";
 
-// Blinn–Phong with a headlight (at the eye) and a dimmer fill light from above; both faces lit
+// Blinn–Phong with a headlight (at the eye) and a directional light (by default a dimmer fill
+// light from above), as set by set_lighting(); both faces lit
 // (an open sheet is seen from both sides).
 constexpr const char* kFragmentShader = R"(#version 330 core
 in vec3 world_position;
@@ -42,6 +43,10 @@ uniform float shininess;
 uniform int lit;
 uniform int vertex_colours;
 uniform vec3 eye;
+uniform float head_intensity;
+uniform vec3 light_towards;
+uniform float light_intensity;
+uniform float ambient;
 out vec4 fragment;
 void main() {
   vec4 base = vertex_colours != 0 ? vertex_colour : colour;
@@ -50,10 +55,12 @@ void main() {
   vec3 v = normalize(eye - world_position);
   if (dot(n, v) < 0.0) n = -n;
   vec3 head = v;
-  vec3 fill = normalize(vec3(0.3, 0.2, 1.0));
-  float d = 0.75 * max(dot(n, head), 0.0) + 0.3 * max(dot(n, fill), 0.0);
-  float s = pow(max(dot(n, normalize(head + v)), 0.0), max(shininess * 128.0, 1.0));
-  vec3 c = base.rgb * (0.18 + d) + specular * s;
+  vec3 fill = normalize(light_towards);
+  float d = head_intensity * max(dot(n, head), 0.0) + light_intensity * max(dot(n, fill), 0.0);
+  float power = max(shininess * 128.0, 1.0);
+  float s = head_intensity / 0.75 * pow(max(dot(n, head), 0.0), power) +
+            light_intensity / 0.75 * pow(max(dot(n, normalize(fill + v)), 0.0), power);
+  vec3 c = base.rgb * (ambient + d) + specular * s;
   fragment = vec4(min(c, vec3(1.0)), base.a);
 }
 )";
@@ -285,6 +292,10 @@ Expected<void> GlRenderer::init() {
   u_lit_ = glGetUniformLocation(mesh_program_, "lit");
   u_vertex_colours_ = glGetUniformLocation(mesh_program_, "vertex_colours");
   u_eye_ = glGetUniformLocation(mesh_program_, "eye");
+  u_head_intensity_ = glGetUniformLocation(mesh_program_, "head_intensity");
+  u_light_towards_ = glGetUniformLocation(mesh_program_, "light_towards");
+  u_light_intensity_ = glGetUniformLocation(mesh_program_, "light_intensity");
+  u_ambient_ = glGetUniformLocation(mesh_program_, "ambient");
   u_point_size_ = glGetUniformLocation(mesh_program_, "point_size");
   build_sphere(sphere_);
   build_cylinder(cylinder_, false);
@@ -328,6 +339,11 @@ void GlRenderer::use_mesh_program(const Eigen::Matrix4f& model, const Material& 
   glUniform1i(u_lit_, lit ? 1 : 0);
   glUniform1i(u_vertex_colours_, vertex_colours ? 1 : 0);
   glUniform3fv(u_eye_, 1, eye_.data());
+  glUniform1f(u_head_intensity_, lighting_.headlight_intensity);
+  const Eigen::Vector3f towards = lighting_.direction.norm() > 0.0f ? Eigen::Vector3f(-lighting_.direction.normalized()) : Eigen::Vector3f::UnitZ();
+  glUniform3fv(u_light_towards_, 1, towards.data());
+  glUniform1f(u_light_intensity_, lighting_.intensity);
+  glUniform1f(u_ambient_, lighting_.ambient);
   glUniform1f(u_point_size_, 3.0f);
 }
 

@@ -62,6 +62,14 @@ class MeshBuffer {
   std::vector<float> scratch_;
 };
 
+/// The lights (X3D's headlight and one DirectionalLight).
+struct Lighting {
+  float headlight_intensity{0.75f};  ///< 0: no headlight
+  Eigen::Vector3f direction{-0.3f, -0.2f, -1.0f};  ///< the way the light travels, world frame
+  float intensity{0.3f};
+  float ambient{0.18f};
+};
+
 class GlRenderer {
  public:
   GlRenderer() = default;
@@ -76,6 +84,9 @@ class GlRenderer {
   /// Sets the viewport (x, y from the bottom left, pixels), clears it and sets the camera for
   /// the draws that follow.
   void begin(const OrbitCamera& camera, int x_px, int y_px, int width_px, int height_px, const Rgba& background);
+
+  /// The lights of the draws that follow.
+  void set_lighting(const Lighting& lighting) { lighting_ = lighting; }
 
   /// Draws `triangle_count` triangles from `first_triangle` (all by default).
   void draw(const MeshBuffer& mesh, const Material& material, RenderMode mode,
@@ -98,7 +109,9 @@ class GlRenderer {
   void draw_loose(std::span<const Vec3> points, const Rgba& colour, GLenum primitive, float point_size_px);
   GLuint mesh_program_{0};
   GLint u_mvp_{-1}, u_model_{-1}, u_normal_matrix_{-1}, u_colour_{-1}, u_specular_{-1}, u_shininess_{-1}, u_lit_{-1},
-      u_vertex_colours_{-1}, u_eye_{-1}, u_point_size_{-1};
+      u_vertex_colours_{-1}, u_eye_{-1}, u_point_size_{-1}, u_head_intensity_{-1}, u_light_towards_{-1},
+      u_light_intensity_{-1}, u_ambient_{-1};
+  Lighting lighting_;
   Eigen::Matrix4f view_projection_{Eigen::Matrix4f::Identity()};
   Eigen::Vector3f eye_{Eigen::Vector3f::Zero()};
   MeshBuffer sphere_, cylinder_, cone_;

@@ -244,6 +244,9 @@ std::string to_xml(const HofProject& p) {
   out += fmt::format("    <material diffuseColor=\"{}\" specularColor=\"{}\" shininess=\"{}\" transparency=\"{}\"/>\n",
                      vec(p.graphics.diffuse_color), vec(p.graphics.specular_color), number(p.graphics.shininess),
                      number(p.graphics.transparency));
+  out += fmt::format("    <light headlight=\"{}\" headlightIntensity=\"{}\" direction=\"{}\" intensity=\"{}\" ambientIntensity=\"{}\"/>\n",
+                     p.graphics.headlight ? "true" : "false", number(p.graphics.headlight_intensity), vec(p.graphics.light_direction),
+                     number(p.graphics.light_intensity), number(p.graphics.ambient_intensity));
   out += "  </graphics>\n";
   out += "</hof>\n";
   return out;
@@ -541,6 +544,22 @@ Expected<HofProject> parse_project(const std::string& text, const std::filesyste
       p.graphics.specular_color = unit_colour("specularColor", p.graphics.specular_color);
       p.graphics.shininess = unit_number("shininess", p.graphics.shininess);
       p.graphics.transparency = unit_number("transparency", p.graphics.transparency);
+    }
+    if (const pugi::xml_node l = g.child("light")) {
+      const auto unit_number = [&](const char* name, double fallback) {
+        const double v = r.get(l, name, fallback);
+        if (!(v >= 0.0 && v <= 1.0)) {
+          r.fail(l, fmt::format("<light> {} must be in [0, 1], got {}", name, v));
+          return fallback;
+        }
+        return v;
+      };
+      p.graphics.headlight = r.get_bool(l, "headlight", p.graphics.headlight);
+      p.graphics.headlight_intensity = unit_number("headlightIntensity", p.graphics.headlight_intensity);
+      p.graphics.light_direction = r.get_vec(l, "direction", p.graphics.light_direction);
+      if (!(p.graphics.light_direction.norm() > 0.0)) r.fail(l, "<light> direction must not be zero");
+      p.graphics.light_intensity = unit_number("intensity", p.graphics.light_intensity);
+      p.graphics.ambient_intensity = unit_number("ambientIntensity", p.graphics.ambient_intensity);
     }
   }
   if (r.error) return std::unexpected(*r.error);

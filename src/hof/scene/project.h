@@ -34,6 +34,12 @@ struct GraphicsSetup {
   Vec3 specular_color{0.7, 0.7, 0.7};
   double shininess{0.2};
   double transparency{0.0};
+  /// Lights (X3D's NavigationInfo headlight and one DirectionalLight): written <light>.
+  bool headlight{true};
+  double headlight_intensity{0.75};
+  Vec3 light_direction{-0.3, -0.2, -1.0};  ///< the way the light travels (X3D), world frame
+  double light_intensity{0.3};
+  double ambient_intensity{0.18};
 };
 
 /// Settings of one body of the scene (by its name), written in <bodies>.

@@ -1261,6 +1261,12 @@ void Gui::draw_scene(int width, int height) {
   rigid.diffuse = render::Rgba(0.62f, 0.64f, 0.68f, 1.0f);
   rigid.specular = {0.3f, 0.3f, 0.3f};
   const render::RenderMode mode = render_mode_of(g.render_mode);
+  render::Lighting lighting;
+  lighting.headlight_intensity = g.headlight ? static_cast<float>(g.headlight_intensity) : 0.0f;
+  lighting.direction = g.light_direction.cast<float>();
+  lighting.intensity = static_cast<float>(g.light_intensity);
+  lighting.ambient = static_cast<float>(g.ambient_intensity);
+  renderer_->set_lighting(lighting);
   const double size = scene_size();
   // Opaque parts first, then transparent ones (shapes only seen among them).
   for (int pass = 0; pass < 2; ++pass) {
@@ -1761,6 +1767,25 @@ void Gui::draw_graphics_panel() {
   if (ImGui::SliderFloat("shininess", &shininess, 0.0f, 1.0f)) set("graphics/material", "shininess", number_text(shininess));
   ImGui::SetNextItemWidth(200);
   if (ImGui::SliderFloat("transparency", &transparency, 0.0f, 0.9f)) set("graphics/material", "transparency", number_text(transparency));
+  if (ImGui::TreeNode("Lights")) {
+    bool headlight = g.headlight;
+    if (ImGui::Checkbox("headlight", &headlight)) set("graphics/light", "headlight", headlight ? "true" : "false");
+    float head = static_cast<float>(g.headlight_intensity), key = static_cast<float>(g.light_intensity),
+          ambient = static_cast<float>(g.ambient_intensity);
+    ImGui::SetNextItemWidth(160);
+    if (ImGui::SliderFloat("headlightIntensity", &head, 0.0f, 1.0f)) set("graphics/light", "headlightIntensity", number_text(head));
+    float direction[3] = {static_cast<float>(g.light_direction.x()), static_cast<float>(g.light_direction.y()),
+                          static_cast<float>(g.light_direction.z())};
+    ImGui::SetNextItemWidth(200);
+    if (ImGui::SliderFloat3("direction", direction, -1.0f, 1.0f) && Eigen::Vector3f(direction[0], direction[1], direction[2]).norm() > 1e-3f) {
+      set("graphics/light", "direction", fmt::format("{} {} {}", direction[0], direction[1], direction[2]));
+    }
+    ImGui::SetNextItemWidth(160);
+    if (ImGui::SliderFloat("intensity", &key, 0.0f, 1.0f)) set("graphics/light", "intensity", number_text(key));
+    ImGui::SetNextItemWidth(160);
+    if (ImGui::SliderFloat("ambientIntensity", &ambient, 0.0f, 1.0f)) set("graphics/light", "ambientIntensity", number_text(ambient));
+    ImGui::TreePop();
+  }
   if (ImGui::Button("Reset view")) reset_camera();
   ImGui::SameLine();
   if (ImGui::Button("Keep this view in the project")) {
