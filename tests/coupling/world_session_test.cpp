@@ -397,6 +397,37 @@ TEST(CommandSeam, AModelSwitchedMidRunStartsFromTheCurrentShapeAndActsAtTheNextS
   EXPECT_TRUE(b->run_virtual(0.02, {}).applied_commands.empty());
 }
 
+TEST(CommandSeam, ACalibrationChangedMidRunMovesTheStylusInTheWorldFromTheNextStep) {
+  auto session = springs_liver_session(poke_device(Vec3(0.03, 0, 0.09), Vec3(0, 0, -1), 0.04, 0.01, 0.05, 0.3));
+  std::vector<haptics::HapticSample> samples;
+  const auto keep = [&](const haptics::HapticSample& s) { samples.push_back(s); };
+  session->run_virtual(1.0, keep);  // pressing the liver from 0.8 s
+  ASSERT_TRUE(samples.back().contact);
+  const Vec3 before = samples.back().device;
+  haptics::Calibration moved;
+  moved.position.topRightCorner<3, 1>() = Vec3(0.5, 0.0, 0.0);  // half a metre away: nothing there
+  ASSERT_TRUE(session->submit(command::SetCalibration{moved}));
+  EXPECT_EQ(session->calibration().position, moved.position);
+  samples.clear();
+  const SessionReport report = session->run_virtual(0.05, keep);
+  ASSERT_EQ(report.applied_commands.size(), 1u);
+  EXPECT_EQ(report.applied_commands[0], "step 0: calibration");
+  ASSERT_FALSE(samples.empty());
+  // From the first tick after the step: the device half a metre off, out of contact, no force.
+  EXPECT_NEAR((samples.back().device - before).x(), 0.5, 0.01);
+  EXPECT_FALSE(samples.back().contact);
+  EXPECT_LT(samples.back().force.norm(), 1e-9);
+  for (const haptics::HapticSample& s : samples) EXPECT_TRUE(s.force.allFinite());
+
+  haptics::Calibration singular;
+  singular.position.topLeftCorner<3, 3>().setZero();
+  EXPECT_FALSE(session->submit(command::SetCalibration{singular}));
+  haptics::Calibration projective;
+  projective.position(3, 0) = 1.0;
+  EXPECT_FALSE(session->submit(command::SetCalibration{projective}));
+  EXPECT_EQ(session->calibration().position, moved.position);
+}
+
 TEST(CommandSeam, NodePositionsArePublishedForAReaderOnceAsked) {
   auto session = springs_liver_session(poke_device(Vec3(0.03, 0, 0.09), Vec3(0, 0, -1), 0.04, 0.01, 0.05, 0.3));
   TripleBuffer<std::vector<std::vector<double>>>& states = session->graphics_states();

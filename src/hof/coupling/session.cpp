@@ -153,6 +153,8 @@ Session::Session(std::vector<SessionBody> bodies, std::unique_ptr<haptics::Devic
   current_settings_.renderer = config_.haptics.renderer;
   current_settings_.effects = config_.effects;
   current_settings_.max_force_n = config_.haptics.safety.max_force_n;
+  current_settings_.calibration = config_.haptics.calibration;
+  submitted_calibration_ = config_.haptics.calibration;
   for (const BodyRuntime& r : bodies_) current_settings_.materials.push_back(r.body.material.value_or(config_.haptics.material));
   loop_ = std::make_unique<haptics::HapticLoop>(*device_, std::span<TripleBuffer<haptics::SurfaceSnapshot>* const>(buffers),
                                                 config_.haptics, &settings_);
@@ -219,6 +221,11 @@ TripleBuffer<haptics::SurfaceSnapshot>& Session::graphics_surfaces(std::size_t l
   return layers_[std::min(layer, layers_.size() - 1)]->graphics;
 }
 
+haptics::Calibration Session::calibration() const {
+  std::lock_guard lock(commands_mutex_);
+  return submitted_calibration_;
+}
+
 TripleBuffer<std::vector<std::vector<double>>>& Session::graphics_states() {
   states_wanted_.store(true, std::memory_order_release);
   return graphics_states_;
@@ -281,6 +288,16 @@ Expected<void> Session::submit(const Command& submitted) {
     // The caller took the body's changes into `config`: from now on they are not changes
     // (erased again when applied, for a parameter command still queued before this one).
     std::erase_if(changes_, [&](const ParameterChange& c) { return c.body == model->body; });
+  } else if (const auto* calibration = std::get_if<command::SetCalibration>(&command)) {
+    const Eigen::Matrix4d& m = calibration->calibration.position;
+    const double det = m.topLeftCorner<3, 3>().determinant();
+    if (!m.allFinite() || !calibration->calibration.orientation.coeffs().allFinite() || !(std::abs(det) > 1e-12) ||
+        m.row(3) != Eigen::RowVector4d(0, 0, 0, 1)) {
+      return make_error(ErrorCode::kInvalidArgument,
+                        "calibration: positionCalibration must be a finite affine 4x4 matrix (last row 0 0 0 1) with an "
+                        "invertible linear part");
+    }
+    submitted_calibration_ = calibration->calibration;
   } else if (const auto* steps = std::get_if<command::SingleStep>(&command)) {
     if (steps->steps < 1 || steps->steps > 1000000) {
       return make_error(ErrorCode::kInvalidArgument, fmt::format("single step: steps must be in [1, 1000000], got {}", steps->steps));
@@ -438,6 +455,11 @@ void Session::apply_commands(SessionReport& report) {
       current_settings_.renderer = renderer->renderer;
       settings_changed = true;
       report.applied_commands.push_back(fmt::format("step {}: renderer", at));
+    } else if (const auto* calibration = std::get_if<command::SetCalibration>(&command)) {
+      current_settings_.calibration = calibration->calibration;
+      config_.haptics.calibration = calibration->calibration;
+      settings_changed = true;
+      report.applied_commands.push_back(fmt::format("step {}: calibration", at));
     } else if (const auto* limit = std::get_if<command::SetForceLimit>(&command)) {
       current_settings_.max_force_n = limit->max_force_n;
       settings_changed = true;

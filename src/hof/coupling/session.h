@@ -149,6 +149,11 @@ struct SetDevice {
   /// as the window does for the mouse) passes it here.
   std::shared_ptr<haptics::Device> opened;
 };
+/// Another device calibration (device → world), e.g. the window's "fit the workspace to the
+/// scene": the proxy restarts at the next reading. The linear part must be invertible.
+struct SetCalibration {
+  haptics::Calibration calibration;
+};
 /// Another model for a deformable body, on the same mesh (a structural edit: a force field,
 /// solver, mass or constraint switched, added or removed; material regions). Built and
 /// checked when submitted (on the caller's thread); the simulation swaps it in between two
@@ -163,7 +168,7 @@ struct SetModel {
 }  // namespace command
 using Command = std::variant<command::SetParameter, command::Pause, command::Resume, command::SingleStep, command::Reset,
                              command::SetMaterial, command::SetEffects, command::SetRenderer, command::SetForceLimit,
-                             command::SetDevice, command::SetModel>;
+                             command::SetDevice, command::SetModel, command::SetCalibration>;
 
 /// A parameter changed through the seam, as a project saves it.
 struct ParameterChange {
@@ -237,6 +242,8 @@ class Session {
   TripleBuffer<std::vector<std::vector<double>>>& graphics_states();
   /// The world simulation step dt (the smallest body dt), s.
   [[nodiscard]] double dt() const { return dt_.load(std::memory_order_relaxed); }
+  /// The calibration in force (the configuration's, or the last SetCalibration submitted).
+  [[nodiscard]] haptics::Calibration calibration() const;
   [[nodiscard]] const haptics::HapticLoop& haptic_loop() const { return *loop_; }
 
  private:
@@ -284,6 +291,7 @@ class Session {
   mutable std::mutex commands_mutex_;
   std::vector<Command> pending_;
   std::vector<ParameterChange> changes_;
+  haptics::Calibration submitted_calibration_;
   std::vector<std::pair<std::string, haptics::SurfaceMaterial>> material_changes_;
   std::vector<mechanics::ModelConfig> validated_configs_;  // configs as the accepted commands leave them
   std::vector<char> has_mechanics_;                        // per body, fixed: a model and its config

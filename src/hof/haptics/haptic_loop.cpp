@@ -94,7 +94,13 @@ HapticLoop::HapticLoop(Device& device, std::span<TripleBuffer<SurfaceSnapshot>* 
   effects_.springs.reserve(kMaxEffectsEach);
   effects_.viscosities.reserve(kMaxEffectsEach);
   effects_.constants.reserve(kMaxEffectsEach);
-  // The rotation that takes world vectors to the device frame, computed once (not per tick).
+  apply_calibration(config_.calibration);
+}
+
+void HapticLoop::apply_calibration(const Calibration& calibration) {
+  config_.calibration = calibration;
+  // The rotation that takes world vectors to the device frame, computed once (not per tick);
+  // fixed-size matrices: no allocation in the tick.
   const Eigen::JacobiSVD<Eigen::Matrix3d> svd(config_.calibration.position.topLeftCorner<3, 3>(),
                                               Eigen::ComputeFullU | Eigen::ComputeFullV);
   Eigen::Matrix3d u = svd.matrixU();
@@ -127,6 +133,11 @@ void HapticLoop::take_settings() {
   for (HapticRenderer& r : renderers_) {
     if (renderer_changed) r.reconfigure(s.renderer);
     r.set_part_materials(s.materials);
+  }
+  if (s.calibration.position != config_.calibration.position ||
+      !s.calibration.orientation.coeffs().isApprox(config_.calibration.orientation.coeffs(), 0.0)) {
+    apply_calibration(s.calibration);
+    proxy_initialised_ = false;
   }
   if (s.max_force_n != max_force_n_) {
     max_force_n_ = s.max_force_n;

@@ -59,6 +59,9 @@ struct HapticSettings {
   std::vector<SurfaceMaterial> materials;   ///< per snapshot part (body); empty: config material
   ForceEffects effects;
   double max_force_n{0.0};                  ///< the user's force limit (SafetyConfig::max_force_n)
+  /// Device → world. A change restarts the proxy at the next reading (as a device switch does:
+  /// the stylus jumps in the world, and must not be pulled back through a surface).
+  Calibration calibration;
 };
 inline constexpr std::size_t kMaxEffectsEach = 32;
 /// Checks counts and values of a set of effects (finite, non-negative constants).
@@ -161,6 +164,8 @@ class HapticLoop {
   void run_thread();
   void tick_impl(double time_s, double period_s, bool overrun);
   void take_settings();
+  /// The calibration the tick uses (and what follows from it: the force rotation, the scale).
+  void apply_calibration(const Calibration& calibration);
 
   // A device and the safety filter made for its specification, switched as one.
   struct DeviceBinding {

@@ -313,6 +313,7 @@ class Gui {
   haptics::MouseDevice* mouse_{nullptr};
   haptics::Calibration calibration_;
   double max_force_n_{8.0};
+  double workspace_radius_m_{0.08};
   std::vector<LayerView> layers_;
   std::vector<BodyView> bodies_;
   std::vector<VisualView> visuals_;
@@ -513,6 +514,7 @@ Expected<void> Gui::open(const std::filesystem::path& file) {
   if (!device) return std::unexpected(device.error());
   auto* mouse = dynamic_cast<haptics::MouseDevice*>(device->get());
   const double max_force = (*device)->spec().max_force_n;
+  const double workspace = (*device)->spec().workspace_radius_m;
   std::vector<BodyView> bodies;
   for (const coupling::SessionBody& b : world->bodies) {
     BodyView v;
@@ -546,6 +548,7 @@ Expected<void> Gui::open(const std::filesystem::path& file) {
   mouse_ = mouse;
   calibration_ = config.haptics.calibration;
   max_force_n_ = max_force;
+  workspace_radius_m_ = workspace;
   file_ = file;
   project_ = std::move(project);
   world_name_ = world->name;
@@ -859,6 +862,12 @@ Expected<void> Gui::apply_set(const std::string& element, const std::string& att
     if (auto ok = session_->submit(coupling::command::SetRenderer{r}); !ok) return ok;
   } else if (element.starts_with("haptics/effects")) {
     if (auto ok = session_->submit(coupling::command::SetEffects{config.effects}); !ok) return ok;
+  } else if (element == "haptics/calibration") {
+    const haptics::Calibration calibration = config.haptics.calibration;
+    if (auto ok = session_->submit(coupling::command::SetCalibration{calibration}); !ok) return ok;
+    calibration_ = calibration;
+    // The mouse stylus stays where it is in the world (its device position follows).
+    if (mouse_) mouse_->place((calibration_.position.inverse() * mouse_world_.homogeneous()).head<3>());
   } else if (element == "haptics/safety" && attribute == "maxForce") {
     if (auto ok = session_->submit(coupling::command::SetForceLimit{next.safety.max_force_n}); !ok) return ok;
   } else if (element == "haptics" && attribute == "device") {
@@ -872,6 +881,7 @@ Expected<void> Gui::apply_set(const std::string& element, const std::string& att
     if (mouse_) mouse_->place((calibration_.position.inverse() * mouse_world_.homogeneous()).head<3>());
     device_spec_ = spec;
     max_force_n_ = device->spec().max_force_n;
+    workspace_radius_m_ = device->spec().workspace_radius_m;
   } else if (element == "graphics" || element.starts_with("graphics/") || element == "haptics/stylus") {
     // Drawn by this window only.
   } else {
@@ -1711,6 +1721,28 @@ void Gui::draw_haptics_panel() {
   }
   double limit = project_.safety.max_force_n;
   ImGui::SetNextItemWidth(200);
+  if (ImGui::TreeNode("Calibration (device -> world)")) {
+    const Eigen::Matrix3d linear = calibration_.position.topLeftCorner<3, 3>();
+    const Vec3 offset = calibration_.position.topRightCorner<3, 1>();
+    ImGui::Text("scale %.4g, offset %.4g %.4g %.4g", std::cbrt(std::abs(linear.determinant())), offset.x(), offset.y(), offset.z());
+    ImGui::TextDisabled("device workspace radius %.3g m", workspace_radius_m_);
+    const auto apply = [&](const Eigen::Matrix4d& m) {
+      std::string text;
+      for (int i = 0; i < 16; ++i) text += fmt::format("{}{}", i ? " " : "", m(i / 4, i % 4));
+      if (auto ok = apply_set("haptics/calibration", "positionCalibration", text); !ok) report(ok.error().to_string(), true);
+    };
+    if (ImGui::Button("Fit the workspace to the scene")) {
+      // The device's reach spans the scene's bounding sphere (keeping the axes).
+      Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
+      const double scale = 0.5 * scene_size() / std::max(workspace_radius_m_, 1e-6);
+      m.topLeftCorner<3, 3>() *= scale;
+      m.topRightCorner<3, 1>() = 0.5 * (bounds_min_ + bounds_max_);
+      apply(m);
+    }
+    ImGui::SameLine();
+    if (ImGui::Button("Identity")) apply(Eigen::Matrix4d::Identity());
+    ImGui::TreePop();
+  }
   if (ImGui::InputDouble("force limit (N, 0: device's)", &limit, 0.0, 0.0, "%.3g", ImGuiInputTextFlags_EnterReturnsTrue)) {
     set("haptics/safety", "maxForce", number_text(limit));
   }
