@@ -26,6 +26,20 @@ wait 0.3
 screenshot docs/images/gui-mechanics.png
 quit
 ACTIONS
+cat > "$work/stress.txt" <<'ACTIONS'
+# the scene tree's edits: a Neo-Hookean liver (E 5.4 kPa, nu 0.45) with a stiff region,
+# pressed, coloured by von Mises stress
+show mechanics
+region Liver sphere 0 0 0.04 0.025 54000
+replace mechanics/Liver/FEM TetrahedronHyperelasticityFEMForceField materialName=NeoHookean "ParameterSet=1862.0689655172414 18000"
+set graphics@colorBy stress
+mouse 835 330 0.015
+wait 3
+screenshot docs/images/gui-stress.png
+quit
+ACTIONS
 xvfb-run -a -s "-screen 0 1280x720x24" build/release/bin/hof gui examples/liver-palpation-medium-fem.hof \
   --size 1280x720 --script "$work/press.txt"
-echo "screenshots: docs/images/gui-liver.png gui-press.png gui-displacement.png gui-mechanics.png"
+xvfb-run -a -s "-screen 0 1280x720x24" build/release/bin/hof gui examples/liver-palpation-medium-fem.hof \
+  --size 1280x720 --script "$work/stress.txt"
+echo "screenshots: docs/images/gui-liver.png gui-press.png gui-displacement.png gui-mechanics.png gui-stress.png"
