@@ -538,7 +538,10 @@ Expected<void> add_project_scene(World& w, const std::filesystem::path& file) {
     const auto on_disk = read_project(file);
     if (!on_disk || on_disk->mechanics_inline != w.project.mechanics_inline) text = &w.project.mechanics_inline;
   }
-  if (auto ok = add_sofa(w, w.scene_path, text); !ok) {
+  // Lines of a scene held in memory are its own, not the file's: its messages say so (the
+  // folder still anchors its files).
+  const std::filesystem::path named = text ? file.parent_path() / (file.filename().string() + " (edited scene)") : w.scene_path;
+  if (auto ok = add_sofa(w, named, text); !ok) {
     Error inner = ok.error();
     if (w.scene_path == file) return std::unexpected(inner);
     std::error_code canonical_error;
