@@ -241,6 +241,12 @@ Expected<void> Session::submit(const Command& submitted) {
     if (!opened) return std::unexpected(opened.error());
     device->opened = std::shared_ptr<haptics::Device>(std::move(*opened));
   }
+  if (auto* model = std::get_if<command::SetModel>(&command)) {
+    // Built here, before the lock: the simulation thread takes the same lock between steps.
+    auto built = mechanics::build_model(model->config);
+    if (!built) return make_error(ErrorCode::kInvalidArgument, fmt::format("body '{}': {}", model->body, built.error().message));
+    model->built = std::make_shared<mechanics::MechanicalModel>(std::move(*built));
+  }
   std::lock_guard lock(commands_mutex_);
   const auto find_body = [&](const std::string& name) -> std::int32_t {
     for (std::size_t i = 0; i < bodies_.size(); ++i) {
@@ -281,9 +287,6 @@ Expected<void> Session::submit(const Command& submitted) {
                                     model->body, model->config.positions.size(), model->config.tets.size(), now.positions.size(),
                                     now.tets.size()));
     }
-    auto built = mechanics::build_model(model->config);
-    if (!built) return make_error(ErrorCode::kInvalidArgument, fmt::format("body '{}': {}", model->body, built.error().message));
-    model->built = std::make_shared<mechanics::MechanicalModel>(std::move(*built));
     validated_configs_[static_cast<std::size_t>(i)] = model->config;
     // The caller took the body's changes into `config`: from now on they are not changes
     // (erased again when applied, for a parameter command still queued before this one).

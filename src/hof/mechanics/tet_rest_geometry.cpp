@@ -55,7 +55,7 @@ Expected<std::vector<double>> element_modulus_weights(const std::vector<double>&
     const double e = per_element[t];
     if (!(e >= 0.0) || !std::isfinite(e)) {
       return make_error(ErrorCode::kInvalidArgument,
-                        fmt::format("{}: youngModulus of tetrahedron {} must be > 0 Pa, got {}", who, t, e));
+                        fmt::format("{}: youngModulus of tetrahedron {} must be > 0 Pa (0: the field's own), got {}", who, t, e));
     }
     weights[t] = e > 0.0 ? e / young_modulus_pa : 1.0;
   }

@@ -101,9 +101,12 @@ Expected<std::string> edit_scene(const std::string& scene_xml, const SceneEdit& 
       }
     }
   }
+  // A component the file left unnamed goes by its type: its replacement stays unnamed (it then
+  // goes by its new type), rather than carrying the old type as a name.
+  const bool named = edit.action == SceneEdit::Action::kAdd || (component && (component.attribute("name") || component.attribute("pluginName")));
   const auto fill = [&](pugi::xml_node e) {
     if (legacy) e.append_attribute("type") = edit.type.c_str();
-    e.append_attribute("name") = edit.component.c_str();
+    if (named) e.append_attribute("name") = edit.component.c_str();
     for (const auto& [key, value] : edit.attributes) {
       if (key == "name" || (legacy && key == "type")) continue;
       e.append_attribute(key.c_str()) = value.c_str();

@@ -331,6 +331,9 @@ Expected<void> Reader::apply_force_field(Component& c, ModelConfig& m) {
       auto values = numbers(c, "youngModulus", *text);
       if (!values) return std::unexpected(values.error());
       if (values->empty()) return fail(c, "attribute youngModulus: empty, expected a number");
+      if (std::ranges::any_of(*values, [](double v) { return !(v > 0.0); })) {
+        return fail(c, "attribute youngModulus: every value must be > 0 Pa", ErrorCode::kInvalidArgument);
+      }
       fem.young_modulus_pa = values->front();
       const bool uniform = std::ranges::all_of(*values, [&](double v) { return v == values->front(); });
       if (!uniform) {

@@ -352,6 +352,8 @@ class Gui {
   bool show_device_{true};
   bool show_regions_{true};
   std::set<std::string> warned_;  // warnings already shown for this world
+  // Parameter changes submitted since the last structural change (some may still be queued).
+  std::vector<coupling::ParameterChange> submitted_changes_;
   Clock::time_point next_stress_{};
   // Structure editor inputs.
   float region_radius_m_{0.0f};  // 0: a tenth of the scene
@@ -544,6 +546,7 @@ Expected<void> Gui::open(const std::filesystem::path& file) {
 
   // Accepted: the new world replaces the old one.
   close_session();
+  submitted_changes_.clear();
   session_ = std::move(*made);
   mouse_ = mouse;
   calibration_ = config.haptics.calibration;
@@ -840,8 +843,12 @@ Expected<void> Gui::apply_set(const std::string& element, const std::string& att
       return std::unexpected(e);
     }
     for (BodyView& b : bodies_) {
-      if (b.name == body && b.config) (void)mechanics::set_parameter(*b.config, component, attribute, v);
+      if (b.name == body && b.config) {
+        (void)mechanics::set_parameter(*b.config, component, attribute, v);
+        b.stress.reset();  // its moduli may have changed
+      }
     }
+    submitted_changes_.push_back(coupling::ParameterChange{body, component, attribute, v});
     if (recording_) recording_->events.push_back(fmt::format("{:.3f}: set {} {}", recording_->seconds(), name, value));
     dirty_ = true;
     return {};
@@ -900,8 +907,10 @@ Expected<void> Gui::change_structure(const std::optional<scene::SceneEdit>& edit
     return make_error(ErrorCode::kUnsupported, "the scene tree edits SOFA scenes; an X3D scene's bodies are edited in its file", file_.string());
   }
   scene::HofProject next = project_;
-  // The values changed so far go with the new models (the seam forgets them at the switch).
+  // The values changed so far go with the new models (the seam forgets them at the switch),
+  // those still queued too.
   scene::record_parameters(next, session_->parameter_changes());
+  scene::record_parameters(next, submitted_changes_);
   if (next.mechanics_inline.empty()) {
     // From now on the project holds its scene (the file it came from is left as it was).
     auto text = scene::inline_scene(scene::scene_file(project_, file_), file_.parent_path());
@@ -949,6 +958,7 @@ Expected<void> Gui::change_structure(const std::optional<scene::SceneEdit>& edit
                                              edit ? fmt::format("scene edit {}/{}", edit->node, edit->component) : std::string("material regions")));
   }
   project_ = std::move(next);
+  submitted_changes_.clear();
   dirty_ = true;
   return {};
 }
