@@ -1093,6 +1093,8 @@ scene::HofProject Gui::project_for(const std::filesystem::path& path) const {
                                                        std::filesystem::absolute(path, ec).parent_path());
   }
   if (session_) scene::record_parameters(out, session_->parameter_changes());  // as <set> elements
+  // And those submitted but not applied yet (a save right after a change, the simulation busy).
+  scene::record_parameters(out, submitted_changes_);
   return out;
 }
 
