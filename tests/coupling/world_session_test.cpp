@@ -408,10 +408,12 @@ TEST(CommandSeam, ACalibrationChangedMidRunMovesTheStylusInTheWorldFromTheNextSt
   moved.position.topRightCorner<3, 1>() = Vec3(0.5, 0.0, 0.0);  // half a metre away: nothing there
   ASSERT_TRUE(session->submit(command::SetCalibration{moved}));
   EXPECT_EQ(session->calibration().position, moved.position);
+  EXPECT_EQ(session->calibrations_applied(), 0u) << "applied at the next step, not when submitted";
   samples.clear();
   const SessionReport report = session->run_virtual(0.05, keep);
   ASSERT_EQ(report.applied_commands.size(), 1u);
   EXPECT_EQ(report.applied_commands[0], "step 0: calibration");
+  EXPECT_EQ(session->calibrations_applied(), 1u);
   ASSERT_FALSE(samples.empty());
   // From the first tick after the step: the device half a metre off, out of contact, no force.
   EXPECT_NEAR((samples.back().device - before).x(), 0.5, 0.01);

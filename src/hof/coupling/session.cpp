@@ -463,6 +463,7 @@ void Session::apply_commands(SessionReport& report) {
       config_.haptics.calibration = calibration->calibration;
       settings_changed = true;
       report.applied_commands.push_back(fmt::format("step {}: calibration", at));
+      calibrations_applied_.fetch_add(1, std::memory_order_release);
     } else if (const auto* limit = std::get_if<command::SetForceLimit>(&command)) {
       current_settings_.max_force_n = limit->max_force_n;
       settings_changed = true;

@@ -244,6 +244,9 @@ class Session {
   [[nodiscard]] double dt() const { return dt_.load(std::memory_order_relaxed); }
   /// The calibration in force (the configuration's, or the last SetCalibration submitted).
   [[nodiscard]] haptics::Calibration calibration() const;
+  /// SetCalibration commands the simulation has passed to the haptic loop so far (any thread:
+  /// a caller that moves a stylus in device coordinates waits for its change to arrive).
+  [[nodiscard]] std::uint64_t calibrations_applied() const { return calibrations_applied_.load(std::memory_order_acquire); }
   [[nodiscard]] const haptics::HapticLoop& haptic_loop() const { return *loop_; }
 
  private:
@@ -292,6 +295,7 @@ class Session {
   std::vector<Command> pending_;
   std::vector<ParameterChange> changes_;
   haptics::Calibration submitted_calibration_;
+  std::atomic<std::uint64_t> calibrations_applied_{0};
   std::vector<std::pair<std::string, haptics::SurfaceMaterial>> material_changes_;
   std::vector<mechanics::ModelConfig> validated_configs_;  // configs as the accepted commands leave them
   std::vector<char> has_mechanics_;                        // per body, fixed: a model and its config

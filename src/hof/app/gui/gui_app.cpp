@@ -354,6 +354,13 @@ class Gui {
   std::set<std::string> warned_;  // warnings already shown for this world
   // Parameter changes submitted since the last structural change (some may still be queued).
   std::vector<coupling::ParameterChange> submitted_changes_;
+  // A calibration change on its way to the haptic loop: the mouse keeps the old mapping until
+  // the session has applied as many as were submitted.
+  std::uint64_t calibrations_submitted_{0};
+  bool calibration_pending_{false};
+  haptics::Calibration pending_calibration_;
+  /// The calibration the haptic loop reads the mouse stylus through right now.
+  [[nodiscard]] const haptics::Calibration& mouse_calibration() const { return calibration_pending_ ? pending_calibration_ : calibration_; }
   Clock::time_point next_stress_{};
   // Structure editor inputs.
   float region_radius_m_{0.0f};  // 0: a tenth of the scene
@@ -547,6 +554,8 @@ Expected<void> Gui::open(const std::filesystem::path& file) {
   // Accepted: the new world replaces the old one.
   close_session();
   submitted_changes_.clear();
+  calibrations_submitted_ = 0;
+  calibration_pending_ = false;
   session_ = std::move(*made);
   mouse_ = mouse;
   calibration_ = config.haptics.calibration;
@@ -805,6 +814,10 @@ void Gui::update_from_loops() {
     }
   }
   update_stress();
+  if (calibration_pending_ && session_->calibrations_applied() >= calibrations_submitted_) {
+    calibration_pending_ = false;
+    if (mouse_) mouse_->place((calibration_.position.inverse() * mouse_world_.homogeneous()).head<3>());
+  }
   stats_.sim_sequences.emplace_back(now, session_->steps_taken());
   stats_.frames.push_back(now);
   stats_.update(now);
@@ -871,10 +884,14 @@ Expected<void> Gui::apply_set(const std::string& element, const std::string& att
     if (auto ok = session_->submit(coupling::command::SetEffects{config.effects}); !ok) return ok;
   } else if (element == "haptics/calibration") {
     const haptics::Calibration calibration = config.haptics.calibration;
+    if (!calibration_pending_) pending_calibration_ = calibration_;  // in force until the loop has the new one
     if (auto ok = session_->submit(coupling::command::SetCalibration{calibration}); !ok) return ok;
     calibration_ = calibration;
-    // The mouse stylus stays where it is in the world (its device position follows).
-    if (mouse_) mouse_->place((calibration_.position.inverse() * mouse_world_.homogeneous()).head<3>());
+    // The mouse stylus stays where it is in the world: its device position follows once the
+    // haptic loop has the new calibration (before that, a new device position read through the
+    // old one would put the stylus elsewhere for a few ticks).
+    calibrations_submitted_ += 1;
+    calibration_pending_ = true;
   } else if (element == "haptics/safety" && attribute == "maxForce") {
     if (auto ok = session_->submit(coupling::command::SetForceLimit{next.safety.max_force_n}); !ok) return ok;
   } else if (element == "haptics" && attribute == "device") {
@@ -885,7 +902,7 @@ Expected<void> Gui::apply_set(const std::string& element, const std::string& att
     std::shared_ptr<haptics::Device> device(std::move(*opened));
     if (auto ok = session_->submit(coupling::command::SetDevice{spec, device}); !ok) return ok;
     mouse_ = dynamic_cast<haptics::MouseDevice*>(device.get());  // the session keeps the device alive
-    if (mouse_) mouse_->place((calibration_.position.inverse() * mouse_world_.homogeneous()).head<3>());
+    if (mouse_) mouse_->place((mouse_calibration().position.inverse() * mouse_world_.homogeneous()).head<3>());
     device_spec_ = spec;
     max_force_n_ = device->spec().max_force_n;
     workspace_radius_m_ = device->spec().workspace_radius_m;
@@ -1103,7 +1120,7 @@ Expected<void> Gui::start_recording(const std::filesystem::path& file) {
   if (recording_) return make_error(ErrorCode::kInvalidArgument, "already recording to " + recording_->file.string());
   Recording r;
   r.file = file;
-  r.world_to_device = calibration_.position.inverse();
+  r.world_to_device = mouse_calibration().position.inverse();
   r.samples.reserve(60000);
   if (file_.extension() != ".x3d") r.project = project_for(std::filesystem::path(file).replace_extension(".hof"));
   recording_ = std::move(r);
@@ -1188,7 +1205,7 @@ std::optional<Vec3> Gui::pick(double x_px, double y_px) const {
 
 void Gui::set_mouse_target(const Vec3& world) {
   mouse_world_ = world;
-  if (mouse_) mouse_->set_target((calibration_.position.inverse() * world.homogeneous()).head<3>());
+  if (mouse_) mouse_->set_target((mouse_calibration().position.inverse() * world.homogeneous()).head<3>());
 }
 
 void Gui::mouse_to(double window_x, double window_y, double depth_m, bool new_plane) {
