@@ -242,7 +242,22 @@ Expected<void> Session::submit(const Command& submitted) {
     device->opened = std::shared_ptr<haptics::Device>(std::move(*opened));
   }
   if (auto* model = std::get_if<command::SetModel>(&command)) {
-    // Built here, before the lock: the simulation thread takes the same lock between steps.
+    // Built here, outside the lock (the simulation thread takes it between steps); the cheap
+    // checks come first so that their messages are the ones a user sees.
+    {
+      std::lock_guard lock(commands_mutex_);
+      for (std::size_t i = 0; i < bodies_.size(); ++i) {
+        if (bodies_[i].body.name != model->body || !has_mechanics_[i]) continue;
+        const mechanics::ModelConfig& now = validated_configs_[i];
+        if (model->config.positions != now.positions || model->config.tets != now.tets) {
+          return make_error(ErrorCode::kInvalidArgument,
+                            fmt::format("body '{}': the new model has another mesh ({} nodes, {} tetrahedra; the body has {} and {}): "
+                                        "reopen the project to change the mesh",
+                                        model->body, model->config.positions.size(), model->config.tets.size(), now.positions.size(),
+                                        now.tets.size()));
+        }
+      }
+    }
     auto built = mechanics::build_model(model->config);
     if (!built) return make_error(ErrorCode::kInvalidArgument, fmt::format("body '{}': {}", model->body, built.error().message));
     model->built = std::make_shared<mechanics::MechanicalModel>(std::move(*built));
