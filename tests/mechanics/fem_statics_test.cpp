@@ -64,6 +64,17 @@ std::vector<std::int32_t> nodes_where(const BoxMesh& box, const std::function<bo
   return out;
 }
 
+// Symmetry planes: each face at 0 holds its normal direction (rollers).
+void add_rollers(ModelConfig& c, const BoxMesh& box) {
+  for (int axis = 0; axis < 3; ++axis) {
+    FixedConstraintConfig roller;
+    roller.name = "roller";
+    roller.directions = {axis == 0, axis == 1, axis == 2};
+    roller.indices = nodes_where(box, [&](const Vec3& p) { return p[axis] == 0.0; });
+    c.fixed.push_back(roller);
+  }
+}
+
 bool on_boundary(const BoxMesh& box, const Vec3& p) {
   return p.x() == 0.0 || p.y() == 0.0 || p.z() == 0.0 || p.x() == box.size.x() || p.y() == box.size.y() ||
          p.z() == box.size.z();
@@ -137,14 +148,7 @@ TEST_P(UniaxialTest, StressOverStrainIsTheModulus) {
   const Vec3 size(0.2, 0.1, 0.1);
   const BoxMesh box = box_mesh(6, 3, 3, size);
   ModelConfig c = static_config(box, GetParam().method, young, poisson);
-  // Symmetry planes: each face at 0 holds its normal direction (rollers).
-  for (int axis = 0; axis < 3; ++axis) {
-    FixedConstraintConfig roller;
-    roller.name = "roller";
-    roller.directions = {axis == 0, axis == 1, axis == 2};
-    roller.indices = nodes_where(box, [&](const Vec3& p) { return p[axis] == 0.0; });
-    c.fixed.push_back(roller);
-  }
+  add_rollers(c, box);
   if (GetParam().confined) {
     // Lateral faces at y = W and z = H hold their normal too: uniaxial strain.
     for (int axis = 1; axis < 3; ++axis) {
@@ -209,12 +213,7 @@ TEST_P(TwoMaterialBarTest, StretchesAsTwoSpringsInSeries) {
     neo.neo_hookean = NeoHookeanConfig{soft, 0.0, per_element};
     c.force_fields[0] = neo;
   }
-  for (int axis = 0; axis < 3; ++axis) {
-    FixedConstraintConfig roller;
-    roller.directions = {axis == 0, axis == 1, axis == 2};
-    roller.indices = nodes_where(box, [&](const Vec3& p) { return p[axis] == 0.0; });
-    c.fixed.push_back(roller);
-  }
+  add_rollers(c, box);
   ForceFieldConfig load;
   load.name = "traction";
   load.constant_force = traction(box, Vec3(stress, 0, 0), [&](const Vec3& p) { return p.x() == size.x(); });

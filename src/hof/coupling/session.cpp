@@ -233,6 +233,20 @@ TripleBuffer<std::vector<std::vector<double>>>& Session::graphics_states() {
 
 // ---- The command seam
 
+namespace {
+
+/// A body's new model must keep its mesh: the surface follows the nodes through a mapping made
+/// for this one.
+Expected<void> same_mesh(const std::string& body, const mechanics::ModelConfig& next, const mechanics::ModelConfig& now) {
+  if (next.positions == now.positions && next.tets == now.tets) return {};
+  return make_error(ErrorCode::kInvalidArgument,
+                    fmt::format("body '{}': the new model has another mesh ({} nodes, {} tetrahedra; the body has {} and {}): "
+                                "reopen the project to change the mesh",
+                                body, next.positions.size(), next.tets.size(), now.positions.size(), now.tets.size()));
+}
+
+}  // namespace
+
 Expected<void> Session::submit(const Command& submitted) {
   Command command = submitted;
   if (auto* device = std::get_if<command::SetDevice>(&command); device && !device->opened) {
@@ -248,14 +262,7 @@ Expected<void> Session::submit(const Command& submitted) {
       std::lock_guard lock(commands_mutex_);
       for (std::size_t i = 0; i < bodies_.size(); ++i) {
         if (bodies_[i].body.name != model->body || !has_mechanics_[i]) continue;
-        const mechanics::ModelConfig& now = validated_configs_[i];
-        if (model->config.positions != now.positions || model->config.tets != now.tets) {
-          return make_error(ErrorCode::kInvalidArgument,
-                            fmt::format("body '{}': the new model has another mesh ({} nodes, {} tetrahedra; the body has {} and {}): "
-                                        "reopen the project to change the mesh",
-                                        model->body, model->config.positions.size(), model->config.tets.size(), now.positions.size(),
-                                        now.tets.size()));
-        }
+        if (auto same = same_mesh(model->body, model->config, validated_configs_[i]); !same) return same;
       }
     }
     auto built = mechanics::build_model(model->config);
@@ -293,15 +300,8 @@ Expected<void> Session::submit(const Command& submitted) {
     if (!has_mechanics_[static_cast<std::size_t>(i)]) {
       return make_error(ErrorCode::kInvalidArgument, fmt::format("body '{}' is rigid: it has no model to replace", model->body));
     }
-    const mechanics::ModelConfig& now = validated_configs_[static_cast<std::size_t>(i)];
-    // The surface follows the nodes through a mapping made for this mesh: it must stay.
-    if (model->config.positions != now.positions || model->config.tets != now.tets) {
-      return make_error(ErrorCode::kInvalidArgument,
-                        fmt::format("body '{}': the new model has another mesh ({} nodes, {} tetrahedra; the body has {} and {}): "
-                                    "reopen the project to change the mesh",
-                                    model->body, model->config.positions.size(), model->config.tets.size(), now.positions.size(),
-                                    now.tets.size()));
-    }
+    // Checked again under the lock (the body may have had another model submitted meanwhile).
+    if (auto same = same_mesh(model->body, model->config, validated_configs_[static_cast<std::size_t>(i)]); !same) return same;
     validated_configs_[static_cast<std::size_t>(i)] = model->config;
     // The caller took the body's changes into `config`: from now on they are not changes
     // (erased again when applied, for a parameter command still queued before this one).

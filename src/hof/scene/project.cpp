@@ -510,6 +510,15 @@ Expected<HofProject> parse_project(const std::string& text, const std::filesyste
       if (!x3d->viewpoints.empty()) p.graphics.viewpoint_m = x3d->viewpoints.front().position;
     }
   }
+  // A value in [0, 1] (colours' parts, intensities, shininess), else an error naming it.
+  const auto unit_interval = [&](const pugi::xml_node& node, const char* name, double fallback) {
+    const double v = r.get(node, name, fallback);
+    if (!(v >= 0.0 && v <= 1.0)) {
+      r.fail(node, fmt::format("<{}> {} must be in [0, 1], got {}", node.name(), name, v));
+      return fallback;
+    }
+    return v;
+  };
   if (const pugi::xml_node g = root.child("graphics")) {
     p.graphics.viewpoint_m = r.get_vec(g, "viewpoint", p.graphics.viewpoint_m);
     p.graphics.look_at_m = r.get_vec(g, "lookAt", p.graphics.look_at_m);
@@ -532,28 +541,14 @@ Expected<HofProject> parse_project(const std::string& text, const std::filesyste
         }
         return c;
       };
-      const auto unit_number = [&](const char* name, double fallback) {
-        const double v = r.get(m, name, fallback);
-        if (!(v >= 0.0 && v <= 1.0)) {
-          r.fail(m, fmt::format("<material> {} must be in [0, 1], got {}", name, v));
-          return fallback;
-        }
-        return v;
-      };
+      const auto unit_number = [&](const char* name, double fallback) { return unit_interval(m, name, fallback); };
       p.graphics.diffuse_color = unit_colour("diffuseColor", p.graphics.diffuse_color);
       p.graphics.specular_color = unit_colour("specularColor", p.graphics.specular_color);
       p.graphics.shininess = unit_number("shininess", p.graphics.shininess);
       p.graphics.transparency = unit_number("transparency", p.graphics.transparency);
     }
     if (const pugi::xml_node l = g.child("light")) {
-      const auto unit_number = [&](const char* name, double fallback) {
-        const double v = r.get(l, name, fallback);
-        if (!(v >= 0.0 && v <= 1.0)) {
-          r.fail(l, fmt::format("<light> {} must be in [0, 1], got {}", name, v));
-          return fallback;
-        }
-        return v;
-      };
+      const auto unit_number = [&](const char* name, double fallback) { return unit_interval(l, name, fallback); };
       p.graphics.headlight = r.get_bool(l, "headlight", p.graphics.headlight);
       p.graphics.headlight_intensity = unit_number("headlightIntensity", p.graphics.headlight_intensity);
       p.graphics.light_direction = r.get_vec(l, "direction", p.graphics.light_direction);

@@ -70,6 +70,22 @@ render::RenderMode render_mode_of(const std::string& mode) {
 
 std::string number_text(double v) { return fmt::format("{}", v); }
 
+/// The twelve edges of the box [lo, hi] as line-segment end points, appended to `lines`.
+void add_box_edges(std::vector<Vec3>& lines, const Vec3& lo, const Vec3& hi) {
+  for (int a = 0; a < 3; ++a) {
+    for (int c = 0; c < 4; ++c) {
+      Vec3 p = lo;
+      const int b1 = (a + 1) % 3, b2 = (a + 2) % 3;
+      p[b1] = (c & 1) ? hi[b1] : lo[b1];
+      p[b2] = (c & 2) ? hi[b2] : lo[b2];
+      Vec3 q = p;
+      q[a] = hi[a];
+      lines.push_back(p);
+      lines.push_back(q);
+    }
+  }
+}
+
 /// A snapshot layer as the window draws it.
 struct LayerView {
   render::MeshBuffer mesh;
@@ -1327,20 +1343,7 @@ void Gui::draw_scene(int width, int height) {
     std::vector<Vec3> lines;
     for (const LayerView& l : layers_) {
       if (!l.latest) continue;
-      for (const auto& [lo, hi] : l.latest->tree.boxes(bound_tree_depth_)) {
-        for (int a = 0; a < 3; ++a) {
-          for (int c = 0; c < 4; ++c) {
-            Vec3 p = lo;
-            const int b1 = (a + 1) % 3, b2 = (a + 2) % 3;
-            p[b1] = (c & 1) ? hi[b1] : lo[b1];
-            p[b2] = (c & 2) ? hi[b2] : lo[b2];
-            Vec3 q = p;
-            q[a] = hi[a];
-            lines.push_back(p);
-            lines.push_back(q);
-          }
-        }
-      }
+      for (const auto& [lo, hi] : l.latest->tree.boxes(bound_tree_depth_)) add_box_edges(lines, lo, hi);
     }
     renderer_->draw_lines(lines, render::Rgba(0.3f, 0.9f, 0.4f, 1.0f));
   }
@@ -1354,18 +1357,7 @@ void Gui::draw_scene(int width, int height) {
         continue;
       }
       std::vector<Vec3> lines;
-      for (int a = 0; a < 3; ++a) {
-        for (int c = 0; c < 4; ++c) {
-          Vec3 p = r.box_min;
-          const int b1 = (a + 1) % 3, b2 = (a + 2) % 3;
-          p[b1] = (c & 1) ? r.box_max[b1] : r.box_min[b1];
-          p[b2] = (c & 2) ? r.box_max[b2] : r.box_min[b2];
-          Vec3 q = p;
-          q[a] = r.box_max[a];
-          lines.push_back(p);
-          lines.push_back(q);
-        }
-      }
+      add_box_edges(lines, r.box_min, r.box_max);
       renderer_->draw_lines(lines, render::Rgba(1.0f, 0.55f, 0.1f, 1.0f));
     }
   }
