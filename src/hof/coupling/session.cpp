@@ -47,6 +47,10 @@ struct Session::BodyRuntime {
   std::int64_t ticks_at_last_step{0};
   std::int32_t last_triangle{-1};  // local to the body's surface
   Vec3 last_barycentric{Vec3::Zero()};
+  // The tool in or on this body since it last stepped: its force summed, its latest state.
+  Vec3 tool_force_sum{Vec3::Zero()};
+  int tool_ticks{0};
+  haptics::ToolState last_tool;
   double next_step_s{0.0};
   BodyReport report;
   bool inside_since_start{false};
@@ -158,6 +162,7 @@ Session::Session(std::vector<SessionBody> bodies, std::unique_ptr<haptics::Devic
   for (const BodyRuntime& r : bodies_) current_settings_.materials.push_back(r.body.material.value_or(config_.haptics.material));
   loop_ = std::make_unique<haptics::HapticLoop>(*device_, std::span<TripleBuffer<haptics::SurfaceSnapshot>* const>(buffers),
                                                 config_.haptics, &settings_);
+  loop_->set_tool(config_.tool.get());
   last_device_ = device_.get();
   publish_settings();
 }
@@ -514,6 +519,17 @@ void Session::take_contacts(SessionReport& report) {
     const double force = c.force.norm();
     report.max_force_n = std::max(report.max_force_n, force);
     bool any = false;
+    if (c.tool.active && c.tool.body >= 0 && static_cast<std::size_t>(c.tool.body) < bodies_.size()) {
+      // The tool in a body: its reaction goes through the tool's coupling at the body's step.
+      BodyRuntime& r = bodies_[static_cast<std::size_t>(c.tool.body)];
+      r.tool_force_sum += c.tool.force;
+      ++r.tool_ticks;
+      r.last_tool = c.tool;
+      r.report.contact_time_s += period;
+      r.report.max_force_n = std::max(r.report.max_force_n, c.tool.force.norm());
+      last_body_ = c.tool.body;
+      any = true;
+    }
     for (std::size_t l = 0; l < layers_.size() && l < c.layer_count; ++l) {
       const haptics::HapticContact::Layer& layer = c.layers[l];
       if (!layer.contact || layer.triangle < 0) continue;
@@ -592,6 +608,16 @@ bool Session::advance_bodies(SessionReport& report) {
         for (int k = 0; k < 3; ++k) r->body.mapping.add_vertex_force(tri[k], r->last_barycentric[k] * reaction, forces);
       }
     }
+    if (r->tool_ticks > 0 && config_.tool_coupling) {
+      // The tool's force averaged over this body's ticks since its last step (it acted only
+      // during the ticks it was in the body), at the tool's latest place.
+      haptics::ToolState tool = r->last_tool;
+      tool.force = r->tool_force_sum / static_cast<double>(ticks);
+      std::span<double> forces{r->state.external_force.data(), static_cast<std::size_t>(r->state.external_force.size())};
+      config_.tool_coupling->add_tissue_forces(tool, *r->body.model, r->state, forces);
+    }
+    r->tool_force_sum.setZero();
+    r->tool_ticks = 0;
     r->reaction_sum.setZero();
     r->contact_ticks = 0;
     r->ticks_at_last_step = report.haptic_ticks;
@@ -705,6 +731,8 @@ bool Session::step_world(SessionReport& report, StateTimer& timer, double clock_
     if (r.body.deformable()) continue;
     r.reaction_sum.setZero();
     r.contact_ticks = 0;
+    r.tool_force_sum.setZero();
+    r.tool_ticks = 0;
   }
   ticks_since_step_ = 0;
   const auto step_start = Clock::now();
@@ -757,18 +785,19 @@ SessionReport Session::run_virtual(double seconds, const std::function<void(cons
     // N haptic ticks per simulation step (dt may change through a command).
     const auto ticks_per_step = std::max<std::int64_t>(1, std::llround(dt_ / tick_period));
     for (std::int64_t k = 0; k < ticks_per_step; ++k, ++tick) {
-      loop_->tick(static_cast<double>(tick) * tick_period);
+      loop_->tick(static_cast<double>(virtual_ticks_ + tick) * tick_period);
       while (loop_->telemetry().pop(sample)) {
         if (on_sample) on_sample(sample);
       }
     }
-    if (!step_world(report, timer, static_cast<double>(tick) * tick_period)) break;
+    if (!step_world(report, timer, static_cast<double>(virtual_ticks_ + tick) * tick_period)) break;
     ++steps;
     if (progress && (steps % 16 == 0 || tick >= total_ticks)) {
       progress("haptic session (virtual time)", std::min(1.0, static_cast<double>(tick) / static_cast<double>(total_ticks)));
     }
   }
   report.haptic_ticks = tick;
+  virtual_ticks_ += tick;  // a next run goes on from here (the device's clock does not restart)
   finish_report(report, timer, seconds_between(start, Clock::now()));
   return report;
 }

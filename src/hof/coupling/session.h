@@ -35,6 +35,7 @@
 #include "hof/core/error.h"
 #include "hof/core/progress.h"
 #include "hof/coupling/surface_mapping.h"
+#include "hof/coupling/tool_coupling.h"
 #include "hof/haptics/device.h"
 #include "hof/haptics/haptic_loop.h"
 #include "hof/mechanics/mechanical_model.h"
@@ -55,6 +56,10 @@ struct SessionConfig {
   ContactCoupling coupling{ContactCoupling::kBarycentric};
   haptics::ForceEffects effects;      ///< H3D force effects added to the contact force
   collision::AabbTreeOptions tree;    ///< the surfaces' bound tree (H3D useBoundTree, maxTrianglesInLeaf)
+  /// A tool on the stylus (a needle: procedures/needle.h), ticked by the haptic loop, and the
+  /// per-step hook that gives its reaction to the tissue. Null: the stylus is a point/sphere.
+  std::shared_ptr<haptics::Tool> tool;
+  std::shared_ptr<ToolTissueCoupling> tool_coupling;
 };
 
 /// A body of the world: deformable (a model, and the touchable surface that follows it
@@ -187,7 +192,7 @@ class Session {
   Session(const Session&) = delete;
   Session& operator=(const Session&) = delete;
 
-  /// Runs `seconds` of virtual time in lock-step. `on_sample` receives every haptic tick's
+  /// Runs `seconds` of virtual time in lock-step, from where the last virtual run ended. `on_sample` receives every haptic tick's
   /// sample (for telemetry); `progress` is told how far along the run is.
   SessionReport run_virtual(double seconds, const std::function<void(const haptics::HapticSample&)>& on_sample,
                             const ProgressSink& progress = {});
@@ -277,6 +282,7 @@ class Session {
   SessionConfig config_;
   std::atomic<double> dt_{0.01};  // written by the simulation (a dt command), read anywhere
   double time_s_{0.0};       // simulated time of the world
+  std::int64_t virtual_ticks_{0};  // haptic ticks run in virtual time so far (their clock)
   std::vector<std::unique_ptr<LayerRuntime>> layers_;
   TripleBuffer<haptics::HapticSettings> settings_;
   haptics::HapticSettings current_settings_;

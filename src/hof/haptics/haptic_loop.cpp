@@ -107,6 +107,7 @@ void HapticLoop::apply_calibration(const Calibration& calibration) {
   if ((u * svd.matrixV().transpose()).determinant() < 0.0) u.col(2) = -u.col(2);
   world_to_device_ = (u * svd.matrixV().transpose()).transpose();
   const double world_scale = std::cbrt(std::abs(config_.calibration.position.topLeftCorner<3, 3>().determinant()));
+  world_scale_ = world_scale > 0.0 && std::isfinite(world_scale) ? world_scale : 1.0;
   for (HapticRenderer& r : renderers_) r.set_world_scale(world_scale);
 }
 
@@ -193,21 +194,49 @@ void HapticLoop::tick_impl(double time_s, double period_s, bool overrun) {
   const Vec3 v = valid ? config_.calibration.vector_to_world(reading.velocity_m_per_s) : Vec3::Zero();
   if (valid && !proxy_initialised_) {
     for (HapticRenderer& r : renderers_) r.reset(x);
+    if (tool_) tool_->restart();
     proxy_initialised_ = true;
   }
 
   // Render: each layer's surfaces with its own proxy (forces add up), then force effects.
+  // The tool (a needle) comes between the surfaces and the effects: it may take over the
+  // surface force of what it pierces.
   Vec3 requested = Vec3::Zero();
   std::array<ContactState, kMaxLayers> contacts{};
+  std::array<Vec3, kMaxLayers> layer_forces{};
+  layer_forces.fill(Vec3::Zero());
+  Vec3 tool_force = Vec3::Zero();
+  ToolState tool_state;
   std::size_t first_contact = kMaxLayers;
   if (valid && proxy_initialised_) {
+    std::array<const SurfaceSnapshot*, kMaxLayers> surfaces{};
     for (std::size_t l = 0; l < layers_.size(); ++l) {
       const SurfaceSnapshot& surface = layers_[l]->read();
-      if (have_surface_[l] && !surface.triangles.empty()) contacts[l] = renderers_[l].update(x, v, surface, changed[l], dt);
-      requested += contacts[l].force;
+      if (have_surface_[l] && !surface.triangles.empty()) {
+        contacts[l] = renderers_[l].update(x, v, surface, changed[l], dt);
+        surfaces[l] = &surface;
+      }
+      layer_forces[l] = contacts[l].force;
       if (contacts[l].in_contact && first_contact == kMaxLayers) first_contact = l;
     }
+    if (tool_) {
+      ToolTickInput input;
+      input.time_s = time_s;
+      input.dt_s = dt;
+      input.position = x;
+      input.velocity = v;
+      input.orientation = config_.calibration.orientation * reading.orientation;
+      input.contacts = std::span<const ContactState>(contacts.data(), layers_.size());
+      input.surfaces = std::span<const SurfaceSnapshot* const>(surfaces.data(), layers_.size());
+      input.max_stiffness_n_per_m = device.spec().max_stiffness_n_per_m / world_scale_;
+      tool_force = tool_->tick(input, std::span<Vec3>(layer_forces.data(), layers_.size()), tool_state);
+      tool_state.active = true;
+    }
+    for (std::size_t l = 0; l < layers_.size(); ++l) requested += layer_forces[l];
+    requested += tool_force;
     requested += effects_.evaluate(x, v);
+  } else if (tool_) {
+    tool_state.active = true;  // mounted, without a reading: free
   }
   const std::size_t shown = first_contact < kMaxLayers ? first_contact : 0;
   const ContactState& contact = contacts[shown];
@@ -248,6 +277,7 @@ void HapticLoop::tick_impl(double time_s, double period_s, bool overrun) {
   out.period_s = period_s;
   out.buttons = reading.buttons;
   out.valid = valid;
+  out.tool = tool_state;
   telemetry_.push(out);
   HapticContact c;
   c.tick = tick;
@@ -265,8 +295,10 @@ void HapticLoop::tick_impl(double time_s, double period_s, bool overrun) {
     layer.contact = contacts[l].in_contact;
     layer.triangle = contacts[l].triangle;
     layer.barycentric = contacts[l].barycentric;
-    layer.force = scale * contacts[l].force;
+    layer.force = scale * layer_forces[l];
   }
+  c.tool = tool_state;
+  c.tool.force = scale * tool_force;
   contacts_.push(c);
   samples_.publish();
   if (tick > 0) stats_.record(period_s, overrun);

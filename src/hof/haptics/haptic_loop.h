@@ -24,6 +24,7 @@
 #include "hof/haptics/period_stats.h"
 #include "hof/haptics/safety.h"
 #include "hof/haptics/surface_snapshot.h"
+#include "hof/haptics/tool.h"
 
 namespace hof::haptics {
 
@@ -80,6 +81,8 @@ struct HapticContact {
     Vec3 barycentric{Vec3::Zero()};
     Vec3 force{Vec3::Zero()};         ///< this layer's share of the force sent to the device, world, N
   };
+  /// The tool's state this tick; its force is its share of what was sent (as the layers').
+  ToolState tool;
   std::uint64_t tick{0};
   double time_s{0.0};
   bool valid{false};                  ///< the device gave a reading (proxies meaningful)
@@ -109,6 +112,7 @@ struct HapticSample {
   double period_s{0.0};
   std::uint32_t buttons{0};
   bool valid{false};
+  ToolState tool;                    ///< the mounted tool's state (tool.active false: none)
 };
 
 class HapticLoop {
@@ -135,6 +139,11 @@ class HapticLoop {
   bool switch_device(Device& device);
   /// The device the ticks use now (the producer may read it after a switch was taken).
   [[nodiscard]] Device& device() { return *binding_.load(std::memory_order_acquire)->device; }
+
+  /// Mounts a tool (tool.h) whose tick runs after the surfaces and before the force effects;
+  /// null: none. Call before the first tick or start(); `tool` must outlive the loop.
+  void set_tool(Tool* tool) { tool_ = tool; }
+  [[nodiscard]] Tool* tool() const { return tool_; }
 
   /// Real-time mode: starts the thread; time counts from the call.
   void start();
@@ -192,6 +201,8 @@ class HapticLoop {
   std::atomic<std::uint64_t> ticks_{0};
   std::thread thread_;
   Eigen::Matrix3d world_to_device_{Eigen::Matrix3d::Identity()};
+  double world_scale_{1.0};       // world units per metre of device travel
+  Tool* tool_{nullptr};
   double last_time_s_{-1.0};
   bool proxy_initialised_{false};
 };

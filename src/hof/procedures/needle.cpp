@@ -1,0 +1,307 @@
+#include "hof/procedures/needle.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace hof::procedures {
+
+std::string_view axis_name(NeedleAxis axis) {
+  switch (axis) {
+    case NeedleAxis::kMotion: return "motion";
+    case NeedleAxis::kNormal: return "normal";
+    case NeedleAxis::kStylus: return "stylus";
+  }
+  return "motion";
+}
+
+Expected<void> validate(const NeedleConfig& config) {
+  const NeedleGeometry& g = config.geometry;
+  for (double v : {g.length_m, g.shaft_diameter_m, g.tip_diameter_m, g.syringe_diameter_m, g.syringe_length_m}) {
+    if (!(v > 0.0 && std::isfinite(v))) {
+      return make_error(ErrorCode::kInvalidArgument,
+                        fmt::format("needle: length, shaftDiameter, tipDiameter, syringeDiameter and syringeLength must be > 0 m, got {}", v));
+    }
+  }
+  if (!(g.tip_length_m >= 0.0 && g.tip_length_m <= g.length_m)) {
+    return make_error(ErrorCode::kInvalidArgument,
+                      fmt::format("needle: tipLength must be in [0, length] = [0, {}] m, got {}", g.length_m, g.tip_length_m));
+  }
+  if (auto ok = validate(config.tissue, "needle tissue"); !ok) return ok;
+  for (const auto& [name, set] : config.bodies) {
+    if (auto ok = validate(set, fmt::format("needle tissue of body '{}'", name)); !ok) return ok;
+  }
+  return {};
+}
+
+std::vector<TissueNeedleParameters> parameters_by_body(const NeedleConfig& config, const std::vector<std::string>& body_names,
+                                                       const std::vector<bool>& deformable) {
+  std::vector<TissueNeedleParameters> out;
+  for (std::size_t i = 0; i < body_names.size(); ++i) {
+    const auto own = std::find_if(config.bodies.begin(), config.bodies.end(), [&](const auto& b) { return b.first == body_names[i]; });
+    if (own != config.bodies.end()) {
+      out.push_back(own->second);
+    } else {
+      out.push_back(config.tissue);
+      out.back().pierceable = config.tissue.pierceable && i < deformable.size() && deformable[i];
+    }
+  }
+  return out;
+}
+
+Expected<std::shared_ptr<NeedleTool>> NeedleTool::make(const NeedleConfig& config, std::vector<std::string> body_names,
+                                                        std::vector<bool> deformable) {
+  if (auto ok = validate(config); !ok) return std::unexpected(ok.error());
+  for (const auto& [name, set] : config.bodies) {
+    if (std::find(body_names.begin(), body_names.end(), name) == body_names.end()) {
+      std::string names;
+      for (const auto& n : body_names) names += (names.empty() ? "" : ", ") + n;
+      return make_error(ErrorCode::kInvalidArgument,
+                        fmt::format("needle: no body '{}' for its tissue (bodies: {})", name, names.empty() ? "none" : names));
+    }
+  }
+  return std::shared_ptr<NeedleTool>(new NeedleTool(config, std::move(body_names), std::move(deformable)));
+}
+
+NeedleTool::NeedleTool(const NeedleConfig& config, std::vector<std::string> body_names, std::vector<bool> deformable)
+    : config_(config), body_names_(std::move(body_names)), deformable_(std::move(deformable)) {
+  producer_resolved_.axis = config_.axis;
+  producer_resolved_.bodies = parameters_by_body(config_, body_names_, deformable_);
+  spread_radius_ = std::make_unique<std::atomic<double>[]>(std::max<std::size_t>(1, body_names_.size()));
+  for (std::size_t i = 0; i < body_names_.size(); ++i) spread_radius_[i].store(producer_resolved_.bodies[i].spread_radius_m);
+  // Every slot holds the settings: the tick reads a whole one.
+  settings_.write_slot() = producer_resolved_;
+  settings_.publish();
+  settings_.acquire();
+  settings_.write_slot() = producer_resolved_;
+}
+
+Expected<void> NeedleTool::configure(const NeedleConfig& config) {
+  if (auto ok = validate(config); !ok) return ok;
+  for (const auto& [name, set] : config.bodies) {
+    if (std::find(body_names_.begin(), body_names_.end(), name) == body_names_.end()) {
+      return make_error(ErrorCode::kInvalidArgument, fmt::format("needle: no body '{}' for its tissue", name));
+    }
+  }
+  config_ = config;
+  producer_resolved_.axis = config_.axis;
+  producer_resolved_.bodies = parameters_by_body(config_, body_names_, deformable_);
+  for (std::size_t i = 0; i < body_names_.size(); ++i) spread_radius_[i].store(producer_resolved_.bodies[i].spread_radius_m);
+  settings_.write_slot() = producer_resolved_;
+  settings_.publish();
+  return {};
+}
+
+const TissueNeedleParameters& NeedleTool::parameters(std::size_t body) const {
+  return producer_resolved_.bodies.at(body);
+}
+
+double NeedleTool::spread_radius(std::size_t body) const {
+  return body < body_names_.size() ? spread_radius_[body].load(std::memory_order_relaxed) : config_.tissue.spread_radius_m;
+}
+
+void NeedleTool::restart() {
+  disengage(NeedlePhase::kFree);
+  rearmed_ = true;
+}
+
+void NeedleTool::disengage(NeedlePhase phase) {
+  engaged_ = false;
+  broken_ = false;
+  phase_ = phase;
+  body_ = -1;
+  layer_ = -1;
+  held_n_ = 0.0;
+}
+
+Vec3 NeedleTool::tick(const haptics::ToolTickInput& in, std::span<Vec3> layer_forces, haptics::ToolState& st) {
+  settings_.acquire();
+  const Resolved& settings = settings_.read();
+  const auto body_of = [&](std::size_t l) -> std::int32_t {
+    if (l >= in.contacts.size() || l >= in.surfaces.size() || !in.surfaces[l]) return -1;
+    const haptics::ContactState& c = in.contacts[l];
+    if (!c.in_contact || c.triangle < 0) return -1;
+    const std::int32_t part = in.surfaces[l]->part_of(c.triangle);
+    if (part < 0) return -1;
+    const std::int32_t body = in.surfaces[l]->parts[static_cast<std::size_t>(part)].body;
+    return body >= 0 ? body : part;
+  };
+
+  if (!engaged_ && !rearmed_) {
+    // Just withdrawn: the stylus is still at the surface; a new insertion starts at the next
+    // contact, not at this one.
+    bool touching = false;
+    for (std::size_t l = 0; l < in.contacts.size(); ++l) touching = touching || body_of(l) >= 0;
+    rearmed_ = !touching;
+  }
+  if (!engaged_ && rearmed_) {
+    // First contact with a body the needle can enter: the entry point and the axis are fixed.
+    for (std::size_t l = 0; l < in.contacts.size(); ++l) {
+      const std::int32_t b = body_of(l);
+      if (b < 0 || static_cast<std::size_t>(b) >= settings.bodies.size() || !settings.bodies[static_cast<std::size_t>(b)].pierceable) {
+        continue;
+      }
+      const haptics::ContactState& c = in.contacts[l];
+      const TissueNeedleParameters& p = settings.bodies[static_cast<std::size_t>(b)];
+      const double still = std::max(1e-9, 0.5 * p.friction.velocity_band_m_per_s);
+      normal_ = c.normal.norm() > 0.0 ? c.normal.normalized() : Vec3(0.0, 0.0, 1.0);
+      const Vec3 inward = -normal_;
+      axis_ = inward;
+      if (settings.axis == NeedleAxis::kMotion) {
+        const double speed = in.velocity.norm();
+        if (speed > still && in.velocity.dot(inward) > 0.2 * speed) axis_ = in.velocity / speed;
+      } else if (settings.axis == NeedleAxis::kStylus) {
+        const Vec3 stylus = in.orientation * Vec3(0.0, 0.0, -1.0);
+        if (stylus.dot(inward) > 0.0) axis_ = stylus.normalized();
+      }
+      entry_ = c.point;
+      engaged_ = true;
+      broken_ = false;
+      body_ = b;
+      layer_ = static_cast<std::int32_t>(l);
+      phase_ = NeedlePhase::kTouching;
+      held_n_ = 0.0;
+      break;
+    }
+  }
+
+  const auto publish = [&](double depth, double f, const Vec3& force) {
+    st.phase = static_cast<std::uint8_t>(phase_);
+    st.touched = engaged_;
+    st.broken = broken_;
+    st.body = engaged_ ? body_ : -1;
+    st.layer = engaged_ ? layer_ : -1;
+    st.depth_m = depth;
+    st.axial_force_n = f;
+    st.tip = in.position;
+    st.entry = entry_;
+    st.axis = axis_;
+    st.normal = normal_;
+    st.force = force;
+    return force;
+  };
+  if (!engaged_) return publish(0.0, 0.0, Vec3::Zero());
+
+  const TissueNeedleParameters& p = settings.bodies[static_cast<std::size_t>(body_)];
+  const double still = std::max(1e-9, 0.5 * p.friction.velocity_band_m_per_s);
+  const double d = (in.position - entry_).dot(axis_);
+  const double v = in.velocity.dot(axis_);
+  // The zero-force surface: the pierced body's surface lets the tip pass.
+  const bool on_surface = body_of(static_cast<std::size_t>(layer_)) == body_;
+  if (on_surface) layer_forces[static_cast<std::size_t>(layer_)].setZero();
+
+  double f = 0.0;
+  if (!broken_) {
+    if (d <= 0.0) {
+      if (!on_surface) {
+        disengage(NeedlePhase::kFree);
+        return publish(0.0, 0.0, Vec3::Zero());
+      }
+      phase_ = NeedlePhase::kTouching;
+    } else {
+      f = pre_puncture_force(p, d);
+      if (d >= p.capsule_m || f >= p.puncture_force_n) {
+        broken_ = true;  // the capsule gives way: the post-puncture model from this tick on
+        phase_ = NeedlePhase::kPunctured;
+        f = post_puncture_force(p, d, v, held_n_);
+      } else {
+        phase_ = NeedlePhase::kPrePuncture;
+      }
+    }
+  } else {
+    if (d <= 0.0) {
+      disengage(NeedlePhase::kOut);
+      rearmed_ = false;
+      return publish(0.0, 0.0, Vec3::Zero());
+    }
+    NeedlePhase next = phase_;
+    if (v >= still) {
+      next = NeedlePhase::kPunctured;
+    } else if (v <= -still) {
+      next = NeedlePhase::kExtraction;
+    } else if (phase_ == NeedlePhase::kPunctured) {
+      next = NeedlePhase::kRelaxation;  // stopped while inserting; a stop while withdrawing sticks
+    }
+    if (next == NeedlePhase::kRelaxation && phase_ != NeedlePhase::kRelaxation) {
+      relax_start_s_ = in.time_s;
+      relax_force_n_ = held_n_;
+    }
+    phase_ = next;
+    switch (phase_) {
+      case NeedlePhase::kRelaxation: f = relaxation_force(p, relax_force_n_, in.time_s - relax_start_s_); break;
+      case NeedlePhase::kExtraction: f = extraction_force(p, d, v, held_n_); break;
+      default: f = post_puncture_force(p, d, v, held_n_); break;
+    }
+  }
+  held_n_ = f;
+
+  // Inside, the tissue holds the shaft on its path: a lateral spring toward the axis line.
+  Vec3 lateral = Vec3::Zero();
+  if (d > 0.0) {
+    const Vec3 off_axis = (in.position - entry_) - d * axis_;
+    const Vec3 lateral_velocity = in.velocity - v * axis_;
+    const double k = std::min(p.lateral_stiffness_n_per_m, in.max_stiffness_n_per_m);
+    lateral = -k * off_axis - p.lateral_damping_n_s_per_m * lateral_velocity;
+  }
+  return publish(std::max(0.0, d), f, -f * axis_ + lateral);
+}
+
+// ---- The reaction in the tissue
+
+void NeedleTissueCoupling::add_tissue_forces(const haptics::ToolState& tool, const mechanics::MechanicalModel& model,
+                                             const mechanics::MechanicalState& state, std::span<double> forces) {
+  const Vec3 reaction = -tool.force;  // the tissue feels the opposite of what the hand feels
+  const std::size_t nodes = model.node_count();
+  if (nodes == 0 || !reaction.allFinite() || reaction.squaredNorm() == 0.0 || !tool.axis.allFinite()) return;
+  const double radius = tool_ ? tool_->spread_radius(static_cast<std::size_t>(std::max(0, tool.body))) : 0.01;
+  const auto phase = static_cast<NeedlePhase>(tool.phase);
+  if (phase == NeedlePhase::kTouching || phase == NeedlePhase::kPrePuncture || tool.depth_m <= 0.0) {
+    // The capsule is intact: pushed ahead of the tip.
+    spread(tool.entry + tool.axis * std::max(0.0, tool.depth_m), reaction, radius, state, nodes, forces);
+    return;
+  }
+  // Through the capsule: along the shaft, entry to tip, in equal shares.
+  const int points = std::clamp(static_cast<int>(std::ceil(tool.depth_m / radius)), 1, 16);
+  for (int k = 0; k < points; ++k) {
+    const Vec3 at = tool.entry + tool.axis * (tool.depth_m * (k + 1) / points);
+    spread(at, reaction / points, radius, state, nodes, forces);
+  }
+}
+
+void NeedleTissueCoupling::spread(const Vec3& point, const Vec3& force, double radius, const mechanics::MechanicalState& state,
+                                  std::size_t nodes, std::span<double> forces) {
+  near_.clear();
+  double reach2 = radius * radius;
+  for (std::size_t i = 0; i < nodes; ++i) {
+    const double d2 = (state.position(static_cast<std::int32_t>(i)) - point).squaredNorm();
+    if (d2 < reach2) near_.emplace_back(d2, static_cast<std::int32_t>(i));
+  }
+  constexpr std::size_t kAtLeast = 4;
+  if (near_.size() < kAtLeast) {
+    // A coarse mesh or a small radius: the four nearest nodes, reach widened to include them.
+    near_.clear();
+    for (std::size_t i = 0; i < nodes; ++i) {
+      near_.emplace_back((state.position(static_cast<std::int32_t>(i)) - point).squaredNorm(), static_cast<std::int32_t>(i));
+    }
+    const std::size_t keep = std::min(kAtLeast, near_.size());
+    std::nth_element(near_.begin(), near_.begin() + static_cast<std::ptrdiff_t>(keep - 1), near_.end());
+    near_.resize(keep);
+    double farthest = 0.0;
+    for (const auto& [d2, i] : near_) farthest = std::max(farthest, d2);
+    reach2 = 2.0 * farthest + 1e-30;
+  }
+  // Wendland-like weights (1 − r²/ρ²)²: smooth, largest at the point, zero at the reach.
+  double total = 0.0;
+  for (auto& [d2, i] : near_) {
+    const double w = (1.0 - d2 / reach2) * (1.0 - d2 / reach2);
+    d2 = w;  // reuse the slot for the weight
+    total += w;
+  }
+  for (const auto& [w, i] : near_) {
+    const double share = total > 0.0 ? w / total : 1.0 / static_cast<double>(near_.size());
+    for (int c = 0; c < 3; ++c) forces[3 * static_cast<std::size_t>(i) + c] += share * force[c];
+  }
+}
+
+}  // namespace hof::procedures

@@ -1,0 +1,91 @@
+// The needle force models against their closed forms and the published values.
+
+#include "hof/procedures/needle_model.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+namespace hof::procedures {
+namespace {
+
+TEST(NeedleModel, FungPrePunctureReproducesMaurinsAnchorValues) {
+  // reference/literature.md §2a: with the integrated form, f(11.45 mm) = 0.20 N, f(21.45 mm)
+  // = 0.44 N, f(31.45 mm) = 1.24 N, f(36.45 mm) ≈ 2.2 N.
+  const FungParameters pre;
+  EXPECT_NEAR(fung_force(pre, 0.01145), 0.2, 1e-12);
+  EXPECT_NEAR(fung_force(pre, 0.02145), 0.44, 0.005);
+  EXPECT_NEAR(fung_force(pre, 0.03145), 1.24, 0.01);
+  EXPECT_NEAR(fung_force(pre, 0.03645), 2.2, 0.05);
+  // Not the printed "+ b" form, which would give F0 + 2b at d0.
+  EXPECT_GT(std::abs(fung_force(pre, 0.01145) - (0.2 + 2 * -0.098)), 0.1);
+}
+
+TEST(NeedleModel, FungPostPunctureIsTheLiteralFitWithItsSign) {
+  const TissueNeedleParameters p;
+  EXPECT_NEAR(fung_force(p.fung_post, 0.01961), -3.39, 1e-12);
+  // Deeper it tends to −b = −1.7 N, from below (a < 0, F0 + b < 0).
+  EXPECT_NEAR(fung_force(p.fung_post, 1.0), -1.7, 1e-6);
+  EXPECT_LT(fung_force(p.fung_post, 0.03), fung_force(p.fung_post, 0.04));
+  // At the thesis' capsule depth the force drops from the pre-puncture rise to the post fit.
+  EXPECT_GT(pre_puncture_force(p, 0.02), 0.3);
+  EXPECT_LT(post_puncture_force(p, 0.02, 0.01, 0.0), -3.0);
+}
+
+TEST(NeedleModel, SimoneOkamuraStiffnessIsThePolynomialInMillimetres) {
+  TissueNeedleParameters p;
+  p.model = NeedleForceModel::kSimoneOkamura;
+  // a1 = 0.002 N/mm, a2 = 0.0023 N/mm²: at 20 mm, 0.04 + 0.92 N.
+  EXPECT_NEAR(pre_puncture_force(p, 0.02), 0.002 * 20 + 0.0023 * 400, 1e-12);
+}
+
+TEST(NeedleModel, KarnoppHasItsFourBranches) {
+  const KarnoppFriction k;  // Cp 0.121 mN/mm, Cn −0.117 mN/mm, bp 3.2, bn −1.6 mN s/mm², Δv 2 mm/s
+  const double length = 0.03;  // 30 mm inserted
+  // Slipping inward: 30 mm · (0.121 mN/mm + 3.2 mN s/mm² · 5 mm/s) = 30 · 16.121 mN.
+  EXPECT_NEAR(karnopp_force(k, length, 0.005, 0.0), 30 * 16.121e-3, 1e-12);
+  // Slipping outward: 30 mm · (−0.117 − 1.6 · 5) mN/mm, negative: it holds the needle back.
+  EXPECT_NEAR(karnopp_force(k, length, -0.005, 0.0), 30 * -8.117e-3, 1e-12);
+  // Stuck (|v| < Δv/2): what the shaft carried, within the static limits.
+  EXPECT_NEAR(karnopp_force(k, length, 0.0005, 1e-3), 1e-3, 1e-15);
+  EXPECT_NEAR(karnopp_force(k, length, -0.0005, 10.0), 30 * 0.121e-3, 1e-15);
+  EXPECT_NEAR(karnopp_force(k, length, 0.0, -10.0), 30 * -0.117e-3, 1e-15);
+  // No shaft inside, no friction.
+  EXPECT_EQ(karnopp_force(k, 0.0, 0.01, 0.0), 0.0);
+}
+
+TEST(NeedleModel, RelaxationDecaysWithItsTimeConstant) {
+  TissueNeedleParameters p;
+  p.relaxation_time_s = 2.0;
+  EXPECT_NEAR(relaxation_force(p, -2.5, 0.0), -2.5, 1e-15);
+  EXPECT_NEAR(relaxation_force(p, -2.5, 2.0), -2.5 / std::exp(1.0), 1e-12);
+}
+
+TEST(NeedleModel, ExtremeParametersGiveFiniteForces) {
+  TissueNeedleParameters p;
+  p.fung_pre = {1e9, -1e300, 0.0, 1e300};
+  EXPECT_TRUE(std::isfinite(pre_puncture_force(p, 1.0)));
+  p.friction.damping_positive_n_s_per_m2 = 1e308;
+  EXPECT_TRUE(std::isfinite(karnopp_force(p.friction, 10.0, 1e10, 0.0)));
+}
+
+TEST(NeedleModel, ValidationNamesTheAttribute) {
+  TissueNeedleParameters p;
+  p.capsule_m = -0.01;
+  auto ok = validate(p, "needle tissue of body 'Liver'");
+  ASSERT_FALSE(ok);
+  EXPECT_NE(ok.error().message.find("capsule"), std::string::npos);
+  EXPECT_NE(ok.error().message.find("Liver"), std::string::npos);
+  p = {};
+  p.fung_post.a_per_m = std::numeric_limits<double>::quiet_NaN();
+  ok = validate(p, "needle tissue");
+  ASSERT_FALSE(ok);
+  EXPECT_NE(ok.error().message.find("fungPost"), std::string::npos);
+  p = {};
+  p.puncture_force_n = std::numeric_limits<double>::infinity();  // depth only: allowed
+  EXPECT_TRUE(validate(p, "needle tissue"));
+}
+
+}  // namespace
+}  // namespace hof::procedures

@@ -1,0 +1,352 @@
+// Needle insertion through the haptic loop's tool seam and the session's per-step hook, in
+// virtual time: the force follows the model exactly, phase by phase; the tissue deforms around
+// the path and is dragged on extraction; the device never gets more than its limit.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <set>
+
+#include "hof/coupling/session.h"
+#include "hof/haptics/device_backends/scripted_device.h"
+#include "hof/mesh/boundary.h"
+#include "hof/mesh/liver_generator.h"
+#include "hof/procedures/needle.h"
+
+#include "coupling/resting_liver.h"
+
+namespace hof::procedures {
+namespace {
+
+using coupling::Session;
+using coupling::SessionBody;
+using coupling::SessionConfig;
+
+// An axis-aligned box as a closed triangle surface, normals outward.
+mesh::TriMesh box(const Vec3& lo, const Vec3& hi) {
+  mesh::TriMesh m;
+  for (int i = 0; i < 8; ++i) m.vertices.emplace_back(i & 1 ? hi.x() : lo.x(), i & 2 ? hi.y() : lo.y(), i & 4 ? hi.z() : lo.z());
+  const auto quad = [&](int a, int b, int c, int d) {
+    m.triangles.push_back({a, b, c});
+    m.triangles.push_back({a, c, d});
+  };
+  quad(0, 2, 3, 1);
+  quad(4, 5, 7, 6);
+  quad(0, 1, 5, 4);
+  quad(2, 6, 7, 3);
+  quad(0, 4, 6, 2);
+  quad(1, 3, 7, 5);
+  return m;
+}
+
+// Insert–hold–extract along −z: from `start`, `approach` to the surface, `depth` further at
+// `speed`, hold, withdraw to the start at the same speed.
+std::unique_ptr<haptics::ScriptedDevice> insertion(const Vec3& start, double approach, double depth, double speed, double hold,
+                                                    const haptics::DeviceSpec& spec = {}) {
+  haptics::MotionConfig motion;
+  motion.kind = haptics::MotionKind::kPoke;
+  motion.start_m = start;
+  motion.direction = Vec3(0, 0, -1);
+  motion.approach_m = approach;
+  motion.depth_m = depth;
+  motion.speed_m_per_s = speed;
+  motion.hold_s = hold;
+  auto scripted = haptics::ScriptedMotion::make(motion);
+  EXPECT_TRUE(scripted) << scripted.error().to_string();
+  return std::make_unique<haptics::ScriptedDevice>(*scripted, spec);
+}
+
+SessionConfig needle_config(const NeedleConfig& needle, const std::vector<SessionBody>& bodies) {
+  std::vector<std::string> names;
+  std::vector<bool> deformable;
+  for (const SessionBody& b : bodies) {
+    names.push_back(b.name);
+    deformable.push_back(b.deformable());
+  }
+  auto tool = NeedleTool::make(needle, names, deformable);
+  EXPECT_TRUE(tool) << tool.error().to_string();
+  SessionConfig config;
+  config.haptics.realtime_priority = false;
+  config.haptics.safety.fade_in_s = 0.0;
+  config.tool = *tool;
+  config.tool_coupling = std::make_shared<NeedleTissueCoupling>(*tool);
+  return config;
+}
+
+// The tissue's parameters, written out here (not read from the library) for the checks.
+constexpr double kPreA = 121.0, kPreB = -0.098, kPreD0 = 0.01145, kPreF0 = 0.2;
+constexpr double kPostA = -31.0, kPostB = 1.7, kPostD0 = 0.01961, kPostF0 = -3.39;
+double fung(double a, double b, double d0, double f0, double d) { return (f0 + b) * std::exp(a * (d - d0)) - b; }
+
+struct BoxRun {
+  std::vector<haptics::HapticSample> samples;
+  coupling::SessionReport report;
+};
+
+// A rigid 10 cm box (top at z = 0) pierced along −z: the tissue does not move, so depth and
+// force are exact functions of the script.
+BoxRun pierce_box(NeedleConfig needle, haptics::RendererKind renderer, double speed = 0.01,
+                  const haptics::DeviceSpec& spec = {}) {
+  std::vector<SessionBody> bodies(1);
+  bodies[0].name = "block";
+  bodies[0].surface = box(Vec3(-0.05, -0.05, -0.1), Vec3(0.05, 0.05, 0.0));
+  needle.bodies.emplace_back("block", needle.tissue);  // a rigid body is pierced only when named
+  SessionConfig config = needle_config(needle, bodies);
+  config.haptics.renderer.kind = renderer;
+  auto session = Session::make(std::move(bodies), insertion(Vec3(0.003, 0.002, 0.01), 0.01, 0.04, speed, 1.0, spec), config);
+  EXPECT_TRUE(session) << session.error().to_string();
+  BoxRun run;
+  const double seconds = (0.01 + 0.04 + 0.05) / speed + 1.0 + 0.5;
+  run.report = (*session)->run_virtual(seconds, [&](const haptics::HapticSample& s) { run.samples.push_back(s); });
+  return run;
+}
+
+TEST(NeedleInsertion, TheForceFollowsFungExactlyPhaseByPhase) {
+  NeedleConfig needle;  // the literature's defaults: Fung, capsule 20 mm, relaxation 2 s
+  const BoxRun run = pierce_box(needle, haptics::RendererKind::kRuspini);
+  std::set<NeedlePhase> seen;
+  std::vector<NeedlePhase> order;
+  double previous_axial = 0.0, relax_start = -1.0, relax_force = 0.0;
+  NeedlePhase previous = NeedlePhase::kFree;
+  int checked = 0;
+  for (const haptics::HapticSample& s : run.samples) {
+    ASSERT_TRUE(s.tool.active);
+    if (!s.valid) continue;  // the script has ended
+    const auto phase = static_cast<NeedlePhase>(s.tool.phase);
+    if (order.empty() || order.back() != phase) order.push_back(phase);
+    seen.insert(phase);
+    const double d = s.tool.depth_m;
+    const double v = -s.device_velocity.z();  // along the axis (−z)
+    double expected = 0.0;
+    switch (phase) {
+      case NeedlePhase::kPrePuncture: expected = fung(kPreA, kPreB, kPreD0, kPreF0, d); break;
+      case NeedlePhase::kPunctured: expected = fung(kPostA, kPostB, kPostD0, kPostF0, d); break;
+      case NeedlePhase::kRelaxation:
+        if (previous != NeedlePhase::kRelaxation) {
+          relax_start = s.time_s;
+          relax_force = previous_axial;
+        }
+        expected = relax_force * std::exp(-(s.time_s - relax_start) / 2.0);
+        break;
+      case NeedlePhase::kExtraction: expected = d * (-0.117 + -1600.0 * std::abs(v)); break;
+      default: expected = 0.0; break;
+    }
+    EXPECT_NEAR(s.tool.axial_force_n, expected, 1e-9) << "phase " << phase_name(phase) << " at t = " << s.time_s;
+    if (phase != NeedlePhase::kFree && phase != NeedlePhase::kOut && d > 0.0) {
+      // The depth is the script's: the box top is z = 0, the axis −z.
+      EXPECT_NEAR(d, -s.device.z(), 1e-9);
+      // The hand feels −f along the axis, nothing sideways (the script moves on the axis).
+      EXPECT_NEAR((s.requested_force - Vec3(0, 0, expected)).norm(), 0.0, 1e-9) << "t = " << s.time_s;
+      ++checked;
+    }
+    previous_axial = s.tool.axial_force_n;
+    previous = phase;
+  }
+  EXPECT_GT(checked, 5000);
+  // Every phase, in the order of an insert–hold–extract.
+  const std::vector<NeedlePhase> expected_order{NeedlePhase::kFree,       NeedlePhase::kTouching,   NeedlePhase::kPrePuncture,
+                                                NeedlePhase::kPunctured,  NeedlePhase::kRelaxation, NeedlePhase::kExtraction,
+                                                NeedlePhase::kOut};
+  EXPECT_EQ(order, expected_order);
+}
+
+TEST(NeedleInsertion, PunctureSwitchesModelRelaxationDecaysExtractionPullsTheOtherWay) {
+  const BoxRun run = pierce_box(NeedleConfig{}, haptics::RendererKind::kGodObject);
+  double last_pre = 0.0, first_post = 0.0, puncture_depth = -1.0;
+  std::vector<double> relaxation, extraction;
+  NeedlePhase previous = NeedlePhase::kFree;
+  for (const haptics::HapticSample& s : run.samples) {
+    const auto phase = static_cast<NeedlePhase>(s.tool.phase);
+    if (phase == NeedlePhase::kPrePuncture) last_pre = s.tool.axial_force_n;
+    if (phase == NeedlePhase::kPunctured && previous == NeedlePhase::kPrePuncture) {
+      first_post = s.tool.axial_force_n;
+      puncture_depth = s.tool.depth_m;
+    }
+    if (phase == NeedlePhase::kRelaxation) relaxation.push_back(s.tool.axial_force_n);
+    if (phase == NeedlePhase::kExtraction) extraction.push_back(s.tool.axial_force_n);
+    previous = phase;
+  }
+  // The capsule breaks at its depth (20 mm, within one tick's travel), and the force drops.
+  EXPECT_NEAR(puncture_depth, 0.02, 0.01 * 1e-3 + 1e-12);
+  EXPECT_GT(last_pre, 0.3);
+  EXPECT_LT(first_post, -3.0);
+  // Relaxation: the magnitude decays, monotonically.
+  ASSERT_GT(relaxation.size(), 100u);
+  for (std::size_t i = 1; i < relaxation.size(); ++i) EXPECT_LE(std::abs(relaxation[i]), std::abs(relaxation[i - 1]));
+  EXPECT_LT(std::abs(relaxation.back()), 0.7 * std::abs(relaxation.front()));
+  // Extraction: friction that holds the needle back (f < 0 while the hand pulls out), and that
+  // shrinks with the inserted length — not the insertion curve run backwards.
+  ASSERT_GT(extraction.size(), 100u);
+  for (double f : extraction) EXPECT_LE(f, 0.0);
+  EXPECT_LT(std::abs(extraction.back()), std::abs(extraction.front()));
+  EXPECT_GT(std::abs(extraction.front() - fung(kPostA, kPostB, kPostD0, kPostF0, 0.04)), 1.0);
+}
+
+TEST(NeedleInsertion, SimoneOkamuraPunctureThresholdAndKarnoppFriction) {
+  NeedleConfig needle;
+  needle.tissue.model = NeedleForceModel::kSimoneOkamura;
+  needle.tissue.capsule_m = 0.05;         // deeper than the insertion: the force breaks it
+  needle.tissue.puncture_force_n = 0.5;   // a0 + a1 d + a2 d² reaches 0.5 N at 14.3 mm
+  const BoxRun run = pierce_box(needle, haptics::RendererKind::kGodObject);
+  double puncture_depth = -1.0;
+  NeedlePhase previous = NeedlePhase::kFree;
+  int punctured = 0;
+  for (const haptics::HapticSample& s : run.samples) {
+    const auto phase = static_cast<NeedlePhase>(s.tool.phase);
+    const double d = s.tool.depth_m, v = -s.device_velocity.z();
+    if (phase == NeedlePhase::kPrePuncture) {
+      EXPECT_NEAR(s.tool.axial_force_n, 2.0 * d + 2300.0 * d * d, 1e-9);
+    }
+    if (phase == NeedlePhase::kPunctured) {
+      if (previous == NeedlePhase::kPrePuncture) puncture_depth = d;
+      // Stiffness gone; friction on the inserted length at the insertion speed (10 mm/s).
+      EXPECT_NEAR(s.tool.axial_force_n, d * (0.121 + 3200.0 * v), 1e-9);
+      ++punctured;
+    }
+    previous = phase;
+  }
+  const double threshold_depth = (-2.0 + std::sqrt(4.0 + 4 * 2300.0 * 0.5)) / (2 * 2300.0);
+  EXPECT_NEAR(puncture_depth, threshold_depth, 1e-5 + 1e-12);
+  EXPECT_GT(punctured, 1000);
+}
+
+TEST(NeedleInsertion, ASurfaceTheNeedleCannotEnterStillPushesBack) {
+  NeedleConfig needle;
+  needle.tissue.pierceable = false;
+  std::vector<SessionBody> bodies(1);
+  bodies[0].name = "block";
+  bodies[0].surface = box(Vec3(-0.05, -0.05, -0.1), Vec3(0.05, 0.05, 0.0));
+  SessionConfig config = needle_config(needle, bodies);  // rigid and not named: not pierceable
+  auto session = Session::make(std::move(bodies), insertion(Vec3(0, 0, 0.01), 0.01, 0.005, 0.01, 0.2), config);
+  ASSERT_TRUE(session);
+  double pushed = 0.0;
+  (*session)->run_virtual(1.5, [&](const haptics::HapticSample& s) {
+    EXPECT_EQ(static_cast<NeedlePhase>(s.tool.phase), NeedlePhase::kFree);
+    pushed = std::max(pushed, s.force.z());
+  });
+  EXPECT_GT(pushed, 1.0);
+}
+
+// The simple liver (co-rotational FEM, 5.4 kPa) pierced from above.
+struct LiverRun {
+  std::vector<haptics::HapticSample> samples;
+  std::vector<Eigen::VectorXd> states;  // node positions at each step
+  std::vector<double> state_times;
+  mesh::Mesh liver;
+};
+
+LiverRun pierce_liver(NeedleForceModel model) {
+  LiverRun run;
+  run.liver = *mesh::generate_liver(mesh::LiverResolution::kSimple);
+  const mesh::BoundarySurface b = mesh::extract_boundary(run.liver.nodes, run.liver.tets);
+  mechanics::ModelConfig c = coupling::testing::resting_liver_config(run.liver);
+  c.ode.rayleigh_mass = c.ode.rayleigh_stiffness = 0.1;
+  c.dt_s = 0.01;
+  auto built = mechanics::build_model(c);
+  EXPECT_TRUE(built) << built.error().to_string();
+  auto mapping = coupling::SurfaceMapping::by_index(run.liver.nodes, b.surface.vertices, b.surface_to_volume);
+  EXPECT_TRUE(mapping);
+  std::vector<SessionBody> bodies;
+  bodies.push_back(SessionBody{"liver", std::move(*built), b.surface, std::move(*mapping), {}, {}});
+  NeedleConfig needle;
+  needle.tissue.model = model;
+  SessionConfig config = needle_config(needle, bodies);
+  // Over the right lobe's top (z ≈ 0.05), 30 mm in at 10 mm/s, hold 1 s, out.
+  auto session = Session::make(std::move(bodies), insertion(Vec3(0.03, 0.0, 0.06), 0.01, 0.03, 0.01, 1.0), config);
+  EXPECT_TRUE(session) << session.error().to_string();
+  for (int step = 0; step < 800; ++step) {
+    (*session)->run_virtual(0.01, [&](const haptics::HapticSample& s) { run.samples.push_back(s); });
+    run.states.push_back((*session)->state().x);
+    run.state_times.push_back(0.01 * (step + 1));
+  }
+  return run;
+}
+
+TEST(NeedleInsertion, TheLiverDeformsAroundThePathAndIsDraggedOnExtraction) {
+  const LiverRun run = pierce_liver(NeedleForceModel::kSimoneOkamura);
+  const Eigen::VectorXd& rest = run.states.front();
+  // When each phase held, by time.
+  double end_of_insertion = -1.0, start_of_extraction = -1.0, mid_extraction = -1.0;
+  Vec3 entry = Vec3::Zero(), axis = Vec3::Zero();
+  for (std::size_t i = 1; i < run.samples.size(); ++i) {
+    const auto phase = static_cast<NeedlePhase>(run.samples[i].tool.phase);
+    const auto before = static_cast<NeedlePhase>(run.samples[i - 1].tool.phase);
+    if (before == NeedlePhase::kPunctured && phase == NeedlePhase::kRelaxation) {
+      end_of_insertion = run.samples[i].time_s;
+      entry = run.samples[i].tool.entry;
+      axis = run.samples[i].tool.axis;
+    }
+    if (before == NeedlePhase::kRelaxation && phase == NeedlePhase::kExtraction) start_of_extraction = run.samples[i].time_s;
+    if (phase == NeedlePhase::kExtraction && run.samples[i].tool.depth_m > 0.012 && run.samples[i].tool.depth_m < 0.015) {
+      mid_extraction = run.samples[i].time_s;
+    }
+  }
+  ASSERT_GT(end_of_insertion, 0.0);
+  ASSERT_GT(start_of_extraction, end_of_insertion);
+  ASSERT_GT(mid_extraction, start_of_extraction);
+  const auto state_at = [&](double t) -> const Eigen::VectorXd& {
+    std::size_t k = 0;
+    while (k + 1 < run.state_times.size() && run.state_times[k] < t) ++k;
+    return run.states[k];
+  };
+  // At the end of the insertion: displaced, over many nodes (not one vertex).
+  const Eigen::VectorXd& inserted = state_at(end_of_insertion);
+  double largest = 0.0;
+  std::vector<double> moved;
+  for (Eigen::Index n = 0; n < rest.size() / 3; ++n) {
+    moved.push_back((inserted.segment<3>(3 * n) - rest.segment<3>(3 * n)).norm());
+    largest = std::max(largest, moved.back());
+  }
+  EXPECT_GT(largest, 1e-4);
+  int spread = 0;
+  for (double m : moved) spread += m > 0.5 * largest ? 1 : 0;
+  EXPECT_GE(spread, 4) << "largest " << largest;
+  // Extraction drags the tissue near the path outward (against the axis) from where it was
+  // when the withdrawal began.
+  const Eigen::VectorXd& held = state_at(start_of_extraction);
+  const Eigen::VectorXd& dragged = state_at(mid_extraction);
+  double outward = 0.0;
+  int near_path = 0;
+  for (Eigen::Index n = 0; n < rest.size() / 3; ++n) {
+    const Vec3 x = held.segment<3>(3 * n);
+    const double along = (x - entry).dot(axis);
+    if (along < 0.0 || along > 0.015 || ((x - entry) - along * axis).norm() > 0.01) continue;
+    outward += -(dragged.segment<3>(3 * n) - x).dot(axis);
+    ++near_path;
+  }
+  ASSERT_GT(near_path, 0);
+  EXPECT_GT(outward / near_path, 1e-5);
+}
+
+TEST(NeedleInsertion, TheDeviceNeverGetsMoreThanItsLimitWhateverTheParameters) {
+  haptics::DeviceSpec spec;
+  spec.max_force_n = 3.3;  // a Touch
+  spec.max_stiffness_n_per_m = 400.0;
+  std::vector<NeedleConfig> sweep;
+  for (double scale : {1e-6, 1.0, 1e3, 1e9, 1e300}) {
+    NeedleConfig n;
+    n.tissue.fung_pre = {121.0 * scale, -0.098 * scale, 0.0, 0.2 * scale};
+    n.tissue.fung_post = {31.0 * scale, 1.7 * scale, 0.0, 3.39 * scale};
+    n.tissue.friction.damping_negative_n_s_per_m2 = -1600.0 * scale;
+    n.tissue.lateral_stiffness_n_per_m = 500.0 * scale;
+    n.tissue.lateral_damping_n_s_per_m = scale;
+    n.tissue.capsule_m = 0.001 * scale < 1e3 ? 0.001 : 1e3;
+    sweep.push_back(n);
+    n.tissue.model = NeedleForceModel::kSimoneOkamura;
+    n.tissue.stiffness = {scale, -scale, scale};
+    n.tissue.cutting_force_n = -scale;
+    sweep.push_back(n);
+  }
+  for (const NeedleConfig& n : sweep) {
+    for (double speed : {0.01, 0.5}) {
+      const BoxRun run = pierce_box(n, haptics::RendererKind::kRuspini, speed, spec);
+      for (const haptics::HapticSample& s : run.samples) {
+        ASSERT_TRUE(s.force.allFinite());
+        ASSERT_LE(s.force.norm(), spec.max_force_n) << "t = " << s.time_s;
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace hof::procedures
