@@ -20,6 +20,7 @@
 #include "hof/mechanics/step.h"
 #include "hof/mesh/boundary.h"
 #include "hof/mesh/mesh_io.h"
+#include "hof/procedures/needle.h"
 #include "hof/scene/project.h"
 #include "hof/scene/world.h"
 
@@ -56,8 +57,40 @@ std::string gnuplot_text(const std::string& text) {
   return out;
 }
 
+// What a needle run measured, for the report and its plots.
+struct NeedleRun {
+  bool mounted{false};
+  procedures::TissueNeedleParameters tissue;  // of the first body pierced (else the common set)
+  std::string body;                            // that body
+  std::array<double, procedures::kNeedlePhaseCount> phase_s{};
+  double puncture_depth_m{-1.0};
+  double max_depth_m{0.0};
+  double peak_before_puncture_n{0.0};
+  double force_after_puncture_n{0.0};
+  double insertion_speed_sum{0.0};
+  std::int64_t insertion_ticks{0};
+};
+
+// The model's curves over depth, for the force-against-depth plot: before puncture up to the
+// puncture depth (or the capsule), after it from there to the deepest point (Simone–Okamura's
+// friction at the mean insertion speed).
+void write_needle_model(const std::filesystem::path& dir, const NeedleRun& needle) {
+  std::ofstream out(dir / "needle_model.dat");
+  out << "# depth_mm,pre_puncture_N,post_puncture_N (" << procedures::model_name(needle.tissue.model) << ")\n";
+  const double puncture = needle.puncture_depth_m > 0.0 ? needle.puncture_depth_m : needle.tissue.capsule_m;
+  const double deepest = std::max(needle.max_depth_m, puncture);
+  const double speed = needle.insertion_ticks > 0 ? needle.insertion_speed_sum / static_cast<double>(needle.insertion_ticks) : 0.0;
+  constexpr int kPoints = 400;
+  for (int i = 0; i <= kPoints; ++i) {
+    const double d = deepest * i / kPoints;
+    const std::string pre = d <= puncture ? csv_number(procedures::pre_puncture_force(needle.tissue, d)) : "NaN";
+    const std::string post = d >= puncture ? csv_number(procedures::post_puncture_force(needle.tissue, d, speed, 0.0)) : "NaN";
+    out << csv_number(1e3 * d) << "," << pre << "," << post << "\n";
+  }
+}
+
 void write_plots(const std::filesystem::path& dir, const coupling::SessionReport& report, const std::string& title,
-                 const std::string& unit, bool quiet) {
+                 const std::string& unit, bool quiet, const NeedleRun& needle) {
   // Period histogram data (µs, count), every bin that holds a tick.
   {
     std::ofstream h(dir / "haptic_period_histogram.dat");
@@ -75,7 +108,7 @@ void write_plots(const std::filesystem::path& dir, const coupling::SessionReport
     std::string name;
     std::string body;
   };
-  const std::vector<Plot> plots{
+  std::vector<Plot> plots{
       {"force_over_time",
        "set datafile separator ','\nset xlabel 'time (s)'\nset ylabel 'force (N)'\n"
        "plot 'telemetry.csv' every ::1 using 1:(sqrt($8**2+$9**2+$10**2)) with lines title '|F| sent to the device'\n"},
@@ -93,6 +126,31 @@ void write_plots(const std::filesystem::path& dir, const coupling::SessionReport
        "set xlabel 'haptic period (us)'\nset ylabel 'ticks'\nset logscale y\nset yrange [0.5:*]\nset style fill solid\n"
        "set boxwidth 1\nplot 'haptic_period_histogram.dat' using 1:2 with boxes title 'ticks per 1 us bin'\n"},
   };
+  if (needle.mounted) {
+    write_needle_model(dir, needle);
+    // Columns: 16 depth (m), 17 phase, 18 the model's axial force (N), 19 the force sent along the axis.
+    const auto phase_points = [](const std::string& x, const std::string& y) {
+      std::string out;
+      for (const char* phase : {"pre-puncture", "punctured", "relaxation", "extraction"}) {
+        out += fmt::format("'telemetry.csv' every ::1 using (strcol(17) eq '{0}' ? {1} : 1/0):{2} with points pt 7 ps 0.4 title '{0}', ",
+                           phase, x, y);
+      }
+      return out;
+    };
+    plots.push_back({"force_vs_depth",
+                     fmt::format("set datafile separator ','\nset xlabel 'needle depth below the entry point (mm)'\n"
+                                 "set ylabel 'force along the needle (N; > 0 resists insertion)'\nset key below\n"
+                                 "plot {}"
+                                 "'needle_model.dat' using 1:2 with lines lw 2 lc rgb 'black' dt 2 title 'model before puncture ({})', "
+                                 "'needle_model.dat' using 1:3 with lines lw 2 lc rgb 'black' dt 3 title 'model after puncture'\n",
+                                 phase_points("$16*1000", "18"), procedures::model_name(needle.tissue.model))});
+    plots.push_back({"needle_force_over_time",
+                     "set datafile separator ','\nset xlabel 'time (s)'\nset ylabel 'force along the needle (N; > 0 resists insertion)'\n"
+                     "set y2label 'depth (mm)'\nset y2tics\nset ytics nomirror\nset key below\n"
+                     "plot " + phase_points("$1", "18") +
+                     "'telemetry.csv' every ::1 using 1:19 with lines lc rgb 'gray40' title 'sent to the device (after safety)', "
+                     "'telemetry.csv' every ::1 using 1:($16*1000) axes x1y2 with lines lc rgb 'black' dt 2 title 'depth'\n"});
+  }
   std::ofstream all(dir / "plots.gp");
   std::string failed;
   for (const Plot& plot : plots) {
@@ -156,7 +214,9 @@ int run_session(const RunOptions& options) {
   if (!made) return fail(made.error());
   coupling::Session& session = **made;
 
-  double seconds = options.seconds.value_or(5.0);
+  // A scripted motion longer than the default is played whole (an insert–hold–extract).
+  const double script_s = session.haptic_loop().device().script_duration_s();
+  double seconds = options.seconds.value_or(script_s > 5.0 ? std::min(script_s + 0.5, 3600.0) : 5.0);
   if (options.steps) seconds = static_cast<double>(*options.steps) * session.dt();
 
   // Telemetry straight to the report folder.
@@ -168,16 +228,51 @@ int run_session(const RunOptions& options) {
     telemetry = std::fopen((*options.out / "telemetry.csv").c_str(), "w");
     if (!telemetry) return fail(Error{ErrorCode::kIo, "cannot write telemetry.csv", options.out->string(), 0, -1});
     std::fputs("t,device_x,device_y,device_z,proxy_x,proxy_y,proxy_z,force_x,force_y,force_z,contact,penetration,period,"
-               "indentation,body\n",
+               "indentation,body",
                telemetry);
+    // With a needle: its depth, phase, the model's force along it and the force sent along it.
+    std::fputs(world->project.needle ? ",depth,phase,needle_force,sent_axial_force\n" : "\n", telemetry);
   }
   std::vector<std::string> body_names;
   for (std::size_t i = 0; i < session.body_count(); ++i) body_names.push_back(csv_text(json_safe(session.body(i).name)));
+  NeedleRun needle;
+  std::vector<procedures::TissueNeedleParameters> needle_tissues;
+  if (world->project.needle) {
+    needle.mounted = true;
+    std::vector<std::string> names;
+    std::vector<bool> deformable;
+    for (std::size_t i = 0; i < session.body_count(); ++i) {
+      names.push_back(session.body(i).name);
+      deformable.push_back(session.body(i).deformable());
+    }
+    needle_tissues = procedures::parameters_by_body(*world->project.needle, names, deformable);
+    needle.tissue = world->project.needle->tissue;
+  }
+  auto previous_phase = procedures::NeedlePhase::kFree;
   double next_row = 0.0;
   std::int64_t ended_rows = 0;
   bool was_in_contact = false;
   double displaced_at_contact = 0.0;
   auto on_sample = [&](const haptics::HapticSample& s) {
+    if (needle.mounted && s.valid) {
+      const auto phase = static_cast<procedures::NeedlePhase>(s.tool.phase);
+      needle.phase_s[static_cast<std::size_t>(phase)] += s.period_s;
+      if (needle.body.empty() && s.tool.body >= 0 && static_cast<std::size_t>(s.tool.body) < needle_tissues.size()) {
+        needle.body = session.body(static_cast<std::size_t>(s.tool.body)).name;
+        needle.tissue = needle_tissues[static_cast<std::size_t>(s.tool.body)];
+      }
+      needle.max_depth_m = std::max(needle.max_depth_m, s.tool.depth_m);
+      if (phase == procedures::NeedlePhase::kPrePuncture) needle.peak_before_puncture_n = std::max(needle.peak_before_puncture_n, s.tool.axial_force_n);
+      if (phase == procedures::NeedlePhase::kPunctured && previous_phase == procedures::NeedlePhase::kPrePuncture && needle.puncture_depth_m < 0.0) {
+        needle.puncture_depth_m = s.tool.depth_m;
+        needle.force_after_puncture_n = s.tool.axial_force_n;
+      }
+      if (phase == procedures::NeedlePhase::kPunctured) {
+        needle.insertion_speed_sum += s.device_velocity.dot(s.tool.axis);
+        ++needle.insertion_ticks;
+      }
+      previous_phase = phase;
+    }
     if (!telemetry) return;
     // No reading (a script that has ended, a device gone): not a device at the origin.
     if (!s.valid) {
@@ -197,18 +292,26 @@ int run_session(const RunOptions& options) {
       const std::int32_t b = session.body_of_triangle(s.triangle, s.layer);
       if (b >= 0) body = body_names[static_cast<std::size_t>(b)];
     }
+    if (s.tool.body >= 0 && static_cast<std::size_t>(s.tool.body) < body_names.size()) body = body_names[static_cast<std::size_t>(s.tool.body)];
     was_in_contact = s.contact && s.triangle >= 0;
     if (options.telemetry_rate_hz > 0.0) {
       if (s.time_s + 1e-12 < next_row) return;
       next_row += 1.0 / options.telemetry_rate_hz;
     }
-    std::fputs(fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", csv_number(s.time_s), csv_number(s.device.x()),
+    std::fputs(fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}", csv_number(s.time_s), csv_number(s.device.x()),
                            csv_number(s.device.y()), csv_number(s.device.z()), csv_number(s.proxy.x()),
                            csv_number(s.proxy.y()), csv_number(s.proxy.z()), csv_number(s.force.x()),
                            csv_number(s.force.y()), csv_number(s.force.z()), s.contact ? 1 : 0,
                            csv_number(s.penetration_m), csv_number(s.period_s), csv_number(indentation), body)
                    .c_str(),
                telemetry);
+    if (needle.mounted) {
+      std::fputs(fmt::format(",{},{},{},{}", csv_number(s.tool.depth_m), procedures::phase_name(static_cast<procedures::NeedlePhase>(s.tool.phase)),
+                             csv_number(s.tool.axial_force_n), csv_number(s.tool.axis.squaredNorm() > 0.0 ? -s.force.dot(s.tool.axis) : 0.0))
+                     .c_str(),
+                 telemetry);
+    }
+    std::fputc('\n', telemetry);
   };
   const auto progress = make_terminal_progress(options.quiet);
   const coupling::SessionReport report = options.deterministic ? session.run_virtual(seconds, on_sample, progress)
@@ -275,6 +378,21 @@ int run_session(const RunOptions& options) {
   summary["defaults"] = nlohmann::json::array();
   for (const auto& d : world->defaults) summary["defaults"].push_back(json_safe(d));
   summary["commands"] = report.applied_commands;
+  if (needle.mounted) {
+    nlohmann::json phases = nlohmann::json::object();
+    for (int k = 0; k < procedures::kNeedlePhaseCount; ++k) {
+      phases[std::string(procedures::phase_name(static_cast<procedures::NeedlePhase>(k)))] = needle.phase_s[static_cast<std::size_t>(k)];
+    }
+    summary["needle"] = {{"model", procedures::model_name(needle.tissue.model)},
+                         {"body", json_safe(needle.body)},
+                         {"phase_time_s", phases},
+                         {"max_depth_m", needle.max_depth_m},
+                         {"puncture_depth_m", needle.puncture_depth_m > 0.0 ? nlohmann::json(needle.puncture_depth_m) : nlohmann::json()},
+                         {"peak_force_before_puncture_n", needle.peak_before_puncture_n},
+                         {"force_after_puncture_n", needle.force_after_puncture_n},
+                         {"capsule_m", needle.tissue.capsule_m},
+                         {"puncture_force_n", needle.tissue.puncture_force_n}};
+  }
 
   if (options.out) {
     // Written first and whole: whatever happens after, the session's results are on disk.
@@ -299,7 +417,7 @@ int run_session(const RunOptions& options) {
     }
     write_plots(*options.out, report,
                 fmt::format("{} - {}", json_safe(world->scene_path.filename().string()), touched.empty() ? "no contact" : touched),
-                world->length_unit, options.quiet);
+                world->length_unit, options.quiet, needle);
   }
   if (!options.quiet) {
     const bool metres = world->length_unit == "m";
@@ -319,6 +437,21 @@ int run_session(const RunOptions& options) {
                   b.deformable ? "deformable" : "rigid", b.contact_time_s, b.max_force_n,
                   b.deformable ? (", max displacement " + length(b.max_displacement_m)).c_str() : "",
                   b.probe_started_inside ? ", the probe started inside it" : "");
+    }
+    if (needle.mounted) {
+      std::string visited;
+      for (int k = 0; k < procedures::kNeedlePhaseCount; ++k) {
+        const double t = needle.phase_s[static_cast<std::size_t>(k)];
+        if (t > 0.0) visited += fmt::format("{}{} {:.2f} s", visited.empty() ? "" : ", ", procedures::phase_name(static_cast<procedures::NeedlePhase>(k)), t);
+      }
+      std::printf("  needle      %s model%s: %s\n", std::string(procedures::model_name(needle.tissue.model)).c_str(),
+                  needle.body.empty() ? "" : (" in " + json_safe(needle.body)).c_str(), visited.c_str());
+      if (needle.puncture_depth_m > 0.0) {
+        std::printf("              capsule broken at %s (%.3f N before, %.3f N after); deepest %s\n", length(needle.puncture_depth_m).c_str(),
+                    needle.peak_before_puncture_n, needle.force_after_puncture_n, length(needle.max_depth_m).c_str());
+      } else {
+        std::printf("              capsule intact; deepest %s, peak %.3f N\n", length(needle.max_depth_m).c_str(), needle.peak_before_puncture_n);
+      }
     }
     if (report.diverged) std::printf("  DIVERGED    %s\n", report.divergence.c_str());
     if (options.out) std::printf("  report      %s (telemetry.csv, summary.json, .vtu per deformable body, plots)\n", options.out->c_str());

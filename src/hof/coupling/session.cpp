@@ -537,6 +537,7 @@ void Session::take_contacts(SessionReport& report) {
       const std::int32_t part = rest.part_of(layer.triangle);
       if (part < 0) continue;
       const auto b = static_cast<std::size_t>(rest.parts[static_cast<std::size_t>(part)].body);
+      if (c.tool.active && c.tool.body == static_cast<std::int32_t>(b)) continue;  // the tool's (above)
       BodyRuntime& r = bodies_[b];
       r.reaction_sum -= layer.force;  // the tissue feels the opposite of what the hand feels
       ++r.contact_ticks;

@@ -72,6 +72,10 @@ class Device {
 
   [[nodiscard]] virtual DeviceHealth health() const = 0;
 
+  /// How long a finite motion lasts (a script, a recording played once), s; 0 for a live
+  /// device or a motion that repeats forever. A run without a given length plays it whole.
+  [[nodiscard]] virtual double script_duration_s() const { return 0.0; }
+
   /// Stops background threads and sends a zero force. Idempotent; the destructor calls it.
   virtual void close() {}
 };

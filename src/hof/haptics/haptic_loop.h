@@ -139,6 +139,7 @@ class HapticLoop {
   bool switch_device(Device& device);
   /// The device the ticks use now (the producer may read it after a switch was taken).
   [[nodiscard]] Device& device() { return *binding_.load(std::memory_order_acquire)->device; }
+  [[nodiscard]] const Device& device() const { return *binding_.load(std::memory_order_acquire)->device; }
 
   /// Mounts a tool (tool.h) whose tick runs after the surfaces and before the force effects;
   /// null: none. Call before the first tick or start(); `tool` must outlive the loop.

@@ -131,8 +131,14 @@ Vec3 NeedleTool::tick(const haptics::ToolTickInput& in, std::span<Vec3> layer_fo
   if (!engaged_ && !rearmed_) {
     // Just withdrawn: the stylus is still at the surface; a new insertion starts at the next
     // contact, not at this one.
+    // Until then its surface stays force-free (the tissue dragged out with the needle has the
+    // tip still under its surface: it must not spring the hand back).
     bool touching = false;
-    for (std::size_t l = 0; l < in.contacts.size(); ++l) touching = touching || body_of(l) >= 0;
+    for (std::size_t l = 0; l < in.contacts.size(); ++l) {
+      if (body_of(l) != withdrawn_from_) continue;
+      touching = true;
+      layer_forces[l].setZero();
+    }
     rearmed_ = !touching;
   }
   if (!engaged_ && rearmed_) {
@@ -211,6 +217,7 @@ Vec3 NeedleTool::tick(const haptics::ToolTickInput& in, std::span<Vec3> layer_fo
     }
   } else {
     if (d <= 0.0) {
+      withdrawn_from_ = body_;
       disengage(NeedlePhase::kOut);
       rearmed_ = false;
       return publish(0.0, 0.0, Vec3::Zero());

@@ -115,7 +115,8 @@ class NeedleTool final : public haptics::Tool {
   // Tick state.
   bool engaged_{false};
   bool broken_{false};
-  bool rearmed_{true};          // false after an extraction, until the stylus has left the surface
+  bool rearmed_{true};
+  std::int32_t withdrawn_from_{-1};  // the body just withdrawn from          // false after an extraction, until the stylus has left the surface
   NeedlePhase phase_{NeedlePhase::kFree};
   std::int32_t body_{-1};
   std::int32_t layer_{-1};

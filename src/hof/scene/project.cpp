@@ -160,6 +160,128 @@ std::string surface_xml(const haptics::SurfaceMaterial& s, std::string_view inde
       number(s.static_friction), number(s.dynamic_friction), number(s.snap_distance_m));
 }
 
+std::string numbers(std::initializer_list<double> values) {
+  std::string out;
+  for (double v : values) out += (out.empty() ? "" : " ") + number(v);
+  return out;
+}
+
+std::string tissue_xml(const procedures::TissueNeedleParameters& t, const std::string& body) {
+  const std::string named = body.empty() ? std::string() : fmt::format(" body=\"{}\"", xml_escape(body));
+  return fmt::format(
+      "      <tissue{} pierceable=\"{}\" model=\"{}\" capsule=\"{}\" punctureForce=\"{}\" relaxationTime=\"{}\" "
+      "fungPre=\"{}\" fungPost=\"{}\" stiffness=\"{}\" cuttingForce=\"{}\" friction=\"{}\" frictionVelocityBand=\"{}\" "
+      "lateralStiffness=\"{}\" lateralDamping=\"{}\" spreadRadius=\"{}\"/>\n",
+      named, t.pierceable ? "true" : "false", procedures::model_name(t.model), number(t.capsule_m), number(t.puncture_force_n),
+      number(t.relaxation_time_s), numbers({t.fung_pre.a_per_m, t.fung_pre.b_n, t.fung_pre.d0_m, t.fung_pre.f0_n}),
+      numbers({t.fung_post.a_per_m, t.fung_post.b_n, t.fung_post.d0_m, t.fung_post.f0_n}),
+      numbers({t.stiffness.a0_n, t.stiffness.a1_n_per_m, t.stiffness.a2_n_per_m2}), number(t.cutting_force_n),
+      numbers({t.friction.static_positive_n_per_m, t.friction.static_negative_n_per_m, t.friction.damping_positive_n_s_per_m2,
+               t.friction.damping_negative_n_s_per_m2}),
+      number(t.friction.velocity_band_m_per_s), number(t.lateral_stiffness_n_per_m), number(t.lateral_damping_n_s_per_m),
+      number(t.spread_radius_m));
+}
+
+std::string needle_xml(const procedures::NeedleConfig& n) {
+  const procedures::NeedleGeometry& g = n.geometry;
+  std::string out = fmt::format(
+      "    <needle axis=\"{}\" length=\"{}\" shaftDiameter=\"{}\" tipDiameter=\"{}\" tipLength=\"{}\" syringeDiameter=\"{}\" "
+      "syringeLength=\"{}\">\n",
+      procedures::axis_name(n.axis), number(g.length_m), number(g.shaft_diameter_m), number(g.tip_diameter_m),
+      number(g.tip_length_m), number(g.syringe_diameter_m), number(g.syringe_length_m));
+  out += tissue_xml(n.tissue, "");
+  for (const auto& [body, tissue] : n.bodies) out += tissue_xml(tissue, body);
+  return out + "    </needle>\n";
+}
+
+// N numbers of an attribute (e.g. fungPre="a b d0 F0"), else an error naming it.
+template <std::size_t N>
+bool read_numbers(Reader& r, const pugi::xml_node& node, const char* name, std::array<double, N>& out, const char* meaning) {
+  const pugi::xml_attribute a = node.attribute(name);
+  if (!a) return false;
+  std::istringstream in(a.value());
+  std::array<double, N> v{};
+  for (double& x : v) {
+    if (!(in >> x) || !std::isfinite(x)) {
+      r.fail(node, fmt::format("<{}> {}=\"{}\" must be {} numbers ({})", node.name(), name, a.value(), N, meaning));
+      return false;
+    }
+  }
+  std::string rest;
+  if (in >> rest) {
+    r.fail(node, fmt::format("<{}> {}=\"{}\" must be {} numbers ({})", node.name(), name, a.value(), N, meaning));
+    return false;
+  }
+  out = v;
+  return true;
+}
+
+procedures::TissueNeedleParameters read_tissue(Reader& r, const pugi::xml_node& node, procedures::TissueNeedleParameters t) {
+  t.pierceable = r.get_bool(node, "pierceable", t.pierceable);
+  const std::string model = node.attribute("model").as_string(std::string(procedures::model_name(t.model)).c_str());
+  if (model == "fung") t.model = procedures::NeedleForceModel::kFung;
+  else if (model == "simone-okamura") t.model = procedures::NeedleForceModel::kSimoneOkamura;
+  else r.fail(node, fmt::format("<tissue> model=\"{}\": expected fung or simone-okamura", model));
+  t.capsule_m = r.get(node, "capsule", t.capsule_m);
+  t.puncture_force_n = r.get(node, "punctureForce", t.puncture_force_n);
+  t.relaxation_time_s = r.get(node, "relaxationTime", t.relaxation_time_s);
+  if (std::array<double, 4> v{}; read_numbers(r, node, "fungPre", v, "a 1/m, b N, d0 m, F0 N")) t.fung_pre = {v[0], v[1], v[2], v[3]};
+  if (std::array<double, 4> v{}; read_numbers(r, node, "fungPost", v, "a 1/m, b N, d0 m, F0 N")) t.fung_post = {v[0], v[1], v[2], v[3]};
+  if (std::array<double, 3> v{}; read_numbers(r, node, "stiffness", v, "a0 N, a1 N/m, a2 N/m2")) t.stiffness = {v[0], v[1], v[2]};
+  t.cutting_force_n = r.get(node, "cuttingForce", t.cutting_force_n);
+  if (std::array<double, 4> v{}; read_numbers(r, node, "friction", v, "Cp N/m, Cn N/m, bp N s/m2, bn N s/m2")) {
+    t.friction.static_positive_n_per_m = v[0];
+    t.friction.static_negative_n_per_m = v[1];
+    t.friction.damping_positive_n_s_per_m2 = v[2];
+    t.friction.damping_negative_n_s_per_m2 = v[3];
+  }
+  t.friction.velocity_band_m_per_s = r.get(node, "frictionVelocityBand", t.friction.velocity_band_m_per_s);
+  t.lateral_stiffness_n_per_m = r.get(node, "lateralStiffness", t.lateral_stiffness_n_per_m);
+  t.lateral_damping_n_s_per_m = r.get(node, "lateralDamping", t.lateral_damping_n_s_per_m);
+  t.spread_radius_m = r.get(node, "spreadRadius", t.spread_radius_m);
+  const std::string body = node.attribute("body").as_string("");
+  if (auto ok = procedures::validate(t, body.empty() ? std::string("<tissue>") : fmt::format("<tissue body=\"{}\">", body)); !ok) {
+    r.fail(node, ok.error().message);
+  }
+  return t;
+}
+
+procedures::NeedleConfig read_needle(Reader& r, const pugi::xml_node& node) {
+  procedures::NeedleConfig n;
+  const std::string axis = node.attribute("axis").as_string("motion");
+  if (axis == "motion") n.axis = procedures::NeedleAxis::kMotion;
+  else if (axis == "normal") n.axis = procedures::NeedleAxis::kNormal;
+  else if (axis == "stylus") n.axis = procedures::NeedleAxis::kStylus;
+  else r.fail(node, fmt::format("<needle> axis=\"{}\": expected motion, normal or stylus", axis));
+  procedures::NeedleGeometry& g = n.geometry;
+  g.length_m = r.get(node, "length", g.length_m);
+  g.shaft_diameter_m = r.get(node, "shaftDiameter", g.shaft_diameter_m);
+  g.tip_diameter_m = r.get(node, "tipDiameter", g.tip_diameter_m);
+  g.tip_length_m = r.get(node, "tipLength", g.tip_length_m);
+  g.syringe_diameter_m = r.get(node, "syringeDiameter", g.syringe_diameter_m);
+  g.syringe_length_m = r.get(node, "syringeLength", g.syringe_length_m);
+  // The common set first (the one without a body), so that a body's set starts from it.
+  for (const pugi::xml_node t : node.children("tissue")) {
+    if (!t.attribute("body")) n.tissue = read_tissue(r, t, n.tissue);
+  }
+  for (const pugi::xml_node t : node.children()) {
+    if (t.type() != pugi::node_element) continue;
+    if (std::string(t.name()) != "tissue") {
+      r.fail(t, fmt::format("unknown element <{}> in <needle> (tissue)", t.name()));
+      continue;
+    }
+    if (!t.attribute("body")) continue;
+    const std::string body = t.attribute("body").as_string("");
+    if (body.empty()) {
+      r.fail(t, "<tissue body=\"\">: name the body, or leave body out for every deformable body");
+      continue;
+    }
+    n.bodies.emplace_back(body, read_tissue(r, t, n.tissue));
+  }
+  if (auto ok = procedures::validate(n); !ok) r.fail(node, ok.error().message);
+  return n;
+}
+
 }  // namespace
 
 std::string to_xml(const HofProject& p) {
@@ -221,6 +343,7 @@ std::string to_xml(const HofProject& p) {
   out += fmt::format("    <options useBoundTree=\"{}\" maxTrianglesInLeaf=\"{}\"/>\n", p.use_bound_tree ? "true" : "false",
                      p.max_triangles_in_leaf);
   out += fmt::format("    <stylus radius=\"{}\" length=\"{}\"/>\n", number(p.stylus_radius_m), number(p.stylus_length_m));
+  if (p.needle) out += needle_xml(*p.needle);
   if (p.effects.springs.empty() && p.effects.viscosities.empty() && p.effects.constants.empty()) {
     out += "    <effects/>\n";
   } else {
@@ -454,6 +577,7 @@ Expected<HofProject> parse_project(const std::string& text, const std::filesyste
       p.stylus_radius_m = r.get(st, "radius", p.stylus_radius_m);
       p.stylus_length_m = r.get(st, "length", p.stylus_length_m);
     }
+    if (const pugi::xml_node n = h.child("needle")) p.needle = read_needle(r, n);
     for (const pugi::xml_node e : h.child("effects").children()) {
       const std::string type = e.name();
       if (type == "SpringEffect") {

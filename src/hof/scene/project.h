@@ -20,6 +20,7 @@
 #include "hof/haptics/haptic_renderer.h"
 #include "hof/haptics/safety.h"
 #include "hof/haptics/surface_material.h"
+#include "hof/procedures/needle.h"
 
 namespace hof::scene {
 
@@ -103,6 +104,9 @@ struct HofProject {
   int max_triangles_in_leaf{1};           ///< H3D GeometryBoundTreeOptions.maxTrianglesInLeaf
   double stylus_radius_m{0.0025};         ///< drawn stylus tip (graphics)
   double stylus_length_m{0.1};
+  /// The needle stylus and its tissue parameters (<needle> in <haptics>); unset: a point or
+  /// sphere stylus.
+  std::optional<procedures::NeedleConfig> needle;
   GraphicsSetup graphics;
 };
 

@@ -587,6 +587,23 @@ Expected<World> finish_world(World w, bool sofa_scene, bool bare, const std::str
   }
   w.device = device;
   w.config = session_config(w.project);
+  if (w.project.needle) {
+    // The needle stylus: the tool in the haptic loop and its reaction in the tissue.
+    std::vector<std::string> names;
+    std::vector<bool> deformable;
+    for (const coupling::SessionBody& b : w.bodies) {
+      names.push_back(b.name);
+      deformable.push_back(b.deformable());
+    }
+    auto tool = procedures::NeedleTool::make(*w.project.needle, names, deformable);
+    if (!tool) {
+      Error e = tool.error();
+      e.file = w.file.string();
+      return std::unexpected(e);
+    }
+    w.config.tool = *tool;
+    w.config.tool_coupling = std::make_shared<procedures::NeedleTissueCoupling>(*tool);
+  }
   return w;
 }
 

@@ -53,6 +53,7 @@ class ReplayDevice final : public Device {
   DeviceReading read(double time_s) override;
   void write_force(const Vec3& force_n, const Vec3& torque_n_m) override;
   [[nodiscard]] DeviceHealth health() const override { return health_.load(std::memory_order_acquire); }
+  [[nodiscard]] double script_duration_s() const override { return loop_ ? 0.0 : samples_.back().t_s; }
 
   [[nodiscard]] const std::vector<ReplaySample>& samples() const { return samples_; }
   [[nodiscard]] bool loops() const { return loop_; }

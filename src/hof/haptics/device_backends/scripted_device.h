@@ -23,6 +23,7 @@
 /// are continuous, velocities jump at the corners.
 
 #include <array>
+#include <cmath>
 #include <atomic>
 #include <cstdint>
 #include <limits>
@@ -134,6 +135,9 @@ class ScriptedDevice final : public Device {
   DeviceReading read(double time_s) override;
   void write_force(const Vec3& force_n, const Vec3& torque_n_m) override;
   [[nodiscard]] DeviceHealth health() const override { return health_.load(std::memory_order_acquire); }
+  [[nodiscard]] double script_duration_s() const override {
+    return std::isfinite(motion_.duration()) ? motion_.duration() : 0.0;
+  }
 
   [[nodiscard]] const ScriptedMotion& motion() const { return motion_; }
   /// The last force written (N), for tests.

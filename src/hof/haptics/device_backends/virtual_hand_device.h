@@ -29,6 +29,7 @@
 ///    exactly when b_dev + b_h > K·T/2 (with k_h ≪ K). Use it for passivity studies.
 
 #include <atomic>
+#include <cmath>
 #include <cstdint>
 
 #include "hof/haptics/device.h"
@@ -69,6 +70,9 @@ class VirtualHandDevice final : public Device {
   /// non-finite force is treated as zero. Torque is ignored (point hand).
   void write_force(const Vec3& force_n, const Vec3& torque_n_m) override;
   [[nodiscard]] DeviceHealth health() const override { return health_.load(std::memory_order_acquire); }
+  [[nodiscard]] double script_duration_s() const override {
+    return std::isfinite(target_.duration()) ? target_.duration() : 0.0;
+  }
 
   /// Hand position (m, device frame) at the last read.
   [[nodiscard]] const Vec3& position() const { return x_m_; }
