@@ -133,3 +133,33 @@ execute_process(COMMAND ${HOF} run ${WORK}/points-to-missing.hof --deterministic
 if(rc EQUAL 0 OR NOT err MATCHES "^hof: [^\n]*points-to-missing.hof: its scene [^\n]*/missing.scn:[0-9]+: [^\n]*nowhere.msh")
   message(FATAL_ERROR "a project's broken scene was not reported project first (rc=${rc}): ${err}")
 endif()
+
+# The needle example, as the issue runs it (no --seconds: the scripted insert–hold–extract is
+# played whole): every phase is visited, the capsule breaks, and the force-against-depth plot
+# (with the model's curve) is written.
+execute_process(COMMAND ${HOF} run ${SOURCE}/examples/needle-liver.hof --headless --deterministic --quiet --out ${WORK}/needle
+                RESULT_VARIABLE rc ERROR_VARIABLE err)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "hof run needle-liver.hof failed (${rc}): ${err}")
+endif()
+file(READ ${WORK}/needle/summary.json summary)
+foreach(phase free touching pre-puncture punctured relaxation extraction out)
+  string(JSON t GET "${summary}" needle phase_time_s ${phase})
+  if(t LESS_EQUAL 0)
+    message(FATAL_ERROR "needle-liver.hof: the needle never was in phase ${phase}")
+  endif()
+endforeach()
+string(JSON puncture GET "${summary}" needle puncture_depth_m)
+string(JSON moved GET "${summary}" bodies 0 max_displacement)
+if(puncture LESS 0.019 OR puncture GREATER 0.021 OR moved LESS_EQUAL 0.001)
+  message(FATAL_ERROR "needle-liver.hof: puncture at ${puncture} m (capsule 0.02 m), liver moved ${moved} m")
+endif()
+foreach(f force_vs_depth.png force_vs_depth.svg needle_force_over_time.png needle_model.dat)
+  if(NOT EXISTS ${WORK}/needle/${f})
+    message(FATAL_ERROR "needle-liver.hof: no ${f} in the report")
+  endif()
+endforeach()
+file(STRINGS ${WORK}/needle/telemetry.csv header LIMIT_COUNT 1)
+if(NOT header MATCHES ",depth,phase,needle_force,sent_axial_force$")
+  message(FATAL_ERROR "needle-liver.hof: telemetry without the needle's columns: ${header}")
+endif()

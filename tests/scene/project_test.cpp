@@ -58,6 +58,61 @@ TEST(Project, BundledExamplesRoundTrip) {
   }
 }
 
+TEST(Project, NeedleRoundTripsWithEveryParameter) {
+  const auto dir = std::filesystem::temp_directory_path() / "hof_project_needle";
+  std::filesystem::create_directories(dir);
+  HofProject p;
+  p.mechanics_scene = "liver.scn";
+  procedures::NeedleConfig needle;
+  needle.axis = procedures::NeedleAxis::kStylus;
+  needle.geometry.length_m = 0.12;
+  needle.tissue.model = procedures::NeedleForceModel::kSimoneOkamura;
+  needle.tissue.capsule_m = 0.1 / 3.0;
+  needle.tissue.fung_post.f0_n = -2.5;
+  needle.tissue.friction.damping_negative_n_s_per_m2 = -1234.5;
+  procedures::TissueNeedleParameters tumour = needle.tissue;
+  tumour.model = procedures::NeedleForceModel::kFung;
+  tumour.puncture_force_n = 1.5;
+  tumour.pierceable = false;
+  needle.bodies.emplace_back("Tumour", tumour);
+  p.needle = needle;
+  ASSERT_TRUE(write_project(p, dir / "a.hof"));
+  auto loaded = read_project(dir / "a.hof");
+  ASSERT_TRUE(loaded) << loaded.error().to_string();
+  ASSERT_TRUE(loaded->needle);
+  EXPECT_EQ(*loaded->needle, needle);
+  ASSERT_TRUE(write_project(*loaded, dir / "b.hof"));
+  EXPECT_EQ(bytes(dir / "a.hof"), bytes(dir / "b.hof"));
+  // A body's set starts from the common one: only what it names differs.
+  std::ofstream(dir / "partial.hof") << "<hof>\n  <mechanics scene=\"x.scn\"/>\n  <haptics>\n    <needle>\n"
+                                        "      <tissue capsule=\"0.03\"/>\n      <tissue body=\"B\" punctureForce=\"1\"/>\n"
+                                        "    </needle>\n  </haptics>\n</hof>\n";
+  loaded = read_project(dir / "partial.hof");
+  ASSERT_TRUE(loaded) << loaded.error().to_string();
+  ASSERT_EQ(loaded->needle->bodies.size(), 1u);
+  EXPECT_EQ(loaded->needle->bodies[0].second.capsule_m, 0.03);
+  EXPECT_EQ(loaded->needle->bodies[0].second.puncture_force_n, 1.0);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(Project, NeedleErrorsNameTheLineAndAttribute) {
+  const auto dir = std::filesystem::temp_directory_path() / "hof_project_needle_errors";
+  std::filesystem::create_directories(dir);
+  const auto error_of = [&](const std::string& tissue) {
+    std::ofstream(dir / "bad.hof") << "<hof>\n  <mechanics scene=\"x.scn\"/>\n  <haptics>\n    <needle>\n      " << tissue
+                                   << "\n    </needle>\n  </haptics>\n</hof>\n";
+    auto p = read_project(dir / "bad.hof");
+    return p ? std::string("accepted") : p.error().to_string();
+  };
+  EXPECT_NE(error_of("<tissue model=\"magic\"/>").find("bad.hof:5"), std::string::npos);
+  EXPECT_NE(error_of("<tissue model=\"magic\"/>").find("fung or simone-okamura"), std::string::npos);
+  EXPECT_NE(error_of("<tissue fungPre=\"1 2 3\"/>").find("fungPre"), std::string::npos);
+  EXPECT_NE(error_of("<tissue capsule=\"-1\"/>").find("capsule"), std::string::npos);
+  EXPECT_NE(error_of("<tissue body=\"Liver\" spreadRadius=\"0\"/>").find("Liver"), std::string::npos);
+  EXPECT_NE(error_of("<scalpel/>").find("unknown element <scalpel>"), std::string::npos);
+  std::filesystem::remove_all(dir);
+}
+
 TEST(Project, ErrorsNameTheFileLineAndAttribute) {
   const auto dir = std::filesystem::temp_directory_path() / "hof_project_errors";
   std::filesystem::create_directories(dir);

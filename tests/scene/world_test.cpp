@@ -11,6 +11,7 @@
 
 #include "hof/haptics/device_backends/scripted_device.h"
 #include "hof/mechanics/model_parameters.h"
+#include "hof/procedures/needle.h"
 
 namespace hof::scene {
 namespace {
@@ -424,6 +425,31 @@ TEST(World, X3dShapesWithoutASurfaceAreSeenNotTouchedAndMaterialsAreKept) {
   ASSERT_EQ(world->appearances.count("BALL"), 1u);
   EXPECT_EQ(world->appearances.at("BALL").diffuse_color, Vec3(1.0, 0.0, 0.0));
   EXPECT_EQ(world->appearances.count("PLAIN"), 0u) << "no Material: the window's own";
+}
+
+}  // namespace
+}  // namespace hof::scene
+
+namespace hof::scene {
+namespace {
+
+TEST(World, ANeedleProjectMountsTheNeedleOnItsBodies) {
+  auto world = build_world(HOF_SOURCE_DIR "/examples/needle-liver.hof");
+  ASSERT_TRUE(world) << world.error().to_string();
+  ASSERT_TRUE(world->config.tool);
+  ASSERT_TRUE(world->config.tool_coupling);
+  const auto* needle = dynamic_cast<const procedures::NeedleTool*>(world->config.tool.get());
+  ASSERT_NE(needle, nullptr);
+  EXPECT_TRUE(needle->parameters(0).pierceable);  // the liver, deformable
+  EXPECT_EQ(needle->parameters(0).capsule_m, 0.02);
+  // A tissue set for a body the scene does not have is an error naming it.
+  HofProject project = world->project;
+  project.device = "scripted:hold";
+  project.needle->bodies.emplace_back("Kidney", project.needle->tissue);
+  auto wrong = build_world(project, HOF_SOURCE_DIR "/examples/needle-liver.hof");
+  ASSERT_FALSE(wrong);
+  EXPECT_NE(wrong.error().message.find("'Kidney'"), std::string::npos) << wrong.error().to_string();
+  EXPECT_NE(wrong.error().message.find("Liver"), std::string::npos) << wrong.error().to_string();
 }
 
 }  // namespace
