@@ -49,7 +49,8 @@ uniform float light_intensity;
 uniform float ambient;
 out vec4 fragment;
 void main() {
-  vec4 base = vertex_colours != 0 ? vertex_colour : colour;
+  // Vertex colours (displacement, stress) keep the material's transparency.
+  vec4 base = vertex_colours != 0 ? vec4(vertex_colour.rgb, vertex_colour.a * colour.a) : colour;
   if (lit == 0) { fragment = base; return; }
   vec3 n = normalize(world_normal);
   vec3 v = normalize(eye - world_position);
@@ -366,7 +367,18 @@ void GlRenderer::draw(const MeshBuffer& mesh, const Material& material, RenderMo
     // Push the faces back a little so that the wireframe drawn over them is not hidden.
     glEnable(GL_POLYGON_OFFSET_FILL);
     glPolygonOffset(1.0f, 1.0f);
-    glDrawElements(GL_TRIANGLES, count, GL_UNSIGNED_INT, offset);
+    if (transparent) {
+      // Without depth writes the faces blend in drawing order: the far (back) faces first, then
+      // the near ones, so that a closed surface does not show patches of its far side on top.
+      glEnable(GL_CULL_FACE);
+      glCullFace(GL_FRONT);
+      glDrawElements(GL_TRIANGLES, count, GL_UNSIGNED_INT, offset);
+      glCullFace(GL_BACK);
+      glDrawElements(GL_TRIANGLES, count, GL_UNSIGNED_INT, offset);
+      glDisable(GL_CULL_FACE);
+    } else {
+      glDrawElements(GL_TRIANGLES, count, GL_UNSIGNED_INT, offset);
+    }
     glDisable(GL_POLYGON_OFFSET_FILL);
   }
   if (mode == RenderMode::kWireframe || mode == RenderMode::kShadedWireframe) {

@@ -40,6 +40,7 @@
 #include "hof/mesh/mesh_io.h"
 #include "hof/mesh/surface_strain.h"
 #include "hof/mesh/tet_geometry.h"
+#include "hof/procedures/needle.h"
 #include "hof/render/camera.h"
 #include "hof/render/colormap.h"
 #include "hof/render/gl_renderer.h"
@@ -263,7 +264,8 @@ class Gui {
   Gui& operator=(const Gui&) = delete;
 
   Expected<void> create_window();
-  Expected<void> open(const std::filesystem::path& file);
+  /// Opens `file` (or, given, the project in memory that lives at `file`).
+  Expected<void> open(const std::filesystem::path& file, const scene::HofProject* in_memory = nullptr);
   int run(std::vector<ScriptAction> script, const std::string& script_name);
 
  private:
@@ -300,6 +302,10 @@ class Gui {
   void draw_structure_editor(BodyView& body);
   void draw_haptics_panel();
   void draw_effects_editor();
+  void draw_needle_editor();
+  void draw_needle(double size);
+  /// Mounts (or takes off) the needle: the world is opened again from the project in memory.
+  Expected<void> mount_needle(bool on);
   void draw_graphics_panel();
   void handle_input();
   void reset_camera();
@@ -327,6 +333,7 @@ class Gui {
   bool default_probe_{false};
   std::unique_ptr<coupling::Session> session_;
   haptics::MouseDevice* mouse_{nullptr};
+  std::shared_ptr<procedures::NeedleTool> needle_;  // the needle stylus, when the project mounts one
   haptics::Calibration calibration_;
   double max_force_n_{8.0};
   double workspace_radius_m_{0.08};
@@ -500,15 +507,19 @@ void Gui::close_session() {
     session_->stop_realtime();
     session_.reset();
   }
+  needle_.reset();
   mouse_ = nullptr;
 }
 
-Expected<void> Gui::open(const std::filesystem::path& file) {
+Expected<void> Gui::open(const std::filesystem::path& file, const scene::HofProject* in_memory) {
   // Everything is built beside the running world, which stays as it is if anything fails.
   const bool is_project = file.extension() == ".hof";
   scene::HofProject project;
   Expected<scene::World> world = make_error(ErrorCode::kIo, "not read");
-  if (is_project) {
+  if (in_memory) {
+    project = *in_memory;
+    world = scene::build_world(project, file, options_.device);
+  } else if (is_project) {
     auto read = scene::read_project(file);
     if (!read) return std::unexpected(read.error());
     project = *read;
@@ -573,6 +584,7 @@ Expected<void> Gui::open(const std::filesystem::path& file) {
   calibrations_submitted_ = 0;
   calibration_pending_ = false;
   session_ = std::move(*made);
+  needle_ = std::dynamic_pointer_cast<procedures::NeedleTool>(config.tool);
   mouse_ = mouse;
   calibration_ = config.haptics.calibration;
   max_force_n_ = max_force;
@@ -922,6 +934,12 @@ Expected<void> Gui::apply_set(const std::string& element, const std::string& att
     device_spec_ = spec;
     max_force_n_ = device->spec().max_force_n;
     workspace_radius_m_ = device->spec().workspace_radius_m;
+  } else if (element.starts_with("haptics/needle")) {
+    // Taken by the needle's next tick: it keeps its place and phase.
+    if (!needle_ || !next.needle) {
+      return make_error(ErrorCode::kInvalidArgument, fmt::format("'{}': no needle is mounted (script: needle on)", name));
+    }
+    if (auto ok = needle_->configure(*next.needle); !ok) return ok;
   } else if (element == "graphics" || element.starts_with("graphics/") || element == "haptics/stylus") {
     // Drawn by this window only.
   } else {
@@ -1297,6 +1315,8 @@ void Gui::handle_input() {
 // ---------------------------------------------------------------------------------------------
 // Drawing
 
+render::Rgba phase_colour(procedures::NeedlePhase phase);
+
 void Gui::draw_scene(int width, int height) {
   view_x_ = static_cast<int>(kPanelWidth);
   view_w_ = std::max(width - view_x_, 1);
@@ -1325,6 +1345,8 @@ void Gui::draw_scene(int width, int height) {
   const double size = scene_size();
   // Opaque parts first, then transparent ones (shapes only seen among them).
   for (int pass = 0; pass < 2; ++pass) {
+    // The needle is opaque: drawn before the transparent bodies it is seen through.
+    if (pass == 1 && last_.valid && needle_) draw_needle(size);
     for (const VisualView& v : visuals_) {
       if ((v.material.diffuse.w() < 0.999f) == (pass == 1)) renderer_->draw(v.mesh, v.material, render::RenderMode::kShaded);
     }
@@ -1337,6 +1359,17 @@ void Gui::draw_scene(int width, int height) {
                        static_cast<std::size_t>(part.first_triangle), static_cast<std::size_t>(part.triangle_count));
       }
     }
+  }
+  if (last_.valid && needle_ && last_.tool.touched) {
+    // The needle inside a body, seen through it (as an X-ray): the path from the entry point to
+    // the tip and the tip marker, over everything.
+    glDisable(GL_DEPTH_TEST);
+    const haptics::ToolState& t = last_.tool;
+    const Vec3 path[2] = {t.entry, last_.device};
+    renderer_->draw_lines(path, render::Rgba(0.9f, 0.92f, 0.95f, 1.0f));
+    renderer_->draw_sphere(last_.device, 0.004 * size, phase_colour(static_cast<procedures::NeedlePhase>(t.phase)));
+    renderer_->draw_sphere(t.entry, 0.004 * size, render::Rgba(1.0f, 0.15f, 0.1f, 1.0f));
+    glEnable(GL_DEPTH_TEST);
   }
   // Debug views.
   if (show_bound_tree_) {
@@ -1369,7 +1402,7 @@ void Gui::draw_scene(int width, int height) {
   // The stylus, the proxy, the device, the contact.
   const double proxy_radius = std::max(project_.renderer == haptics::RendererKind::kRuspini ? project_.proxy_radius_m : project_.stylus_radius_m,
                                        0.004 * size);
-  if (last_.valid) {
+  if (last_.valid && !needle_) {
     const Vec3 shaft = (camera_.up_on_screen() * 0.8 - camera_.forward() * 0.6).normalized();
     const double length = std::clamp(project_.stylus_length_m, 0.05 * size, 0.6 * size);
     renderer_->draw_cylinder(last_.proxy, last_.proxy + shaft * length, proxy_radius * 0.45, render::Rgba(0.75f, 0.78f, 0.82f, 1.0f));
@@ -1402,6 +1435,50 @@ void Gui::draw_scene(int width, int height) {
     }
   }
   glViewport(0, 0, width, height);
+}
+
+// The colour of each needle phase (the tip marker, the touch panel).
+render::Rgba phase_colour(procedures::NeedlePhase phase) {
+  switch (phase) {
+    case procedures::NeedlePhase::kTouching: return {1.0f, 0.85f, 0.1f, 1.0f};
+    case procedures::NeedlePhase::kPrePuncture: return {0.75f, 0.35f, 1.0f, 1.0f};
+    case procedures::NeedlePhase::kPunctured: return {0.1f, 0.8f, 0.5f, 1.0f};
+    case procedures::NeedlePhase::kRelaxation: return {0.35f, 0.75f, 1.0f, 1.0f};
+    case procedures::NeedlePhase::kExtraction: return {1.0f, 0.6f, 0.1f, 1.0f};
+    default: return {0.85f, 0.85f, 0.85f, 1.0f};
+  }
+}
+
+void Gui::draw_needle(double size) {
+  // The thesis' stylus (Zamani et al.): a thin tip section, the shaft, then the syringe, drawn
+  // from the tip back along the needle. Inside a body the needle lies on its insertion axis;
+  // outside, it points into the view. Diameters below what a screen shows are widened, in
+  // proportion.
+  const procedures::NeedleGeometry& g = project_.needle ? project_.needle->geometry : procedures::NeedleGeometry{};
+  const haptics::ToolState& tool = last_.tool;
+  const auto phase = static_cast<procedures::NeedlePhase>(tool.phase);
+  const bool inside = tool.touched && tool.axis.squaredNorm() > 0.5;
+  const Vec3 back = inside ? Vec3(-tool.axis) : Vec3((camera_.up_on_screen() * 0.8 - camera_.forward() * 0.6).normalized());
+  const Vec3 tip = last_.device;
+  const double visible = 0.0012 * size;  // the thinnest radius worth drawing
+  const double widen = std::max(1.0, visible / (0.5 * g.tip_diameter_m));
+  const Vec3 tip_end = tip + back * g.tip_length_m;
+  const Vec3 hub = tip + back * g.length_m;
+  renderer_->draw_cylinder(tip, tip_end, 0.5 * g.tip_diameter_m * widen, render::Rgba(0.85f, 0.87f, 0.9f, 1.0f));
+  renderer_->draw_cylinder(tip_end, hub, 0.5 * g.shaft_diameter_m * std::min(widen, std::max(1.0, 2.0 * visible / (0.5 * g.shaft_diameter_m))),
+                           render::Rgba(0.75f, 0.78f, 0.82f, 1.0f));
+  renderer_->draw_cylinder(hub, hub + back * g.syringe_length_m, 0.5 * g.syringe_diameter_m, render::Rgba(0.8f, 0.9f, 1.0f, 0.45f));
+  // The tip marker (the thesis' sphere at the tip), in the phase's colour, and the entry point.
+  renderer_->draw_sphere(tip, std::max(0.0025 * size, g.tip_diameter_m), phase_colour(phase));
+  if (tool.touched) {
+    renderer_->draw_sphere(tool.entry, std::max(0.003 * size, g.shaft_diameter_m), render::Rgba(1.0f, 0.15f, 0.1f, 1.0f));
+    const Vec3 path[2] = {tool.entry, tool.entry + tool.axis * std::max(tool.depth_m, 0.0)};
+    renderer_->draw_lines(path, render::Rgba(1.0f, 0.4f, 0.3f, 1.0f));
+  }
+  const double per_n = arrow_m_per_n_ > 0.0f ? arrow_m_per_n_ : size / 3.0 / std::max(max_force_n_, 1e-6);
+  if (last_.force.norm() > 1e-6) {
+    renderer_->draw_arrow(hub, hub + last_.force * per_n, 0.0015 * size, render::Rgba(1.0f, 0.25f, 0.2f, 1.0f));
+  }
 }
 
 void Gui::draw_legend() {
@@ -1796,6 +1873,94 @@ void Gui::draw_haptics_panel() {
   bool tree = project_.use_bound_tree;
   if (ImGui::Checkbox("useBoundTree", &tree)) set("haptics/options", "useBoundTree", tree ? "true" : "false");
   draw_effects_editor();
+  draw_needle_editor();
+}
+
+Expected<void> Gui::mount_needle(bool on) {
+  if (!session_) return make_error(ErrorCode::kInvalidArgument, "no world is open");
+  if (on == project_.needle.has_value()) return {};
+  if (file_.extension() == ".x3d") return make_error(ErrorCode::kUnsupported, "the needle is mounted in a .hof project (save the scene as one)");
+  scene::HofProject next = project_;
+  // The parameters changed so far go with the reopened world.
+  scene::record_parameters(next, session_->parameter_changes());
+  scene::record_parameters(next, submitted_changes_);
+  if (on) {
+    next.needle = procedures::NeedleConfig{};
+  } else {
+    next.needle.reset();
+  }
+  if (auto ok = open(file_, &next); !ok) return ok;
+  dirty_ = true;
+  report(on ? "the needle is mounted: its tissue parameters are under Haptics > Needle" : "the needle is taken off", false);
+  return {};
+}
+
+void Gui::draw_needle_editor() {
+  ImGui::Separator();
+  bool mounted = project_.needle.has_value();
+  if (ImGui::Checkbox("needle stylus (Maurin / Simone-Okamura insertion)", &mounted)) {
+    if (auto ok = mount_needle(mounted); !ok) report(ok.error().to_string(), true);
+  }
+  if (!project_.needle || !needle_) return;
+  if (!ImGui::TreeNodeEx("Needle", ImGuiTreeNodeFlags_DefaultOpen)) return;
+  const auto set = [&](const std::string& element, const char* attribute, const std::string& value) {
+    if (auto ok = apply_set(element, attribute, value); !ok) report(ok.error().to_string(), true);
+  };
+  procedures::NeedleConfig& n = *project_.needle;
+  int axis = static_cast<int>(n.axis);
+  const char* axes[] = {"motion", "normal", "stylus"};
+  ImGui::SetNextItemWidth(120);
+  if (ImGui::Combo("axis at first contact", &axis, axes, 3)) set("haptics/needle", "axis", axes[axis]);
+  // The common set (every deformable body), then each body's own: tissue[k] as the file orders them.
+  const auto edit_tissue = [&](const std::string& element, const procedures::TissueNeedleParameters& t, const std::string& label) {
+    if (!ImGui::TreeNode(label.c_str())) return;
+    int model = static_cast<int>(t.model);
+    const char* models[] = {"fung", "simone-okamura"};
+    ImGui::SetNextItemWidth(150);
+    if (ImGui::Combo("model", &model, models, 2)) set(element, "model", models[model]);
+    bool pierceable = t.pierceable;
+    if (ImGui::Checkbox("pierceable", &pierceable)) set(element, "pierceable", pierceable ? "true" : "false");
+    const auto number = [&](const char* text, const char* attribute, double value) {
+      ImGui::SetNextItemWidth(150);
+      if (ImGui::InputDouble(text, &value, 0.0, 0.0, "%.5g", ImGuiInputTextFlags_EnterReturnsTrue)) set(element, attribute, number_text(value));
+    };
+    const auto numbers = [&](const char* text, const char* attribute, std::vector<double> values) {
+      std::array<float, 4> f{};
+      for (std::size_t i = 0; i < values.size(); ++i) f[i] = static_cast<float>(values[i]);
+      ImGui::SetNextItemWidth(230);
+      bool changed = values.size() == 4 ? ImGui::InputFloat4(text, f.data(), "%.4g", ImGuiInputTextFlags_EnterReturnsTrue)
+                                        : ImGui::InputFloat3(text, f.data(), "%.4g", ImGuiInputTextFlags_EnterReturnsTrue);
+      if (!changed) return;
+      std::string joined;
+      for (std::size_t i = 0; i < values.size(); ++i) joined += (i ? " " : "") + number_text(static_cast<double>(f[i]));
+      set(element, attribute, joined);
+    };
+    number("capsule (m)", "capsule", t.capsule_m);
+    number("punctureForce (N)", "punctureForce", t.puncture_force_n);
+    number("relaxationTime (s)", "relaxationTime", t.relaxation_time_s);
+    if (t.model == procedures::NeedleForceModel::kFung) {
+      numbers("fungPre a b d0 F0", "fungPre", {t.fung_pre.a_per_m, t.fung_pre.b_n, t.fung_pre.d0_m, t.fung_pre.f0_n});
+      numbers("fungPost a b d0 F0", "fungPost", {t.fung_post.a_per_m, t.fung_post.b_n, t.fung_post.d0_m, t.fung_post.f0_n});
+      ImGui::TextDisabled("f(d) = (F0 + b) exp(a (d - d0)) - b; SI: 1/m, N, m, N");
+    } else {
+      numbers("stiffness a0 a1 a2", "stiffness", {t.stiffness.a0_n, t.stiffness.a1_n_per_m, t.stiffness.a2_n_per_m2});
+      number("cuttingForce (N)", "cuttingForce", t.cutting_force_n);
+    }
+    numbers("friction Cp Cn bp bn", "friction",
+            {t.friction.static_positive_n_per_m, t.friction.static_negative_n_per_m, t.friction.damping_positive_n_s_per_m2,
+             t.friction.damping_negative_n_s_per_m2});
+    number("frictionVelocityBand (m/s)", "frictionVelocityBand", t.friction.velocity_band_m_per_s);
+    number("lateralStiffness (N/m)", "lateralStiffness", t.lateral_stiffness_n_per_m);
+    number("lateralDamping (N s/m)", "lateralDamping", t.lateral_damping_n_s_per_m);
+    number("spreadRadius (m)", "spreadRadius", t.spread_radius_m);
+    ImGui::TreePop();
+  };
+  const procedures::NeedleConfig current = n;  // the editors may replace project_ while drawing
+  edit_tissue("haptics/needle/tissue", current.tissue, "tissue of every deformable body");
+  for (std::size_t k = 0; k < current.bodies.size(); ++k) {
+    edit_tissue(fmt::format("haptics/needle/tissue[{}]", k + 2), current.bodies[k].second, "tissue of " + current.bodies[k].first);
+  }
+  ImGui::TreePop();
 }
 
 void Gui::draw_graphics_panel() {
@@ -2022,7 +2187,24 @@ void Gui::draw_panels() {
                    std::min(*lo, 0.0f), std::max(*hi * 1.1f, 1.0f), ImVec2(kPanelWidth - 20, 70));
   // Touch.
   if (ImGui::CollapsingHeader("Touch", ImGuiTreeNodeFlags_DefaultOpen)) {
-    if (last_.contact) {
+    if (needle_ && last_.tool.active) {
+      // The thesis' field network (touched, capsule, broken, distance, force, normal), live.
+      const haptics::ToolState& t = last_.tool;
+      const auto phase = static_cast<procedures::NeedlePhase>(t.phase);
+      const render::Rgba c = phase_colour(phase);
+      ImGui::Text("needle");
+      ImGui::SameLine();
+      ImGui::TextColored(ImVec4(c.x(), c.y(), c.z(), 1.0f), "%s", std::string(procedures::phase_name(phase)).c_str());
+      const double to_shown = length_unit_ == "m" ? 1e3 : 1.0;
+      const char* length = length_unit_ == "m" ? "mm" : "units";
+      const std::string body = t.body >= 0 && static_cast<std::size_t>(t.body) < bodies_.size() ? bodies_[static_cast<std::size_t>(t.body)].name : "-";
+      const double capsule = t.body >= 0 ? needle_->parameters(static_cast<std::size_t>(t.body)).capsule_m : 0.0;
+      ImGui::Text("touched %s, capsule %s, body %s", t.touched ? "yes" : "no",
+                  !t.touched ? "-" : t.broken ? "broken" : fmt::format("intact ({:.1f} {})", to_shown * capsule, length).c_str(), body.c_str());
+      ImGui::Text("depth %.2f %s, force along the needle %.3f N", to_shown * t.depth_m, length, t.axial_force_n);
+      ImGui::Text("sent %.3f N, normal %.2f %.2f %.2f", last_.force.norm(), t.normal.x(), t.normal.y(), t.normal.z());
+      if (t.touched) ImGui::Text("entry  %.4f %.4f %.4f", t.entry.x(), t.entry.y(), t.entry.z());
+    } else if (last_.contact) {
       const std::string body = contact_body_ >= 0 && static_cast<std::size_t>(contact_body_) < bodies_.size()
                                    ? bodies_[static_cast<std::size_t>(contact_body_)].name
                                    : "?";
@@ -2124,6 +2306,9 @@ bool Gui::step_script(std::vector<ScriptAction>& script, std::size_t& next, cons
         break;
       case ScriptAction::Kind::kAnimate:
         set_animating(a.on);
+        break;
+      case ScriptAction::Kind::kNeedle:
+        if (auto ok = mount_needle(a.on); !ok) return fail(ok.error());
         break;
       case ScriptAction::Kind::kStep:
         if (session_) {

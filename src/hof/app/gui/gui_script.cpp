@@ -70,6 +70,10 @@ Expected<std::vector<ScriptAction>> parse_script(const std::string& text, const 
       if (w.size() != 2 || !to_number(w[1], a.number) || a.number < 0.0 || a.number > 3600.0) {
         return fail("wait takes seconds in [0, 3600]");
       }
+    } else if (verb == "needle") {
+      a.kind = ScriptAction::Kind::kNeedle;
+      if (w.size() != 2 || (w[1] != "on" && w[1] != "off")) return fail("needle takes on or off");
+      a.on = w[1] == "on";
     } else if (verb == "animate") {
       a.kind = ScriptAction::Kind::kAnimate;
       if (w.size() != 2 || (w[1] != "on" && w[1] != "off")) return fail("animate takes on or off");
@@ -167,7 +171,7 @@ Expected<std::vector<ScriptAction>> parse_script(const std::string& text, const 
       a.kind = ScriptAction::Kind::kQuit;
       if (w.size() != 1) return fail("quit takes nothing");
     } else {
-      return fail(fmt::format("unknown action '{}' (known: wait, animate, step, reset, set, replace, add, remove, region, mouse, open, show, record, screenshot, save, quit)", verb));
+      return fail(fmt::format("unknown action '{}' (known: wait, animate, step, needle, reset, set, replace, add, remove, region, mouse, open, show, record, screenshot, save, quit)", verb));
     }
     actions.push_back(std::move(a));
   }

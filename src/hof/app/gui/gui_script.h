@@ -19,6 +19,8 @@
 ///   remove mechanics/BODY/COMPONENT                a component removed
 ///   region BODY sphere X Y Z RADIUS YOUNGMODULUS   a material region (box: X0 Y0 Z0 X1 Y1 Z1 E);
 ///   region clear                                    every region removed
+///   needle on|off                mount the needle stylus (Haptics > Needle) or take it off;
+///                                its settings: set haptics/needle/tissue@capsule 0.03
 ///   mouse X Y [DEPTH]            the mouse stylus under window pixel (X, Y), DEPTH metres
 ///                                beyond the touch plane (default 0)
 ///   open FILE                    as File > Open: a file that does not load shows its error and
@@ -39,7 +41,7 @@
 namespace hof::app {
 
 struct ScriptAction {
-  enum class Kind { kWait, kAnimate, kStep, kReset, kSet, kEdit, kRegion, kMouse, kShow, kOpen, kRecord, kScreenshot, kSave, kQuit };
+  enum class Kind { kWait, kAnimate, kNeedle, kStep, kReset, kSet, kEdit, kRegion, kMouse, kShow, kOpen, kRecord, kScreenshot, kSave, kQuit };
   Kind kind{Kind::kWait};
   int line{0};
   double number{0.0};          ///< wait: seconds; step: steps; mouse: x
