@@ -190,6 +190,40 @@ TEST(GuiWindow, DrawsTheLiverAndTheMouseStylusPressesItVisibly) {
   EXPECT_LT(number_after(press.output, "max force"), 8.0 + 1e-9) << "above the device's force limit";
 }
 
+TEST(GuiWindow, TheNeedleIsMountedTunedInsertedThroughTheCapsuleAndSaved) {
+  const fs::path dir = scratch("needle");
+  // Where the organ is (the project's view).
+  const GuiRun first = run_gui(dir, "wait 1\nscreenshot " + (dir / "before.png").string() + "\nquit\n");
+  ASSERT_EQ(first.status, 0) << first.output;
+  auto before = hof::render::read_png(dir / "before.png");
+  ASSERT_TRUE(before);
+  const Coverage organ = tissue_coverage(*before);
+  const fs::path saved = dir / "needle.hof";
+  // Mount the needle, make the capsule 8 mm deep and the model Simone-Okamura, then push the
+  // mouse stylus 25 mm into the liver at its centre, and out again.
+  const std::string at = std::to_string(static_cast<int>(organ.cx)) + " " + std::to_string(static_cast<int>(organ.cy));
+  const GuiRun run = run_gui(dir, "needle on\nset haptics/needle/tissue@capsule 0.008\n"
+                                  "set haptics/needle/tissue@model simone-okamura\nwait 0.5\nmouse " + at + " -0.01\nwait 0.5\n"
+                                  "mouse " + at + " 0.025\nwait 2\nscreenshot " + (dir / "inserted.png").string() + "\n"
+                                  "mouse " + at + " -0.03\nwait 2\nsave " + saved.string() + "\nquit\n");
+  ASSERT_EQ(run.status, 0) << run.output;
+  // The window logged the insertion's events.
+  EXPECT_NE(run.output.find("the needle is mounted"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("needle: touching Liver"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("needle: the capsule of Liver broke at"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("needle: withdrawn"), std::string::npos) << run.output;
+  EXPECT_LT(number_after(run.output, "max force"), 8.0 + 1e-9) << "above the device's force limit";
+  auto inserted = hof::render::read_png(dir / "inserted.png");
+  ASSERT_TRUE(inserted);
+  EXPECT_GT(tissue_coverage(*inserted).share, 0.5 * organ.share) << "the liver is no longer drawn";
+  // The saved project mounts the needle with the settings made in the window.
+  auto reloaded = hof::scene::read_project(saved);
+  ASSERT_TRUE(reloaded) << reloaded.error().to_string();
+  ASSERT_TRUE(reloaded->needle);
+  EXPECT_EQ(reloaded->needle->tissue.capsule_m, 0.008);
+  EXPECT_EQ(reloaded->needle->tissue.model, hof::procedures::NeedleForceModel::kSimoneOkamura);
+}
+
 TEST(GuiWindow, ScriptChangesSettingsAndTheSavedProjectReloadsToExactlyThem) {
   const fs::path dir = scratch("save");
   const fs::path saved = dir / "tuned.hof";

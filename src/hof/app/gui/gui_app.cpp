@@ -334,6 +334,7 @@ class Gui {
   std::unique_ptr<coupling::Session> session_;
   haptics::MouseDevice* mouse_{nullptr};
   std::shared_ptr<procedures::NeedleTool> needle_;  // the needle stylus, when the project mounts one
+  procedures::NeedlePhase needle_phase_{procedures::NeedlePhase::kFree};  // at the last tick
   haptics::Calibration calibration_;
   double max_force_n_{8.0};
   double workspace_radius_m_{0.08};
@@ -585,6 +586,7 @@ Expected<void> Gui::open(const std::filesystem::path& file, const scene::HofProj
   calibration_pending_ = false;
   session_ = std::move(*made);
   needle_ = std::dynamic_pointer_cast<procedures::NeedleTool>(config.tool);
+  needle_phase_ = procedures::NeedlePhase::kFree;
   mouse_ = mouse;
   calibration_ = config.haptics.calibration;
   max_force_n_ = max_force;
@@ -821,6 +823,25 @@ void Gui::update_from_loops() {
     }
     was_in_contact_ = s.contact && s.triangle >= 0;
     indentation_m_ = indentation;
+    if (needle_ && s.tool.active) {
+      // The needle's events, in the messages (the thesis' field network as a log).
+      const auto phase = static_cast<procedures::NeedlePhase>(s.tool.phase);
+      const std::string body = s.tool.body >= 0 && static_cast<std::size_t>(s.tool.body) < bodies_.size()
+                                   ? bodies_[static_cast<std::size_t>(s.tool.body)].name
+                                   : std::string("the body");
+      const double shown = length_unit_ == "m" ? 1e3 : 1.0;
+      const char* unit = length_unit_ == "m" ? "mm" : "units";
+      if (phase == procedures::NeedlePhase::kPunctured && needle_phase_ == procedures::NeedlePhase::kPrePuncture) {
+        report(fmt::format("needle: the capsule of {} broke at {:.1f} {} ({:.3f} N after)", body, shown * s.tool.depth_m, unit,
+                           s.tool.axial_force_n), false);
+      } else if (phase == procedures::NeedlePhase::kTouching && needle_phase_ != procedures::NeedlePhase::kTouching) {
+        report(fmt::format("needle: touching {}", body), false);
+      } else if (phase == procedures::NeedlePhase::kOut && needle_phase_ != procedures::NeedlePhase::kOut) {
+        report("needle: withdrawn", false);
+      }
+      needle_phase_ = phase;
+      indentation = s.tool.depth_m;  // the second plot shows the depth
+    }
     if (s.time_s >= next_plot_time_) {
       next_plot_time_ = s.time_s + 1.0 / kPlotRateHz;
       std::rotate(plot_force_.begin(), plot_force_.begin() + 1, plot_force_.end());
@@ -2183,7 +2204,9 @@ void Gui::draw_panels() {
   const auto [lo, hi] = std::minmax_element(plot_indentation_.begin(), plot_indentation_.end());
   const double unit = length_unit_ == "m" ? 1.0 : 1e-3;  // telemetry is in scene units for a SOFA scene
   ImGui::PlotLines("##indentation", plot_indentation_.data(), static_cast<int>(plot_indentation_.size()), 0,
-                   fmt::format("indentation ({}), now {:.2f}", length_unit_ == "m" ? "mm" : "scene units / 1000", 1e3 * indentation_m_ * unit).c_str(),
+                   needle_ ? fmt::format("needle depth ({}), now {:.2f}", length_unit_ == "m" ? "mm" : "scene units / 1000",
+                                         1e3 * last_.tool.depth_m * unit).c_str()
+                           : fmt::format("indentation ({}), now {:.2f}", length_unit_ == "m" ? "mm" : "scene units / 1000", 1e3 * indentation_m_ * unit).c_str(),
                    std::min(*lo, 0.0f), std::max(*hi * 1.1f, 1.0f), ImVec2(kPanelWidth - 20, 70));
   // Touch.
   if (ImGui::CollapsingHeader("Touch", ImGuiTreeNodeFlags_DefaultOpen)) {
