@@ -42,4 +42,28 @@ xvfb-run -a -s "-screen 0 1280x720x24" build/release/bin/hof gui examples/liver-
   --size 1280x720 --script "$work/press.txt"
 xvfb-run -a -s "-screen 0 1280x720x24" build/release/bin/hof gui examples/liver-palpation-medium-fem.hof \
   --size 1280x720 --script "$work/stress.txt"
-echo "screenshots: docs/images/gui-liver.png gui-press.png gui-displacement.png gui-mechanics.png gui-stress.png"
+cat > "$work/needle.txt" <<'ACTIONS'
+# the scripted insert-hold-extract of examples/needle-liver.hof: the needle through the
+# capsule, then relaxing; the Needle panel
+wait 4.6
+screenshot docs/images/gui-needle.png
+show needle
+wait 2.6
+screenshot docs/images/gui-needle-editor.png
+quit
+ACTIONS
+cat > "$work/cube.txt" <<'ACTIONS'
+wait 3.4
+screenshot docs/images/gui-needle-cube.png
+quit
+ACTIONS
+xvfb-run -a -s "-screen 0 1280x720x24" build/release/bin/hof gui examples/needle-liver.hof \
+  --size 1280x720 --script "$work/needle.txt"
+xvfb-run -a -s "-screen 0 1280x720x24" build/release/bin/hof gui examples/needle-cube.hof \
+  --size 1280x720 --script "$work/cube.txt"
+# The needle's force against depth, as `hof run` plots it.
+build/release/bin/hof run examples/needle-liver.hof --headless --deterministic --quiet --out "$work/needle-run"
+cp "$work/needle-run/force_vs_depth.png" docs/images/needle-force-vs-depth.png
+cp "$work/needle-run/needle_force_over_time.png" docs/images/needle-force-over-time.png
+echo "screenshots: docs/images/gui-liver.png gui-press.png gui-displacement.png gui-mechanics.png gui-stress.png" \
+     "gui-needle.png gui-needle-editor.png gui-needle-cube.png needle-force-vs-depth.png needle-force-over-time.png"

@@ -1894,7 +1894,6 @@ void Gui::draw_haptics_panel() {
   bool tree = project_.use_bound_tree;
   if (ImGui::Checkbox("useBoundTree", &tree)) set("haptics/options", "useBoundTree", tree ? "true" : "false");
   draw_effects_editor();
-  draw_needle_editor();
 }
 
 Expected<void> Gui::mount_needle(bool on) {
@@ -1912,18 +1911,19 @@ Expected<void> Gui::mount_needle(bool on) {
   }
   if (auto ok = open(file_, &next); !ok) return ok;
   dirty_ = true;
-  report(on ? "the needle is mounted: its tissue parameters are under Haptics > Needle" : "the needle is taken off", false);
+  report(on ? "the needle is mounted: its tissue parameters are in the Needle panel" : "the needle is taken off", false);
   return {};
 }
 
 void Gui::draw_needle_editor() {
-  ImGui::Separator();
   bool mounted = project_.needle.has_value();
-  if (ImGui::Checkbox("needle stylus (Maurin / Simone-Okamura insertion)", &mounted)) {
+  if (ImGui::Checkbox("the stylus is a needle (reopens the world)", &mounted)) {
     if (auto ok = mount_needle(mounted); !ok) report(ok.error().to_string(), true);
   }
-  if (!project_.needle || !needle_) return;
-  if (!ImGui::TreeNodeEx("Needle", ImGuiTreeNodeFlags_DefaultOpen)) return;
+  if (!project_.needle || !needle_) {
+    ImGui::TextDisabled("insertion with Maurin's or Simone-Okamura's model (docs/needle.md)");
+    return;
+  }
   const auto set = [&](const std::string& element, const char* attribute, const std::string& value) {
     if (auto ok = apply_set(element, attribute, value); !ok) report(ok.error().to_string(), true);
   };
@@ -1934,7 +1934,7 @@ void Gui::draw_needle_editor() {
   if (ImGui::Combo("axis at first contact", &axis, axes, 3)) set("haptics/needle", "axis", axes[axis]);
   // The common set (every deformable body), then each body's own: tissue[k] as the file orders them.
   const auto edit_tissue = [&](const std::string& element, const procedures::TissueNeedleParameters& t, const std::string& label) {
-    if (!ImGui::TreeNode(label.c_str())) return;
+    if (!ImGui::TreeNodeEx(label.c_str(), ImGuiTreeNodeFlags_DefaultOpen)) return;
     int model = static_cast<int>(t.model);
     const char* models[] = {"fung", "simone-okamura"};
     ImGui::SetNextItemWidth(150);
@@ -1953,7 +1953,8 @@ void Gui::draw_needle_editor() {
                                         : ImGui::InputFloat3(text, f.data(), "%.4g", ImGuiInputTextFlags_EnterReturnsTrue);
       if (!changed) return;
       std::string joined;
-      for (std::size_t i = 0; i < values.size(); ++i) joined += (i ? " " : "") + number_text(static_cast<double>(f[i]));
+      // A float's shortest text (0.01145, not 0.011450000107…): the values the user sees.
+      for (std::size_t i = 0; i < values.size(); ++i) joined += (i ? " " : "") + fmt::format("{}", f[i]);
       set(element, attribute, joined);
     };
     number("capsule (m)", "capsule", t.capsule_m);
@@ -1981,7 +1982,6 @@ void Gui::draw_needle_editor() {
   for (std::size_t k = 0; k < current.bodies.size(); ++k) {
     edit_tissue(fmt::format("haptics/needle/tissue[{}]", k + 2), current.bodies[k].second, "tissue of " + current.bodies[k].first);
   }
-  ImGui::TreePop();
 }
 
 void Gui::draw_graphics_panel() {
@@ -2240,6 +2240,8 @@ void Gui::draw_panels() {
       ImGui::TextDisabled("no contact%s", mouse_ ? " (left-drag onto a body, wheel or W/S to press)" : "");
     }
   }
+  if (open_panel_ == "needle") ImGui::SetNextItemOpen(true);
+  if (ImGui::CollapsingHeader("Needle")) draw_needle_editor();
   if (open_panel_ == "mechanics") ImGui::SetNextItemOpen(true);
   if (ImGui::CollapsingHeader("Mechanics")) draw_mechanics_panel();
   if (open_panel_ == "haptics") ImGui::SetNextItemOpen(true);

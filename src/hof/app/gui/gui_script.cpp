@@ -148,8 +148,8 @@ Expected<std::vector<ScriptAction>> parse_script(const std::string& text, const 
       a.file = w[1];
     } else if (verb == "show") {
       a.kind = ScriptAction::Kind::kShow;
-      if (w.size() != 2 || (w[1] != "mechanics" && w[1] != "haptics" && w[1] != "graphics" && w[1] != "messages")) {
-        return fail("show takes a panel: mechanics, haptics, graphics or messages");
+      if (w.size() != 2 || (w[1] != "needle" && w[1] != "mechanics" && w[1] != "haptics" && w[1] != "graphics" && w[1] != "messages")) {
+        return fail("show takes a panel: needle, mechanics, haptics, graphics or messages");
       }
       a.value = w[1];
     } else if (verb == "record") {

@@ -25,7 +25,7 @@
 ///                                beyond the touch plane (default 0)
 ///   open FILE                    as File > Open: a file that does not load shows its error and
 ///                                leaves the world as it was (the script goes on)
-///   show PANEL                   opens a panel: mechanics, haptics, graphics, messages
+///   show PANEL                   opens a panel: needle, mechanics, haptics, graphics, messages
 ///   record FILE.csv | off        start recording the stylus (replay format), or stop and write it
 ///   screenshot FILE.png          the window as it is drawn
 ///   save FILE.hof                the project with every change made so far
