@@ -350,3 +350,125 @@ TEST(NeedleInsertion, TheDeviceNeverGetsMoreThanItsLimitWhateverTheParameters) {
 
 }  // namespace
 }  // namespace hof::procedures
+
+namespace hof::procedures {
+namespace {
+
+// Two bodies side by side: a liver that is not touched, and a 4 cm block of FEM tissue (with a
+// set of its own) that the needle enters. The block is a tetrahedral cube made here.
+mechanics::ModelConfig block_config(const Vec3& origin, double size, int cells) {
+  mechanics::ModelConfig c;
+  c.name = "block";
+  const double h = size / cells;
+  const auto node = [&](int i, int j, int k) { return static_cast<std::int32_t>((k * (cells + 1) + j) * (cells + 1) + i); };
+  for (int k = 0; k <= cells; ++k) {
+    for (int j = 0; j <= cells; ++j) {
+      for (int i = 0; i <= cells; ++i) c.positions.push_back(origin + Vec3(i * h, j * h, k * h));
+    }
+  }
+  for (int k = 0; k < cells; ++k) {
+    for (int j = 0; j < cells; ++j) {
+      for (int i = 0; i < cells; ++i) {
+        // Six tetrahedra per cube around its main diagonal (positively oriented).
+        const std::array<std::int32_t, 8> v{node(i, j, k),         node(i + 1, j, k),         node(i + 1, j + 1, k),
+                                            node(i, j + 1, k),     node(i, j, k + 1),         node(i + 1, j, k + 1),
+                                            node(i + 1, j + 1, k + 1), node(i, j + 1, k + 1)};
+        const int tets[6][4] = {{0, 1, 2, 6}, {0, 2, 3, 6}, {0, 3, 7, 6}, {0, 7, 4, 6}, {0, 4, 5, 6}, {0, 5, 1, 6}};
+        for (const auto& t : tets) {
+          mesh::Tet tet{v[t[0]], v[t[1]], v[t[2]], v[t[3]]};
+          const Vec3 a = c.positions[tet[0]], b = c.positions[tet[1]], cc = c.positions[tet[2]], d = c.positions[tet[3]];
+          if ((b - a).dot((cc - a).cross(d - a)) < 0.0) std::swap(tet[2], tet[3]);
+          c.tets.push_back(tet);
+        }
+      }
+    }
+  }
+  c.mass.mass_density_kg_per_m3 = 1000.0;
+  c.gravity_m_per_s2 = Vec3::Zero();
+  mechanics::ForceFieldConfig fem;
+  fem.name = "FEM";
+  fem.tetrahedron_fem = mechanics::TetrahedronFemConfig{15000.0, 0.45, mechanics::FemMethod::kLarge, {}};
+  c.force_fields.push_back(fem);
+  mechanics::FixedConstraintConfig base;
+  base.box = std::make_pair(origin - Vec3::Constant(1e-6), origin + Vec3(size, size, 1e-6));
+  c.fixed.push_back(base);
+  c.ode.rayleigh_mass = c.ode.rayleigh_stiffness = 0.1;
+  c.dt_s = 0.01;
+  return c;
+}
+
+SessionBody deformable_body(const std::string& name, mechanics::ModelConfig c) {
+  c.name = name;
+  mesh::Mesh m;
+  m.nodes = c.positions;
+  m.tets = c.tets;
+  const mesh::BoundarySurface b = mesh::extract_boundary(m.nodes, m.tets);
+  auto built = mechanics::build_model(c);
+  EXPECT_TRUE(built) << built.error().to_string();
+  auto mapping = coupling::SurfaceMapping::by_index(m.nodes, b.surface.vertices, b.surface_to_volume);
+  EXPECT_TRUE(mapping);
+  return SessionBody{name, std::move(*built), b.surface, std::move(*mapping), {}, c};
+}
+
+TEST(NeedleInsertion, EntersTheBodyItTouchesInAWorldOfSeveralWithThatBodysOwnParameters) {
+  const mesh::Mesh liver = *mesh::generate_liver(mesh::LiverResolution::kSimple);
+  std::vector<SessionBody> bodies;
+  bodies.push_back(deformable_body("liver", coupling::testing::resting_liver_config(liver)));
+  bodies.push_back(deformable_body("block", block_config(Vec3(0.2, -0.02, 0.0), 0.04, 6)));
+  NeedleConfig needle;  // every deformable body: capsule 20 mm; the block: 8 mm, Simone-Okamura
+  TissueNeedleParameters block = needle.tissue;
+  block.capsule_m = 0.008;
+  block.model = NeedleForceModel::kSimoneOkamura;
+  needle.bodies.emplace_back("block", block);
+  SessionConfig config = needle_config(needle, bodies);
+  // Down into the block's top (z = 0.04) at its middle: 20 mm in, hold, out.
+  auto session = Session::make(std::move(bodies), insertion(Vec3(0.221, 0.001, 0.05), 0.01, 0.02, 0.01, 0.5), config);
+  ASSERT_TRUE(session) << session.error().to_string();
+  double puncture_depth = -1.0;
+  std::set<std::int32_t> pierced;
+  NeedlePhase previous = NeedlePhase::kFree;
+  const coupling::SessionReport report = (*session)->run_virtual(6.0, [&](const haptics::HapticSample& s) {
+    const auto phase = static_cast<NeedlePhase>(s.tool.phase);
+    if (s.tool.body >= 0) pierced.insert(s.tool.body);
+    if (phase == NeedlePhase::kPunctured && previous == NeedlePhase::kPrePuncture) puncture_depth = s.tool.depth_m;
+    if (phase == NeedlePhase::kPrePuncture) {
+      EXPECT_NEAR(s.tool.axial_force_n, 2.0 * s.tool.depth_m + 2300.0 * s.tool.depth_m * s.tool.depth_m, 1e-9);
+    }
+    previous = phase;
+  });
+  EXPECT_EQ(pierced, std::set<std::int32_t>{1});
+  EXPECT_NEAR(puncture_depth, 0.008, 1e-5 + 1e-12);  // the block's capsule, not the common one
+  ASSERT_EQ(report.bodies.size(), 2u);
+  EXPECT_LT(report.bodies[0].max_displacement_m, 1e-9);  // the liver is not touched (round-off only)
+  EXPECT_GT(report.bodies[1].max_displacement_m, 1e-4);
+  EXPECT_GT(report.bodies[1].contact_time_s, 1.0);
+}
+
+TEST(NeedleInsertion, RealTimeSessionRunsAndStopsCleanlyWithTheNeedle) {
+  // Real time on two threads: whatever the machine's load, no force above the limit, no NaN,
+  // telemetry in tick order, and a clean stop.
+  const mesh::Mesh liver = *mesh::generate_liver(mesh::LiverResolution::kSimple);
+  std::vector<SessionBody> bodies;
+  bodies.push_back(deformable_body("liver", coupling::testing::resting_liver_config(liver)));
+  SessionConfig config = needle_config(NeedleConfig{}, bodies);
+  haptics::DeviceSpec spec;
+  spec.max_force_n = 3.3;
+  auto session = Session::make(std::move(bodies), insertion(Vec3(0.03, 0.0, 0.06), 0.01, 0.03, 0.05, 0.1, spec), config);
+  ASSERT_TRUE(session) << session.error().to_string();
+  std::uint64_t last_tick = 0;
+  bool ordered = true, any = false;
+  const coupling::SessionReport report = (*session)->run_realtime(1.0, [&](const haptics::HapticSample& s) {
+    ordered = ordered && (!any || s.tick > last_tick);
+    last_tick = s.tick;
+    any = true;
+    EXPECT_TRUE(s.force.allFinite());
+    EXPECT_LE(s.force.norm(), spec.max_force_n);
+  });
+  EXPECT_TRUE(any);
+  EXPECT_TRUE(ordered);
+  EXPECT_FALSE(report.diverged) << report.divergence;
+  EXPECT_FALSE((*session)->realtime_running());
+}
+
+}  // namespace
+}  // namespace hof::procedures
