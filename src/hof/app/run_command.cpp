@@ -493,6 +493,26 @@ int run_check(const CheckOptions& options) {
     std::printf("  %zu touchable, %zu spring / %zu viscosity / %zu constant force effects\n", touchable,
                 world->config.effects.springs.size(), world->config.effects.viscosities.size(),
                 world->config.effects.constants.size());
+    if (world->project.needle) {
+      // Which bodies the needle enters, and with what.
+      std::vector<std::string> names;
+      std::vector<bool> deformable;
+      for (const coupling::SessionBody& b : world->bodies) {
+        names.push_back(b.name);
+        deformable.push_back(b.deformable());
+      }
+      const auto sets = procedures::parameters_by_body(*world->project.needle, names, deformable);
+      for (std::size_t i = 0; i < sets.size(); ++i) {
+        const procedures::TissueNeedleParameters& t = sets[i];
+        if (!t.pierceable) {
+          std::printf("  needle: '%s' is not entered (a wall for the needle)\n", json_safe(names[i]).c_str());
+          continue;
+        }
+        std::printf("  needle: enters '%s': %s model, capsule %g m, puncture force %g N, relaxation %g s\n",
+                    json_safe(names[i]).c_str(), std::string(procedures::model_name(t.model)).c_str(), t.capsule_m,
+                    t.puncture_force_n, t.relaxation_time_s);
+      }
+    }
     for (const auto& d : world->defaults) std::printf("default: %s\n", json_safe(d).c_str());
     for (const auto& s : world->skipped) std::printf("not simulated: %s\n", json_safe(s).c_str());
     for (const auto& w : world->warnings) std::printf("warning: %s\n", json_safe(w).c_str());
