@@ -83,8 +83,36 @@ TEST(NeedleModel, ValidationNamesTheAttribute) {
   ASSERT_FALSE(ok);
   EXPECT_NE(ok.error().message.find("fungPost"), std::string::npos);
   p = {};
-  p.puncture_force_n = std::numeric_limits<double>::infinity();  // depth only: allowed
-  EXPECT_TRUE(validate(p, "needle tissue"));
+  p.puncture_force_n = std::numeric_limits<double>::infinity();  // a file cannot hold it: refused
+  ok = validate(p, "needle tissue");
+  ASSERT_FALSE(ok);
+  EXPECT_NE(ok.error().message.find("punctureForce"), std::string::npos);
+  // Friction resists motion: Okamura's positive magnitudes on the negative side are refused
+  // (they would push the hand out while it withdraws: energy into the user).
+  p = {};
+  p.friction.static_negative_n_per_m = 0.117;
+  ok = validate(p, "needle tissue");
+  ASSERT_FALSE(ok);
+  EXPECT_NE(ok.error().message.find("Cn, bn <= 0"), std::string::npos);
+  p = {};
+  p.friction.damping_positive_n_s_per_m2 = -1.0;
+  EXPECT_FALSE(validate(p, "needle tissue"));
+}
+
+TEST(NeedleModel, ThePrintedFormStartsEachPhaseFromAboutZero) {
+  // The thesis' "+ b": f(d0) = F0 + 2b, which with Maurin's θ is 0.004 N and 0.01 N: both
+  // phases start from about zero at their d0, and the post-puncture force is positive, rising
+  // toward b = 1.7 N.
+  TissueNeedleParameters p;
+  p.fung_form = FungForm::kPrinted;
+  EXPECT_NEAR(fung_force(p.fung_pre, 0.01145, p.fung_form), 0.2 + 2 * -0.098, 1e-12);
+  EXPECT_NEAR(fung_force(p.fung_post, 0.01961, p.fung_form), -3.39 + 2 * 1.7, 1e-12);
+  EXPECT_GT(post_puncture_force(p, 0.04, 0.01, 0.0), 0.7);
+  EXPECT_NEAR(post_puncture_force(p, 1.0, 0.01, 0.0), 1.7, 1e-6);
+  // The two forms differ by 2b everywhere.
+  for (double d : {0.0, 0.01, 0.03}) {
+    EXPECT_NEAR(fung_force(p.fung_pre, d, FungForm::kPrinted) - fung_force(p.fung_pre, d, FungForm::kIntegrated), 2 * -0.098, 1e-12);
+  }
 }
 
 }  // namespace

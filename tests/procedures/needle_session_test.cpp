@@ -116,7 +116,7 @@ TEST(NeedleInsertion, TheForceFollowsFungExactlyPhaseByPhase) {
     if (order.empty() || order.back() != phase) order.push_back(phase);
     seen.insert(phase);
     const double d = s.tool.depth_m;
-    const double v = -s.device_velocity.z();  // along the axis (−z)
+    const double v = s.tool.axial_velocity_m_per_s;  // the tool's (filtered) estimate, inward
     double expected = 0.0;
     switch (phase) {
       case NeedlePhase::kPrePuncture: expected = fung(kPreA, kPreB, kPreD0, kPreF0, d); break;
@@ -128,8 +128,15 @@ TEST(NeedleInsertion, TheForceFollowsFungExactlyPhaseByPhase) {
         }
         expected = relax_force * std::exp(-(s.time_s - relax_start) / 2.0);
         break;
-      case NeedlePhase::kExtraction: expected = d * (-0.117 + -1600.0 * std::abs(v)); break;
+      case NeedlePhase::kExtraction:  // Karnopp, its branches written out
+        expected = v >= 0.001 ? d * (0.121 + 3200.0 * v) : v <= -0.001 ? d * (-0.117 + -1600.0 * std::abs(v))
+                                                                        : std::clamp(previous_axial, -0.117 * d, 0.121 * d);
+        break;
       default: expected = 0.0; break;
+    }
+    if (s.time_s > 1.5 && s.time_s < 4.9) {
+      // Away from the script's corners the velocity estimate is the script's (inserting at 10 mm/s).
+      EXPECT_NEAR(v, 0.01, 1e-9) << "t = " << s.time_s;
     }
     EXPECT_NEAR(s.tool.axial_force_n, expected, 1e-9) << "phase " << phase_name(phase) << " at t = " << s.time_s;
     if (phase != NeedlePhase::kFree && phase != NeedlePhase::kOut && d > 0.0) {
@@ -193,7 +200,7 @@ TEST(NeedleInsertion, SimoneOkamuraPunctureThresholdAndKarnoppFriction) {
   int punctured = 0;
   for (const haptics::HapticSample& s : run.samples) {
     const auto phase = static_cast<NeedlePhase>(s.tool.phase);
-    const double d = s.tool.depth_m, v = -s.device_velocity.z();
+    const double d = s.tool.depth_m, v = s.tool.axial_velocity_m_per_s;
     if (phase == NeedlePhase::kPrePuncture) {
       EXPECT_NEAR(s.tool.axial_force_n, 2.0 * d + 2300.0 * d * d, 1e-9);
     }
@@ -210,21 +217,85 @@ TEST(NeedleInsertion, SimoneOkamuraPunctureThresholdAndKarnoppFriction) {
   EXPECT_GT(punctured, 1000);
 }
 
-TEST(NeedleInsertion, ASurfaceTheNeedleCannotEnterStillPushesBack) {
-  NeedleConfig needle;
-  needle.tissue.pierceable = false;
+// Presses a rigid block 5 mm deep with the needle; returns the largest push back (N) and
+// whether the needle ever left `free`.
+std::pair<double, bool> press_block(const NeedleConfig& needle) {
   std::vector<SessionBody> bodies(1);
   bodies[0].name = "block";
   bodies[0].surface = box(Vec3(-0.05, -0.05, -0.1), Vec3(0.05, 0.05, 0.0));
-  SessionConfig config = needle_config(needle, bodies);  // rigid and not named: not pierceable
+  SessionConfig config = needle_config(needle, bodies);
   auto session = Session::make(std::move(bodies), insertion(Vec3(0, 0, 0.01), 0.01, 0.005, 0.01, 0.2), config);
-  ASSERT_TRUE(session);
+  EXPECT_TRUE(session);
   double pushed = 0.0;
+  bool entered = false;
   (*session)->run_virtual(1.5, [&](const haptics::HapticSample& s) {
-    EXPECT_EQ(static_cast<NeedlePhase>(s.tool.phase), NeedlePhase::kFree);
+    entered = entered || static_cast<NeedlePhase>(s.tool.phase) != NeedlePhase::kFree;
     pushed = std::max(pushed, s.force.z());
   });
-  EXPECT_GT(pushed, 1.0);
+  return {pushed, entered};
+}
+
+TEST(NeedleInsertion, ARigidBodyIsAWallUnlessNamedAndANamedBodyCanBeMadeAWall) {
+  // A rigid body not named in the needle's sets: a wall (its surface pushes back).
+  const auto [unnamed_push, unnamed_entered] = press_block(NeedleConfig{});
+  EXPECT_FALSE(unnamed_entered);
+  EXPECT_GT(unnamed_push, 1.0);
+  // Named with pierceable="true": entered (no surface force; 5 mm in, the capsule pushes).
+  NeedleConfig named;
+  named.bodies.emplace_back("block", named.tissue);
+  const auto [named_push, named_entered] = press_block(named);
+  EXPECT_TRUE(named_entered);
+  EXPECT_LT(named_push, 0.2);
+  // Named with pierceable="false": a wall again.
+  named.bodies[0].second.pierceable = false;
+  const auto [wall_push, wall_entered] = press_block(named);
+  EXPECT_FALSE(wall_entered);
+  EXPECT_GT(wall_push, 1.0);
+}
+
+TEST(NeedleInsertion, TheAxisFollowsTheMotionOrTheNormalAndTheLateralSpringHoldsThePath) {
+  // An oblique insertion (17° from the normal) into the block.
+  const auto run_oblique = [](NeedleAxis axis) {
+    std::vector<SessionBody> bodies(1);
+    bodies[0].name = "block";
+    bodies[0].surface = box(Vec3(-0.05, -0.05, -0.1), Vec3(0.05, 0.05, 0.0));
+    NeedleConfig needle;
+    needle.axis = axis;
+    needle.bodies.emplace_back("block", needle.tissue);
+    SessionConfig config = needle_config(needle, bodies);
+    // A point proxy on the flat face: the entry is where the path crosses it, the normal the
+    // face's own (no shading from the box's edges).
+    config.haptics.renderer.kind = haptics::RendererKind::kGodObject;
+    haptics::MotionConfig motion;
+    motion.kind = haptics::MotionKind::kPoke;
+    motion.start_m = Vec3(-0.006, 0.0, 0.02);
+    motion.direction = Vec3(0.3, 0.0, -1.0);
+    motion.approach_m = 0.02 * Vec3(0.3, 0.0, -1.0).norm();  // to z = 0
+    motion.depth_m = 0.03;
+    motion.speed_m_per_s = 0.01;
+    motion.hold_s = 0.2;
+    auto session = Session::make(std::move(bodies), std::make_unique<haptics::ScriptedDevice>(*haptics::ScriptedMotion::make(motion)), config);
+    EXPECT_TRUE(session);
+    haptics::HapticSample deepest;
+    (*session)->run_virtual(5.6, [&](const haptics::HapticSample& s) {
+      if (s.valid && s.tool.depth_m > deepest.tool.depth_m) deepest = s;
+    });
+    return deepest;
+  };
+  const Vec3 direction = Vec3(0.3, 0.0, -1.0).normalized();
+  const haptics::HapticSample motion = run_oblique(NeedleAxis::kMotion);
+  EXPECT_NEAR((motion.tool.axis - direction).norm(), 0.0, 1e-9);
+  EXPECT_NEAR(motion.tool.depth_m, 0.03, 1e-5);
+  // Along its own axis: no lateral force.
+  EXPECT_NEAR((motion.requested_force + motion.tool.axial_force_n * motion.tool.axis).norm(), 0.0, 1e-9);
+  const haptics::HapticSample normal = run_oblique(NeedleAxis::kNormal);
+  EXPECT_NEAR((normal.tool.axis - Vec3(0, 0, -1)).norm(), 0.0, 1e-9);
+  // Off its axis (the hand moved obliquely): the lateral spring pulls the tip back toward the
+  // vertical path, 500 N/m times the offset.
+  const Vec3 offset = (normal.device - normal.tool.entry) - normal.tool.depth_m * normal.tool.axis;
+  const Vec3 lateral = normal.requested_force + normal.tool.axial_force_n * normal.tool.axis;
+  EXPECT_GT(offset.norm(), 0.001);
+  EXPECT_NEAR(lateral.dot(offset.normalized()), -500.0 * offset.norm(), 0.05 * 500.0 * offset.norm());
 }
 
 // The simple liver (co-rotational FEM, 5.4 kPa) pierced from above.
@@ -235,7 +306,7 @@ struct LiverRun {
   mesh::Mesh liver;
 };
 
-LiverRun pierce_liver(NeedleForceModel model) {
+LiverRun pierce_liver(NeedleForceModel model, FungForm form = FungForm::kIntegrated) {
   LiverRun run;
   run.liver = *mesh::generate_liver(mesh::LiverResolution::kSimple);
   const mesh::BoundarySurface b = mesh::extract_boundary(run.liver.nodes, run.liver.tets);
@@ -250,6 +321,7 @@ LiverRun pierce_liver(NeedleForceModel model) {
   bodies.push_back(SessionBody{"liver", std::move(*built), b.surface, std::move(*mapping), {}, {}});
   NeedleConfig needle;
   needle.tissue.model = model;
+  needle.tissue.fung_form = form;
   SessionConfig config = needle_config(needle, bodies);
   // Over the right lobe's top (z ≈ 0.05), 30 mm in at 10 mm/s, hold 1 s, out.
   auto session = Session::make(std::move(bodies), insertion(Vec3(0.03, 0.0, 0.06), 0.01, 0.03, 0.01, 1.0), config);
@@ -262,8 +334,10 @@ LiverRun pierce_liver(NeedleForceModel model) {
   return run;
 }
 
-TEST(NeedleInsertion, TheLiverDeformsAroundThePathAndIsDraggedOnExtraction) {
-  const LiverRun run = pierce_liver(NeedleForceModel::kSimoneOkamura);
+class LiverPierced : public ::testing::TestWithParam<std::pair<NeedleForceModel, FungForm>> {};
+
+TEST_P(LiverPierced, DeformsAroundThePathAndIsDraggedOnExtraction) {
+  const LiverRun run = pierce_liver(GetParam().first, GetParam().second);
   const Eigen::VectorXd& rest = run.states.front();
   // When each phase held, by time.
   double end_of_insertion = -1.0, start_of_extraction = -1.0, mid_extraction = -1.0;
@@ -310,13 +384,20 @@ TEST(NeedleInsertion, TheLiverDeformsAroundThePathAndIsDraggedOnExtraction) {
   for (Eigen::Index n = 0; n < rest.size() / 3; ++n) {
     const Vec3 x = held.segment<3>(3 * n);
     const double along = (x - entry).dot(axis);
-    if (along < 0.0 || along > 0.015 || ((x - entry) - along * axis).norm() > 0.01) continue;
+    if (along < -0.005 || along > 0.03 || ((x - entry) - along * axis).norm() > 0.02) continue;  // the simple liver's nodes are ~15 mm apart
     outward += -(dragged.segment<3>(3 * n) - x).dot(axis);
     ++near_path;
   }
-  ASSERT_GT(near_path, 0);
+  ASSERT_GT(near_path, 0) << "entry " << entry.transpose() << " axis " << axis.transpose();
   EXPECT_GT(outward / near_path, 1e-5);
 }
+
+// Simone-Okamura, and Fung in the printed form (positive after puncture, so the tissue is
+// pushed in while inserting and dragged out on extraction). In the integrated form the
+// post-puncture force already pulls the tissue out while inserting (see docs/needle.md).
+INSTANTIATE_TEST_SUITE_P(Needle, LiverPierced,
+                         ::testing::Values(std::pair{NeedleForceModel::kSimoneOkamura, FungForm::kIntegrated},
+                                           std::pair{NeedleForceModel::kFung, FungForm::kPrinted}));
 
 TEST(NeedleInsertion, TheDeviceNeverGetsMoreThanItsLimitWhateverTheParameters) {
   haptics::DeviceSpec spec;
@@ -342,6 +423,9 @@ TEST(NeedleInsertion, TheDeviceNeverGetsMoreThanItsLimitWhateverTheParameters) {
       const BoxRun run = pierce_box(n, haptics::RendererKind::kRuspini, speed, spec);
       for (const haptics::HapticSample& s : run.samples) {
         ASSERT_TRUE(s.force.allFinite());
+        // Finite before the safety filter too: the tool itself never makes a NaN.
+        ASSERT_TRUE(s.requested_force.allFinite()) << "t = " << s.time_s;
+        ASSERT_TRUE(std::isfinite(s.tool.axial_force_n));
         ASSERT_LE(s.force.norm(), spec.max_force_n) << "t = " << s.time_s;
       }
     }

@@ -248,7 +248,7 @@ int run_session(const RunOptions& options) {
     needle_tissues = procedures::parameters_by_body(*world->project.needle, names, deformable);
     needle.tissue = world->project.needle->tissue;
   }
-  auto previous_phase = procedures::NeedlePhase::kFree;
+  bool previous_broken = false;
   double next_row = 0.0;
   std::int64_t ended_rows = 0;
   bool was_in_contact = false;
@@ -263,7 +263,7 @@ int run_session(const RunOptions& options) {
       }
       needle.max_depth_m = std::max(needle.max_depth_m, s.tool.depth_m);
       if (phase == procedures::NeedlePhase::kPrePuncture) needle.peak_before_puncture_n = std::max(needle.peak_before_puncture_n, s.tool.axial_force_n);
-      if (phase == procedures::NeedlePhase::kPunctured && previous_phase == procedures::NeedlePhase::kPrePuncture && needle.puncture_depth_m < 0.0) {
+      if (s.tool.broken && !previous_broken && needle.puncture_depth_m < 0.0) {
         needle.puncture_depth_m = s.tool.depth_m;
         needle.force_after_puncture_n = s.tool.axial_force_n;
       }
@@ -271,7 +271,7 @@ int run_session(const RunOptions& options) {
         needle.insertion_speed_sum += s.device_velocity.dot(s.tool.axis);
         ++needle.insertion_ticks;
       }
-      previous_phase = phase;
+      previous_broken = s.tool.broken;
     }
     if (!telemetry) return;
     // No reading (a script that has ended, a device gone): not a device at the origin.

@@ -28,8 +28,9 @@ struct ToolState {
   bool broken{false};         ///< the body's capsule (its outer layer) is broken
   std::int32_t body{-1};      ///< the world's body index the tool is in (or touches), -1: none
   std::int32_t layer{-1};     ///< the haptic layer of that body
-  double depth_m{0.0};        ///< tip depth along the axis below the entry point
+  double depth_m{0.0};        ///< tip depth along the axis below the entry point, m
   double axial_force_n{0.0};  ///< the model's force along the axis; > 0 resists insertion
+  double axial_velocity_m_per_s{0.0};  ///< the tool's (filtered) velocity along the axis, > 0 inward
   Vec3 tip{Vec3::Zero()};     ///< the tool's tip
   Vec3 entry{Vec3::Zero()};   ///< where it entered the body (fixed at first contact)
   Vec3 axis{Vec3::Zero()};    ///< unit insertion direction (into the body)

@@ -28,6 +28,9 @@ Expected<void> validate(const NeedleConfig& config) {
     return make_error(ErrorCode::kInvalidArgument,
                       fmt::format("needle: tipLength must be in [0, length] = [0, {}] m, got {}", g.length_m, g.tip_length_m));
   }
+  if (!(config.velocity_filter_s >= 0.0 && config.velocity_filter_s <= 1.0)) {
+    return make_error(ErrorCode::kInvalidArgument, fmt::format("needle: velocityFilter must be in [0, 1] s, got {}", config.velocity_filter_s));
+  }
   if (auto ok = validate(config.tissue, "needle tissue"); !ok) return ok;
   for (const auto& [name, set] : config.bodies) {
     if (auto ok = validate(set, fmt::format("needle tissue of body '{}'", name)); !ok) return ok;
@@ -51,8 +54,11 @@ std::vector<TissueNeedleParameters> parameters_by_body(const NeedleConfig& confi
 }
 
 Expected<std::shared_ptr<NeedleTool>> NeedleTool::make(const NeedleConfig& config, std::vector<std::string> body_names,
-                                                        std::vector<bool> deformable) {
+                                                        std::vector<bool> deformable, double metres_per_unit) {
   if (auto ok = validate(config); !ok) return std::unexpected(ok.error());
+  if (!(metres_per_unit > 0.0 && std::isfinite(metres_per_unit))) {
+    return make_error(ErrorCode::kInvalidArgument, fmt::format("needle: the length unit must be > 0 m, got {}", metres_per_unit));
+  }
   for (const auto& [name, set] : config.bodies) {
     if (std::find(body_names.begin(), body_names.end(), name) == body_names.end()) {
       std::string names;
@@ -61,20 +67,27 @@ Expected<std::shared_ptr<NeedleTool>> NeedleTool::make(const NeedleConfig& confi
                         fmt::format("needle: no body '{}' for its tissue (bodies: {})", name, names.empty() ? "none" : names));
     }
   }
-  return std::shared_ptr<NeedleTool>(new NeedleTool(config, std::move(body_names), std::move(deformable)));
+  return std::shared_ptr<NeedleTool>(new NeedleTool(config, std::move(body_names), std::move(deformable), metres_per_unit));
 }
 
-NeedleTool::NeedleTool(const NeedleConfig& config, std::vector<std::string> body_names, std::vector<bool> deformable)
-    : config_(config), body_names_(std::move(body_names)), deformable_(std::move(deformable)) {
-  producer_resolved_.axis = config_.axis;
-  producer_resolved_.bodies = parameters_by_body(config_, body_names_, deformable_);
+NeedleTool::NeedleTool(const NeedleConfig& config, std::vector<std::string> body_names, std::vector<bool> deformable,
+                       double metres_per_unit)
+    : config_(config), body_names_(std::move(body_names)), deformable_(std::move(deformable)), metres_per_unit_(metres_per_unit) {
   spread_radius_ = std::make_unique<std::atomic<double>[]>(std::max<std::size_t>(1, body_names_.size()));
-  for (std::size_t i = 0; i < body_names_.size(); ++i) spread_radius_[i].store(producer_resolved_.bodies[i].spread_radius_m);
-  // Every slot holds the settings: the tick reads a whole one.
+  resolve();
+  // Every slot the tick may read holds the settings.
   settings_.write_slot() = producer_resolved_;
   settings_.publish();
   settings_.acquire();
   settings_.write_slot() = producer_resolved_;
+}
+
+void NeedleTool::resolve() {
+  producer_resolved_.axis = config_.axis;
+  producer_resolved_.velocity_filter_s = config_.velocity_filter_s;
+  producer_resolved_.bodies = parameters_by_body(config_, body_names_, deformable_);
+  for (std::size_t i = 0; i < body_names_.size(); ++i) spread_radius_[i].store(producer_resolved_.bodies[i].spread_radius_m / metres_per_unit_);
+  if (body_names_.empty()) spread_radius_[0].store(config_.tissue.spread_radius_m / metres_per_unit_);
 }
 
 Expected<void> NeedleTool::configure(const NeedleConfig& config) {
@@ -85,9 +98,7 @@ Expected<void> NeedleTool::configure(const NeedleConfig& config) {
     }
   }
   config_ = config;
-  producer_resolved_.axis = config_.axis;
-  producer_resolved_.bodies = parameters_by_body(config_, body_names_, deformable_);
-  for (std::size_t i = 0; i < body_names_.size(); ++i) spread_radius_[i].store(producer_resolved_.bodies[i].spread_radius_m);
+  resolve();
   settings_.write_slot() = producer_resolved_;
   settings_.publish();
   return {};
@@ -98,12 +109,13 @@ const TissueNeedleParameters& NeedleTool::parameters(std::size_t body) const {
 }
 
 double NeedleTool::spread_radius(std::size_t body) const {
-  return body < body_names_.size() ? spread_radius_[body].load(std::memory_order_relaxed) : config_.tissue.spread_radius_m;
+  return spread_radius_[body < body_names_.size() ? body : 0].load(std::memory_order_relaxed);
 }
 
 void NeedleTool::restart() {
   disengage(NeedlePhase::kFree);
   rearmed_ = true;
+  have_velocity_ = false;
 }
 
 void NeedleTool::disengage(NeedlePhase phase) {
@@ -118,6 +130,7 @@ void NeedleTool::disengage(NeedlePhase phase) {
 Vec3 NeedleTool::tick(const haptics::ToolTickInput& in, std::span<Vec3> layer_forces, haptics::ToolState& st) {
   settings_.acquire();
   const Resolved& settings = settings_.read();
+  const double to_m = metres_per_unit_;
   const auto body_of = [&](std::size_t l) -> std::int32_t {
     if (l >= in.contacts.size() || l >= in.surfaces.size() || !in.surfaces[l]) return -1;
     const haptics::ContactState& c = in.contacts[l];
@@ -127,19 +140,36 @@ Vec3 NeedleTool::tick(const haptics::ToolTickInput& in, std::span<Vec3> layer_fo
     const std::int32_t body = in.surfaces[l]->parts[static_cast<std::size_t>(part)].body;
     return body >= 0 ? body : part;
   };
+  // The tip's velocity, low-pass filtered (first order, time constant velocity_filter_s).
+  if (!have_velocity_ || !(settings.velocity_filter_s > 0.0)) {
+    velocity_ = in.velocity;
+    have_velocity_ = true;
+  } else {
+    velocity_ += (1.0 - std::exp(-in.dt_s / settings.velocity_filter_s)) * (in.velocity - velocity_);
+  }
 
   if (!engaged_ && !rearmed_) {
-    // Just withdrawn: the stylus is still at the surface; a new insertion starts at the next
-    // contact, not at this one.
-    // Until then its surface stays force-free (the tissue dragged out with the needle has the
-    // tip still under its surface: it must not spring the hand back).
+    // Just withdrawn: the stylus is still at the surface, which stays force-free (the tissue
+    // dragged out with the needle has the tip under its surface: it must not spring the hand
+    // back). Pushed back in there, the needle re-enters the hole it made; once the stylus has
+    // left the surface, the next contact starts a new insertion.
     bool touching = false;
     for (std::size_t l = 0; l < in.contacts.size(); ++l) {
       if (body_of(l) != withdrawn_from_) continue;
       touching = true;
       layer_forces[l].setZero();
     }
-    rearmed_ = !touching;
+    if ((in.position - entry_).dot(axis_) > 0.0 && touching) {
+      engaged_ = true;
+      broken_ = true;
+      body_ = withdrawn_from_;
+      layer_ = withdrawn_layer_;
+      phase_ = NeedlePhase::kPunctured;
+      held_n_ = 0.0;
+      rearmed_ = true;
+    } else {
+      rearmed_ = !touching;
+    }
   }
   if (!engaged_ && rearmed_) {
     // First contact with a body the needle can enter: the entry point and the axis are fixed.
@@ -150,13 +180,13 @@ Vec3 NeedleTool::tick(const haptics::ToolTickInput& in, std::span<Vec3> layer_fo
       }
       const haptics::ContactState& c = in.contacts[l];
       const TissueNeedleParameters& p = settings.bodies[static_cast<std::size_t>(b)];
-      const double still = std::max(1e-9, 0.5 * p.friction.velocity_band_m_per_s);
+      const double still = std::max(1e-9, 0.5 * p.friction.velocity_band_m_per_s) / to_m;  // world units/s
       normal_ = c.normal.norm() > 0.0 ? c.normal.normalized() : Vec3(0.0, 0.0, 1.0);
       const Vec3 inward = -normal_;
       axis_ = inward;
       if (settings.axis == NeedleAxis::kMotion) {
-        const double speed = in.velocity.norm();
-        if (speed > still && in.velocity.dot(inward) > 0.2 * speed) axis_ = in.velocity / speed;
+        const double speed = velocity_.norm();
+        if (speed > still && velocity_.dot(inward) > 0.2 * speed) axis_ = velocity_ / speed;
       } else if (settings.axis == NeedleAxis::kStylus) {
         const Vec3 stylus = in.orientation * Vec3(0.0, 0.0, -1.0);
         if (stylus.dot(inward) > 0.0) axis_ = stylus.normalized();
@@ -168,18 +198,20 @@ Vec3 NeedleTool::tick(const haptics::ToolTickInput& in, std::span<Vec3> layer_fo
       layer_ = static_cast<std::int32_t>(l);
       phase_ = NeedlePhase::kTouching;
       held_n_ = 0.0;
+      max_depth_m_ = 0.0;
       break;
     }
   }
 
-  const auto publish = [&](double depth, double f, const Vec3& force) {
+  const auto publish = [&](double depth_m, double v_m, double f, const Vec3& force) {
     st.phase = static_cast<std::uint8_t>(phase_);
     st.touched = engaged_;
     st.broken = broken_;
     st.body = engaged_ ? body_ : -1;
     st.layer = engaged_ ? layer_ : -1;
-    st.depth_m = depth;
+    st.depth_m = depth_m;
     st.axial_force_n = f;
+    st.axial_velocity_m_per_s = v_m;
     st.tip = in.position;
     st.entry = entry_;
     st.axis = axis_;
@@ -187,22 +219,35 @@ Vec3 NeedleTool::tick(const haptics::ToolTickInput& in, std::span<Vec3> layer_fo
     st.force = force;
     return force;
   };
-  if (!engaged_) return publish(0.0, 0.0, Vec3::Zero());
+  if (!engaged_) return publish(0.0, 0.0, 0.0, Vec3::Zero());
 
   const TissueNeedleParameters& p = settings.bodies[static_cast<std::size_t>(body_)];
   const double still = std::max(1e-9, 0.5 * p.friction.velocity_band_m_per_s);
-  const double d = (in.position - entry_).dot(axis_);
-  const double v = in.velocity.dot(axis_);
+  // Depth and axial velocity in SI (the model's units), whatever the world's.
+  double d = (in.position - entry_).dot(axis_) * to_m;
+  const double v = velocity_.dot(axis_) * to_m;
+  Vec3 off_axis = (in.position - entry_) - (d / to_m) * axis_;
   // The zero-force surface: the pierced body's surface lets the tip pass.
   const bool on_surface = body_of(static_cast<std::size_t>(layer_)) == body_;
   if (on_surface) layer_forces[static_cast<std::size_t>(layer_)].setZero();
+  const auto withdraw = [&] {
+    withdrawn_from_ = body_;
+    withdrawn_layer_ = layer_;
+    disengage(NeedlePhase::kOut);
+    rearmed_ = false;
+    return publish(0.0, v, 0.0, Vec3::Zero());
+  };
 
   double f = 0.0;
   if (!broken_) {
+    // The capsule is intact: the needle is not in yet, and its dimple slides with the tip (no
+    // lateral hold before the puncture).
+    entry_ += off_axis;
+    off_axis.setZero();
     if (d <= 0.0) {
       if (!on_surface) {
         disengage(NeedlePhase::kFree);
-        return publish(0.0, 0.0, Vec3::Zero());
+        return publish(0.0, v, 0.0, Vec3::Zero());
       }
       phase_ = NeedlePhase::kTouching;
     } else {
@@ -210,18 +255,16 @@ Vec3 NeedleTool::tick(const haptics::ToolTickInput& in, std::span<Vec3> layer_fo
       if (d >= p.capsule_m || f >= p.puncture_force_n) {
         broken_ = true;  // the capsule gives way: the post-puncture model from this tick on
         phase_ = NeedlePhase::kPunctured;
+        max_depth_m_ = d;
         f = post_puncture_force(p, d, v, held_n_);
       } else {
         phase_ = NeedlePhase::kPrePuncture;
       }
     }
   } else {
-    if (d <= 0.0) {
-      withdrawn_from_ = body_;
-      disengage(NeedlePhase::kOut);
-      rearmed_ = false;
-      return publish(0.0, 0.0, Vec3::Zero());
-    }
+    // Out past the entry, or torn sideways out of the path (a rigid needle cannot cross the
+    // tissue): withdrawn.
+    if (d <= 0.0 || off_axis.norm() * to_m > p.path_tolerance_m) return withdraw();
     NeedlePhase next = phase_;
     if (v >= still) {
       next = NeedlePhase::kPunctured;
@@ -238,20 +281,24 @@ Vec3 NeedleTool::tick(const haptics::ToolTickInput& in, std::span<Vec3> layer_fo
     switch (phase_) {
       case NeedlePhase::kRelaxation: f = relaxation_force(p, relax_force_n_, in.time_s - relax_start_s_); break;
       case NeedlePhase::kExtraction: f = extraction_force(p, d, v, held_n_); break;
-      default: f = post_puncture_force(p, d, v, held_n_); break;
+      default:
+        // New tissue is cut beyond the deepest point so far; before it the path exists.
+        f = d >= max_depth_m_ ? post_puncture_force(p, d, v, held_n_) : reinsertion_force(p, d, v, held_n_);
+        max_depth_m_ = std::max(max_depth_m_, d);
+        break;
     }
   }
   held_n_ = f;
 
   // Inside, the tissue holds the shaft on its path: a lateral spring toward the axis line.
   Vec3 lateral = Vec3::Zero();
-  if (d > 0.0) {
-    const Vec3 off_axis = (in.position - entry_) - d * axis_;
-    const Vec3 lateral_velocity = in.velocity - v * axis_;
-    const double k = std::min(p.lateral_stiffness_n_per_m, in.max_stiffness_n_per_m);
-    lateral = -k * off_axis - p.lateral_damping_n_s_per_m * lateral_velocity;
+  if (broken_ && d > 0.0) {
+    const Vec3 lateral_velocity = velocity_ - velocity_.dot(axis_) * axis_;
+    const double k = std::min(p.lateral_stiffness_n_per_m * to_m, in.max_stiffness_n_per_m);  // N per world unit
+    lateral = -k * off_axis - p.lateral_damping_n_s_per_m * to_m * lateral_velocity;
   }
-  return publish(std::max(0.0, d), f, -f * axis_ + lateral);
+  d = std::max(0.0, d);
+  return publish(d, v, f, -f * axis_ + lateral);
 }
 
 // ---- The reaction in the tissue
@@ -262,16 +309,17 @@ void NeedleTissueCoupling::add_tissue_forces(const haptics::ToolState& tool, con
   const std::size_t nodes = model.node_count();
   if (nodes == 0 || !reaction.allFinite() || reaction.squaredNorm() == 0.0 || !tool.axis.allFinite()) return;
   const double radius = tool_ ? tool_->spread_radius(static_cast<std::size_t>(std::max(0, tool.body))) : 0.01;
+  const double depth = std::max(0.0, tool.depth_m) / (tool_ ? tool_->metres_per_unit() : 1.0);  // world units
   const auto phase = static_cast<NeedlePhase>(tool.phase);
-  if (phase == NeedlePhase::kTouching || phase == NeedlePhase::kPrePuncture || tool.depth_m <= 0.0) {
+  if (phase == NeedlePhase::kTouching || phase == NeedlePhase::kPrePuncture || depth <= 0.0) {
     // The capsule is intact: pushed ahead of the tip.
-    spread(tool.entry + tool.axis * std::max(0.0, tool.depth_m), reaction, radius, state, nodes, forces);
+    spread(tool.entry + tool.axis * depth, reaction, radius, state, nodes, forces);
     return;
   }
   // Through the capsule: along the shaft, entry to tip, in equal shares.
-  const int points = std::clamp(static_cast<int>(std::ceil(tool.depth_m / radius)), 1, 16);
+  const int points = std::clamp(static_cast<int>(std::ceil(depth / radius)), 1, 16);
   for (int k = 0; k < points; ++k) {
-    const Vec3 at = tool.entry + tool.axis * (tool.depth_m * (k + 1) / points);
+    const Vec3 at = tool.entry + tool.axis * (depth * (k + 1) / points);
     spread(at, reaction / points, radius, state, nodes, forces);
   }
 }

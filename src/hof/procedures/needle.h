@@ -66,6 +66,10 @@ struct NeedleGeometry {
 struct NeedleConfig {
   NeedleGeometry geometry;
   NeedleAxis axis{NeedleAxis::kMotion};
+  /// Time constant of the low-pass filter on the tip's velocity that decides moving / still
+  /// and feeds the friction (a real device's velocity estimate is noisy: unfiltered, a still
+  /// needle would flicker between relaxation, insertion and extraction), s; 0: unfiltered.
+  double velocity_filter_s{0.01};
   TissueNeedleParameters tissue;  ///< every deformable body without its own set
   std::vector<std::pair<std::string, TissueNeedleParameters>> bodies;  ///< by body name
   bool operator==(const NeedleConfig&) const = default;
@@ -81,9 +85,10 @@ struct NeedleConfig {
 
 class NeedleTool final : public haptics::Tool {
  public:
-  /// `body_names` and `deformable` describe the world's bodies, by index.
+  /// `body_names` and `deformable` describe the world's bodies, by index. The parameters are
+  /// SI; `metres_per_unit` is the world's length unit in metres (1e-3 for a scene in mm).
   static Expected<std::shared_ptr<NeedleTool>> make(const NeedleConfig& config, std::vector<std::string> body_names,
-                                                     std::vector<bool> deformable);
+                                                     std::vector<bool> deformable, double metres_per_unit = 1.0);
 
   Vec3 tick(const haptics::ToolTickInput& input, std::span<Vec3> layer_forces, haptics::ToolState& state) override;
   void restart() override;
@@ -95,28 +100,38 @@ class NeedleTool final : public haptics::Tool {
   [[nodiscard]] const NeedleConfig& config() const { return config_; }
   /// The parameters in force for body `i` (producer side).
   [[nodiscard]] const TissueNeedleParameters& parameters(std::size_t body) const;
-  /// Body i's reach of the reaction in the tissue (any thread).
+  /// Body i's reach of the reaction in the tissue, in world units (any thread).
   [[nodiscard]] double spread_radius(std::size_t body) const;
+  [[nodiscard]] double metres_per_unit() const { return metres_per_unit_; }
 
  private:
-  NeedleTool(const NeedleConfig& config, std::vector<std::string> body_names, std::vector<bool> deformable);
+  NeedleTool(const NeedleConfig& config, std::vector<std::string> body_names, std::vector<bool> deformable, double metres_per_unit);
   struct Resolved {
     NeedleAxis axis{NeedleAxis::kMotion};
+    double velocity_filter_s{0.01};
     std::vector<TissueNeedleParameters> bodies;
   };
   void disengage(NeedlePhase phase);
+  void resolve();
 
   NeedleConfig config_;                 // producer side
   std::vector<std::string> body_names_;
   std::vector<bool> deformable_;
+  double metres_per_unit_{1.0};
   Resolved producer_resolved_;
   TripleBuffer<Resolved> settings_;     // producer → tick
   std::unique_ptr<std::atomic<double>[]> spread_radius_;  // producer → the simulation's coupling
   // Tick state.
   bool engaged_{false};
   bool broken_{false};
+  // After a withdrawal the hole stays until the stylus has left the surface: pushed back in
+  // there, the needle re-enters its path.
   bool rearmed_{true};
-  std::int32_t withdrawn_from_{-1};  // the body just withdrawn from          // false after an extraction, until the stylus has left the surface
+  std::int32_t withdrawn_from_{-1};
+  std::int32_t withdrawn_layer_{-1};
+  double max_depth_m_{0.0};     // the deepest point of the path cut so far
+  bool have_velocity_{false};
+  Vec3 velocity_{Vec3::Zero()}; // the tip's filtered velocity, world units/s
   NeedlePhase phase_{NeedlePhase::kFree};
   std::int32_t body_{-1};
   std::int32_t layer_{-1};

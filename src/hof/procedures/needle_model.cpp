@@ -21,6 +21,8 @@ std::string_view phase_name(NeedlePhase phase) {
   return "unknown";
 }
 
+std::string_view form_name(FungForm form) { return form == FungForm::kIntegrated ? "integrated" : "printed"; }
+
 std::string_view model_name(NeedleForceModel model) {
   return model == NeedleForceModel::kFung ? "fung" : "simone-okamura";
 }
@@ -33,9 +35,10 @@ double finite_or_max(double v) {
 }
 }  // namespace
 
-double fung_force(const FungParameters& t, double d) {
-  // Fung's law, integrated (Maurin et al. 2004): f(d0) = F0.
-  return finite_or_max((t.f0_n + t.b_n) * std::exp(t.a_per_m * (d - t.d0_m)) - t.b_n);
+double fung_force(const FungParameters& t, double d, FungForm form) {
+  // Fung's law (Maurin et al. 2004), integrated: f(d0) = F0; or as the thesis prints it.
+  const double exponential = (t.f0_n + t.b_n) * std::exp(t.a_per_m * (d - t.d0_m));
+  return finite_or_max(form == FungForm::kIntegrated ? exponential - t.b_n : exponential + t.b_n);
 }
 
 double stiffness_force(const StiffnessPolynomial& p, double d) {
@@ -55,12 +58,16 @@ double karnopp_force(const KarnoppFriction& k, double inserted_m, double v, doub
 }
 
 double pre_puncture_force(const TissueNeedleParameters& p, double d) {
-  return p.model == NeedleForceModel::kFung ? fung_force(p.fung_pre, d) : stiffness_force(p.stiffness, d);
+  return p.model == NeedleForceModel::kFung ? fung_force(p.fung_pre, d, p.fung_form) : stiffness_force(p.stiffness, d);
 }
 
 double post_puncture_force(const TissueNeedleParameters& p, double d, double v, double held_n) {
-  if (p.model == NeedleForceModel::kFung) return fung_force(p.fung_post, d);
+  if (p.model == NeedleForceModel::kFung) return fung_force(p.fung_post, d, p.fung_form);
   return finite_or_max(karnopp_force(p.friction, d, v, held_n) + p.cutting_force_n);
+}
+
+double reinsertion_force(const TissueNeedleParameters& p, double d, double v, double held_n) {
+  return karnopp_force(p.friction, d, v, held_n);
 }
 
 double extraction_force(const TissueNeedleParameters& p, double d, double v, double held_n) {
@@ -87,16 +94,19 @@ Expected<void> validate(const TissueNeedleParameters& p, std::string_view what) 
   for (double v : {p.stiffness.a0_n, p.stiffness.a1_n_per_m, p.stiffness.a2_n_per_m2}) {
     if (!finite(v)) return bad("stiffness", "three finite numbers (a0 N, a1 N/m, a2 N/m2)", v);
   }
-  for (double v : {p.friction.static_positive_n_per_m, p.friction.static_negative_n_per_m,
-                   p.friction.damping_positive_n_s_per_m2, p.friction.damping_negative_n_s_per_m2}) {
-    if (!finite(v)) return bad("friction", "four finite numbers (Cp N/m, Cn N/m, bp N s/m2, bn N s/m2)", v);
+  for (double v : {p.friction.static_positive_n_per_m, p.friction.damping_positive_n_s_per_m2}) {
+    // Friction resists the motion: a wrong sign would push the hand along (energy in).
+    if (!(finite(v) && v >= 0.0)) return bad("friction", "Cp, bp >= 0 and Cn, bn <= 0 (N/m, N s/m2; Maurin: 0.121 -0.117 3200 -1600)", v);
+  }
+  for (double v : {p.friction.static_negative_n_per_m, p.friction.damping_negative_n_s_per_m2}) {
+    if (!(finite(v) && v <= 0.0)) return bad("friction", "Cp, bp >= 0 and Cn, bn <= 0 (N/m, N s/m2; Maurin: 0.121 -0.117 3200 -1600)", v);
   }
   if (!(p.friction.velocity_band_m_per_s >= 0.0 && finite(p.friction.velocity_band_m_per_s))) {
     return bad("frictionVelocityBand", ">= 0 m/s", p.friction.velocity_band_m_per_s);
   }
   if (!finite(p.cutting_force_n)) return bad("cuttingForce", "finite (N)", p.cutting_force_n);
   if (!(p.capsule_m > 0.0 && finite(p.capsule_m))) return bad("capsule", "> 0 m", p.capsule_m);
-  if (!(p.puncture_force_n > 0.0)) return bad("punctureForce", "> 0 N (inf: depth only)", p.puncture_force_n);
+  if (!(p.puncture_force_n > 0.0 && finite(p.puncture_force_n))) return bad("punctureForce", "> 0 N (a large value: by depth only)", p.puncture_force_n);
   if (!(p.relaxation_time_s > 0.0 && finite(p.relaxation_time_s))) return bad("relaxationTime", "> 0 s", p.relaxation_time_s);
   if (!(p.lateral_stiffness_n_per_m >= 0.0 && finite(p.lateral_stiffness_n_per_m))) {
     return bad("lateralStiffness", ">= 0 N/m", p.lateral_stiffness_n_per_m);
@@ -105,6 +115,7 @@ Expected<void> validate(const TissueNeedleParameters& p, std::string_view what) 
     return bad("lateralDamping", ">= 0 N s/m", p.lateral_damping_n_s_per_m);
   }
   if (!(p.spread_radius_m > 0.0 && finite(p.spread_radius_m))) return bad("spreadRadius", "> 0 m", p.spread_radius_m);
+  if (!(p.path_tolerance_m > 0.0 && finite(p.path_tolerance_m))) return bad("pathTolerance", "> 0 m", p.path_tolerance_m);
   return {};
 }
 

@@ -57,7 +57,17 @@ enum class NeedleForceModel : std::uint8_t {
 };
 [[nodiscard]] std::string_view model_name(NeedleForceModel model);  ///< "fung", "simone-okamura"
 
-/// θ = [a, b, d0, F0] of f(d) = (F0 + b)·e^{a(d − d0)} − b.
+/// Which form of Fung's law θ is read in.
+enum class FungForm : std::uint8_t {
+  kIntegrated,  ///< f(d) = (F0 + b)·e^{a(d − d0)} − b: Fung's law integrated, f(d0) = F0
+  /// f(d) = (F0 + b)·e^{a(d − d0)} + b, as the thesis (and the MATLAB comment it came from)
+  /// prints it. With Maurin's θ, F0 + 2b ≈ 0 in both phases (0.004 N and 0.01 N): each phase
+  /// starts from about zero at its d0 and rises, the post-puncture force is positive.
+  kPrinted,
+};
+[[nodiscard]] std::string_view form_name(FungForm form);  ///< "integrated", "printed"
+
+/// θ = [a, b, d0, F0] of f(d) = (F0 + b)·e^{a(d − d0)} ∓ b (FungForm).
 struct FungParameters {
   double a_per_m{121.0};
   double b_n{-0.098};
@@ -65,7 +75,7 @@ struct FungParameters {
   double f0_n{0.2};
   bool operator==(const FungParameters&) const = default;
 };
-[[nodiscard]] double fung_force(const FungParameters& theta, double depth_m);
+[[nodiscard]] double fung_force(const FungParameters& theta, double depth_m, FungForm form = FungForm::kIntegrated);
 
 /// f(d) = a0 + a1·d + a2·d².
 struct StiffnessPolynomial {
@@ -95,6 +105,7 @@ struct KarnoppFriction {
 struct TissueNeedleParameters {
   bool pierceable{true};
   NeedleForceModel model{NeedleForceModel::kFung};
+  FungForm fung_form{FungForm::kIntegrated};
   FungParameters fung_pre{};
   FungParameters fung_post{-31.0, 1.7, 0.01961, -3.39};
   StiffnessPolynomial stiffness{};
@@ -106,6 +117,9 @@ struct TissueNeedleParameters {
   double lateral_stiffness_n_per_m{500.0};  ///< the tissue holding the shaft on its path (≤ the device's)
   double lateral_damping_n_s_per_m{1.0};
   double spread_radius_m{0.01};         ///< the reaction's reach around the path in the tissue
+  /// How far the tip may leave its path sideways before the needle tears out of it (the
+  /// needle is then withdrawn: a rigid needle cannot move across the tissue).
+  double path_tolerance_m{0.02};
   bool operator==(const TissueNeedleParameters&) const = default;
 };
 /// Checks that every value is finite and in range; errors name `what` and the attribute.
@@ -113,9 +127,12 @@ struct TissueNeedleParameters {
 
 /// The model's axial force before puncture at depth d (> 0).
 [[nodiscard]] double pre_puncture_force(const TissueNeedleParameters& p, double depth_m);
-/// After puncture while inserting (Fung: the post-puncture law; Simone–Okamura: friction on
-/// the inserted length plus cutting).
+/// After puncture while inserting new tissue (Fung: the post-puncture law; Simone–Okamura:
+/// friction on the inserted length plus cutting). Through a path already cut (pushed back in
+/// after a withdrawal) only friction acts: reinsertion_force().
 [[nodiscard]] double post_puncture_force(const TissueNeedleParameters& p, double depth_m, double v, double held_n);
+/// Pushed back in along a path already cut: Karnopp friction on the inserted length.
+[[nodiscard]] double reinsertion_force(const TissueNeedleParameters& p, double depth_m, double v, double held_n);
 /// While withdrawing: Karnopp friction on the inserted length (both models).
 [[nodiscard]] double extraction_force(const TissueNeedleParameters& p, double depth_m, double v, double held_n);
 /// While still after insertion: the force f0 it had when it stopped, decaying.

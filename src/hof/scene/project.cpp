@@ -170,24 +170,24 @@ std::string tissue_xml(const procedures::TissueNeedleParameters& t, const std::s
   const std::string named = body.empty() ? std::string() : fmt::format(" body=\"{}\"", xml_escape(body));
   return fmt::format(
       "      <tissue{} pierceable=\"{}\" model=\"{}\" capsule=\"{}\" punctureForce=\"{}\" relaxationTime=\"{}\" "
-      "fungPre=\"{}\" fungPost=\"{}\" stiffness=\"{}\" cuttingForce=\"{}\" friction=\"{}\" frictionVelocityBand=\"{}\" "
-      "lateralStiffness=\"{}\" lateralDamping=\"{}\" spreadRadius=\"{}\"/>\n",
+      "fungForm=\"{}\" fungPre=\"{}\" fungPost=\"{}\" stiffness=\"{}\" cuttingForce=\"{}\" friction=\"{}\" frictionVelocityBand=\"{}\" "
+      "lateralStiffness=\"{}\" lateralDamping=\"{}\" spreadRadius=\"{}\" pathTolerance=\"{}\"/>\n",
       named, t.pierceable ? "true" : "false", procedures::model_name(t.model), number(t.capsule_m), number(t.puncture_force_n),
-      number(t.relaxation_time_s), numbers({t.fung_pre.a_per_m, t.fung_pre.b_n, t.fung_pre.d0_m, t.fung_pre.f0_n}),
+      number(t.relaxation_time_s), procedures::form_name(t.fung_form), numbers({t.fung_pre.a_per_m, t.fung_pre.b_n, t.fung_pre.d0_m, t.fung_pre.f0_n}),
       numbers({t.fung_post.a_per_m, t.fung_post.b_n, t.fung_post.d0_m, t.fung_post.f0_n}),
       numbers({t.stiffness.a0_n, t.stiffness.a1_n_per_m, t.stiffness.a2_n_per_m2}), number(t.cutting_force_n),
       numbers({t.friction.static_positive_n_per_m, t.friction.static_negative_n_per_m, t.friction.damping_positive_n_s_per_m2,
                t.friction.damping_negative_n_s_per_m2}),
       number(t.friction.velocity_band_m_per_s), number(t.lateral_stiffness_n_per_m), number(t.lateral_damping_n_s_per_m),
-      number(t.spread_radius_m));
+      number(t.spread_radius_m), number(t.path_tolerance_m));
 }
 
 std::string needle_xml(const procedures::NeedleConfig& n) {
   const procedures::NeedleGeometry& g = n.geometry;
   std::string out = fmt::format(
-      "    <needle axis=\"{}\" length=\"{}\" shaftDiameter=\"{}\" tipDiameter=\"{}\" tipLength=\"{}\" syringeDiameter=\"{}\" "
-      "syringeLength=\"{}\">\n",
-      procedures::axis_name(n.axis), number(g.length_m), number(g.shaft_diameter_m), number(g.tip_diameter_m),
+      "    <needle axis=\"{}\" velocityFilter=\"{}\" length=\"{}\" shaftDiameter=\"{}\" tipDiameter=\"{}\" tipLength=\"{}\" "
+      "syringeDiameter=\"{}\" syringeLength=\"{}\">\n",
+      procedures::axis_name(n.axis), number(n.velocity_filter_s), number(g.length_m), number(g.shaft_diameter_m), number(g.tip_diameter_m),
       number(g.tip_length_m), number(g.syringe_diameter_m), number(g.syringe_length_m));
   out += tissue_xml(n.tissue, "");
   for (const auto& [body, tissue] : n.bodies) out += tissue_xml(tissue, body);
@@ -222,6 +222,10 @@ procedures::TissueNeedleParameters read_tissue(Reader& r, const pugi::xml_node& 
   if (model == "fung") t.model = procedures::NeedleForceModel::kFung;
   else if (model == "simone-okamura") t.model = procedures::NeedleForceModel::kSimoneOkamura;
   else r.fail(node, fmt::format("<tissue> model=\"{}\": expected fung or simone-okamura", model));
+  const std::string form = node.attribute("fungForm").as_string(std::string(procedures::form_name(t.fung_form)).c_str());
+  if (form == "integrated") t.fung_form = procedures::FungForm::kIntegrated;
+  else if (form == "printed") t.fung_form = procedures::FungForm::kPrinted;
+  else r.fail(node, fmt::format("<tissue> fungForm=\"{}\": expected integrated ((F0 + b) e^(a (d - d0)) - b) or printed (... + b)", form));
   t.capsule_m = r.get(node, "capsule", t.capsule_m);
   t.puncture_force_n = r.get(node, "punctureForce", t.puncture_force_n);
   t.relaxation_time_s = r.get(node, "relaxationTime", t.relaxation_time_s);
@@ -239,6 +243,7 @@ procedures::TissueNeedleParameters read_tissue(Reader& r, const pugi::xml_node& 
   t.lateral_stiffness_n_per_m = r.get(node, "lateralStiffness", t.lateral_stiffness_n_per_m);
   t.lateral_damping_n_s_per_m = r.get(node, "lateralDamping", t.lateral_damping_n_s_per_m);
   t.spread_radius_m = r.get(node, "spreadRadius", t.spread_radius_m);
+  t.path_tolerance_m = r.get(node, "pathTolerance", t.path_tolerance_m);
   const std::string body = node.attribute("body").as_string("");
   if (auto ok = procedures::validate(t, body.empty() ? std::string("<tissue>") : fmt::format("<tissue body=\"{}\">", body)); !ok) {
     r.fail(node, ok.error().message);
@@ -253,6 +258,10 @@ procedures::NeedleConfig read_needle(Reader& r, const pugi::xml_node& node) {
   else if (axis == "normal") n.axis = procedures::NeedleAxis::kNormal;
   else if (axis == "stylus") n.axis = procedures::NeedleAxis::kStylus;
   else r.fail(node, fmt::format("<needle> axis=\"{}\": expected motion, normal or stylus", axis));
+  n.velocity_filter_s = r.get(node, "velocityFilter", n.velocity_filter_s);
+  if (!(n.velocity_filter_s >= 0.0 && n.velocity_filter_s <= 1.0)) {
+    r.fail(node, fmt::format("<needle> velocityFilter must be in [0, 1] s, got {}", n.velocity_filter_s));
+  }
   procedures::NeedleGeometry& g = n.geometry;
   g.length_m = r.get(node, "length", g.length_m);
   g.shaft_diameter_m = r.get(node, "shaftDiameter", g.shaft_diameter_m);

@@ -595,7 +595,16 @@ Expected<World> finish_world(World w, bool sofa_scene, bool bare, const std::str
       names.push_back(b.name);
       deformable.push_back(b.deformable());
     }
-    auto tool = procedures::NeedleTool::make(*w.project.needle, names, deformable);
+    // The needle's parameters are SI: lengths in the scene's unit are converted.
+    double metres_per_unit = 1.0;
+    if (w.length_unit == "mm") metres_per_unit = 1e-3;
+    else if (w.length_unit == "cm") metres_per_unit = 1e-2;
+    else if (w.length_unit == "dm") metres_per_unit = 1e-1;
+    else if (w.length_unit != "m") {
+      w.warnings.push_back(fmt::format("the needle's parameters are in SI units; the scene's lengths ({}) are taken as metres "
+                                       "(set mechanics@unit to m, cm or mm)", w.length_unit));
+    }
+    auto tool = procedures::NeedleTool::make(*w.project.needle, names, deformable, metres_per_unit);
     if (!tool) {
       Error e = tool.error();
       e.file = w.file.string();

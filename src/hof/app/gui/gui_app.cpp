@@ -829,8 +829,8 @@ void Gui::update_from_loops() {
       const std::string body = s.tool.body >= 0 && static_cast<std::size_t>(s.tool.body) < bodies_.size()
                                    ? bodies_[static_cast<std::size_t>(s.tool.body)].name
                                    : std::string("the body");
-      const double shown = length_unit_ == "m" ? 1e3 : 1.0;
-      const char* unit = length_unit_ == "m" ? "mm" : "units";
+      const double shown = 1e3;  // the needle's lengths are SI
+      const char* unit = "mm";
       if (phase == procedures::NeedlePhase::kPunctured && needle_phase_ == procedures::NeedlePhase::kPrePuncture) {
         report(fmt::format("needle: the capsule of {} broke at {:.1f} {} ({:.3f} N after)", body, shown * s.tool.depth_m, unit,
                            s.tool.axial_force_n), false);
@@ -1932,6 +1932,11 @@ void Gui::draw_needle_editor() {
   const char* axes[] = {"motion", "normal", "stylus"};
   ImGui::SetNextItemWidth(120);
   if (ImGui::Combo("axis at first contact", &axis, axes, 3)) set("haptics/needle", "axis", axes[axis]);
+  double filter = n.velocity_filter_s;
+  ImGui::SetNextItemWidth(120);
+  if (ImGui::InputDouble("velocityFilter (s)", &filter, 0.0, 0.0, "%.4g", ImGuiInputTextFlags_EnterReturnsTrue)) {
+    set("haptics/needle", "velocityFilter", number_text(filter));
+  }
   // The common set (every deformable body), then each body's own: tissue[k] as the file orders them.
   const auto edit_tissue = [&](const std::string& element, const procedures::TissueNeedleParameters& t, const std::string& label) {
     if (!ImGui::TreeNodeEx(label.c_str(), ImGuiTreeNodeFlags_DefaultOpen)) return;
@@ -1961,9 +1966,14 @@ void Gui::draw_needle_editor() {
     number("punctureForce (N)", "punctureForce", t.puncture_force_n);
     number("relaxationTime (s)", "relaxationTime", t.relaxation_time_s);
     if (t.model == procedures::NeedleForceModel::kFung) {
+      int form = static_cast<int>(t.fung_form);
+      const char* forms[] = {"integrated", "printed"};
+      ImGui::SetNextItemWidth(150);
+      if (ImGui::Combo("fungForm", &form, forms, 2)) set(element, "fungForm", forms[form]);
       numbers("fungPre a b d0 F0", "fungPre", {t.fung_pre.a_per_m, t.fung_pre.b_n, t.fung_pre.d0_m, t.fung_pre.f0_n});
       numbers("fungPost a b d0 F0", "fungPost", {t.fung_post.a_per_m, t.fung_post.b_n, t.fung_post.d0_m, t.fung_post.f0_n});
-      ImGui::TextDisabled("f(d) = (F0 + b) exp(a (d - d0)) - b; SI: 1/m, N, m, N");
+      ImGui::TextDisabled(t.fung_form == procedures::FungForm::kIntegrated ? "f(d) = (F0 + b) exp(a (d - d0)) - b; SI: 1/m, N, m, N"
+                                                                             : "f(d) = (F0 + b) exp(a (d - d0)) + b; SI: 1/m, N, m, N");
     } else {
       numbers("stiffness a0 a1 a2", "stiffness", {t.stiffness.a0_n, t.stiffness.a1_n_per_m, t.stiffness.a2_n_per_m2});
       number("cuttingForce (N)", "cuttingForce", t.cutting_force_n);
@@ -1975,6 +1985,7 @@ void Gui::draw_needle_editor() {
     number("lateralStiffness (N/m)", "lateralStiffness", t.lateral_stiffness_n_per_m);
     number("lateralDamping (N s/m)", "lateralDamping", t.lateral_damping_n_s_per_m);
     number("spreadRadius (m)", "spreadRadius", t.spread_radius_m);
+    number("pathTolerance (m)", "pathTolerance", t.path_tolerance_m);
     ImGui::TreePop();
   };
   const procedures::NeedleConfig current = n;  // the editors may replace project_ while drawing
@@ -2204,8 +2215,7 @@ void Gui::draw_panels() {
   const auto [lo, hi] = std::minmax_element(plot_indentation_.begin(), plot_indentation_.end());
   const double unit = length_unit_ == "m" ? 1.0 : 1e-3;  // telemetry is in scene units for a SOFA scene
   ImGui::PlotLines("##indentation", plot_indentation_.data(), static_cast<int>(plot_indentation_.size()), 0,
-                   needle_ ? fmt::format("needle depth ({}), now {:.2f}", length_unit_ == "m" ? "mm" : "scene units / 1000",
-                                         1e3 * last_.tool.depth_m * unit).c_str()
+                   needle_ ? fmt::format("needle depth (mm), now {:.2f}", 1e3 * last_.tool.depth_m).c_str()
                            : fmt::format("indentation ({}), now {:.2f}", length_unit_ == "m" ? "mm" : "scene units / 1000", 1e3 * indentation_m_ * unit).c_str(),
                    std::min(*lo, 0.0f), std::max(*hi * 1.1f, 1.0f), ImVec2(kPanelWidth - 20, 70));
   // Touch.
@@ -2218,8 +2228,8 @@ void Gui::draw_panels() {
       ImGui::Text("needle");
       ImGui::SameLine();
       ImGui::TextColored(ImVec4(c.x(), c.y(), c.z(), 1.0f), "%s", std::string(procedures::phase_name(phase)).c_str());
-      const double to_shown = length_unit_ == "m" ? 1e3 : 1.0;
-      const char* length = length_unit_ == "m" ? "mm" : "units";
+      const double to_shown = 1e3;  // the needle's lengths are SI
+      const char* length = "mm";
       const std::string body = t.body >= 0 && static_cast<std::size_t>(t.body) < bodies_.size() ? bodies_[static_cast<std::size_t>(t.body)].name : "-";
       const double capsule = t.body >= 0 ? needle_->parameters(static_cast<std::size_t>(t.body)).capsule_m : 0.0;
       ImGui::Text("touched %s, capsule %s, body %s", t.touched ? "yes" : "no",
