@@ -9,7 +9,8 @@
 ///  - Fung's law per phase (Maurin et al., "In vivo study of forces during needle insertions",
 ///    MRNV 2004): dT/dλ = a (T + b) integrated gives f(d) = (F0 + b)·e^{a(d − d0)} − b, so that
 ///    f(d0) = F0. The thesis (and the MATLAB comment it came from) prints "+ b", which gives
-///    f(d0) = F0 + 2b; HoF uses the integrated form. Defaults θ = [a, b, d0, F0]:
+///    f(d0) = F0 + 2b; HoF uses the integrated form by default and offers the printed one
+///    (FungForm: with Maurin's θ it starts each phase from ≈0). Defaults θ = [a, b, d0, F0]:
 ///    pre-puncture [0.121 /mm, −0.098 N, 11.45 mm, 0.2 N] (0.12 N at the surface, 0.39 N at
 ///    20 mm), post-puncture [−0.031 /mm, 1.7 N, 19.61 mm, −3.39 N]: taken literally, the
 ///    post-puncture force is negative (−3.39 N at 19.61 mm, tending to −1.7 N deeper): after the
