@@ -79,7 +79,7 @@ void add_run_commands(CLI::App& app, int& status) {
   run_cmd->add_option("file", run.file, "Project (.hof), SOFA scene (.scn) or X3D scene (.x3d)")->required();
   run_cmd->add_flag("--headless", run.headless, "No window (the default; `hof gui` is the window)");
   run_cmd->add_flag("--deterministic", run.deterministic, "Virtual time: loops in lock-step, identical output every run");
-  auto* seconds_opt = run_cmd->add_option("--seconds", seconds, "Length of the run in seconds (default 5)");
+  auto* seconds_opt = run_cmd->add_option("--seconds", seconds, "Length of the run in seconds (default 5, or a scripted motion's whole length when longer)");
   auto* steps_opt = run_cmd->add_option("--steps", steps, "Length of the run in simulation steps");
   seconds_opt->excludes(steps_opt);
   run_cmd->add_option("--device", device, "Device spec, e.g. scripted:poke, replay:FILE.csv, udp:5005, virtual-hand:poke");
