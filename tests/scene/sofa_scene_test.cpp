@@ -269,6 +269,54 @@ TEST_F(SofaSceneFiles, LinksLoaderTransformAndSolvers) {
   EXPECT_TRUE(mechanics::build_model(c).has_value());
 }
 
+TEST_F(SofaSceneFiles, APlaceholderPositionTakesTheTopologysNodes) {
+  // SOFA resizes a MechanicalObject to its node's topology: position="0 0 0" is a placeholder.
+  auto s = read_sofa_scene(write("scene.scn",
+                                 "<Node name=\"root\">\n  <Node name=\"body\">\n    <EulerImplicitSolver/>\n"
+                                 "    <MeshGmshLoader name=\"l\" filename=\"tet.msh\"/>\n"
+                                 "    <MeshTopology name=\"topo\" src=\"@l\"/>\n"
+                                 "    <MechanicalObject name=\"dofs\" position=\"0 0 0\"/>\n"
+                                 "    <TetrahedronFEMForceField youngModulus=\"1000\" poissonRatio=\"0.3\"/>\n  </Node>\n</Node>\n"));
+  ASSERT_TRUE(s.has_value()) << s.error().to_string();
+  ASSERT_EQ(s->models.size(), 1u);
+  EXPECT_EQ(s->models[0].config.positions.size(), 4u);
+  EXPECT_EQ(s->models[0].config.positions[3], Vec3(0, 0, 1));
+  EXPECT_TRUE(mechanics::build_model(s->models[0].config).has_value());
+}
+
+TEST_F(SofaSceneFiles, LinksToAnObjLoadersOutputsReadItsFile) {
+  write("tet.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
+  auto s = read_sofa_scene(write("scene.scn",
+                                 "<Node name=\"root\">\n  <Node name=\"body\">\n    <EulerImplicitSolver/>\n"
+                                 "    <MeshGmshLoader name=\"l\" filename=\"tet.msh\"/>\n"
+                                 "    <MeshOBJLoader name=\"ObjLoader\" filename=\"tet.obj\" translation=\"0 0 1\"/>\n"
+                                 "    <MeshTopology name=\"topo\" tetrahedra=\"@l.tetrahedra\" edges=\"@l.edges\"/>\n"
+                                 "    <MechanicalObject name=\"dofs\" position=\"@ObjLoader.position\"/>\n"
+                                 "    <TetrahedronFEMForceField youngModulus=\"1000\" poissonRatio=\"0.3\"/>\n  </Node>\n</Node>\n"));
+  ASSERT_TRUE(s.has_value()) << s.error().to_string();
+  ASSERT_EQ(s->models.size(), 1u);
+  ASSERT_EQ(s->models[0].config.positions.size(), 4u);
+  EXPECT_EQ(s->models[0].config.positions[1], Vec3(1, 0, 1));  // the loader's translation applied
+}
+
+TEST_F(SofaSceneFiles, AMechanicalObjectTransformsItsPositions) {
+  // rotation (degrees about x, then y, then z), then scale, then translation; and the legacy dx.
+  auto s = read_sofa_scene(write("scene.scn",
+                                 "<Node name=\"root\">\n  <Node name=\"body\">\n    <EulerImplicitSolver/>\n"
+                                 "    <MeshGmshLoader name=\"l\" filename=\"tet.msh\"/>\n"
+                                 "    <MechanicalObject name=\"dofs\" src=\"@l\" rotation=\"0 0 90\" scale3d=\"2 3 4\" "
+                                 "translation=\"1 0 0\" dy=\"5\"/>\n"
+                                 "    <TetrahedronFEMForceField youngModulus=\"1000\" poissonRatio=\"0.3\"/>\n  </Node>\n</Node>\n"));
+  ASSERT_TRUE(s.has_value()) << s.error().to_string();
+  const auto& x = s->models[0].config.positions;
+  // (1,0,0) turned 90° about z: (0,1,0); scaled: (0,3,0); moved by (1,5,0): (1,8,0).
+  EXPECT_NEAR((x[1] - Vec3(1, 8, 0)).norm(), 0.0, 1e-12);
+  // (0,0,1): (0,0,1) → (0,0,4) → (1,5,4).
+  EXPECT_NEAR((x[3] - Vec3(1, 5, 4)).norm(), 0.0, 1e-12);
+  EXPECT_TRUE(s->warnings.empty() || std::none_of(s->warnings.begin(), s->warnings.end(),
+                                                  [](const std::string& w) { return w.find("ignored") != std::string::npos; }));
+}
+
 TEST_F(SofaSceneFiles, CgImplicitOf2008IsImplicitEulerWithCg) {
   auto s = read_sofa_scene(write(
       "scene.scn",

@@ -344,6 +344,17 @@ Expected<const MeshData*> Reader::data_of(Component& c) {
   return &data_cache_.emplace(&c, std::move(*d)).first->second;
 }
 
+Expected<const MeshData*> Reader::linked_data_of(Component& c) {
+  auto d = data_of(c);
+  if (!d || c.type != "MeshOBJLoader" || (*d)->has_positions) return d;
+  const char* key = c.attr("filename") ? "filename" : c.attr("fileMesh") ? "fileMesh" : nullptr;
+  if (!key) return d;
+  MeshData& cached = data_cache_.at(&c);
+  if (auto r = read_file_into(c, key, cached); !r) return std::unexpected(r.error());
+  if (auto r = transform_loader(c, cached); !r) return std::unexpected(r.error());
+  return &cached;
+}
+
 Expected<void> Reader::read_file_into(Component& c, std::string_view key, MeshData& d) {
   auto file = resolve_file(c, key, *c.attr(key));
   if (!file) return std::unexpected(file.error());
@@ -389,7 +400,7 @@ Expected<void> Reader::read_field(Component& c, std::string_view key, std::strin
     std::string linked_field;
     auto target = resolve_link(c, key, text, linked_field);
     if (!target) return std::unexpected(target.error());
-    auto t = data_of(**target);
+    auto t = linked_data_of(**target);
     if (!t) return std::unexpected(t.error());
     const std::string f = linked_field.empty() ? std::string(key) : linked_field;
     if (f == "position" || f == "positions" || f == "points" || f == "vertices" || f == "rest_position") {
@@ -405,6 +416,10 @@ Expected<void> Reader::read_field(Component& c, std::string_view key, std::strin
       if (field != "triangles") return fail(c, fmt::format("attribute {}: links triangles to {}", key, field));
       d.triangles = (*t)->triangles;
       d.has_triangles = true;
+    } else if (f == "edges" || f == "normals" || f == "texcoords" || f == "quads" || f == "hexahedra") {
+      // A loader output HoF does not take from links (edges come from the elements, normals from
+      // the surface): linked, not needed.
+      return {};
     } else {
       return fail(c, fmt::format("attribute {}: link to data '{}' is not supported", key, f), ErrorCode::kUnsupported);
     }
@@ -481,30 +496,27 @@ Expected<MeshData> Reader::compute_data(Component& c) {
     std::string field;
     auto target = resolve_link(c, "src", *src, field);
     if (!target) return std::unexpected(target.error());
-    auto t = data_of(**target);
+    auto t = linked_data_of(**target);
     if (!t) return std::unexpected(t.error());
     fill_missing(d, **t);
   }
-  // SOFA's MeshLoader transform: scale, then rotate, then translate.
   if (is_loader(c.type) && d.has_positions) {
-    auto t = vec3(c, "translation");
-    auto r = vec3(c, "rotation");
-    auto s3 = vec3(c, "scale3d");
-    auto s = number(c, "scale");
-    if (!t) return std::unexpected(t.error());
-    if (!r) return std::unexpected(r.error());
-    if (!s3) return std::unexpected(s3.error());
-    if (!s) return std::unexpected(s.error());
-    Vec3 scale = s3->value_or(Vec3::Ones());
-    if (*s) scale *= **s;
-    const Mat3 rot = euler_xyz_deg(r->value_or(Vec3::Zero()));
-    const Vec3 shift = t->value_or(Vec3::Zero());
-    if (*t || *r || *s3 || *s)
-      for (Vec3& p : d.positions) p = rot * p.cwiseProduct(scale) + shift;
+    if (auto r = transform_loader(c, d); !r) return std::unexpected(r.error());
+  }
+  // A MechanicalObject whose own position has at most one entry (SOFA's placeholder
+  // position="0 0 0") takes its node's topology or loader positions, as SOFA's init resizes the
+  // state to the topology; one point stays only when nothing else gives positions.
+  std::optional<MeshData> own_placeholder;
+  if (c.type == "MechanicalObject" && d.has_positions && d.positions.size() <= 1 && !c.attr("src")) {
+    own_placeholder = d;
+    d.positions.clear();
+    d.has_positions = false;
   }
   if (c.type == "MechanicalObject" || is_topology(c.type)) {
-    for (const char* key : {"translation", "rotation", "scale3d", "scale", "dx", "dy", "dz", "rx", "ry", "rz"})
-      if (c.attr(key)) warn(c.line, fmt::format("{}: attribute {} ignored (transform the loader instead)", c.label(), key));
+    if (is_topology(c.type)) {
+      for (const char* key : {"translation", "rotation", "scale3d", "scale", "dx", "dy", "dz", "rx", "ry", "rz"})
+        if (c.attr(key)) warn(c.line, fmt::format("{}: attribute {} ignored (transform the loader or the MechanicalObject)", c.label(), key));
+    }
     const bool topo = is_topology(c.type);
     for (auto& other : c.node->components) {
       if (d.has_positions && (d.has_tets || !topo)) break;
@@ -517,7 +529,65 @@ Expected<MeshData> Reader::compute_data(Component& c) {
       }
     }
   }
+  if (own_placeholder && !d.has_positions) {
+    d.positions = own_placeholder->positions;
+    d.has_positions = true;
+  }
+  if (c.type == "MechanicalObject" && d.has_positions) {
+    if (auto r = transform_state(c, d); !r) return std::unexpected(r.error());
+  }
   return d;
+}
+
+// SOFA's MeshLoader transform: scale, then rotate, then translate.
+Expected<void> Reader::transform_loader(Component& c, MeshData& d) {
+  auto t = vec3(c, "translation");
+  auto r = vec3(c, "rotation");
+  auto s3 = vec3(c, "scale3d");
+  auto s = number(c, "scale");
+  if (!t) return std::unexpected(t.error());
+  if (!r) return std::unexpected(r.error());
+  if (!s3) return std::unexpected(s3.error());
+  if (!s) return std::unexpected(s.error());
+  Vec3 scale = s3->value_or(Vec3::Ones());
+  if (*s) scale *= **s;
+  const Mat3 rot = euler_xyz_deg(r->value_or(Vec3::Zero()));
+  const Vec3 shift = t->value_or(Vec3::Zero());
+  if (*t || *r || *s3 || *s)
+    for (Vec3& p : d.positions) p = rot * p.cwiseProduct(scale) + shift;
+  return {};
+}
+
+// SOFA's MechanicalObject transform of its initial positions: `rotation` (degrees, x then y then
+// z), `scale3d` (or a uniform `scale`, or `sx sy sz`), `translation` (or `dx dy dz`; `rx ry rz`
+// for the rotation), applied as rotation, then scale, then translation.
+Expected<void> Reader::transform_state(Component& c, MeshData& d) {
+  const auto component = [&](const char* key, double fallback) -> Expected<double> {
+    auto v = number(c, key);
+    if (!v) return std::unexpected(v.error());
+    return v->value_or(fallback);
+  };
+  auto t = vec3(c, "translation");
+  auto r = vec3(c, "rotation");
+  auto s3 = vec3(c, "scale3d");
+  auto s = number(c, "scale");
+  if (!t) return std::unexpected(t.error());
+  if (!r) return std::unexpected(r.error());
+  if (!s3) return std::unexpected(s3.error());
+  if (!s) return std::unexpected(s.error());
+  Vec3 shift = t->value_or(Vec3::Zero()), angles = r->value_or(Vec3::Zero()), scale = s3->value_or(Vec3::Ones());
+  if (*s) scale *= **s;
+  const char* legacy[9] = {"dx", "dy", "dz", "rx", "ry", "rz", "sx", "sy", "sz"};
+  for (int k = 0; k < 9; ++k) {
+    if (!c.attr(legacy[k])) continue;
+    auto v = component(legacy[k], 0.0);
+    if (!v) return std::unexpected(v.error());
+    (k < 3 ? shift : k < 6 ? angles : scale)[k % 3] = *v;
+  }
+  if (shift.isZero(0.0) && angles.isZero(0.0) && scale == Vec3::Ones()) return {};
+  const Mat3 rot = euler_xyz_deg(angles);
+  for (Vec3& p : d.positions) p = (rot * p).cwiseProduct(scale) + shift;
+  return {};
 }
 
 // ---- models -----------------------------------------------------------------------------------

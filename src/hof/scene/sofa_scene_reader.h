@@ -130,8 +130,13 @@ class Reader {
                                     std::string& field);
   Expected<fs::path> resolve_file(const Component& c, std::string_view key, const std::string& file) const;
   Expected<const MeshData*> data_of(Component& c);
+  /// data_of(), with a surface loader's file read too (a link to a MeshOBJLoader's position or
+  /// triangles needs them; otherwise its visual file is only named).
+  Expected<const MeshData*> linked_data_of(Component& c);
   Expected<MeshData> compute_data(Component& c);
   Expected<void> read_file_into(Component& c, std::string_view key, MeshData& d);
+  Expected<void> transform_loader(Component& c, MeshData& d);
+  Expected<void> transform_state(Component& c, MeshData& d);
   Expected<void> read_field(Component& c, std::string_view key, std::string_view field, MeshData& d);
 
   // Models.
