@@ -84,10 +84,13 @@ TEST(SofaScene, LiverScn) {
   EXPECT_EQ(model.visual_mesh->filename(), "liver-smooth.obj");
   EXPECT_TRUE(fs::exists(*model.visual_mesh));
   EXPECT_TRUE(model.visual_barycentric);
-  EXPECT_TRUE(contains(s.skipped, "CollisionPipeline 'CollisionPipeline' (line 18)"));
-  EXPECT_TRUE(contains(s.skipped, "RequiredPlugin"));
+  // Plugins, the collision pipeline and (one body: nothing to collide with) the collision
+  // response need no counterpart; the rest not simulated is named once.
+  EXPECT_TRUE(contains(s.ignored, "CollisionPipeline 'CollisionPipeline' (line 18)"));
+  EXPECT_TRUE(contains(s.ignored, "RequiredPlugin"));
+  EXPECT_TRUE(contains(s.ignored, "CollisionResponse"));
   EXPECT_TRUE(contains(s.skipped, "SphereCollisionModel 'CollisionModel'"));
-  EXPECT_TRUE(contains(s.skipped, "SphereLoader"));
+  EXPECT_TRUE(contains(s.ignored, "SphereLoader"));
   EXPECT_FALSE(contains(s.skipped, "LiverSurface"));  // used by the OglModel
   EXPECT_FALSE(contains(s.skipped, "'dofs'"));
   EXPECT_TRUE(contains(s.warnings, "not simulated by HoF and skipped"));
@@ -108,7 +111,7 @@ TEST(SofaScene, TutorialForceFieldLiverFem) {
   EXPECT_EQ(c.fixed[0].indices, (std::vector<std::int32_t>{3, 39, 64}));
   EXPECT_TRUE(s.models[0].visual_barycentric);
   EXPECT_EQ(s.models[0].visual_mesh->filename(), "liver-smooth.obj");
-  EXPECT_TRUE(contains(s.skipped, "VisualStyle"));
+  EXPECT_TRUE(contains(s.ignored, "VisualStyle"));
   EXPECT_GT(run_ten_steps(c), 0.0);
 }
 
@@ -315,6 +318,47 @@ TEST_F(SofaSceneFiles, AMechanicalObjectTransformsItsPositions) {
   EXPECT_NEAR((x[3] - Vec3(1, 5, 4)).norm(), 0.0, 1e-12);
   EXPECT_TRUE(s->warnings.empty() || std::none_of(s->warnings.begin(), s->warnings.end(),
                                                   [](const std::string& w) { return w.find("ignored") != std::string::npos; }));
+}
+
+TEST_F(SofaSceneFiles, HexahedralAndMembraneModelsAreNamedAsNotYetSimulated) {
+  Error e = read_error("<Node name=\"root\">\n  <Node name=\"Liver\">\n    <EulerImplicitSolver/>\n"
+                       "    <SparseGridTopology name=\"grid\" n=\"6 6 6\" fileTopology=\"tet.msh\"/>\n"
+                       "    <MechanicalObject name=\"dofs\"/>\n"
+                       "    <HexahedronFEMForceField youngModulus=\"3000\"/>\n  </Node>\n</Node>\n");
+  EXPECT_EQ(e.code, ErrorCode::kUnsupported);
+  EXPECT_EQ(e.line, 4);
+  EXPECT_NE(e.message.find("hexahedral models"), std::string::npos) << e.message;
+  EXPECT_EQ(e.message.find("no positions"), std::string::npos) << e.message;
+  write("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  e = read_error("<Node name=\"root\">\n  <Node name=\"Membrane\">\n    <EulerImplicitSolver/>\n"
+                 "    <MeshOBJLoader name=\"l\" filename=\"tri.obj\"/>\n"
+                 "    <TriangleSetTopologyContainer src=\"@l\"/>\n    <MechanicalObject src=\"@l\"/>\n"
+                 "    <TriangleFEMForceField name=\"membrane\" youngModulus=\"3000\"/>\n  </Node>\n</Node>\n");
+  EXPECT_EQ(e.code, ErrorCode::kUnsupported);
+  EXPECT_EQ(e.line, 7);
+  EXPECT_NE(e.message.find("TriangleFEMForceField is not simulated by HoF yet (membrane FEM"), std::string::npos) << e.message;
+}
+
+TEST_F(SofaSceneFiles, AComponentThatChangesTheResultIsAWarningOfItsOwnAndEachIsNamedOnce) {
+  const std::string body = "    <EulerImplicitSolver/>\n    <MeshGmshLoader name=\"l\" filename=\"tet.msh\"/>\n"
+                           "    <MechanicalObject src=\"@l\"/>\n    <TetrahedronFEMForceField youngModulus=\"1000\"/>\n";
+  auto s = read_sofa_scene(write("scene.scn", "<Node name=\"root\">\n  <RequiredPlugin name=\"p\"/>\n"
+                                              "  <CollisionResponse name=\"response\"/>\n  <Node name=\"a\">\n" + body +
+                                              "    <RestShapeSpringsForceField name=\"anchor\"/>\n  </Node>\n"
+                                              "  <Node name=\"b\">\n" + body + "    <Mystery name=\"m\"/>\n  </Node>\n</Node>\n"));
+  ASSERT_TRUE(s) << s.error().to_string();
+  ASSERT_EQ(s->models.size(), 2u);
+  // Two bodies: the collision response changes the result; so does a force field left out.
+  const auto count = [&](const std::string& what) {
+    return std::ranges::count_if(s->warnings, [&](const std::string& w) { return w.find(what) != std::string::npos; });
+  };
+  EXPECT_EQ(count("CollisionResponse 'response' (line 3) changes SOFA's result"), 1);
+  EXPECT_EQ(count("RestShapeSpringsForceField 'anchor' (line 9) changes SOFA's result"), 1);
+  // The others not simulated are listed together, each once; plugins only counted.
+  EXPECT_EQ(count("Mystery 'm' (line 16)"), 1);
+  EXPECT_EQ(count("CollisionResponse"), 1);
+  EXPECT_EQ(count("RequiredPlugin"), 0);
+  EXPECT_TRUE(contains(s->ignored, "RequiredPlugin 'p' (line 2)"));
 }
 
 TEST_F(SofaSceneFiles, CgImplicitOf2008IsImplicitEulerWithCg) {

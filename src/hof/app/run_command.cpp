@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <map>
 #include <cctype>
 #include <string_view>
 #include <vector>
@@ -375,6 +376,8 @@ int run_session(const RunOptions& options) {
   }
   summary["skipped_components"] = nlohmann::json::array();
   for (const auto& s : world->skipped) summary["skipped_components"].push_back(json_safe(s));
+  summary["ignored_components"] = nlohmann::json::array();
+  for (const auto& s : world->ignored) summary["ignored_components"].push_back(json_safe(s));
   summary["defaults"] = nlohmann::json::array();
   for (const auto& d : world->defaults) summary["defaults"].push_back(json_safe(d));
   summary["commands"] = report.applied_commands;
@@ -514,7 +517,15 @@ int run_check(const CheckOptions& options) {
       }
     }
     for (const auto& d : world->defaults) std::printf("default: %s\n", json_safe(d).c_str());
-    for (const auto& s : world->skipped) std::printf("not simulated: %s\n", json_safe(s).c_str());
+    // The components not simulated are named once, in the warnings below; those that need no
+    // counterpart (plugins, display, the default loops) are counted.
+    if (!world->ignored.empty()) {
+      std::map<std::string, int> kinds;
+      for (const auto& s : world->ignored) ++kinds[s.substr(0, s.find(' '))];
+      std::string list;
+      for (const auto& [kind, n] : kinds) list += fmt::format("{}{}{}", list.empty() ? "" : ", ", kind, n > 1 ? fmt::format(" x{}", n) : "");
+      std::printf("  not needed in HoF: %zu component(s): %s\n", world->ignored.size(), list.c_str());
+    }
     for (const auto& w : world->warnings) std::printf("warning: %s\n", json_safe(w).c_str());
     if (auto device = haptics::open_device(world->device); !device) {
       std::printf("%s\n", device.error().to_string().c_str());

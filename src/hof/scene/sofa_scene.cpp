@@ -124,11 +124,17 @@ Expected<SofaScene> Reader::run() {
   if (auto r = build_node(xml_root, *root_); !r) return std::unexpected(r.error());
   if (auto r = collect_models(*root_); !r) return std::unexpected(r.error());
   list_skipped(*root_);
-  if (!scene_.skipped.empty()) {
-    std::string all;
-    for (const auto& s : scene_.skipped) all += (all.empty() ? "" : ", ") + s;
-    scene_.warnings.push_back(fmt::format("{}: {} component(s) not simulated by HoF and skipped: {}", path_.string(),
-                                          scene_.skipped.size(), all));
+  // Each component not simulated is named once: those that change SOFA's result have a warning
+  // of their own (list_skipped); the others are listed here together.
+  std::string others;
+  std::size_t count = 0;
+  for (const auto& s : scene_.skipped) {
+    if (std::ranges::any_of(scene_.warnings, [&](const std::string& w) { return w.find(s) != std::string::npos; })) continue;
+    others += (others.empty() ? "" : ", ") + s;
+    ++count;
+  }
+  if (count) {
+    scene_.warnings.push_back(fmt::format("{}: {} component(s) not simulated by HoF and skipped: {}", path_.string(), count, others));
   }
   if (scene_.models.empty()) warn(root_->line, "no simulated model (a Node with an ODE solver and a MechanicalObject)");
   return std::move(scene_);
@@ -628,9 +634,59 @@ Expected<void> Reader::collect_models(SceneNode& node) {
   return {};
 }
 
+namespace {
+
+// Components with no counterpart needed in HoF: they change nothing it simulates.
+bool needs_no_counterpart(std::string_view type) {
+  static constexpr std::string_view kTypes[] = {
+      "RequiredPlugin", "DefaultAnimationLoop", "DefaultVisualManagerLoop", "VisualStyle", "InteractiveCamera", "Camera",
+      "LightManager", "DirectionalLight", "PositionalLight", "SpotLight", "BackgroundSetting", "OglSceneFrame", "OglGrid",
+      "OglLabel", "CollisionPipeline", "DefaultPipeline", "BruteForceBroadPhase", "BVHNarrowPhase", "BruteForceDetection",
+      "BruteForce", "DiscreteIntersection", "MinProximityIntersection", "NewProximityIntersection", "LocalMinDistance",
+      "AttachBodyButtonSetting", "FixedPlaneConstraintSetting", "OglModel", "VisualModel", "OglShader", "MeshOBJLoader",
+      "SphereLoader", "VisualGrid", "LineAxis"};
+  return std::ranges::find(kTypes, type) != std::end(kTypes);
+}
+
+// Why a component HoF does not simulate changes SOFA's result ("" when it does not).
+std::string_view what_changes(std::string_view type) {
+  if (type == "CollisionResponse" || type == "DefaultContactManager" || type == "RuleBasedContactManager") {
+    return "contacts between bodies: in HoF bodies do not collide with each other, only with the stylus";
+  }
+  if (type == "FreeMotionAnimationLoop" || type.ends_with("ConstraintSolver") || type.ends_with("ConstraintCorrection")) {
+    return "constraint-based contacts and constraints are not solved";
+  }
+  if (type.find("ForceField") != std::string_view::npos) return "its forces are missing from the body";
+  if (type.find("Constraint") != std::string_view::npos) return "its constraint is missing";
+  if (type.find("Mapping") != std::string_view::npos) return "what it maps does not follow the body";
+  if (type.ends_with("Mass")) return "a second mass is not added";
+  return {};
+}
+
+}  // namespace
+
 void Reader::list_skipped(const SceneNode& node) {
-  for (const auto& c : node.components)
-    if (!c->used) scene_.skipped.push_back(c->label());
+  for (const auto& c : node.components) {
+    if (c->used) continue;
+    if (needs_no_counterpart(c->type)) {
+      scene_.ignored.push_back(c->label());
+      continue;
+    }
+    const bool contact = c->type == "CollisionResponse" || c->type.ends_with("ContactManager");
+    if (contact && scene_.models.size() + scene_.obstacles.size() < 2) {
+      scene_.ignored.push_back(c->label());  // one body: nothing for it to collide with
+      continue;
+    }
+    scene_.skipped.push_back(c->label());
+    // A mapping that carries a collision model (SOFA's collision spheres) is part of that model.
+    const bool carries_collision = c->type.find("Mapping") != std::string::npos &&
+                                   std::ranges::any_of(node.components, [](const auto& o) {
+                                     return o->type.ends_with("CollisionModel") || o->type == "Sphere" || o->type == "Triangle";
+                                   });
+    if (const std::string_view why = what_changes(c->type); !why.empty() && !carries_collision) {
+      warn(c->line, fmt::format("{} changes SOFA's result and is not simulated by HoF: {}", c->label(), why));
+    }
+  }
   for (const auto& child : node.children) list_skipped(*child);
 }
 

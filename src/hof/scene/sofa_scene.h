@@ -40,6 +40,9 @@ struct SofaScene {
   std::vector<SofaSceneModel> models;
   std::vector<SofaSceneObstacle> obstacles;
   std::vector<std::string> skipped;   ///< "TYPE 'name' (line N)" of every component not simulated
+  /// Components HoF needs no counterpart of (plugins, display, the default loops, collision
+  /// detection without a response): read, not simulated, changing nothing.
+  std::vector<std::string> ignored;
   std::vector<std::string> warnings;  ///< "FILE:LINE: ..." notes (defaults assumed, aliases used)
 };
 

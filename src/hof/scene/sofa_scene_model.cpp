@@ -44,6 +44,20 @@ Expected<SofaSceneModel> Reader::make_model(SceneNode& node, Component* state) {
       }
       break;
     }
+  // What HoF does not simulate yet, named rather than reported as its consequence.
+  const auto not_yet = [&](std::initializer_list<std::string_view> types) -> const Component* {
+    for (auto& c : node.components)
+      if (std::ranges::find(types, std::string_view(c->type)) != types.end()) return c.get();
+    return nullptr;
+  };
+  if (const Component* grid = not_yet({"SparseGridTopology", "RegularGridTopology", "HexahedronSetTopologyContainer",
+                                       "HexahedronFEMForceField", "HexahedralFEMForceField"});
+      grid && (!geo->has_positions || geo->positions.size() <= 1 || topo_data.tets.empty())) {
+    return fail(*grid, fmt::format("node '{}': hexahedral models (grids and HexahedronFEMForceField) are not simulated "
+                                   "by HoF yet; a tetrahedral mesh (MeshGmshLoader + TetrahedronFEMForceField) is",
+                                   node.path),
+                ErrorCode::kUnsupported);
+  }
   if (!geo->has_positions || geo->positions.empty())
     return fail(*source, fmt::format("the model in node '{}' has no positions (no position, src or filename, and "
                                      "no topology or loader with positions in the node)",
@@ -108,6 +122,16 @@ Expected<SofaSceneModel> Reader::make_model(SceneNode& node, Component* state) {
     }
   }
   if (!have_mass) warn(node.line, fmt::format("node '{}': no mass; DiagonalMass massDensity=1 assumed", node.path));
+  if (m.force_fields.empty()) {
+    // A body with no elasticity HoF simulates would only fall: refused, naming what it has.
+    for (auto& c : node.components) {
+      if (c->used || c->type.find("ForceField") == std::string::npos) continue;
+      return fail(*c, fmt::format("node '{}': {} is not simulated by HoF yet{}, and the body has no other force field",
+                                  node.path, c->type,
+                                  c->type.starts_with("Triangle") ? " (membrane FEM; MeshSpringForceField on the triangles is)" : ""),
+                  ErrorCode::kUnsupported);
+    }
+  }
 
   if (auto r = apply_visual(node, out); !r) return std::unexpected(r.error());
   return out;

@@ -268,6 +268,7 @@ Expected<void> add_sofa(World& w, const std::filesystem::path& scene_path, const
   auto sofa = text ? read_sofa_scene_text(*text, scene_path) : read_sofa_scene(scene_path);
   if (!sofa) return std::unexpected(sofa.error());
   w.skipped = sofa->skipped;
+  w.ignored = sofa->ignored;
   w.warnings = sofa->warnings;
   if (sofa->models.empty() && sofa->obstacles.empty()) {
     std::string why = "the scene has no simulated body (a node with an ODE solver and a MechanicalObject) and no "

@@ -70,6 +70,7 @@ struct World {
   bool default_probe{false};         ///< the device is the builder's probe
   std::string length_unit{"m"};      ///< "m", or "scene units" for a SOFA scene (no unit)
   std::vector<std::string> skipped;  ///< components not simulated, "TYPE 'name' (line N)"
+  std::vector<std::string> ignored;  ///< components needing no counterpart (plugins, display, default loops)
   std::map<std::string, Appearance> appearances;  ///< by body name, where the file gives one
   std::vector<VisualShape> visuals;               ///< shapes only seen
   std::vector<std::string> warnings;
