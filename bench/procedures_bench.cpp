@@ -10,6 +10,7 @@
 #include "hof/mesh/boundary.h"
 #include "hof/mesh/liver_generator.h"
 #include "hof/procedures/needle.h"
+#include "support/box_surface.h"
 
 namespace {
 
@@ -17,20 +18,7 @@ using namespace hof;
 
 // One closed box surface as the snapshot the tick reads (its part is body 0).
 haptics::SurfaceSnapshot box_snapshot() {
-  mesh::TriMesh m;
-  const Vec3 lo(-0.05, -0.05, -0.1), hi(0.05, 0.05, 0.0);
-  for (int i = 0; i < 8; ++i) m.vertices.emplace_back(i & 1 ? hi.x() : lo.x(), i & 2 ? hi.y() : lo.y(), i & 4 ? hi.z() : lo.z());
-  const auto quad = [&](int a, int b, int c, int d) {
-    m.triangles.push_back({a, b, c});
-    m.triangles.push_back({a, c, d});
-  };
-  quad(0, 2, 3, 1);
-  quad(4, 5, 7, 6);
-  quad(0, 1, 5, 4);
-  quad(2, 6, 7, 3);
-  quad(0, 4, 6, 2);
-  quad(1, 3, 7, 5);
-  return haptics::make_snapshot(m);
+  return haptics::make_snapshot(hof::testing::box_surface(Vec3(-0.05, -0.05, -0.1), Vec3(0.05, 0.05, 0.0)));
 }
 
 void BM_NeedleTickInside(benchmark::State& state) {

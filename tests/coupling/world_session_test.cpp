@@ -17,27 +17,13 @@
 #include "hof/mesh/liver_generator.h"
 
 #include "coupling/resting_liver.h"
+#include "support/box_surface.h"
 #include "support/allocation_counter.h"
 
 namespace hof::coupling {
 namespace {
 
-// An axis-aligned box as a closed triangle surface, normals outward.
-mesh::TriMesh box(const Vec3& lo, const Vec3& hi) {
-  mesh::TriMesh m;
-  for (int i = 0; i < 8; ++i) m.vertices.emplace_back(i & 1 ? hi.x() : lo.x(), i & 2 ? hi.y() : lo.y(), i & 4 ? hi.z() : lo.z());
-  const auto quad = [&](int a, int b, int c, int d) {
-    m.triangles.push_back({a, b, c});
-    m.triangles.push_back({a, c, d});
-  };
-  quad(0, 2, 3, 1);  // z = lo
-  quad(4, 5, 7, 6);  // z = hi
-  quad(0, 1, 5, 4);  // y = lo
-  quad(2, 6, 7, 3);  // y = hi
-  quad(0, 4, 6, 2);  // x = lo
-  quad(1, 3, 7, 5);  // x = hi
-  return m;
-}
+mesh::TriMesh box(const Vec3& lo, const Vec3& hi) { return hof::testing::box_surface(lo, hi); }
 
 std::unique_ptr<haptics::ScriptedDevice> poke_device(const Vec3& start, const Vec3& direction, double approach, double depth,
                                                       double speed, double hold, const haptics::DeviceSpec& spec = {}) {

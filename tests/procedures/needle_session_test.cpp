@@ -14,6 +14,7 @@
 #include "hof/procedures/needle.h"
 
 #include "coupling/resting_liver.h"
+#include "support/box_surface.h"
 
 namespace hof::procedures {
 namespace {
@@ -22,22 +23,7 @@ using coupling::Session;
 using coupling::SessionBody;
 using coupling::SessionConfig;
 
-// An axis-aligned box as a closed triangle surface, normals outward.
-mesh::TriMesh box(const Vec3& lo, const Vec3& hi) {
-  mesh::TriMesh m;
-  for (int i = 0; i < 8; ++i) m.vertices.emplace_back(i & 1 ? hi.x() : lo.x(), i & 2 ? hi.y() : lo.y(), i & 4 ? hi.z() : lo.z());
-  const auto quad = [&](int a, int b, int c, int d) {
-    m.triangles.push_back({a, b, c});
-    m.triangles.push_back({a, c, d});
-  };
-  quad(0, 2, 3, 1);
-  quad(4, 5, 7, 6);
-  quad(0, 1, 5, 4);
-  quad(2, 6, 7, 3);
-  quad(0, 4, 6, 2);
-  quad(1, 3, 7, 5);
-  return m;
-}
+mesh::TriMesh box(const Vec3& lo, const Vec3& hi) { return hof::testing::box_surface(lo, hi); }
 
 // Insert–hold–extract along −z: from `start`, `approach` to the surface, `depth` further at
 // `speed`, hold, withdraw to the start at the same speed.

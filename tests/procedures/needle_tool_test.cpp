@@ -12,6 +12,7 @@
 #include "hof/procedures/needle.h"
 
 #include "support/allocation_counter.h"
+#include "support/box_surface.h"
 
 namespace hof::procedures {
 namespace {
@@ -29,20 +30,8 @@ struct Bench {
   bool contact_override{false};  // keep the proxy in contact (a surface dragged out with the needle)
 
   explicit Bench(const NeedleConfig& config) {
-    mesh::TriMesh m;
-    const Vec3 lo(-0.05, -0.05, -0.1), hi(0.05, 0.05, 0.0);
-    for (int i = 0; i < 8; ++i) m.vertices.emplace_back(i & 1 ? hi.x() : lo.x(), i & 2 ? hi.y() : lo.y(), i & 4 ? hi.z() : lo.z());
-    const auto quad = [&](int a, int b, int c, int d) {
-      m.triangles.push_back({a, b, c});
-      m.triangles.push_back({a, c, d});
-    };
-    quad(0, 2, 3, 1);
-    quad(4, 5, 7, 6);  // the top: triangles 2 and 3
-    quad(0, 1, 5, 4);
-    quad(2, 6, 7, 3);
-    quad(0, 4, 6, 2);
-    quad(1, 3, 7, 5);
-    surface = haptics::make_snapshot(m);
+    // The top face z = hi is triangles 2 and 3.
+    surface = haptics::make_snapshot(hof::testing::box_surface(Vec3(-0.05, -0.05, -0.1), Vec3(0.05, 0.05, 0.0)));
     auto made = NeedleTool::make(config, {"block"}, {true});
     EXPECT_TRUE(made) << made.error().to_string();
     tool = *made;

@@ -545,8 +545,9 @@ Expected<MeshData> Reader::compute_data(Component& c) {
   return d;
 }
 
-// SOFA's MeshLoader transform: scale, then rotate, then translate.
-Expected<void> Reader::transform_loader(Component& c, MeshData& d) {
+// A loader's or state's transform attributes: translation, rotation (degrees), scale3d × scale;
+// a state also reads SOFA's legacy dx dy dz, rx ry rz, sx sy sz.
+Expected<Reader::Transform> Reader::read_transform(Component& c, bool legacy) {
   auto t = vec3(c, "translation");
   auto r = vec3(c, "rotation");
   auto s3 = vec3(c, "scale3d");
@@ -555,44 +556,37 @@ Expected<void> Reader::transform_loader(Component& c, MeshData& d) {
   if (!r) return std::unexpected(r.error());
   if (!s3) return std::unexpected(s3.error());
   if (!s) return std::unexpected(s.error());
-  Vec3 scale = s3->value_or(Vec3::Ones());
-  if (*s) scale *= **s;
-  const Mat3 rot = euler_xyz_deg(r->value_or(Vec3::Zero()));
-  const Vec3 shift = t->value_or(Vec3::Zero());
-  if (*t || *r || *s3 || *s)
-    for (Vec3& p : d.positions) p = rot * p.cwiseProduct(scale) + shift;
+  Transform out{t->value_or(Vec3::Zero()), r->value_or(Vec3::Zero()), s3->value_or(Vec3::Ones())};
+  if (*s) out.scale *= **s;
+  if (legacy) {
+    const char* keys[9] = {"dx", "dy", "dz", "rx", "ry", "rz", "sx", "sy", "sz"};
+    for (int k = 0; k < 9; ++k) {
+      auto v = number(c, keys[k]);
+      if (!v) return std::unexpected(v.error());
+      if (*v) (k < 3 ? out.translation : k < 6 ? out.rotation_deg : out.scale)[k % 3] = **v;
+    }
+  }
+  return out;
+}
+
+// SOFA's MeshLoader transform: scale, then rotate, then translate.
+Expected<void> Reader::transform_loader(Component& c, MeshData& d) {
+  auto t = read_transform(c, false);
+  if (!t) return std::unexpected(t.error());
+  if (t->identity()) return {};
+  const Mat3 rot = euler_xyz_deg(t->rotation_deg);
+  for (Vec3& p : d.positions) p = rot * p.cwiseProduct(t->scale) + t->translation;
   return {};
 }
 
-// SOFA's MechanicalObject transform of its initial positions: `rotation` (degrees, x then y then
-// z), `scale3d` (or a uniform `scale`, or `sx sy sz`), `translation` (or `dx dy dz`; `rx ry rz`
-// for the rotation), applied as rotation, then scale, then translation.
+// SOFA's MechanicalObject transform of its initial positions: rotation (degrees, x then y then
+// z), then scale, then translation.
 Expected<void> Reader::transform_state(Component& c, MeshData& d) {
-  const auto component = [&](const char* key, double fallback) -> Expected<double> {
-    auto v = number(c, key);
-    if (!v) return std::unexpected(v.error());
-    return v->value_or(fallback);
-  };
-  auto t = vec3(c, "translation");
-  auto r = vec3(c, "rotation");
-  auto s3 = vec3(c, "scale3d");
-  auto s = number(c, "scale");
+  auto t = read_transform(c, true);
   if (!t) return std::unexpected(t.error());
-  if (!r) return std::unexpected(r.error());
-  if (!s3) return std::unexpected(s3.error());
-  if (!s) return std::unexpected(s.error());
-  Vec3 shift = t->value_or(Vec3::Zero()), angles = r->value_or(Vec3::Zero()), scale = s3->value_or(Vec3::Ones());
-  if (*s) scale *= **s;
-  const char* legacy[9] = {"dx", "dy", "dz", "rx", "ry", "rz", "sx", "sy", "sz"};
-  for (int k = 0; k < 9; ++k) {
-    if (!c.attr(legacy[k])) continue;
-    auto v = component(legacy[k], 0.0);
-    if (!v) return std::unexpected(v.error());
-    (k < 3 ? shift : k < 6 ? angles : scale)[k % 3] = *v;
-  }
-  if (shift.isZero(0.0) && angles.isZero(0.0) && scale == Vec3::Ones()) return {};
-  const Mat3 rot = euler_xyz_deg(angles);
-  for (Vec3& p : d.positions) p = (rot * p).cwiseProduct(scale) + shift;
+  if (t->identity()) return {};
+  const Mat3 rot = euler_xyz_deg(t->rotation_deg);
+  for (Vec3& p : d.positions) p = (rot * p).cwiseProduct(t->scale) + t->translation;
   return {};
 }
 

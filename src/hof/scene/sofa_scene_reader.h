@@ -135,6 +135,15 @@ class Reader {
   Expected<const MeshData*> linked_data_of(Component& c);
   Expected<MeshData> compute_data(Component& c);
   Expected<void> read_file_into(Component& c, std::string_view key, MeshData& d);
+  struct Transform {
+    Vec3 translation{Vec3::Zero()};
+    Vec3 rotation_deg{Vec3::Zero()};
+    Vec3 scale{Vec3::Ones()};
+    [[nodiscard]] bool identity() const {
+      return translation.isZero(0.0) && rotation_deg.isZero(0.0) && scale == Vec3::Ones();
+    }
+  };
+  Expected<Transform> read_transform(Component& c, bool legacy);
   Expected<void> transform_loader(Component& c, MeshData& d);
   Expected<void> transform_state(Component& c, MeshData& d);
   Expected<void> read_field(Component& c, std::string_view key, std::string_view field, MeshData& d);
