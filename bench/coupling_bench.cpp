@@ -34,7 +34,7 @@ std::unique_ptr<coupling::Session> livers(int count, mesh::LiverResolution resol
     c.gravity_m_per_s2 = Vec3(0, 0, -9.81);
     mechanics::ForceFieldConfig fem;
     fem.name = "FEM";
-    fem.tetrahedron_fem = mechanics::TetrahedronFemConfig{5400.0, 0.45, mechanics::FemMethod::kLarge, {}};
+    fem.tetrahedron_fem = mechanics::TetrahedronFemConfig{5400.0, 0.45, mechanics::FemMethod::kLarge, {}, {}};
     c.force_fields.push_back(fem);
     mechanics::FixedConstraintConfig base;
     base.box = std::make_pair(Vec3(-1, -1, -1), Vec3(1, 1, -0.025));

@@ -1,5 +1,5 @@
-// Mechanics step time: every force field × ODE solver on the four standard livers, and SOFA's
-// liver demo with its own settings. Run: build/release/bin/hof_bench_mechanics
+// Mechanics step time: every force field × ODE solver on the four standard livers, SOFA's
+// liver demo with its own settings, and hexahedral FEM on sparse grids of the medium liver. Run: build/release/bin/hof_bench_mechanics
 // (filter with --benchmark_filter=REGEX; threads with HOF_THREADS, default all cores).
 //
 // Settings: liver material E = 30 kPa (ex vivo indentation range, literature.md §6; the softer
@@ -11,12 +11,15 @@
 
 #include <benchmark/benchmark.h>
 
+#include <array>
 #include <cstdio>
 #include <cstdlib>
 #include <map>
 #include <string>
 
 #include "hof/mechanics/step.h"
+#include "hof/mesh/boundary.h"
+#include "hof/mesh/hex_grid.h"
 #include "hof/mesh/liver_generator.h"
 #include "hof/mesh/mesh_io.h"
 
@@ -51,10 +54,10 @@ ForceFieldConfig field_config(Field f) {
   c.name = "tissue";
   switch (f) {
     case Field::kSprings: c.mesh_springs = MeshSpringConfig{5000.0, 25.0, 1.0}; break;  // the thesis' settings
-    case Field::kSmall: c.tetrahedron_fem = TetrahedronFemConfig{30000.0, 0.45, FemMethod::kSmall, {}}; break;
-    case Field::kLarge: c.tetrahedron_fem = TetrahedronFemConfig{30000.0, 0.45, FemMethod::kLarge, {}}; break;
-    case Field::kPolar: c.tetrahedron_fem = TetrahedronFemConfig{30000.0, 0.45, FemMethod::kPolar, {}}; break;
-    case Field::kNeoHookean: c.neo_hookean = NeoHookeanConfig{30000.0, 0.45, {}}; break;
+    case Field::kSmall: c.tetrahedron_fem = TetrahedronFemConfig{30000.0, 0.45, FemMethod::kSmall, {}, {}}; break;
+    case Field::kLarge: c.tetrahedron_fem = TetrahedronFemConfig{30000.0, 0.45, FemMethod::kLarge, {}, {}}; break;
+    case Field::kPolar: c.tetrahedron_fem = TetrahedronFemConfig{30000.0, 0.45, FemMethod::kPolar, {}, {}}; break;
+    case Field::kNeoHookean: c.neo_hookean = NeoHookeanConfig{30000.0, 0.45, {}, {}}; break;
   }
   return c;
 }
@@ -136,7 +139,7 @@ void BM_SofaLiverScn(benchmark::State& bench) {
   c.mass.mass_density_kg_per_m3 = 1.0;
   ForceFieldConfig fem;
   fem.name = "FEM";
-  fem.tetrahedron_fem = TetrahedronFemConfig{3000.0, 0.3, FemMethod::kLarge, {}};
+  fem.tetrahedron_fem = TetrahedronFemConfig{3000.0, 0.3, FemMethod::kLarge, {}, {}};
   c.force_fields.push_back(fem);
   c.fixed.push_back(FixedConstraintConfig{"fixed", {3, 39, 64}, std::nullopt, false, {true, true, true}});
   c.ode.rayleigh_mass = c.ode.rayleigh_stiffness = 0.1;
@@ -145,6 +148,41 @@ void BM_SofaLiverScn(benchmark::State& bench) {
   c.dt_s = 0.02;
   c.threads = thread_count();
   run_steps(bench, c);
+}
+
+// Hexahedral FEM (HexahedronFEMForceField, large) on a sparse grid voxelising the medium
+// liver's surface (SOFA's SparseGridTopology), with the tetrahedral benchmarks' material,
+// mass, gravity, solver and three held nodes (the grid nodes nearest the same points). `n` is
+// SOFA's nodes per axis: 24×16×10 gives cells of about 1 cm, 16³ SOFA's usual cubic `n`.
+void BM_SparseGridLiver(benchmark::State& bench, std::array<int, 3> n) {
+  const mesh::Mesh& m = liver(mesh::LiverResolution::kMedium);
+  auto grid = mesh::sparse_grid(mesh::extract_boundary(m.nodes, m.tets).surface, n);
+  if (!grid) {
+    bench.SkipWithError(grid.error().to_string().c_str());
+    return;
+  }
+  ModelConfig c = liver_config(m, Field::kLarge, OdeSolverKind::kEulerImplicit);
+  c.positions = grid->nodes;
+  c.tets.clear();
+  c.hexahedra = grid->hexes;
+  c.force_fields[0].tetrahedron_fem.reset();
+  c.force_fields[0].hexahedron_fem = HexahedronFemConfig{};
+  c.force_fields[0].hexahedron_fem->young_modulus_pa = 30000.0;
+  c.force_fields[0].hexahedron_fem->poisson_ratio = 0.45;
+  c.force_fields[0].hexahedron_fem->method = FemMethod::kLarge;
+  for (std::int32_t& held : c.fixed[0].indices) {
+    const Vec3 target = m.nodes[static_cast<std::size_t>(held)];
+    std::int32_t best = 0;
+    for (std::size_t i = 0; i < grid->nodes.size(); ++i) {
+      if ((grid->nodes[i] - target).norm() < (grid->nodes[static_cast<std::size_t>(best)] - target).norm()) {
+        best = static_cast<std::int32_t>(i);
+      }
+    }
+    held = best;
+  }
+  run_steps(bench, c);
+  bench.counters["nodes"] = static_cast<double>(grid->nodes.size());
+  bench.counters["hexes"] = static_cast<double>(grid->hexes.size());
 }
 
 void register_all() {
@@ -167,6 +205,14 @@ void register_all() {
     }
   }
   benchmark::RegisterBenchmark("SofaLiverScn/FEMLarge/ImplicitCG25", BM_SofaLiverScn)->Unit(benchmark::kMicrosecond)->MinTime(0.5);
+  benchmark::RegisterBenchmark("SparseGridLiver/medium/n24x16x10/HexFEMLarge/ImplicitCG25", BM_SparseGridLiver,
+                               std::array<int, 3>{24, 16, 10})
+      ->Unit(benchmark::kMicrosecond)
+      ->MinTime(0.5);
+  benchmark::RegisterBenchmark("SparseGridLiver/medium/n16/HexFEMLarge/ImplicitCG25", BM_SparseGridLiver,
+                               std::array<int, 3>{16, 16, 16})
+      ->Unit(benchmark::kMicrosecond)
+      ->MinTime(0.5);
 }
 
 }  // namespace

@@ -61,9 +61,20 @@ xvfb-run -a -s "-screen 0 1280x720x24" build/release/bin/hof gui examples/needle
   --size 1280x720 --script "$work/needle.txt"
 xvfb-run -a -s "-screen 0 1280x720x24" build/release/bin/hof gui examples/needle-cube.hof \
   --size 1280x720 --script "$work/cube.txt"
+cat > "$work/tumour.txt" <<'ACTIONS'
+# the palpation sweep of examples/liver-tumour-palpation.hof, pressing above the tumour
+wait 9.5
+screenshot docs/images/gui-tumour.png
+quit
+ACTIONS
+xvfb-run -a -s "-screen 0 1280x720x24" build/release/bin/hof gui examples/liver-tumour-palpation.hof \
+  --size 1280x720 --script "$work/tumour.txt"
+build/release/bin/hof run examples/liver-tumour-palpation.hof --headless --deterministic --quiet --out "$work/tumour-run"
+cp "$work/tumour-run/palpation.png" docs/images/tumour-palpation.png
 # The needle's force against depth, as `hof run` plots it.
 build/release/bin/hof run examples/needle-liver.hof --headless --deterministic --quiet --out "$work/needle-run"
 cp "$work/needle-run/force_vs_depth.png" docs/images/needle-force-vs-depth.png
 cp "$work/needle-run/needle_force_over_time.png" docs/images/needle-force-over-time.png
 echo "screenshots: docs/images/gui-liver.png gui-press.png gui-displacement.png gui-mechanics.png gui-stress.png" \
-     "gui-needle.png gui-needle-editor.png gui-needle-cube.png needle-force-vs-depth.png needle-force-over-time.png"
+     "gui-needle.png gui-needle-editor.png gui-needle-cube.png needle-force-vs-depth.png needle-force-over-time.png" \
+     "gui-tumour.png tumour-palpation.png"

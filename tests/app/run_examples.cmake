@@ -160,6 +160,6 @@ foreach(f force_vs_depth.png force_vs_depth.svg needle_force_over_time.png needl
   endif()
 endforeach()
 file(STRINGS ${WORK}/needle/telemetry.csv header LIMIT_COUNT 1)
-if(NOT header MATCHES ",depth,phase,needle_force,sent_axial_force$")
+if(NOT header MATCHES ",depth,phase,needle_force,sent_axial_force,press$")
   message(FATAL_ERROR "needle-liver.hof: telemetry without the needle's columns: ${header}")
 endif()

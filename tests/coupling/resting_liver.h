@@ -19,7 +19,7 @@ inline mechanics::ModelConfig resting_liver_config(const mesh::Mesh& liver) {
   c.gravity_m_per_s2 = Vec3::Zero();
   mechanics::ForceFieldConfig fem;
   fem.name = "FEM";
-  fem.tetrahedron_fem = mechanics::TetrahedronFemConfig{5400.0, 0.45, mechanics::FemMethod::kLarge, {}};
+  fem.tetrahedron_fem = mechanics::TetrahedronFemConfig{5400.0, 0.45, mechanics::FemMethod::kLarge, {}, {}};
   c.force_fields.push_back(fem);
   mechanics::FixedConstraintConfig base;
   base.name = "base";

@@ -353,7 +353,9 @@ TEST(CommandSeam, AModelSwitchedMidRunStartsFromTheCurrentShapeAndActsAtTheNextS
   ASSERT_EQ(b->parameter_changes().size(), 1u);
   const Eigen::VectorXd before = b->state().x;
   mechanics::ModelConfig fem = *b->body().config;
-  fem.force_fields[0] = mechanics::ForceFieldConfig{"FEM", {}, mechanics::TetrahedronFemConfig{3000.0, 0.45, mechanics::FemMethod::kLarge, {}}, {}, {}};
+  fem.force_fields[0] = mechanics::ForceFieldConfig{};
+  fem.force_fields[0].name = "FEM";
+  fem.force_fields[0].tetrahedron_fem = mechanics::TetrahedronFemConfig{3000.0, 0.45, mechanics::FemMethod::kLarge, {}, {}};
   ASSERT_TRUE(b->submit(command::SetModel{"Liver", fem, nullptr}));
   const SessionReport rb = b->run_virtual(0.01, {});
   ASSERT_EQ(rb.applied_commands.size(), 1u);

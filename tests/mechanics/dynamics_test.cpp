@@ -28,7 +28,7 @@ ModelConfig vibrating_block(OdeSolverKind solver, double dt, FemMethod method = 
   c.gravity_m_per_s2 = Vec3::Zero();
   ForceFieldConfig fem;
   fem.name = "FEM";
-  fem.tetrahedron_fem = TetrahedronFemConfig{10000.0, 0.3, method, {}};
+  fem.tetrahedron_fem = TetrahedronFemConfig{10000.0, 0.3, method, {}, {}};
   c.force_fields.push_back(fem);
   c.ode.kind = solver;
   c.linear.kind = LinearSolverKind::kSparseLdlt;

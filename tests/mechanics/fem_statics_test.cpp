@@ -26,7 +26,7 @@ ModelConfig static_config(const BoxMesh& box, FemMethod method, double young = 1
   c.gravity_m_per_s2 = Vec3::Zero();
   ForceFieldConfig fem;
   fem.name = "FEM";
-  fem.tetrahedron_fem = TetrahedronFemConfig{young, poisson, method, {}};
+  fem.tetrahedron_fem = TetrahedronFemConfig{young, poisson, method, {}, {}};
   c.force_fields.push_back(fem);
   c.ode.kind = OdeSolverKind::kStatic;
   c.ode.newton_iterations = 20;
@@ -210,7 +210,7 @@ TEST_P(TwoMaterialBarTest, StretchesAsTwoSpringsInSeries) {
   } else {
     ForceFieldConfig neo;
     neo.name = "FEM";
-    neo.neo_hookean = NeoHookeanConfig{soft, 0.0, per_element};
+    neo.neo_hookean = NeoHookeanConfig{soft, 0.0, per_element, {}};
     c.force_fields[0] = neo;
   }
   add_rollers(c, box);
@@ -241,7 +241,7 @@ TEST(MaterialRegions, AListOfTheWrongLengthOrANegativeModulusIsRefused) {
   c.force_fields[0].tetrahedron_fem->element_young_modulus_pa.assign(box.tets.size() - 1, 1000.0);
   auto short_list = build_model(c);
   ASSERT_FALSE(short_list);
-  EXPECT_NE(short_list.error().message.find("one per tetrahedron"), std::string::npos) << short_list.error().message;
+  EXPECT_NE(short_list.error().message.find("one per element"), std::string::npos) << short_list.error().message;
   c.force_fields[0].tetrahedron_fem->element_young_modulus_pa.assign(box.tets.size(), 1000.0);
   c.force_fields[0].tetrahedron_fem->element_young_modulus_pa[3] = -1.0;
   auto negative = build_model(c);
@@ -292,7 +292,9 @@ TEST(VonMisesStress, MatchesTheAnalyticValueOfAUniformStretchAndIgnoresRotation)
 TEST(VonMisesStress, IsUnavailableForASpringModel) {
   const BoxMesh box = box_mesh(1, 1, 1, Vec3(0.1, 0.1, 0.1));
   ModelConfig c = static_config(box, FemMethod::kLarge);
-  c.force_fields[0] = ForceFieldConfig{"springs", MeshSpringConfig{}, {}, {}, {}};
+  c.force_fields[0] = ForceFieldConfig{};
+  c.force_fields[0].name = "springs";
+  c.force_fields[0].mesh_springs = MeshSpringConfig{};
   EXPECT_FALSE(VonMisesStress(c).available());
 }
 

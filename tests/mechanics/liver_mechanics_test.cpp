@@ -39,7 +39,7 @@ ModelConfig liver_config(const mesh::Mesh& liver, OdeSolverKind solver) {
   c.gravity_m_per_s2 = Vec3(0, 0, -9.81);  // z is up in the generated liver
   ForceFieldConfig fem;
   fem.name = "FEM";
-  fem.tetrahedron_fem = TetrahedronFemConfig{30000.0, 0.45, FemMethod::kLarge, {}};
+  fem.tetrahedron_fem = TetrahedronFemConfig{30000.0, 0.45, FemMethod::kLarge, {}, {}};
   c.force_fields.push_back(fem);
   FixedConstraintConfig fixed;
   fixed.indices = three_top_nodes(liver.nodes);
@@ -146,7 +146,7 @@ TEST(SofaLiver, TheSofaDemoMeshRunsWithItsSettings) {
   c.mass.mass_density_kg_per_m3 = 1.0;
   ForceFieldConfig fem;
   fem.name = "FEM";
-  fem.tetrahedron_fem = TetrahedronFemConfig{3000.0, 0.3, FemMethod::kLarge, {}};
+  fem.tetrahedron_fem = TetrahedronFemConfig{3000.0, 0.3, FemMethod::kLarge, {}, {}};
   c.force_fields.push_back(fem);
   c.fixed.push_back(FixedConstraintConfig{"fixed", {3, 39, 64}, std::nullopt, false, {true, true, true}});
   c.ode.rayleigh_mass = c.ode.rayleigh_stiffness = 0.1;

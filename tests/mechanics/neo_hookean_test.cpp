@@ -31,7 +31,7 @@ const std::vector<mesh::Tet> kCubeTets = {{0, 1, 3, 7}, {0, 1, 5, 7}, {0, 2, 3, 
 
 std::unique_ptr<Field> make_field(const std::vector<Vec3>& rest, const std::vector<mesh::Tet>& tets,
                                   double young = 1.0e4, double poisson = 0.45) {
-  auto field = Field::make(rest, tets, NeoHookeanConfig{young, poisson, {}}, "tissue");
+  auto field = Field::make(rest, tets, NeoHookeanConfig{young, poisson, {}, {}}, "tissue");
   EXPECT_TRUE(field.has_value()) << field.error().message;
   return field.has_value() ? std::move(*field) : nullptr;
 }
@@ -461,21 +461,21 @@ TEST(NeoHookean, RestInvertedTetIsReordered) {
 TEST(NeoHookean, InvalidParametersAreErrorsNamingTheComponent) {
   const auto rest = single_tet_rest();
   for (double young : {0.0, -5.0, std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity()}) {
-    const auto field = Field::make(rest, kSingleTet, NeoHookeanConfig{young, 0.3, {}}, "liver");
+    const auto field = Field::make(rest, kSingleTet, NeoHookeanConfig{young, 0.3, {}, {}}, "liver");
     ASSERT_FALSE(field.has_value());
     EXPECT_EQ(field.error().code, ErrorCode::kInvalidArgument);
     EXPECT_NE(field.error().message.find("NeoHookeanForceField 'liver': youngModulus"), std::string::npos)
         << field.error().message;
   }
   for (double poisson : {0.5, 0.6, -1.0, -2.0, std::numeric_limits<double>::quiet_NaN()}) {
-    const auto field = Field::make(rest, kSingleTet, NeoHookeanConfig{1.0e4, poisson, {}}, "liver");
+    const auto field = Field::make(rest, kSingleTet, NeoHookeanConfig{1.0e4, poisson, {}, {}}, "liver");
     ASSERT_FALSE(field.has_value());
     EXPECT_EQ(field.error().code, ErrorCode::kInvalidArgument);
     EXPECT_NE(field.error().message.find("NeoHookeanForceField 'liver': poissonRatio must be in (-1, 0.5), got"),
               std::string::npos)
         << field.error().message;
   }
-  const auto half = Field::make(rest, kSingleTet, NeoHookeanConfig{1.0e4, 0.5, {}}, "liver");
+  const auto half = Field::make(rest, kSingleTet, NeoHookeanConfig{1.0e4, 0.5, {}, {}}, "liver");
   ASSERT_FALSE(half.has_value());
   EXPECT_EQ(half.error().message, "NeoHookeanForceField 'liver': poissonRatio must be in (-1, 0.5), got 0.5");
 }

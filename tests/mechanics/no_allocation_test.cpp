@@ -24,10 +24,18 @@ struct Case {
 };
 
 std::vector<Case> cases() {
-  ForceFieldConfig springs{"springs", MeshSpringConfig{5000.0, 25.0, 1.0}, {}, {}, {}};
-  ForceFieldConfig large{"fem", {}, TetrahedronFemConfig{5400.0, 0.45, FemMethod::kLarge, {}}, {}, {}};
-  ForceFieldConfig polar{"fem", {}, TetrahedronFemConfig{5400.0, 0.45, FemMethod::kPolar, {}}, {}, {}};
-  ForceFieldConfig neo{"neo", {}, {}, NeoHookeanConfig{5400.0, 0.45, {}}, {}};
+  ForceFieldConfig springs;
+  springs.name = "springs";
+  springs.mesh_springs = MeshSpringConfig{5000.0, 25.0, 1.0};
+  ForceFieldConfig large;
+  large.name = "fem";
+  large.tetrahedron_fem = TetrahedronFemConfig{5400.0, 0.45, FemMethod::kLarge, {}, {}};
+  ForceFieldConfig polar;
+  polar.name = "fem";
+  polar.tetrahedron_fem = TetrahedronFemConfig{5400.0, 0.45, FemMethod::kPolar, {}, {}};
+  ForceFieldConfig neo;
+  neo.name = "neo";
+  neo.neo_hookean = NeoHookeanConfig{5400.0, 0.45, {}, {}};
   return {{"springs/implicit-cg", springs, OdeSolverKind::kEulerImplicit, LinearSolverKind::kConjugateGradient},
           {"large/implicit-cg", large, OdeSolverKind::kEulerImplicit, LinearSolverKind::kConjugateGradient},
           {"polar/implicit-ldlt", polar, OdeSolverKind::kEulerImplicit, LinearSolverKind::kSparseLdlt},

@@ -87,7 +87,7 @@ void expect_targets_agree(ForceField& field, const Eigen::VectorXd& x) {
 
 TEST(StiffnessAssembly, CorotationalFemTargetsAgree) {
   const auto box = testing::box_mesh(3, 2, 2, Vec3(0.03, 0.02, 0.02));
-  auto field = TetrahedronFemForceField::make(box.nodes, box.tets, {30000.0, 0.45, FemMethod::kLarge, {}}, "tissue");
+  auto field = TetrahedronFemForceField::make(box.nodes, box.tets, {30000.0, 0.45, FemMethod::kLarge, {}, {}}, "tissue");
   ASSERT_TRUE(field.has_value()) << field.error().to_string();
   expect_targets_agree(**field, deformed(box));
 }

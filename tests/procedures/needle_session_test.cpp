@@ -457,7 +457,7 @@ mechanics::ModelConfig block_config(const Vec3& origin, double size, int cells) 
   c.gravity_m_per_s2 = Vec3::Zero();
   mechanics::ForceFieldConfig fem;
   fem.name = "FEM";
-  fem.tetrahedron_fem = mechanics::TetrahedronFemConfig{15000.0, 0.45, mechanics::FemMethod::kLarge, {}};
+  fem.tetrahedron_fem = mechanics::TetrahedronFemConfig{15000.0, 0.45, mechanics::FemMethod::kLarge, {}, {}};
   c.force_fields.push_back(fem);
   mechanics::FixedConstraintConfig base;
   base.box = std::make_pair(origin - Vec3::Constant(1e-6), origin + Vec3(size, size, 1e-6));

@@ -192,7 +192,7 @@ TEST(MaterialRegion, ASphereStiffensTheTetrahedraInsideAndRoundTripsThroughThePr
   auto refused = build_world(*project, file);
   ASSERT_FALSE(refused);
   EXPECT_NE(refused.error().message.find("<region name=\"tumour\""), std::string::npos) << refused.error().message;
-  EXPECT_NE(refused.error().message.find("no tetrahedral force field 'springs'"), std::string::npos) << refused.error().message;
+  EXPECT_NE(refused.error().message.find("no FEM force field 'springs'"), std::string::npos) << refused.error().message;
 }
 
 }  // namespace

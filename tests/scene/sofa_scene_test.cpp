@@ -320,23 +320,106 @@ TEST_F(SofaSceneFiles, AMechanicalObjectTransformsItsPositions) {
                                                   [](const std::string& w) { return w.find("ignored") != std::string::npos; }));
 }
 
-TEST_F(SofaSceneFiles, HexahedralAndMembraneModelsAreNamedAsNotYetSimulated) {
-  Error e = read_error("<Node name=\"root\">\n  <Node name=\"Liver\">\n    <EulerImplicitSolver/>\n"
-                       "    <SparseGridTopology name=\"grid\" n=\"6 6 6\" fileTopology=\"tet.msh\"/>\n"
-                       "    <MechanicalObject name=\"dofs\"/>\n"
-                       "    <HexahedronFEMForceField youngModulus=\"3000\"/>\n  </Node>\n</Node>\n");
+TEST_F(SofaSceneFiles, HexahedralGridsAreReadWithTheirFineSurfaceAndTheirErrorsNamed) {
+  // A closed cube surface [0, 1]³, filled by a 4×4×4-node sparse grid inside the box
+  // [0, 1]³ (27 cells), held by a BoxROI at z = 0.
+  write("cube.obj",
+        "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
+        "f 1 3 2\nf 1 4 3\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\nf 2 3 7\nf 2 7 6\nf 3 4 8\nf 3 8 7\nf 4 1 5\nf 4 5 8\n");
+  const auto scene = [&](const std::string& grid, const std::string& fem) {
+    return "<Node name=\"root\" gravity=\"0 0 0\">\n  <Node name=\"Block\">\n    <EulerImplicitSolver/>\n    <CGLinearSolver/>\n" +
+           grid + "\n    <MechanicalObject name=\"dofs\" position=\"0 0 0\"/>\n    <DiagonalMass massDensity=\"1000\"/>\n" + fem +
+           "\n    <BoxROI name=\"roi\" box=\"-1 -1 -0.01 2 2 0.01\"/>\n"
+           "    <FixedProjectiveConstraint indices=\"@roi.indices\"/>\n  </Node>\n</Node>\n";
+  };
+  auto s = read_sofa_scene(write("scene.scn", scene("    <SparseGridTopology n=\"4 4 4\" fileTopology=\"cube.obj\" min=\"0 0 0\" max=\"1 1 1\"/>",
+                                                    "    <HexahedronFEMForceField name=\"FEM\" youngModulus=\"3000\" method=\"polar\"/>")));
+  ASSERT_TRUE(s.has_value()) << s.error().to_string();
+  const mechanics::ModelConfig& c = s->models[0].config;
+  EXPECT_EQ(c.positions.size(), 64u);  // the placeholder position gives way to the grid's
+  EXPECT_EQ(c.hexahedra.size(), 27u);
+  ASSERT_TRUE(c.force_fields[0].hexahedron_fem);
+  EXPECT_EQ(c.force_fields[0].hexahedron_fem->method, mechanics::FemMethod::kPolar);
+  ASSERT_TRUE(s->models[0].fine_surface);
+  EXPECT_EQ(s->models[0].fine_surface->triangles.size(), 12u);
+  ASSERT_EQ(c.fixed.size(), 1u);
+  ASSERT_TRUE(c.fixed[0].box);
+  auto model = mechanics::build_model(c);
+  ASSERT_TRUE(model.has_value()) << model.error().to_string();
+  EXPECT_EQ(model->fixed_dofs.size(), 3u * 16u);  // the 16 nodes of the bottom face
+  EXPECT_NEAR(model->total_mass_kg(), 1000.0, 1e-9);  // the cube's volume: no cell is cut by the surface
+
+  // fillWeighted (SOFA's default): in the grid's own box (the surface's, 1% larger) the outer
+  // cells are cut by the surface and count half (stiffness and mass).
+  s = read_sofa_scene(write("scene.scn", scene("    <SparseGridTopology n=\"5 5 5\" fileTopology=\"cube.obj\"/>",
+                                               "    <HexahedronFEMForceField name=\"FEM\" youngModulus=\"3000\"/>")));
+  ASSERT_TRUE(s.has_value()) << s.error().to_string();
+  const auto& young = s->models[0].config.force_fields[0].hexahedron_fem->element_young_modulus_pa;
+  ASSERT_EQ(young.size(), s->models[0].config.hexahedra.size());
+  const auto halved = std::count(young.begin(), young.end(), 1500.0);
+  EXPECT_GT(halved, 0);
+  EXPECT_EQ(halved + std::count(young.begin(), young.end(), 0.0), static_cast<std::ptrdiff_t>(young.size()));
+  EXPECT_EQ(s->models[0].config.mass.element_mass_density_kg_per_m3.size(), young.size());
+
+  // A regular grid: the box cut into (n − 1) cells per axis.
+  s = read_sofa_scene(write("scene.scn", scene("    <RegularGridTopology n=\"3 2 2\" min=\"0 0 0\" max=\"2 1 1\"/>",
+                                               "    <HexahedronFEMForceField/>")));
+  ASSERT_TRUE(s.has_value()) << s.error().to_string();
+  EXPECT_EQ(s->models[0].config.hexahedra.size(), 2u);
+  EXPECT_EQ(s->models[0].config.positions.size(), 12u);
+  EXPECT_FALSE(s->models[0].fine_surface);
+
+  // Errors name the component and its line: a grid with no cell inside the surface, a
+  // per-element list of the wrong length, a hexahedral force field without a grid.
+  Error e = read_error(scene("    <SparseGridTopology name=\"grid\" n=\"4 4 4\" fileTopology=\"cube.obj\" min=\"5 5 5\" max=\"6 6 6\"/>",
+                             "    <HexahedronFEMForceField/>"));
+  EXPECT_EQ(e.line, 5);
+  EXPECT_NE(e.message.find("SparseGridTopology 'grid'"), std::string::npos) << e.message;
+  EXPECT_NE(e.message.find("no cell inside the surface"), std::string::npos) << e.message;
+  e = read_error(scene("    <SparseGridTopology n=\"4 4 4\" fileTopology=\"cube.obj\"/>",
+                       "    <HexahedronFEMForceField name=\"FEM\" youngModulus=\"1 2 3\"/>"));
+  EXPECT_EQ(e.line, 8);
+  EXPECT_NE(e.message.find("3 values; one per hexahedron (27)"), std::string::npos) << e.message;
+  e = read_error("<Node name=\"root\">\n  <Node name=\"Liver\">\n    <EulerImplicitSolver/>\n"
+                 "    <MeshGmshLoader name=\"l\" filename=\"tet.msh\"/>\n    <MechanicalObject src=\"@l\"/>\n"
+                 "    <HexahedronFEMForceField youngModulus=\"3000\"/>\n  </Node>\n</Node>\n");
   EXPECT_EQ(e.code, ErrorCode::kUnsupported);
-  EXPECT_EQ(e.line, 4);
-  EXPECT_NE(e.message.find("hexahedral models"), std::string::npos) << e.message;
-  EXPECT_EQ(e.message.find("no positions"), std::string::npos) << e.message;
-  write("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
-  e = read_error("<Node name=\"root\">\n  <Node name=\"Membrane\">\n    <EulerImplicitSolver/>\n"
-                 "    <MeshOBJLoader name=\"l\" filename=\"tri.obj\"/>\n"
-                 "    <TriangleSetTopologyContainer src=\"@l\"/>\n    <MechanicalObject src=\"@l\"/>\n"
-                 "    <TriangleFEMForceField name=\"membrane\" youngModulus=\"3000\"/>\n  </Node>\n</Node>\n");
-  EXPECT_EQ(e.code, ErrorCode::kUnsupported);
-  EXPECT_EQ(e.line, 7);
-  EXPECT_NE(e.message.find("TriangleFEMForceField is not simulated by HoF yet (membrane FEM"), std::string::npos) << e.message;
+  EXPECT_EQ(e.line, 6);
+  EXPECT_NE(e.message.find("needs a hexahedral topology"), std::string::npos) << e.message;
+}
+
+TEST_F(SofaSceneFiles, AMembraneIsReadWithSofasDefaultsAndItsPerElementLists) {
+  write("quad.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n");
+  auto s = read_sofa_scene(write("scene.scn",
+                                 "<Node name=\"root\">\n  <Node name=\"Membrane\">\n    <EulerImplicitSolver/>\n"
+                                 "    <MeshOBJLoader name=\"l\" filename=\"quad.obj\"/>\n"
+                                 "    <TriangleSetTopologyContainer src=\"@l\"/>\n    <MechanicalObject src=\"@l\"/>\n"
+                                 "    <DiagonalMass massDensity=\"2\"/>\n"
+                                 "    <TriangleFEMForceField name=\"membrane\" thickness=\"0.002\" poissonRatio=\"0.3 0.4\"/>\n"
+                                 "    <TriangularFEMForceField name=\"other\" method=\"small\"/>\n  </Node>\n</Node>\n"));
+  ASSERT_TRUE(s.has_value()) << s.error().to_string();
+  const mechanics::ModelConfig& c = s->models[0].config;
+  ASSERT_EQ(c.triangles.size(), 2u);
+  ASSERT_EQ(c.force_fields.size(), 2u);
+  const auto& membrane = *c.force_fields[0].triangle_fem;
+  EXPECT_EQ(membrane.sofa_type, "TriangleFEMForceField");
+  EXPECT_DOUBLE_EQ(membrane.young_modulus_pa, 1000.0);  // SOFA's TriangleFEMForceField default
+  EXPECT_DOUBLE_EQ(membrane.thickness_m, 0.002);
+  EXPECT_EQ(membrane.element_poisson_ratio.size(), 2u);  // a list: per triangle
+  const auto& other = *c.force_fields[1].triangle_fem;
+  EXPECT_DOUBLE_EQ(other.young_modulus_pa, 5000.0);  // TriangularFEMForceField's
+  EXPECT_DOUBLE_EQ(other.poisson_ratio, 0.45);
+  EXPECT_EQ(other.method, mechanics::FemMethod::kSmall);
+  auto model = mechanics::build_model(c);
+  ASSERT_TRUE(model.has_value()) << model.error().to_string();
+  EXPECT_NEAR(model->total_mass_kg(), 2.0, 1e-12);  // DiagonalMass on triangles: density × area
+
+  const Error e = read_error("<Node name=\"root\">\n  <Node name=\"Membrane\">\n    <EulerImplicitSolver/>\n"
+                             "    <MeshOBJLoader name=\"l\" filename=\"quad.obj\"/>\n    <MechanicalObject src=\"@l\"/>\n"
+                             "    <TriangleFEMForceField name=\"membrane\" youngModulus=\"1 2 3\"/>\n  </Node>\n</Node>\n");
+  EXPECT_EQ(e.line, 6);
+  EXPECT_NE(e.message.find("TriangleFEMForceField 'membrane'"), std::string::npos) << e.message;
+  EXPECT_NE(e.message.find("3 values; one per triangle (2)"), std::string::npos) << e.message;
 }
 
 TEST_F(SofaSceneFiles, AComponentThatChangesTheResultIsAWarningOfItsOwnAndEachIsNamedOnce) {

@@ -315,7 +315,7 @@ TEST(World, ProjectHoldsBodySurfacesAndRigidObstaclesAndRoundTrips) {
   haptics::SurfaceMaterial soft;
   soft.kind = haptics::SurfaceKind::kFrictional;
   soft.stiffness = 0.25;
-  p.bodies.push_back({"Liver", soft});
+  p.bodies.push_back({"Liver", soft, {}, {}});
   haptics::SurfaceMaterial hard;
   hard.stiffness = 0.9;
   p.obstacles.push_back({"Table", "plate.obj", Vec3(0, 0, -0.06), hard});

@@ -16,10 +16,12 @@
 
 #include "hof/core/progress.h"
 #include "hof/core/text.h"
+#include "hof/coupling/press_recorder.h"
 #include "hof/coupling/session.h"
 #include "hof/haptics/device.h"
 #include "hof/mechanics/step.h"
 #include "hof/mesh/boundary.h"
+#include "hof/mesh/hex_grid.h"
 #include "hof/mesh/mesh_io.h"
 #include "hof/procedures/needle.h"
 #include "hof/scene/project.h"
@@ -90,8 +92,31 @@ void write_needle_model(const std::filesystem::path& dir, const NeedleRun& needl
   }
 }
 
+// The loading curve of each press (mean force per indentation bin), one column per press:
+// the palpation plot compares presses without the noise of single samples.
+void write_press_curves(const std::filesystem::path& dir, const coupling::PressRecorder& presses, double to_plot_units) {
+  std::ofstream out(dir / "presses.dat");
+  out << "# indentation, then the mean loading force (N) of each press (NaN: no sample)\n";
+  const auto& all = presses.presses();
+  const std::size_t bins = all.empty() ? 0 : all.front().loading_count.size();
+  for (std::size_t b = 0; b < bins; ++b) {
+    bool any = false;
+    std::string row = fmt::format("{:.6g}", (static_cast<double>(b) + 0.5) * coupling::PressRecorder::kBinWidthM * to_plot_units);
+
+    const double indentation = (static_cast<double>(b) + 0.5) * coupling::PressRecorder::kBinWidthM;
+    for (const coupling::Press& p : all) {
+      // Up to the peak force: past it the probe is turning back while the tissue still moves.
+      const bool has = p.loading_count[b] > 0 && indentation <= p.indentation_at_max_force + coupling::PressRecorder::kBinWidthM;
+      any = any || has;
+      row += has ? fmt::format(" {:.6g}", p.loading_force_sum[b] / p.loading_count[b]) : std::string(" NaN");
+    }
+    if (any) out << row << "\n";
+  }
+}
+
 void write_plots(const std::filesystem::path& dir, const coupling::SessionReport& report, const std::string& title,
-                 const std::string& unit, bool quiet, const NeedleRun& needle) {
+                 const std::string& unit, bool quiet, const NeedleRun& needle, const coupling::PressRecorder& presses) {
+  const std::size_t press_count = presses.presses().size();
   // Period histogram data (µs, count), every bin that holds a tick.
   {
     std::ofstream h(dir / "haptic_period_histogram.dat");
@@ -114,10 +139,18 @@ void write_plots(const std::filesystem::path& dir, const coupling::SessionReport
        "set datafile separator ','\nset xlabel 'time (s)'\nset ylabel 'force (N)'\n"
        "plot 'telemetry.csv' every ::1 using 1:(sqrt($8**2+$9**2+$10**2)) with lines title '|F| sent to the device'\n"},
       {"force_vs_indentation",
-       fmt::format("set datafile separator ','\nset xlabel 'tissue indentation at the contact, since it began ({})'\nset ylabel 'force (N)'\n"
-                   "plot 'telemetry.csv' every ::1 using ($11 > 0 ? $14{} : 1/0):(sqrt($8**2+$9**2+$10**2)) with points pt 7 "
-                   "ps 0.3 title 'surface displacement at the contact (in contact)'\n",
-                   length, scale)},
+       // Each press its own colour (a palpation sweep: the stiff spot stands out); one
+       // series when there are too many presses to tell apart.
+       fmt::format("set datafile separator ','\nset xlabel 'tissue indentation at the contact, since the press began ({0})'\n"
+                   "set ylabel 'force (N)'\nset key top left\n{2}",
+                   length, scale,
+                   press_count >= 2 && press_count <= 12
+                       ? fmt::format("plot for [k=1:{0}] 'telemetry.csv' every ::1 using (($11 > 0 && ${2} == k) ? $14{1} : 1/0):"
+                                     "(sqrt($8**2+$9**2+$10**2)) with points pt 7 ps 0.3 title sprintf('press %d', k)\n",
+                                     press_count, scale, needle.mounted ? 20 : 16)
+                       : fmt::format("plot 'telemetry.csv' every ::1 using ($11 > 0 ? $14{0} : 1/0):(sqrt($8**2+$9**2+$10**2)) "
+                                     "with points pt 7 ps 0.3 title 'surface displacement at the contact (in contact)'\n",
+                                     scale))},
       {"force_vs_penetration",
        fmt::format("set datafile separator ','\nset xlabel 'device-proxy penetration ({})'\nset ylabel 'force (N)'\n"
                    "plot 'telemetry.csv' every ::1 using ($11 > 0 ? $12{} : 1/0):(sqrt($8**2+$9**2+$10**2)) with points pt 7 "
@@ -127,6 +160,18 @@ void write_plots(const std::filesystem::path& dir, const coupling::SessionReport
        "set xlabel 'haptic period (us)'\nset ylabel 'ticks'\nset logscale y\nset yrange [0.5:*]\nset style fill solid\n"
        "set boxwidth 1\nplot 'haptic_period_histogram.dat' using 1:2 with boxes title 'ticks per 1 us bin'\n"},
   };
+  if (press_count >= 2 && press_count <= 12 && metres) {
+    // A palpation sweep: each press's loading curve, titled with where it touched.
+    write_press_curves(dir, presses, 1000.0);
+    std::string series;
+    for (const coupling::Press& p : presses.presses()) {
+      series += fmt::format("{}'presses.dat' using 1:{} with linespoints pt 7 ps 0.5 lw 2 title 'press {} at ({:.0f}, {:.0f}) mm'",
+                            series.empty() ? "" : ", ", p.index + 1, p.index, 1e3 * p.first_contact.x(), 1e3 * p.first_contact.y());
+    }
+    plots.push_back({"palpation",
+                     "set xlabel 'tissue indentation at the contact (mm)'\nset ylabel 'force while pressing (N), mean per 0.5 mm'\n"
+                     "set key top left\nplot " + series + "\n"});
+  }
   if (needle.mounted) {
     write_needle_model(dir, needle);
     // Columns: 16 depth (m), 17 phase, 18 the model's axial force (N), 19 the force sent along the axis.
@@ -232,7 +277,9 @@ int run_session(const RunOptions& options) {
                "indentation,body",
                telemetry);
     // With a needle: its depth, phase, the model's force along it and the force sent along it.
-    std::fputs(world->project.needle ? ",depth,phase,needle_force,sent_axial_force\n" : "\n", telemetry);
+    std::fputs(world->project.needle ? ",depth,phase,needle_force,sent_axial_force" : "", telemetry);
+    // The press the sample belongs to (1, 2, ...; 0 between presses): palpation.
+    std::fputs(",press\n", telemetry);
   }
   std::vector<std::string> body_names;
   for (std::size_t i = 0; i < session.body_count(); ++i) body_names.push_back(csv_text(json_safe(session.body(i).name)));
@@ -252,8 +299,7 @@ int run_session(const RunOptions& options) {
   bool previous_broken = false;
   double next_row = 0.0;
   std::int64_t ended_rows = 0;
-  bool was_in_contact = false;
-  double displaced_at_contact = 0.0;
+  coupling::PressRecorder presses(session);
   auto on_sample = [&](const haptics::HapticSample& s) {
     if (needle.mounted && s.valid) {
       const auto phase = static_cast<procedures::NeedlePhase>(s.tool.phase);
@@ -281,20 +327,14 @@ int run_session(const RunOptions& options) {
       return;
     }
     // Indentation: how far the tissue surface at the contact has moved inward since the
-    // contact began (its displacement from rest, less what it had moved before — a body that
-    // sagged under gravity before the probe arrived is not indented by the sag). Negative
-    // when the body moves into the probe (a swinging body coming back).
-    double indentation = 0.0;
+    // press began (press_recorder.h); each press numbered, for palpation.
+    const double indentation = presses.add(s);
     std::string body;
     if (s.contact && s.triangle >= 0) {
-      const double from_rest = (session.rest_point(s.triangle, s.barycentric, s.layer) - s.contact_point).dot(s.contact_normal);
-      if (!was_in_contact) displaced_at_contact = from_rest;
-      indentation = from_rest - displaced_at_contact;
       const std::int32_t b = session.body_of_triangle(s.triangle, s.layer);
       if (b >= 0) body = body_names[static_cast<std::size_t>(b)];
     }
     if (s.tool.body >= 0 && static_cast<std::size_t>(s.tool.body) < body_names.size()) body = body_names[static_cast<std::size_t>(s.tool.body)];
-    was_in_contact = s.contact && s.triangle >= 0;
     if (options.telemetry_rate_hz > 0.0) {
       if (s.time_s + 1e-12 < next_row) return;
       next_row += 1.0 / options.telemetry_rate_hz;
@@ -312,7 +352,7 @@ int run_session(const RunOptions& options) {
                      .c_str(),
                  telemetry);
     }
-    std::fputc('\n', telemetry);
+    std::fputs(fmt::format(",{}\n", presses.current()).c_str(), telemetry);
   };
   const auto progress = make_terminal_progress(options.quiet);
   const coupling::SessionReport report = options.deterministic ? session.run_virtual(seconds, on_sample, progress)
@@ -381,6 +421,18 @@ int run_session(const RunOptions& options) {
   summary["defaults"] = nlohmann::json::array();
   for (const auto& d : world->defaults) summary["defaults"].push_back(json_safe(d));
   summary["commands"] = report.applied_commands;
+  // The presses: where, how deep, how hard, how stiff (a tumour: stiffer than elsewhere).
+  summary["presses"] = nlohmann::json::array();
+  for (const coupling::Press& p : presses.presses()) {
+    summary["presses"].push_back({{"index", p.index},
+                                  {"body", p.body >= 0 ? nlohmann::json(json_safe(session.body(static_cast<std::size_t>(p.body)).name)) : nlohmann::json()},
+                                  {"start_s", p.start_s},
+                                  {"end_s", p.end_s},
+                                  {"first_contact", {p.first_contact.x(), p.first_contact.y(), p.first_contact.z()}},
+                                  {"max_force_n", p.max_force_n},
+                                  {"max_indentation", p.max_indentation_m},
+                                  {"stiffness", p.stiffness}});
+  }
   if (needle.mounted) {
     nlohmann::json phases = nlohmann::json::object();
     for (int k = 0; k < procedures::kNeedlePhaseCount; ++k) {
@@ -411,7 +463,9 @@ int run_session(const RunOptions& options) {
       const auto& state = session.state(i);
       for (std::size_t n = 0; n < body.model->node_count(); ++n) final_state.nodes.push_back(state.position(static_cast<std::int32_t>(n)));
       final_state.tets = body.model->tets;
-      if (final_state.tets.empty()) final_state.triangles = body.model->triangles;
+      // A hexahedral model as its boundary (the mesh files hold tetrahedra and triangles).
+      if (!body.model->hexahedra.empty()) final_state.triangles = mesh::hex_boundary(body.model->rest_positions, body.model->hexahedra).volume_triangles;
+      else if (final_state.tets.empty()) final_state.triangles = body.model->triangles;
       if (auto ok = mesh::write_vtu(final_state, *options.out / (file_safe(body.name) + ".vtu")); !ok) return fail(ok.error());
     }
     std::string touched;
@@ -420,7 +474,7 @@ int run_session(const RunOptions& options) {
     }
     write_plots(*options.out, report,
                 fmt::format("{} - {}", json_safe(world->scene_path.filename().string()), touched.empty() ? "no contact" : touched),
-                world->length_unit, options.quiet, needle);
+                world->length_unit, options.quiet, needle, presses);
   }
   if (!options.quiet) {
     const bool metres = world->length_unit == "m";
@@ -456,6 +510,16 @@ int run_session(const RunOptions& options) {
         std::printf("              capsule intact; deepest %s, peak %.3f N\n", length(needle.max_depth_m).c_str(), needle.peak_before_puncture_n);
       }
     }
+    if (presses.presses().size() >= 2) {
+      // A palpation sweep: each press's stiffness, the stiffest named (a lump to look at).
+      const auto& all = presses.presses();
+      const auto stiffest = std::ranges::max_element(all, {}, [](const coupling::Press& p) { return p.stiffness; });
+      std::string list;
+      for (const coupling::Press& p : all) list += fmt::format("{}{:.0f}", list.empty() ? "" : ", ", p.stiffness);
+      std::printf("  presses     %zu, stiffness %s N/%s; stiffest: press %d, first touched at (%s)\n", all.size(), list.c_str(),
+                  world->length_unit.c_str(), stiffest->index,
+                  fmt::format("{:.4g}, {:.4g}, {:.4g}", stiffest->first_contact.x(), stiffest->first_contact.y(), stiffest->first_contact.z()).c_str());
+    }
     if (report.diverged) std::printf("  DIVERGED    %s\n", report.divergence.c_str());
     if (options.out) std::printf("  report      %s (telemetry.csv, summary.json, .vtu per deformable body, plots)\n", options.out->c_str());
   }
@@ -486,9 +550,13 @@ int run_check(const CheckOptions& options) {
     for (const coupling::SessionBody& b : world->bodies) {
       touchable += b.surface.triangles.empty() ? 0 : 1;
       if (b.deformable()) {
-        std::printf("  model '%s': %zu nodes, %zu tetrahedra, %zu surface triangles (deformable, dt %g s)\n",
-                    json_safe(b.name).c_str(), b.model->node_count(), b.model->tets.size(), b.surface.triangles.size(),
-                    b.model->dt_s);
+        const std::string elements = !b.model->hexahedra.empty()
+                                         ? fmt::format("{} hexahedra", b.model->hexahedra.size())
+                                         : !b.model->tets.empty() || b.model->triangles.empty()
+                                               ? fmt::format("{} tetrahedra", b.model->tets.size())
+                                               : fmt::format("{} triangles", b.model->triangles.size());
+        std::printf("  model '%s': %zu nodes, %s, %zu surface triangles (deformable, dt %g s)\n", json_safe(b.name).c_str(),
+                    b.model->node_count(), elements.c_str(), b.surface.triangles.size(), b.model->dt_s);
       } else {
         std::printf("  shape '%s': %zu triangles (rigid, fixed)\n", json_safe(b.name).c_str(), b.surface.triangles.size());
       }

@@ -678,8 +678,8 @@ void Session::publish(double clock_s) {
       const mesh::Tri& tri = r.body.surface.triangles[static_cast<std::size_t>(local)];
       const std::array<std::int32_t, 3> vertices{tri[0], tri[1], tri[2]};
       const std::array<double, 3> bary{last_barycentric_[0], last_barycentric_[1], last_barycentric_[2]};
-      std::array<std::int32_t, 12> nodes{};
-      std::array<double, 12> weights{};
+      std::array<std::int32_t, SurfaceMapping::kMaxPointWeights> nodes{};
+      std::array<double, SurfaceMapping::kMaxPointWeights> weights{};
       const std::size_t count = r.body.mapping.point_weights(vertices, bary, nodes, weights);
       Mat3 compliance;
       if (mechanics::compute_point_compliance(*r.body.model, r.state, std::span(nodes.data(), count),

@@ -82,7 +82,7 @@ class Device {
 
 /// Opens a device from a spec string:
 ///   replay:PATH.csv[,loop]                       recorded trajectory (docs/device-protocol.md)
-///   scripted:poke[,key=value...]                 built-in motions: poke, press-and-slide, circle
+///   scripted:poke[,key=value...]                 built-in motions: poke, press-and-slide, palpate, circle
 ///   virtual-hand:MOTION[,key=value...]           compliant hand following a scripted motion
 ///   udp:[HOST:]PORT[,timeout=S]                  datagram bridge (docs/device-protocol.md)
 ///   spacemouse[,scale=M]                         3Dconnexion SpaceMouse via spacenavd (input only)

@@ -9,6 +9,7 @@
 #include "hof/mechanics/linear_system.h"
 #include "hof/mechanics/mechanical_state.h"
 #include "hof/mechanics/neo_hookean_force_field.h"
+#include "hof/mesh/hex_grid.h"
 #include "hof/mesh/tet_geometry.h"
 
 namespace hof::mechanics {
@@ -35,18 +36,55 @@ Expected<std::vector<double>> build_masses(const ModelConfig& c) {
     }
     return mass;
   }
-  // DiagonalMass: each tetrahedron gives ρV/4 to each of its nodes (lumped mass).
-  if (c.tets.empty()) {
-    return make_error(ErrorCode::kInvalidArgument, fmt::format("{}: needs tetrahedra to compute volumes", who));
+  // DiagonalMass: each tetrahedron gives ρV/4 to each of its nodes (lumped mass); on a
+  // triangle model (a membrane) each triangle gives ρA/3, massDensity then being per area, as
+  // SOFA's DiagonalMass does on a triangle topology.
+  // On a hexahedral model (no tetrahedra) each hexahedron gives ρV/8 to each of its nodes.
+  const bool on_hexahedra = c.tets.empty() && !c.hexahedra.empty();
+  const bool on_triangles = c.tets.empty() && !on_hexahedra && !c.triangles.empty();
+  if (c.tets.empty() && !on_triangles && !on_hexahedra) {
+    return make_error(ErrorCode::kInvalidArgument,
+                      fmt::format("{}: needs tetrahedra (or hexahedra or triangles) to compute volumes", who));
   }
   if (!(c.mass.mass_density_kg_per_m3 > 0.0) || !std::isfinite(c.mass.mass_density_kg_per_m3)) {
     return make_error(ErrorCode::kInvalidArgument,
                       fmt::format("{}: massDensity must be > 0 kg/m^3, got {}", who, c.mass.mass_density_kg_per_m3));
   }
-  for (const mesh::Tet& t : c.tets) {
-    const auto p = mesh::tet_corners(c.positions, t);
-    const double quarter = c.mass.mass_density_kg_per_m3 * std::abs(mesh::tet_signed_volume(p[0], p[1], p[2], p[3])) / 4.0;
-    for (mesh::NodeIndex i : t) mass[i] += quarter;
+  const std::vector<double>& densities = c.mass.element_mass_density_kg_per_m3;
+  const std::size_t elements = on_hexahedra ? c.hexahedra.size() : on_triangles ? c.triangles.size() : c.tets.size();
+  if (!densities.empty() && densities.size() != elements) {
+    return make_error(ErrorCode::kInvalidArgument,
+                      fmt::format("{}: massDensity has {} values for {} {} (give one, or one per element)", who,
+                                  densities.size(), elements,
+                                  on_hexahedra ? "hexahedra" : on_triangles ? "triangles" : "tetrahedra"));
+  }
+  auto density = [&](std::size_t e) -> Expected<double> {
+    if (densities.empty() || densities[e] == 0.0) return c.mass.mass_density_kg_per_m3;
+    if (!(densities[e] > 0.0) || !std::isfinite(densities[e])) {
+      return make_error(ErrorCode::kInvalidArgument, fmt::format("{}: massDensity of element {} must be > 0, got {}", who, e, densities[e]));
+    }
+    return densities[e];
+  };
+  for (std::size_t e = 0; e < elements; ++e) {
+    auto rho = density(e);
+    if (!rho) return std::unexpected(rho.error());
+    if (on_hexahedra) {
+      const mesh::Hex& h = c.hexahedra[e];
+      const double eighth = *rho * std::abs(mesh::hex_volume(c.positions, h)) / 8.0;
+      for (mesh::NodeIndex i : h) mass[static_cast<std::size_t>(i)] += eighth;
+    } else if (on_triangles) {
+      const mesh::Tri& t = c.triangles[e];
+      const double third = *rho * 0.5 *
+                           (c.positions[static_cast<std::size_t>(t[1])] - c.positions[static_cast<std::size_t>(t[0])])
+                               .cross(c.positions[static_cast<std::size_t>(t[2])] - c.positions[static_cast<std::size_t>(t[0])])
+                               .norm() /
+                           3.0;
+      for (mesh::NodeIndex i : t) mass[static_cast<std::size_t>(i)] += third;
+    } else {
+      const auto p = mesh::tet_corners(c.positions, c.tets[e]);
+      const double quarter = *rho * std::abs(mesh::tet_signed_volume(p[0], p[1], p[2], p[3])) / 4.0;
+      for (mesh::NodeIndex i : c.tets[e]) mass[static_cast<std::size_t>(i)] += quarter;
+    }
   }
   if (c.mass.diagonal_total_mass_kg) {
     const double total = std::accumulate(mass.begin(), mass.end(), 0.0);
@@ -57,12 +95,52 @@ Expected<std::vector<double>> build_masses(const ModelConfig& c) {
   for (std::size_t i = 0; i < n; ++i) {
     if (!(mass[i] > 0.0)) {
       return make_error(ErrorCode::kInvalidMesh,
-                        fmt::format("{}: node {} belongs to no tetrahedron and gets no mass; remove unused nodes "
+                        fmt::format("{}: node {} belongs to no element and gets no mass; remove unused nodes "
                                     "or use UniformMass",
                                     who, i));
     }
   }
   return mass;
+}
+
+// A tetrahedral field whose Poisson ratio varies by element (a tissue region) as one field per
+// distinct ratio over its elements: the fields' fast assembly shares one λ/μ ratio, and the
+// sum of the parts is the whole (each element belongs to exactly one part).
+template <class Config>
+Expected<std::vector<std::pair<Config, std::vector<mesh::Tet>>>> split_by_poisson_ratio(const Config& config,
+                                                                                       const std::vector<mesh::Tet>& tets,
+                                                                                       const std::string& who) {
+  std::vector<std::pair<Config, std::vector<mesh::Tet>>> parts;
+  if (config.element_poisson_ratio.empty()) {
+    parts.emplace_back(config, tets);
+    return parts;
+  }
+  if (config.element_poisson_ratio.size() != tets.size()) {
+    return make_error(ErrorCode::kInvalidArgument, fmt::format("{}: poissonRatio has {} values for {} tetrahedra (give one, or one per tetrahedron)",
+                                                               who, config.element_poisson_ratio.size(), tets.size()));
+  }
+  if (!config.element_young_modulus_pa.empty() && config.element_young_modulus_pa.size() != tets.size()) {
+    return make_error(ErrorCode::kInvalidArgument, fmt::format("{}: youngModulus has {} values for {} tetrahedra (give one, or one per tetrahedron)",
+                                                               who, config.element_young_modulus_pa.size(), tets.size()));
+  }
+  for (std::size_t t = 0; t < tets.size(); ++t) {
+    const double nu = config.element_poisson_ratio[t] == 0.0 ? config.poisson_ratio : config.element_poisson_ratio[t];
+    if (!(nu > -1.0 && nu < 0.5)) {
+      return make_error(ErrorCode::kInvalidArgument, fmt::format("{}: poissonRatio of tetrahedron {} must be in (-1, 0.5), got {}", who, t, nu));
+    }
+    auto part = std::find_if(parts.begin(), parts.end(), [&](const auto& p) { return p.first.poisson_ratio == nu; });
+    if (part == parts.end()) {
+      Config sub = config;
+      sub.poisson_ratio = nu;
+      sub.element_poisson_ratio.clear();
+      sub.element_young_modulus_pa.clear();
+      parts.emplace_back(std::move(sub), std::vector<mesh::Tet>{});
+      part = std::prev(parts.end());
+    }
+    part->second.push_back(tets[t]);
+    if (!config.element_young_modulus_pa.empty()) part->first.element_young_modulus_pa.push_back(config.element_young_modulus_pa[t]);
+  }
+  return parts;
 }
 
 }  // namespace
@@ -82,6 +160,22 @@ Expected<MechanicalModel> build_model(const ModelConfig& c) {
       if (i < 0 || static_cast<std::size_t>(i) >= n) {
         return make_error(ErrorCode::kInvalidMesh,
                           fmt::format("model '{}': tetrahedron {} refers to node {} of {}", c.name, t, i, n));
+      }
+    }
+  }
+  for (std::size_t t = 0; t < c.triangles.size(); ++t) {
+    for (mesh::NodeIndex i : c.triangles[t]) {
+      if (i < 0 || static_cast<std::size_t>(i) >= n) {
+        return make_error(ErrorCode::kInvalidMesh,
+                          fmt::format("model '{}': triangle {} refers to node {} of {}", c.name, t, i, n));
+      }
+    }
+  }
+  for (std::size_t h = 0; h < c.hexahedra.size(); ++h) {
+    for (mesh::NodeIndex i : c.hexahedra[h]) {
+      if (i < 0 || static_cast<std::size_t>(i) >= n) {
+        return make_error(ErrorCode::kInvalidMesh,
+                          fmt::format("model '{}': hexahedron {} refers to node {} of {}", c.name, h, i, n));
       }
     }
   }
@@ -110,6 +204,7 @@ Expected<MechanicalModel> build_model(const ModelConfig& c) {
   m.name = c.name;
   m.rest_positions = c.positions;
   m.tets = c.tets;
+  m.hexahedra = c.hexahedra;
   m.triangles = c.triangles;
   m.mass_name = c.mass.name;
   m.ode = c.ode;
@@ -126,15 +221,31 @@ Expected<MechanicalModel> build_model(const ModelConfig& c) {
 
   for (const ForceFieldConfig& f : c.force_fields) {
     if (f.tetrahedron_fem) {
-      auto field = TetrahedronFemForceField::make(c.positions, c.tets, *f.tetrahedron_fem, f.name);
-      if (!field) return std::unexpected(field.error());
-      m.force_fields.push_back(std::move(*field));
+      auto parts = split_by_poisson_ratio(*f.tetrahedron_fem, c.tets, fmt::format("TetrahedronFEMForceField '{}'", f.name));
+      if (!parts) return std::unexpected(parts.error());
+      for (const auto& [config, tets] : *parts) {
+        auto field = TetrahedronFemForceField::make(c.positions, tets, config, f.name);
+        if (!field) return std::unexpected(field.error());
+        m.force_fields.push_back(std::move(*field));
+      }
     } else if (f.mesh_springs) {
       auto field = MeshSpringForceField::make(c.positions, c.tets, c.triangles, *f.mesh_springs, f.name);
       if (!field) return std::unexpected(field.error());
       m.force_fields.push_back(std::move(*field));
     } else if (f.neo_hookean) {
-      auto field = NeoHookeanForceField::make(c.positions, c.tets, *f.neo_hookean, f.name);
+      auto parts = split_by_poisson_ratio(*f.neo_hookean, c.tets, fmt::format("NeoHookean '{}'", f.name));
+      if (!parts) return std::unexpected(parts.error());
+      for (const auto& [config, tets] : *parts) {
+        auto field = NeoHookeanForceField::make(c.positions, tets, config, f.name);
+        if (!field) return std::unexpected(field.error());
+        m.force_fields.push_back(std::move(*field));
+      }
+    } else if (f.hexahedron_fem) {
+      auto field = HexahedronFemForceField::make(c.positions, c.hexahedra, *f.hexahedron_fem, f.name);
+      if (!field) return std::unexpected(field.error());
+      m.force_fields.push_back(std::move(*field));
+    } else if (f.triangle_fem) {
+      auto field = TriangleFemForceField::make(c.positions, c.triangles, *f.triangle_fem, f.name);
       if (!field) return std::unexpected(field.error());
       m.force_fields.push_back(std::move(*field));
     } else if (f.constant_force) {

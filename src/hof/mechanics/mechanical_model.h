@@ -17,8 +17,10 @@
 #include "hof/mechanics/block_sparse_matrix.h"
 #include "hof/mechanics/constant_force_field.h"
 #include "hof/mechanics/force_field.h"
+#include "hof/mechanics/hexahedron_fem_force_field.h"
 #include "hof/mechanics/mesh_spring_force_field.h"
 #include "hof/mechanics/tetrahedron_fem_force_field.h"
+#include "hof/mechanics/triangle_fem_force_field.h"
 #include "hof/mesh/mesh.h"
 
 namespace hof::mechanics {
@@ -27,7 +29,7 @@ namespace hof::mechanics {
 
 enum class MassKind : std::uint8_t {
   kUniform,   ///< SOFA UniformMass: totalMass/N per node, or vertexMass
-  kDiagonal,  ///< SOFA DiagonalMass: lumped ρV/4 from each tetrahedron to its nodes
+  kDiagonal,  ///< SOFA DiagonalMass: lumped ρV/4 per tetrahedron node (ρV/8 per hexahedron node without tets)
 };
 
 struct MassConfig {
@@ -37,6 +39,9 @@ struct MassConfig {
   std::optional<double> vertex_mass_kg;      ///< UniformMass vertexMass (overrides totalMass)
   double mass_density_kg_per_m3{1.0};        ///< DiagonalMass massDensity (SOFA default 1)
   std::optional<double> diagonal_total_mass_kg;  ///< DiagonalMass totalMass: rescales the lumped masses
+  /// DiagonalMass: per volume element (tetrahedron, or hexahedron in a hexahedral model),
+  /// kg/m³; 0 = massDensity. Empty: massDensity everywhere (tissue regions fill it).
+  std::vector<double> element_mass_density_kg_per_m3;
 };
 
 /// SOFA's Neo-Hookean counterpart; see neo_hookean_force_field.h.
@@ -45,6 +50,8 @@ struct NeoHookeanConfig {
   double poisson_ratio{0.45};
   /// Per tetrahedron (Pa; 0: youngModulus), or empty: material regions.
   std::vector<double> element_young_modulus_pa;
+  /// Per tetrahedron (0: poissonRatio), or empty (split into one field per ratio, as the FEM).
+  std::vector<double> element_poisson_ratio;
 };
 
 /// One force field of the model; exactly one member is set.
@@ -54,6 +61,8 @@ struct ForceFieldConfig {
   std::optional<TetrahedronFemConfig> tetrahedron_fem;
   std::optional<NeoHookeanConfig> neo_hookean;
   std::optional<ConstantForceConfig> constant_force;
+  std::optional<TriangleFemConfig> triangle_fem;  ///< membrane FEM on `triangles`
+  std::optional<HexahedronFemConfig> hexahedron_fem;  ///< hexahedral FEM on `hexahedra`
 };
 
 /// SOFA FixedProjectiveConstraint (FixedConstraint): nodes by index, or every node whose rest
@@ -108,7 +117,10 @@ struct ModelConfig {
   std::string name{"model"};
   std::vector<Vec3> positions;           ///< (N) rest positions, m
   std::vector<mesh::Tet> tets;           ///< topology (may be empty for spring-only surfaces)
-  std::vector<mesh::Tri> triangles;      ///< surface triangles (springs on surfaces)
+  std::vector<mesh::Hex> hexahedra;      ///< hexahedral topology (SOFA corner order; grids)
+  std::vector<mesh::Tri> triangles;      ///< surface triangles (springs or membrane FEM on surfaces)
+  /// Empty, or a tag per volume element (Gmsh physical group): what tissue regions select by.
+  std::vector<std::int32_t> element_regions;
   MassConfig mass;
   std::vector<ForceFieldConfig> force_fields;
   std::vector<FixedConstraintConfig> fixed;
@@ -126,6 +138,7 @@ struct MechanicalModel {
   std::string name;
   std::vector<Vec3> rest_positions;                   ///< (N) m
   std::vector<mesh::Tet> tets;
+  std::vector<mesh::Hex> hexahedra;
   std::vector<mesh::Tri> triangles;
   std::vector<double> node_mass_kg;                   ///< (N) lumped mass per node
   std::string mass_name;

@@ -51,6 +51,16 @@ Expected<Slot> find_slot(ModelConfig& c, std::string_view component, std::string
       if (parameter == "youngModulus") return Slot{&f.neo_hookean->young_modulus_pa, 0.0, inf, true, false, "Pa"};
       if (parameter == "poissonRatio") return Slot{&f.neo_hookean->poisson_ratio, -1.0, 0.5, true, false, "", true};
     }
+    if (f.hexahedron_fem) {
+      if (parameter == "youngModulus") return Slot{&f.hexahedron_fem->young_modulus_pa, 0.0, inf, true, false, "Pa"};
+      if (parameter == "poissonRatio") return Slot{&f.hexahedron_fem->poisson_ratio, -1.0, 0.5, true, false, "", true};
+    }
+    if (f.triangle_fem) {
+      if (parameter == "youngModulus") return Slot{&f.triangle_fem->young_modulus_pa, 0.0, inf, true, false, "Pa"};
+      if (parameter == "poissonRatio") return Slot{&f.triangle_fem->poisson_ratio, -1.0, 0.5, true, false, "", true};
+      if (parameter == "thickness") return Slot{&f.triangle_fem->thickness_m, 0.0, inf, true, false, "m"};
+      if (parameter == "restScale") return Slot{&f.triangle_fem->rest_scale, 0.0, 2.0, true, false, ""};
+    }
     return no_parameter("force field");
   }
   if (c.ode.name == component) {
@@ -131,9 +141,13 @@ std::vector<std::string> parameter_names(const ModelConfig& c) {
       names.push_back(f.name + "/damping");
       names.push_back(f.name + "/restLengthScale");
     }
-    if (f.tetrahedron_fem || f.neo_hookean) {
+    if (f.tetrahedron_fem || f.neo_hookean || f.triangle_fem || f.hexahedron_fem) {
       names.push_back(f.name + "/youngModulus");
       names.push_back(f.name + "/poissonRatio");
+    }
+    if (f.triangle_fem) {
+      names.push_back(f.name + "/thickness");
+      names.push_back(f.name + "/restScale");
     }
   }
   names.push_back(c.ode.name + "/rayleighStiffness");

@@ -4,7 +4,8 @@
 /// that a setting can be changed by name — by the command seam while a session runs, and by a
 /// project's overrides when it is loaded — with one validation:
 ///   component = a force field's name:  stiffness, damping, restLengthScale (mesh springs);
-///                                      youngModulus, poissonRatio (FEM, Neo-Hookean)
+///                                      youngModulus, poissonRatio (FEM, Neo-Hookean, membrane),
+///                                      thickness (membrane)
 ///   component = the ODE solver's name: rayleighStiffness, rayleighMass
 ///   component = the linear solver's:   iterations, tolerance, threshold
 ///   component = the mass's name:       totalMass, massDensity

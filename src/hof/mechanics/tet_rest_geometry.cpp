@@ -48,7 +48,7 @@ Expected<std::vector<double>> element_modulus_weights(const std::vector<double>&
   if (per_element.empty()) return weights;
   if (per_element.size() != element_count) {
     return make_error(ErrorCode::kInvalidArgument,
-                      fmt::format("{}: youngModulus lists {} values; a per-element list needs one per tetrahedron ({})", who,
+                      fmt::format("{}: youngModulus lists {} values; a per-element list needs one per element ({})", who,
                                   per_element.size(), element_count));
   }
   for (std::size_t t = 0; t < element_count; ++t) {

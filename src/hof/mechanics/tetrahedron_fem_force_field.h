@@ -35,6 +35,9 @@ struct TetrahedronFemConfig {
   FemMethod method{FemMethod::kLarge};
   /// Per tetrahedron (Pa; 0: youngModulus), or empty: material regions, SOFA's vector form.
   std::vector<double> element_young_modulus_pa;
+  /// Per tetrahedron (0: poissonRatio), or empty. build_model gives each distinct ratio its own
+  /// field over its elements (the assembly shares one λ/μ ratio per field).
+  std::vector<double> element_poisson_ratio;
 };
 
 /// Lamé parameters from E and ν: λ = Eν/((1+ν)(1−2ν)), μ = E/(2(1+ν)).

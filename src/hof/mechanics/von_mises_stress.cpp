@@ -18,15 +18,18 @@ double von_mises_from_stretches(const Vec3& stretches, double lambda, double mu)
 VonMisesStress::VonMisesStress(const ModelConfig& config) {
   double young = 0.0, poisson = 0.0;
   const std::vector<double>* per_element = nullptr;
+  const std::vector<double>* per_element_poisson = nullptr;
   for (const ForceFieldConfig& f : config.force_fields) {
     if (f.tetrahedron_fem) {
       young = f.tetrahedron_fem->young_modulus_pa;
       poisson = f.tetrahedron_fem->poisson_ratio;
       per_element = &f.tetrahedron_fem->element_young_modulus_pa;
+      per_element_poisson = &f.tetrahedron_fem->element_poisson_ratio;
     } else if (f.neo_hookean) {
       young = f.neo_hookean->young_modulus_pa;
       poisson = f.neo_hookean->poisson_ratio;
       per_element = &f.neo_hookean->element_young_modulus_pa;
+      per_element_poisson = &f.neo_hookean->element_poisson_ratio;
     } else {
       continue;
     }
@@ -36,7 +39,7 @@ VonMisesStress::VonMisesStress(const ModelConfig& config) {
   if (!per_element || config.tets.empty()) return;
   const auto weights = element_modulus_weights(*per_element, young, config.tets.size(), source_);
   if (!weights) return;  // the model would not build either
-  const Lame lame = lame_parameters(young, poisson);
+  if (!per_element_poisson->empty() && per_element_poisson->size() != config.tets.size()) return;
   node_volume_.assign(config.positions.size(), 0.0);
   elements_.reserve(config.tets.size());
   for (std::size_t t = 0; t < config.tets.size(); ++t) {
@@ -51,6 +54,9 @@ VonMisesStress::VonMisesStress(const ModelConfig& config) {
     for (int c = 0; c < 3; ++c) dm.col(c) = config.positions[static_cast<std::size_t>(e.nodes[c + 1])] - config.positions[static_cast<std::size_t>(e.nodes[0])];
     e.rest_inverse = dm.inverse();
     e.volume = rest->volume;
+    // A tissue region's own Poisson ratio changes λ/μ, its modulus scales both.
+    const double nu = per_element_poisson->empty() || (*per_element_poisson)[t] == 0.0 ? poisson : (*per_element_poisson)[t];
+    const Lame lame = lame_parameters(young, nu);
     e.lambda = (*weights)[t] * lame.lambda;
     e.mu = (*weights)[t] * lame.mu;
     for (const std::int32_t n : e.nodes) node_volume_[static_cast<std::size_t>(n)] += e.volume;

@@ -306,11 +306,22 @@ std::string to_xml(const HofProject& p) {
   for (const MaterialRegion& region : p.regions) {
     const std::string force_field =
         region.force_field.empty() ? std::string() : fmt::format(" forceField=\"{}\"", xml_escape(region.force_field));
-    const std::string shape = region.shape == MaterialRegion::Shape::kSphere
-                                  ? fmt::format("shape=\"sphere\" center=\"{}\" radius=\"{}\"", vec(region.center), number(region.radius))
-                                  : fmt::format("shape=\"box\" min=\"{}\" max=\"{}\"", vec(region.box_min), vec(region.box_max));
-    sets += fmt::format("    <region name=\"{}\" body=\"{}\"{} {} youngModulus=\"{}\"/>\n", xml_escape(region.name),
-                        xml_escape(region.body), force_field, shape, number(region.young_modulus_pa));
+    std::string shape;
+    switch (region.shape) {
+      case MaterialRegion::Shape::kSphere:
+        shape = fmt::format("shape=\"sphere\" center=\"{}\" radius=\"{}\"", vec(region.center), number(region.radius));
+        break;
+      case MaterialRegion::Shape::kBox:
+        shape = fmt::format("shape=\"box\" min=\"{}\" max=\"{}\"", vec(region.box_min), vec(region.box_max));
+        break;
+      case MaterialRegion::Shape::kGroup: shape = fmt::format("shape=\"group\" physicalGroup=\"{}\"", region.physical_group); break;
+    }
+    std::string material;
+    if (region.young_modulus_pa) material += fmt::format(" youngModulus=\"{}\"", number(*region.young_modulus_pa));
+    if (region.poisson_ratio) material += fmt::format(" poissonRatio=\"{}\"", number(*region.poisson_ratio));
+    if (region.mass_density_kg_per_m3) material += fmt::format(" massDensity=\"{}\"", number(*region.mass_density_kg_per_m3));
+    sets += fmt::format("    <region name=\"{}\" body=\"{}\"{} {}{}/>\n", xml_escape(region.name), xml_escape(region.body),
+                        force_field, shape, material);
   }
   const std::string unit = p.scene_unit.empty() ? std::string() : fmt::format(" unit=\"{}\"", xml_escape(p.scene_unit));
   if (!p.mechanics_inline.empty()) {
@@ -324,10 +335,12 @@ std::string to_xml(const HofProject& p) {
   if (!p.bodies.empty() || !p.obstacles.empty()) {
     out += "  <bodies>\n";
     for (const BodySetup& b : p.bodies) {
+      std::string model = b.model.empty() ? std::string() : fmt::format(" model=\"{}\"", xml_escape(b.model));
+      if (b.grid[0] > 0) model += fmt::format(" grid=\"{} {} {}\"", b.grid[0], b.grid[1], b.grid[2]);
       if (b.surface) {
-        out += fmt::format("    <body name=\"{}\">\n", xml_escape(b.name)) + surface_xml(*b.surface, "      ") + "    </body>\n";
+        out += fmt::format("    <body name=\"{}\"{}>\n", xml_escape(b.name), model) + surface_xml(*b.surface, "      ") + "    </body>\n";
       } else {
-        out += fmt::format("    <body name=\"{}\"/>\n", xml_escape(b.name));
+        out += fmt::format("    <body name=\"{}\"{}/>\n", xml_escape(b.name), model);
       }
     }
     for (const ObstacleSetup& o : p.obstacles) {
@@ -503,7 +516,7 @@ Expected<HofProject> parse_project(const std::string& text, const std::filesyste
     region.name = node.attribute("name").as_string("region");
     region.body = node.attribute("body").as_string("");
     region.force_field = node.attribute("forceField").as_string("");
-    if (region.body.empty()) r.fail(node, "<region> needs body=\"NAME\" (the body whose tetrahedra it holds)");
+    if (region.body.empty()) r.fail(node, "<region> needs body=\"NAME\" (the body whose elements it holds)");
     const std::string shape = node.attribute("shape").as_string("sphere");
     if (shape == "sphere") {
       region.shape = MaterialRegion::Shape::kSphere;
@@ -515,11 +528,28 @@ Expected<HofProject> parse_project(const std::string& text, const std::filesyste
       region.box_min = r.get_vec(node, "min", Vec3::Zero());
       region.box_max = r.get_vec(node, "max", Vec3::Zero());
       if (!(region.box_max.array() > region.box_min.array()).all()) r.fail(node, "<region shape=\"box\"> needs min < max on every axis");
+    } else if (shape == "group") {
+      region.shape = MaterialRegion::Shape::kGroup;
+      if (!node.attribute("physicalGroup")) r.fail(node, "<region shape=\"group\"> needs physicalGroup=\"TAG\" (a Gmsh physical tag)");
+      region.physical_group = static_cast<std::int32_t>(r.get(node, "physicalGroup", 0.0));
     } else {
-      r.fail(node, fmt::format("<region> shape=\"{}\": expected sphere or box", shape));
+      r.fail(node, fmt::format("<region> shape=\"{}\": expected sphere, box or group", shape));
     }
-    region.young_modulus_pa = r.get(node, "youngModulus", 0.0);
-    if (!(region.young_modulus_pa > 0.0)) r.fail(node, "<region> needs youngModulus > 0 (Pa)");
+    if (node.attribute("youngModulus")) {
+      region.young_modulus_pa = r.get(node, "youngModulus", 0.0);
+      if (!(*region.young_modulus_pa > 0.0)) r.fail(node, "<region> youngModulus must be > 0 (Pa)");
+    }
+    if (node.attribute("poissonRatio")) {
+      region.poisson_ratio = r.get(node, "poissonRatio", 0.0);
+      if (!(*region.poisson_ratio > -1.0 && *region.poisson_ratio < 0.5)) r.fail(node, "<region> poissonRatio must be in (-1, 0.5)");
+    }
+    if (node.attribute("massDensity")) {
+      region.mass_density_kg_per_m3 = r.get(node, "massDensity", 0.0);
+      if (!(*region.mass_density_kg_per_m3 > 0.0)) r.fail(node, "<region> massDensity must be > 0 (kg/m^3)");
+    }
+    if (!region.young_modulus_pa && !region.poisson_ratio && !region.mass_density_kg_per_m3) {
+      r.fail(node, "<region> needs youngModulus, poissonRatio or massDensity");
+    }
     p.regions.push_back(std::move(region));
   }
   for (const pugi::xml_node b : root.child("bodies").children()) {
@@ -533,7 +563,20 @@ Expected<HofProject> parse_project(const std::string& text, const std::filesyste
     std::optional<haptics::SurfaceMaterial> surface;
     if (const pugi::xml_node s = b.child("surface")) surface = read_surface(r, s);
     if (tag == "body") {
-      p.bodies.push_back(BodySetup{name, surface});
+      const std::string model = b.attribute("model").as_string("");
+      if (!model.empty() && model != "springs" && model != "membrane" && model != "hexahedra") {
+        r.fail(b, fmt::format("<body model=\"{}\">: expected springs, membrane (surface bodies) or hexahedra (volume bodies)", model));
+      }
+      std::array<int, 3> grid{0, 0, 0};
+      if (b.attribute("grid")) {
+        const Vec3 n = r.get_vec(b, "grid", Vec3::Zero());
+        for (int a = 0; a < 3; ++a) grid[static_cast<std::size_t>(a)] = static_cast<int>(n[a]);
+        if (model != "hexahedra") r.fail(b, "<body grid=...> goes with model=\"hexahedra\"");
+        if (!(n.array() >= 2.0).all() || !(n.array() <= 512.0).all() || !(n.array() == n.array().floor()).all()) {
+          r.fail(b, "<body grid=\"nx ny nz\">: whole numbers of nodes per axis, 2 to 512");
+        }
+      }
+      p.bodies.push_back(BodySetup{name, surface, model, grid});
     } else if (tag == "obstacle") {
       ObstacleSetup o;
       o.name = name;

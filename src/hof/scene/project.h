@@ -47,6 +47,17 @@ struct GraphicsSetup {
 struct BodySetup {
   std::string name;
   std::optional<haptics::SurfaceMaterial> surface;  ///< its haptic surface (else the project's)
+  /// The body's model, when the project chooses another than the scene's: for a surface
+  /// body (an X3D DeformableShape, a SOFA triangle model) "springs" (MeshSpringForceField on
+  /// the edges) or "membrane" (co-rotational TriangleFEMForceField); for a volume body
+  /// "hexahedra": its surface filled with a coarse hexahedral grid (SOFA's SparseGridTopology
+  /// + HexahedronFEMForceField, the same material) that the surface follows trilinearly.
+  /// Applied before <set> and <region>, whose component names are then "springs",
+  /// "membrane" or "FEM". "" = as the scene has it.
+  std::string model;
+  /// "hexahedra": nodes per axis of the grid (SOFA's n); 0 = cells of a tenth of the body's
+  /// largest extent.
+  std::array<int, 3> grid{0, 0, 0};
 };
 
 /// A rigid, fixed obstacle the project adds to the scene (a table, a rib cage): a surface mesh
@@ -58,19 +69,24 @@ struct ObstacleSetup {
   std::optional<haptics::SurfaceMaterial> surface;  ///< else the project's
 };
 
-/// A material region (a tumour, a stiffer lobe): the tetrahedra of a body whose centroid lies
-/// in a sphere or a box take their own Young's modulus (SOFA's per-element youngModulus),
-/// applied after the scene and its <set> parameters. Written <region> in <mechanics>.
+/// A tissue region (a tumour, a stiffer lobe): the elements of a body (tetrahedra; a
+/// membrane's triangles) whose centroid lies in a sphere or a box, or that carry a Gmsh
+/// physical group, take their own Young's modulus, Poisson ratio and/or mass density (SOFA's
+/// per-element lists), applied after the scene and its <set> parameters. Written <region> in
+/// <mechanics>; regions apply in order, a later one overriding an earlier one.
 struct MaterialRegion {
-  enum class Shape : std::uint8_t { kSphere, kBox };
+  enum class Shape : std::uint8_t { kSphere, kBox, kGroup };
   std::string name{"region"};
   std::string body;          ///< the body (its SOFA node name)
-  std::string force_field;   ///< the force field ("": every tetrahedral force field of the body)
+  std::string force_field;   ///< the force field ("": every FEM force field of the body)
   Shape shape{Shape::kSphere};
   Vec3 center{Vec3::Zero()};  ///< sphere centre, m (scene units)
   double radius{0.01};        ///< sphere radius
   Vec3 box_min{Vec3::Zero()}, box_max{Vec3::Zero()};  ///< box corners
-  double young_modulus_pa{20000.0};
+  std::int32_t physical_group{0};  ///< Gmsh physical tag (shape kGroup)
+  std::optional<double> young_modulus_pa;        ///< Pa
+  std::optional<double> poisson_ratio;           ///< in (−1, 0.5)
+  std::optional<double> mass_density_kg_per_m3;  ///< needs a DiagonalMass (per area on a membrane)
 };
 
 struct HofProject {

@@ -393,6 +393,8 @@ Expected<void> Reader::read_file_into(Component& c, std::string_view key, MeshDa
   d.positions = std::move(m->mesh.nodes);
   d.tets = std::move(m->mesh.tets);
   d.triangles = std::move(m->mesh.triangles);
+  d.tet_regions = std::move(m->mesh.tet_regions);
+  d.triangle_regions = std::move(m->mesh.triangle_regions);
   d.has_positions = true;
   d.has_tets = !d.tets.empty();
   d.has_triangles = !d.triangles.empty();
@@ -417,10 +419,12 @@ Expected<void> Reader::read_field(Component& c, std::string_view key, std::strin
     } else if (f == "tetrahedra" || f == "tetras") {
       if (field != "tetrahedra") return fail(c, fmt::format("attribute {}: links tetrahedra to {}", key, field));
       d.tets = (*t)->tets;
+      d.tet_regions = (*t)->tet_regions;
       d.has_tets = true;
     } else if (f == "triangles") {
       if (field != "triangles") return fail(c, fmt::format("attribute {}: links triangles to {}", key, field));
       d.triangles = (*t)->triangles;
+      d.triangle_regions = (*t)->triangle_regions;
       d.has_triangles = true;
     } else if (f == "edges" || f == "normals" || f == "texcoords" || f == "quads" || f == "hexahedra") {
       // A loader output HoF does not take from links (edges come from the elements, normals from
@@ -465,10 +469,12 @@ void fill_missing(MeshData& d, const MeshData& from) {
   }
   if (!d.has_tets && from.has_tets) {
     d.tets = from.tets;
+    d.tet_regions = from.tet_regions;
     d.has_tets = true;
   }
   if (!d.has_triangles && from.has_triangles) {
     d.triangles = from.triangles;
+    d.triangle_regions = from.triangle_regions;
     d.has_triangles = true;
   }
   if (!d.file && from.file) d.file = from.file;

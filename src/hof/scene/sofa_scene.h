@@ -25,6 +25,9 @@ struct SofaSceneModel {
   mechanics::ModelConfig config;                  ///< ready for mechanics::build_model()
   std::optional<std::filesystem::path> visual_mesh;  ///< OglModel file (resolved), if any
   bool visual_barycentric{false};                 ///< a BarycentricMapping maps the volume to it
+  /// A hexahedral grid's fine surface (the closed surface a SparseGridTopology was built
+  /// from), to touch when the node has no mapped visual model: it follows the grid trilinearly.
+  std::optional<mesh::TriMesh> fine_surface;
 };
 
 /// A rigid, fixed obstacle: a node with a triangle collision model on a state (or loader) that

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <map>
 
+#include "hof/mesh/hex_grid.h"
 #include "hof/mesh/mesh_io.h"
 #include "hof/scene/sofa_scene_reader.h"
 
@@ -40,6 +41,7 @@ Expected<SofaSceneModel> Reader::make_model(SceneNode& node, Component* state) {
       if (!t) return std::unexpected(t.error());
       if ((*t)->has_tets) {
         topo_data.tets = (*t)->tets;
+        topo_data.tet_regions = (*t)->tet_regions;
         topo_data.has_tets = true;
       }
       break;
@@ -50,24 +52,39 @@ Expected<SofaSceneModel> Reader::make_model(SceneNode& node, Component* state) {
       if (std::ranges::find(types, std::string_view(c->type)) != types.end()) return c.get();
     return nullptr;
   };
-  if (const Component* grid = not_yet({"SparseGridTopology", "RegularGridTopology", "HexahedronSetTopologyContainer",
-                                       "HexahedronFEMForceField", "HexahedralFEMForceField"});
-      grid && (!geo->has_positions || geo->positions.size() <= 1 || topo_data.tets.empty())) {
-    return fail(*grid, fmt::format("node '{}': hexahedral models (grids and HexahedronFEMForceField) are not simulated "
-                                   "by HoF yet; a tetrahedral mesh (MeshGmshLoader + TetrahedronFEMForceField) is",
-                                   node.path),
+  Component* grid = nullptr;
+  for (auto& c : node.components)
+    if (c->type == "SparseGridTopology" || c->type == "RegularGridTopology") grid = c.get();
+  if (const Component* hex = not_yet({"HexahedronSetTopologyContainer"}); hex && !grid) {
+    return fail(*hex, fmt::format("node '{}': a HexahedronSetTopologyContainer is not read by HoF yet; a "
+                                  "RegularGridTopology or SparseGridTopology (hexahedral FEM) or a tetrahedral mesh is",
+                                  node.path),
                 ErrorCode::kUnsupported);
   }
-  if (!geo->has_positions || geo->positions.empty())
+  if (grid) {
+    // A hexahedral model: the grid's nodes are the state (a MechanicalObject's own positions,
+    // if any, are SOFA's placeholder and give way to the topology's).
+    if (auto r = apply_grid(*grid, out); !r) return std::unexpected(r.error());
+    if (state) state->used = true;
+  } else if (const Component* hex = not_yet({"HexahedronFEMForceField", "HexahedralFEMForceField"})) {
+    return fail(*hex, fmt::format("node '{}': {} needs a hexahedral topology (RegularGridTopology or SparseGridTopology) "
+                                  "in the node",
+                                  node.path, hex->type),
+                ErrorCode::kUnsupported);
+  }
+  if (!grid && (!geo->has_positions || geo->positions.empty()))
     return fail(*source, fmt::format("the model in node '{}' has no positions (no position, src or filename, and "
                                      "no topology or loader with positions in the node)",
                                      node.path));
-  m.positions = geo->positions;
+  if (!grid) m.positions = geo->positions;
   if (geo->xs3 && std::ranges::any_of(geo->xs3->fixed, [](bool f) { return f; }))
     warn(source->line, fmt::format("{}: 'fixed' flags of the Xsp file ignored (use a FixedProjectiveConstraint)",
                                    source->label()));
-  m.tets = topo_data.tets;
-  if (m.tets.empty()) m.triangles = topo_data.triangles;
+  if (!grid) m.tets = topo_data.tets;
+  if (!grid && m.tets.empty()) m.triangles = topo_data.triangles;
+  // Gmsh physical groups, for tissue regions that select by them.
+  const auto& regions = m.tets.empty() ? topo_data.triangle_regions : topo_data.tet_regions;
+  if (!grid && regions.size() == (m.tets.empty() ? m.triangles.size() : m.tets.size())) m.element_regions = regions;
   const auto n = static_cast<std::int64_t>(m.positions.size());
   for (std::size_t t = 0; t < m.tets.size(); ++t)
     for (std::int32_t i : m.tets[t])
@@ -113,7 +130,9 @@ Expected<SofaSceneModel> Reader::make_model(SceneNode& node, Component* state) {
       if (auto r = apply_mass(*c, m, m.positions.size()); !r) return std::unexpected(r.error());
       have_mass = true;
     } else if (t == "TetrahedronFEMForceField" || t == "FastTetrahedralCorotationalForceField" ||
-               t == "TetrahedronHyperelasticityFEMForceField" || t == "MeshSpringForceField" || t == "ConstantForceField") {
+               t == "TetrahedronHyperelasticityFEMForceField" || t == "MeshSpringForceField" || t == "ConstantForceField" ||
+               t == "TriangleFEMForceField" || t == "TriangularFEMForceField" || t == "HexahedronFEMForceField" ||
+               t == "HexahedralFEMForceField") {
       if (auto r = apply_force_field(*c, m); !r) return std::unexpected(r.error());
     } else if (t == "FixedProjectiveConstraint" || t == "PartialFixedProjectiveConstraint") {
       if (auto r = apply_fixed(*c, m); !r) return std::unexpected(r.error());
@@ -122,13 +141,19 @@ Expected<SofaSceneModel> Reader::make_model(SceneNode& node, Component* state) {
     }
   }
   if (!have_mass) warn(node.line, fmt::format("node '{}': no mass; DiagonalMass massDensity=1 assumed", node.path));
+  if (!half_filled_.empty() && m.mass.kind == mechanics::MassKind::kDiagonal && m.mass.element_mass_density_kg_per_m3.empty()) {
+    // A fillWeighted sparse grid's surface cells hold half the matter.
+    m.mass.element_mass_density_kg_per_m3.assign(m.hexahedra.size(), 0.0);
+    for (std::size_t h = 0; h < m.hexahedra.size(); ++h) {
+      if (half_filled_[h]) m.mass.element_mass_density_kg_per_m3[h] = 0.5 * m.mass.mass_density_kg_per_m3;
+    }
+  }
   if (m.force_fields.empty()) {
     // A body with no elasticity HoF simulates would only fall: refused, naming what it has.
     for (auto& c : node.components) {
       if (c->used || c->type.find("ForceField") == std::string::npos) continue;
-      return fail(*c, fmt::format("node '{}': {} is not simulated by HoF yet{}, and the body has no other force field",
-                                  node.path, c->type,
-                                  c->type.starts_with("Triangle") ? " (membrane FEM; MeshSpringForceField on the triangles is)" : ""),
+      return fail(*c, fmt::format("node '{}': {} is not simulated by HoF yet, and the body has no other force field",
+                                  node.path, c->type),
                   ErrorCode::kUnsupported);
     }
   }
@@ -340,39 +365,147 @@ Expected<void> Reader::apply_mass(Component& c, ModelConfig& m, std::size_t n) {
   return {};
 }
 
+Expected<void> Reader::apply_grid(Component& c, SofaSceneModel& out) {
+  c.used = true;
+  ModelConfig& m = out.config;
+  half_filled_.clear();
+  // n: nodes per axis (SOFA's `n`, or the old nx ny nz).
+  std::array<int, 3> n{2, 2, 2};
+  if (const std::string* text = c.attr("n")) {
+    auto v = numbers(c, "n", *text);
+    if (!v) return std::unexpected(v.error());
+    if (v->size() != 3) return fail(c, fmt::format("attribute n: expected 3 node counts, got {} values", v->size()));
+    for (std::size_t a = 0; a < 3; ++a) n[a] = static_cast<int>((*v)[a]);
+  }
+  for (std::size_t a = 0; a < 3; ++a) {
+    static constexpr std::array<const char*, 3> kKeys{"nx", "ny", "nz"};
+    auto v = number(c, kKeys[a]);
+    if (!v) return std::unexpected(v.error());
+    if (*v) n[a] = static_cast<int>(**v);
+  }
+  for (std::size_t a = 0; a < 3; ++a) {
+    if (n[a] < 2 || n[a] > 512) {
+      return fail(c, fmt::format("attribute n: {} {} {}: each axis needs 2 to 512 nodes (n - 1 cells)", n[0], n[1], n[2]),
+                  ErrorCode::kInvalidArgument);
+    }
+  }
+  // The box: min/max, or the old xmin xmax ymin ymax zmin zmax.
+  auto lo = vec3(c, "min");
+  auto hi = vec3(c, "max");
+  if (!lo) return std::unexpected(lo.error());
+  if (!hi) return std::unexpected(hi.error());
+  std::optional<std::pair<Vec3, Vec3>> box;
+  if (*lo && *hi) box = std::make_pair(**lo, **hi);
+  if (!box && c.attr("xmin")) {
+    Vec3 a = Vec3::Zero(), b = Vec3::Zero();
+    static constexpr std::array<std::pair<const char*, const char*>, 3> kBounds{{{"xmin", "xmax"}, {"ymin", "ymax"}, {"zmin", "zmax"}}};
+    for (std::size_t k = 0; k < 3; ++k) {
+      auto x0 = number(c, kBounds[k].first);
+      auto x1 = number(c, kBounds[k].second);
+      if (!x0) return std::unexpected(x0.error());
+      if (!x1) return std::unexpected(x1.error());
+      a[static_cast<Eigen::Index>(k)] = x0->value_or(0.0);
+      b[static_cast<Eigen::Index>(k)] = x1->value_or(0.0);
+    }
+    box = std::make_pair(a, b);
+  }
+  Expected<mesh::HexGrid> grid = make_error(ErrorCode::kInvalidArgument, "no grid");
+  if (c.type == "RegularGridTopology") {
+    if (!box) return fail(c, "a RegularGridTopology needs its box: min=\"x y z\" max=\"x y z\"");
+    grid = mesh::regular_grid(n, box->first, box->second);
+  } else {
+    // SparseGridTopology: the closed surface to fill, from fileTopology (or filename), or
+    // linked positions and triangles.
+    mesh::TriMesh surface;
+    const char* key = c.attr("fileTopology") ? "fileTopology" : c.attr("filename") ? "filename" : nullptr;
+    if (key) {
+      auto file = resolve_file(c, key, *c.attr(key));
+      if (!file) return std::unexpected(file.error());
+      auto read = mesh::read_mesh(*file);
+      if (!read) {
+        Error e = read.error();
+        e.message = fmt::format("{}: {}", c.label(), e.message);
+        return std::unexpected(std::move(e));
+      }
+      if (!read->mesh.tets.empty()) surface = mesh::extract_boundary(read->mesh.nodes, read->mesh.tets).surface;
+      else surface = mesh::TriMesh{read->mesh.nodes, read->mesh.triangles};
+    } else if (c.attr("position") && c.attr("triangles")) {
+      MeshData d;
+      if (auto r = read_field(c, "position", "position", d); !r) return std::unexpected(r.error());
+      if (auto r = read_field(c, "triangles", "triangles", d); !r) return std::unexpected(r.error());
+      surface = mesh::TriMesh{d.positions, d.triangles};
+    } else {
+      return fail(c, "a SparseGridTopology needs the closed surface it fills: fileTopology=\"FILE\" (or position and "
+                     "triangles)");
+    }
+    grid = mesh::sparse_grid(surface, n, box);
+    if (grid) out.fine_surface = std::move(surface);
+  }
+  if (!grid) {
+    Error e = grid.error();
+    e.message = fmt::format("{}: {}", c.label(), e.message);
+    e.line = c.line;
+    if (e.file.empty()) e.file = path_.string();
+    return std::unexpected(std::move(e));
+  }
+  m.positions = std::move(grid->nodes);
+  m.hexahedra = std::move(grid->hexes);
+  // fillWeighted (SOFA's default): cells on the surface are half full (stiffness, mass).
+  auto weighted = boolean(c, "fillWeighted");
+  if (!weighted) return std::unexpected(weighted.error());
+  if (c.type == "SparseGridTopology" && weighted->value_or(true)) {
+    half_filled_.assign(grid->hex_on_surface.begin(), grid->hex_on_surface.end());
+  }
+  return {};
+}
+
+// youngModulus and poissonRatio of a linear-elastic field: one value, or (SOFA's vector form)
+// one per element. A list's most common value becomes the field's own (what a user tunes);
+// elements that differ keep theirs (0 in the per-element list: the field's value).
+Expected<void> Reader::elastic_lists(Component& c, double default_young, double default_poisson, std::size_t elements,
+                                     const char* element_name, double& young, std::vector<double>& young_list,
+                                     double& poisson, std::vector<double>& poisson_list) {
+  const auto read = [&](const char* key, double fallback, double& value, std::vector<double>& list,
+                        const auto& valid, const char* range) -> Expected<void> {
+    value = fallback;
+    const std::string* text = c.attr(key);
+    if (!text) return {};
+    auto values = numbers(c, key, *text);
+    if (!values) return std::unexpected(values.error());
+    if (values->empty()) return fail(c, fmt::format("attribute {}: empty, expected a number", key));
+    if (!std::ranges::all_of(*values, valid)) {
+      return fail(c, fmt::format("attribute {}: every value must be {}", key, range), ErrorCode::kInvalidArgument);
+    }
+    value = values->front();
+    if (std::ranges::all_of(*values, [&](double v) { return v == values->front(); })) return {};
+    if (values->size() != elements) {
+      return fail(c, fmt::format("attribute {}: {} values; one per {} ({}) or a single one", key, values->size(), element_name,
+                                 elements),
+                  ErrorCode::kInvalidArgument);
+    }
+    std::map<double, std::size_t> counts;
+    for (const double v : *values) ++counts[v];
+    value = std::ranges::max_element(counts, {}, [](const auto& kv) { return kv.second; })->first;
+    list.reserve(values->size());
+    for (const double v : *values) list.push_back(v == value ? 0.0 : v);
+    return {};
+  };
+  if (auto r = read("youngModulus", default_young, young, young_list, [](double v) { return v > 0.0 && std::isfinite(v); }, "> 0 Pa"); !r) {
+    return r;
+  }
+  return read("poissonRatio", default_poisson, poisson, poisson_list, [](double v) { return v > -1.0 && v < 0.5; }, "in (-1, 0.5)");
+}
+
 Expected<void> Reader::apply_force_field(Component& c, ModelConfig& m) {
   c.used = true;
   mechanics::ForceFieldConfig ff;
   ff.name = c.name;
   if (c.type == "TetrahedronFEMForceField" || c.type == "FastTetrahedralCorotationalForceField") {
     mechanics::TetrahedronFemConfig fem;
-    auto nu = number(c, "poissonRatio");
-    if (!nu) return std::unexpected(nu.error());
-    fem.young_modulus_pa = 5000.0;
-    fem.poisson_ratio = nu->value_or(0.45);
-    // youngModulus: one value, or (SOFA's vector form) one per tetrahedron: material regions.
-    if (const std::string* text = c.attr("youngModulus")) {
-      auto values = numbers(c, "youngModulus", *text);
-      if (!values) return std::unexpected(values.error());
-      if (values->empty()) return fail(c, "attribute youngModulus: empty, expected a number");
-      if (std::ranges::any_of(*values, [](double v) { return !(v > 0.0); })) {
-        return fail(c, "attribute youngModulus: every value must be > 0 Pa", ErrorCode::kInvalidArgument);
-      }
-      fem.young_modulus_pa = values->front();
-      const bool uniform = std::ranges::all_of(*values, [&](double v) { return v == values->front(); });
-      if (!uniform) {
-        if (values->size() != m.tets.size()) {
-          return fail(c, fmt::format("attribute youngModulus: {} values; one per tetrahedron ({}) or a single one", values->size(),
-                                     m.tets.size()),
-                      ErrorCode::kInvalidArgument);
-        }
-        // The most common value is the field's own (what a user tunes); the others are regions.
-        std::map<double, std::size_t> counts;
-        for (const double v : *values) ++counts[v];
-        fem.young_modulus_pa = std::ranges::max_element(counts, {}, [](const auto& kv) { return kv.second; })->first;
-        fem.element_young_modulus_pa.reserve(values->size());
-        for (const double v : *values) fem.element_young_modulus_pa.push_back(v == fem.young_modulus_pa ? 0.0 : v);
-      }
+    if (auto r = elastic_lists(c, 5000.0, 0.45, m.tets.size(), "tetrahedron", fem.young_modulus_pa, fem.element_young_modulus_pa,
+                               fem.poisson_ratio, fem.element_poisson_ratio);
+        !r) {
+      return std::unexpected(r.error());
     }
     const std::string method = c.attr("method") ? lower(std::string(trim(*c.attr("method")))) : std::string("large");
     if (method == "small" || method == "none") fem.method = mechanics::FemMethod::kSmall;
@@ -412,6 +545,65 @@ Expected<void> Reader::apply_force_field(Component& c, ModelConfig& m) {
     warn(c.line, fmt::format("{}: read as HoF's compressible Neo-Hookean with E = {:.6g} Pa, nu = {:.6g}", c.label(),
                              neo.young_modulus_pa, neo.poisson_ratio));
     ff.neo_hookean = neo;
+  } else if (c.type == "HexahedronFEMForceField" || c.type == "HexahedralFEMForceField") {
+    if (m.hexahedra.empty()) return fail(c, "no hexahedra in the node (give it a RegularGridTopology or SparseGridTopology)");
+    mechanics::HexahedronFemConfig fem;
+    if (auto r = elastic_lists(c, 5000.0, 0.45, m.hexahedra.size(), "hexahedron", fem.young_modulus_pa, fem.element_young_modulus_pa,
+                               fem.poisson_ratio, fem.element_poisson_ratio);
+        !r) {
+      return std::unexpected(r.error());
+    }
+    const std::string method = c.attr("method") ? lower(std::string(trim(*c.attr("method")))) : std::string("large");
+    if (method == "small") fem.method = mechanics::FemMethod::kSmall;
+    else if (method == "large") fem.method = mechanics::FemMethod::kLarge;
+    else if (method == "polar") fem.method = mechanics::FemMethod::kPolar;
+    else return fail(c, fmt::format("attribute method: '{}' is not small, large or polar", method));
+    if (c.type != "HexahedronFEMForceField") warn(c.line, fmt::format("{}: read as HexahedronFEMForceField", c.label()));
+    // SOFA's sparse grid (fillWeighted, its default) gives a cell the surface passes through
+    // half the stiffness of a full one: the matter inside it is about half.
+    if (!half_filled_.empty() && fem.element_young_modulus_pa.empty()) {
+      fem.element_young_modulus_pa.assign(m.hexahedra.size(), 0.0);
+      for (std::size_t h = 0; h < m.hexahedra.size(); ++h) {
+        if (half_filled_[h]) fem.element_young_modulus_pa[h] = 0.5 * fem.young_modulus_pa;
+      }
+    }
+    ff.hexahedron_fem = std::move(fem);
+  } else if (c.type == "TriangleFEMForceField" || c.type == "TriangularFEMForceField") {
+    if (!m.tets.empty()) {
+      return fail(c, fmt::format("a membrane on a tetrahedral body: HoF simulates {} on a node whose topology has "
+                                 "triangles and no tetrahedra (a surface model)", c.type),
+                  ErrorCode::kUnsupported);
+    }
+    if (m.triangles.empty()) return fail(c, "no triangles in the node (give it a triangle topology or a surface loader)");
+    mechanics::TriangleFemConfig fem;
+    fem.sofa_type = c.type;
+    // SOFA's defaults differ: TriangleFEMForceField E = 1000, ν = 0.3; TriangularFEMForceField
+    // (BaseLinearElasticityFEMForceField) E = 5000, ν = 0.45.
+    const bool triangular = c.type == "TriangularFEMForceField";
+    if (auto r = elastic_lists(c, triangular ? 5000.0 : 1000.0, triangular ? 0.45 : 0.3, m.triangles.size(), "triangle",
+                               fem.young_modulus_pa, fem.element_young_modulus_pa, fem.poisson_ratio, fem.element_poisson_ratio);
+        !r) {
+      return std::unexpected(r.error());
+    }
+    auto thickness = number(c, "thickness");
+    if (!thickness) return std::unexpected(thickness.error());
+    fem.thickness_m = thickness->value_or(1.0);
+    if (!(fem.thickness_m > 0.0)) return fail(c, fmt::format("attribute thickness: must be > 0, got {}", fem.thickness_m), ErrorCode::kInvalidArgument);
+    auto rest_scale = number(c, "restScale");
+    if (!rest_scale) return std::unexpected(rest_scale.error());
+    fem.rest_scale = rest_scale->value_or(1.0);
+    if (!(fem.rest_scale > 0.0 && fem.rest_scale <= 2.0)) {
+      return fail(c, fmt::format("attribute restScale: must be in (0, 2], got {}", fem.rest_scale), ErrorCode::kInvalidArgument);
+    }
+    if (const std::string* plane = c.attr("planeStrain")) {
+      const std::string v = lower(std::string(trim(*plane)));
+      fem.plane_strain = v == "1" || v == "true";
+    }
+    const std::string method = c.attr("method") ? lower(std::string(trim(*c.attr("method")))) : std::string("large");
+    if (method == "small") fem.method = mechanics::FemMethod::kSmall;
+    else if (method == "large") fem.method = mechanics::FemMethod::kLarge;
+    else return fail(c, fmt::format("attribute method: '{}' is not small or large", method));
+    ff.triangle_fem = std::move(fem);
   } else if (c.type == "MeshSpringForceField") {
     // HoF has one stiffness for all springs: the generic value, else that of the element kind.
     mechanics::MeshSpringConfig s;
@@ -473,6 +665,26 @@ Expected<void> Reader::apply_fixed(Component& c, ModelConfig& m) {
   c.used = true;
   mechanics::FixedConstraintConfig f;
   f.name = c.name;
+  // indices="@roi.indices": the nodes a BoxROI selects (SOFA's usual way to hold a grid).
+  if (const std::string* text = c.attr("indices"); text && trim(*text).starts_with('@')) {
+    std::string field;
+    auto target = resolve_link(c, "indices", *text, field);
+    if (!target) return std::unexpected(target.error());
+    Component& roi = **target;
+    if (roi.type != "BoxROI") return fail(c, fmt::format("attribute indices: links to {}, expected a BoxROI's indices", roi.label()));
+    roi.used = true;
+    const std::string* box_text = roi.attr("box");
+    if (!box_text) return fail(roi, "a BoxROI needs box=\"xmin ymin zmin xmax ymax zmax\"");
+    auto v = numbers(roi, "box", *box_text);
+    if (!v) return std::unexpected(v.error());
+    if (v->empty() || v->size() % 6 != 0) return fail(roi, fmt::format("attribute box: {} numbers, expected 6 per box", v->size()));
+    for (std::size_t b = 0; b < v->size(); b += 6) {
+      mechanics::FixedConstraintConfig part = f;
+      part.box = std::make_pair(Vec3((*v)[b], (*v)[b + 1], (*v)[b + 2]), Vec3((*v)[b + 3], (*v)[b + 4], (*v)[b + 5]));
+      m.fixed.push_back(std::move(part));
+    }
+    return {};
+  }
   auto idx = indices(c, "indices");
   auto all = boolean(c, "fixAll");
   if (!idx) return std::unexpected(idx.error());

@@ -68,6 +68,8 @@ struct MeshData {
   std::vector<Vec3> positions;        ///< (N) scene units
   std::vector<mesh::Tet> tets;        ///< (T)
   std::vector<mesh::Tri> triangles;   ///< (F)
+  std::vector<std::int32_t> tet_regions;       ///< empty, or (T) Gmsh physical tag per tetrahedron
+  std::vector<std::int32_t> triangle_regions;  ///< empty, or (F) Gmsh physical tag per triangle
   bool has_positions{false};
   bool has_tets{false};
   bool has_triangles{false};
@@ -156,6 +158,11 @@ class Reader {
   Expected<void> apply_linear(Component& c, ModelConfig& m);
   Expected<void> apply_mass(Component& c, ModelConfig& m, std::size_t n);
   Expected<void> apply_force_field(Component& c, ModelConfig& m);
+  /// A RegularGridTopology or SparseGridTopology as the model's nodes and hexahedra.
+  Expected<void> apply_grid(Component& grid, SofaSceneModel& out);
+  Expected<void> elastic_lists(Component& c, double default_young, double default_poisson, std::size_t elements,
+                               const char* element_name, double& young, std::vector<double>& young_list, double& poisson,
+                               std::vector<double>& poisson_list);
   Expected<void> apply_fixed(Component& c, ModelConfig& m);
   Expected<void> apply_visual(SceneNode& node, SofaSceneModel& model);
   void list_skipped(const SceneNode& node);
@@ -167,6 +174,9 @@ class Reader {
   bool legacy_{false};  ///< the file uses 2008 syntax (Object tags or 2008-only names)
   std::unique_ptr<SceneNode> root_;
   std::unordered_map<const Component*, MeshData> data_cache_;
+  /// Of the model being read: 1 for each hexahedron of a fillWeighted sparse grid that the
+  /// surface passes through (half full), else empty.
+  std::vector<std::uint8_t> half_filled_;
   std::set<const Component*> in_progress_;
   SofaScene scene_;
 };

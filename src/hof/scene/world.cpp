@@ -10,6 +10,7 @@
 #include "hof/mechanics/model_parameters.h"
 #include "hof/mechanics/step.h"
 #include "hof/mesh/boundary.h"
+#include "hof/mesh/hex_grid.h"
 #include "hof/mesh/mesh_io.h"
 #include "hof/scene/sofa_scene.h"
 #include "hof/scene/x3d_scene.h"
@@ -49,21 +50,37 @@ std::string unique_name(const std::vector<coupling::SessionBody>& bodies, const 
 }
 
 // A SOFA model as a body: its visual mesh (barycentric) as the touchable surface when it has
-// one, else the boundary of its tetrahedra (shared nodes), else (a surface model) itself.
+// one, else a hexahedral grid's fine surface, else the boundary of its volume elements
+// (shared nodes), else (a surface model) itself. On a hexahedral model the mapped surfaces
+// follow the grid trilinearly: a coarse mechanical grid under a fine surface.
 Expected<coupling::SessionBody> make_deformable(const mechanics::ModelConfig& config,
-                                                const std::optional<std::filesystem::path>& visual_mesh, bool visual_barycentric) {
+                                                const std::optional<std::filesystem::path>& visual_mesh, bool visual_barycentric,
+                                                const std::optional<mesh::TriMesh>& fine_surface = std::nullopt) {
   auto model = mechanics::build_model(config);
   if (!model) return std::unexpected(model.error());
   coupling::SessionBody body;
   body.name = config.name.empty() ? std::string("model") : config.name;
   body.model.emplace(std::move(*model));
   body.config = config;
+  const bool hexahedral = !config.hexahedra.empty();
+  const auto mapped = [&](const mesh::TriMesh& surface) -> Expected<void> {
+    body.surface = surface;
+    auto mapping = hexahedral ? coupling::SurfaceMapping::trilinear(config.positions, config.hexahedra, body.surface.vertices)
+                              : coupling::SurfaceMapping::barycentric(config.positions, config.tets, body.surface.vertices);
+    if (!mapping) return std::unexpected(mapping.error());
+    body.mapping = std::move(*mapping);
+    return {};
+  };
   if (visual_mesh && visual_barycentric) {
     auto visual = mesh::read_mesh(*visual_mesh);
     if (!visual) return std::unexpected(visual.error());
-    body.surface.vertices = visual->mesh.nodes;
-    body.surface.triangles = visual->mesh.triangles;
-    auto mapping = coupling::SurfaceMapping::barycentric(config.positions, config.tets, body.surface.vertices);
+    if (auto ok = mapped(mesh::TriMesh{visual->mesh.nodes, visual->mesh.triangles}); !ok) return std::unexpected(ok.error());
+  } else if (hexahedral && fine_surface) {
+    if (auto ok = mapped(*fine_surface); !ok) return std::unexpected(ok.error());
+  } else if (hexahedral) {
+    const mesh::BoundarySurface b = mesh::hex_boundary(config.positions, config.hexahedra);
+    body.surface = b.surface;
+    auto mapping = coupling::SurfaceMapping::by_index(config.positions, b.surface.vertices, b.surface_to_volume);
     if (!mapping) return std::unexpected(mapping.error());
     body.mapping = std::move(*mapping);
   } else if (config.tets.empty()) {
@@ -85,6 +102,160 @@ Expected<coupling::SessionBody> make_deformable(const mechanics::ModelConfig& co
     return make_error(ErrorCode::kInvalidMesh, fmt::format("model '{}' has no surface to touch", body.name));
   }
   return body;
+}
+
+// A volume body as a coarse hexahedral grid under its surface (<body model="hexahedra">):
+// SOFA's SparseGridTopology over the body's touchable surface, HexahedronFEMForceField with the
+// material of its first FEM field, the same mass, solvers and constraints (a held node holds
+// the corners of the cell it lies in), and the surface following the grid trilinearly.
+Expected<void> fill_with_hexahedra(coupling::SessionBody& body, const BodySetup& setup) {
+  const mechanics::ModelConfig& tet = *body.config;
+  if (tet.tets.empty()) return make_error(ErrorCode::kInvalidArgument, "the body is not a volume (no tetrahedra) to fill");
+  std::array<int, 3> n = setup.grid;
+  if (n[0] <= 0) {
+    // Cells of a tenth of the largest extent.
+    Vec3 lo = tet.positions.front(), hi = lo;
+    for (const Vec3& p : tet.positions) {
+      lo = lo.cwiseMin(p);
+      hi = hi.cwiseMax(p);
+    }
+    const double cell = (hi - lo).maxCoeff() / 10.0;
+    for (int a = 0; a < 3; ++a) n[static_cast<std::size_t>(a)] = std::max(2, static_cast<int>(std::ceil((hi[a] - lo[a]) / cell)) + 1);
+  }
+  auto grid = mesh::sparse_grid(body.surface, n);
+  if (!grid) return std::unexpected(grid.error());
+  mechanics::ModelConfig hex = tet;
+  hex.positions = grid->nodes;
+  hex.tets.clear();
+  hex.triangles.clear();
+  hex.element_regions.clear();
+  hex.hexahedra = grid->hexes;
+  hex.mass.element_mass_density_kg_per_m3.clear();
+  // The material: the first FEM (or Neo-Hookean, as its small-strain E and ν) field.
+  std::optional<mechanics::HexahedronFemConfig> fem;
+  for (const mechanics::ForceFieldConfig& f : tet.force_fields) {
+    if (fem) break;
+    if (f.tetrahedron_fem) fem = mechanics::HexahedronFemConfig{f.tetrahedron_fem->young_modulus_pa, f.tetrahedron_fem->poisson_ratio,
+                                                                f.tetrahedron_fem->method, {}, {}};
+    if (f.neo_hookean) fem = mechanics::HexahedronFemConfig{f.neo_hookean->young_modulus_pa, f.neo_hookean->poisson_ratio,
+                                                            mechanics::FemMethod::kLarge, {}, {}};
+  }
+  if (!fem) return make_error(ErrorCode::kInvalidArgument, "the body has no FEM or Neo-Hookean force field to take the material from");
+  // As SOFA's sparse grid (fillWeighted, its default): a cell the surface passes through is
+  // about half full — half the stiffness and half the mass.
+  fem->element_young_modulus_pa.assign(grid->hexes.size(), 0.0);
+  hex.mass.element_mass_density_kg_per_m3.assign(grid->hexes.size(), 0.0);
+  for (std::size_t h = 0; h < grid->hexes.size(); ++h) {
+    if (!grid->hex_on_surface[h]) continue;
+    fem->element_young_modulus_pa[h] = 0.5 * fem->young_modulus_pa;
+    hex.mass.element_mass_density_kg_per_m3[h] = 0.5 * hex.mass.mass_density_kg_per_m3;
+  }
+  if (hex.mass.kind != mechanics::MassKind::kDiagonal) hex.mass.element_mass_density_kg_per_m3.clear();
+  hex.force_fields.clear();
+  mechanics::ForceFieldConfig field;
+  field.name = "FEM";
+  field.hexahedron_fem = *fem;
+  hex.force_fields.push_back(std::move(field));
+  for (const mechanics::ForceFieldConfig& f : tet.force_fields) {
+    if (f.constant_force) {
+      return make_error(ErrorCode::kInvalidArgument,
+                        fmt::format("its ConstantForceField '{}' names tetrahedral nodes; remove it to fill the body with hexahedra", f.name));
+    }
+  }
+  // Held nodes: each holds the corners of the grid cell it lies in.
+  const Vec3 cell = grid->cell_size();
+  std::vector<std::int32_t> hex_of_cell(static_cast<std::size_t>((n[0] - 1) * (n[1] - 1) * (n[2] - 1)), -1);
+  for (std::size_t h = 0; h < grid->hex_cells.size(); ++h) hex_of_cell[static_cast<std::size_t>(grid->hex_cells[h])] = static_cast<std::int32_t>(h);
+  for (mechanics::FixedConstraintConfig& fixed : hex.fixed) {
+    if (fixed.indices.empty()) continue;
+    std::vector<std::int32_t> corners;
+    for (const std::int32_t i : fixed.indices) {
+      const Vec3 p = tet.positions[static_cast<std::size_t>(i)];
+      std::array<int, 3> c{};
+      for (int a = 0; a < 3; ++a) {
+        c[static_cast<std::size_t>(a)] = std::clamp(static_cast<int>(std::floor((p[a] - grid->min[a]) / cell[a])), 0, n[static_cast<std::size_t>(a)] - 2);
+      }
+      const std::int32_t h = hex_of_cell[static_cast<std::size_t>(c[0] + (n[0] - 1) * (c[1] + (n[1] - 1) * c[2]))];
+      if (h < 0) continue;  // a node outside every kept cell (cannot happen for a surface node)
+      for (const std::int32_t corner : grid->hexes[static_cast<std::size_t>(h)]) corners.push_back(corner);
+    }
+    std::sort(corners.begin(), corners.end());
+    corners.erase(std::unique(corners.begin(), corners.end()), corners.end());
+    fixed.indices = std::move(corners);
+  }
+  const mesh::TriMesh surface = body.surface;
+  auto rebuilt = make_deformable(hex, std::nullopt, false, surface);
+  if (!rebuilt) return std::unexpected(rebuilt.error());
+  body.model.emplace(std::move(*rebuilt->model));
+  body.config = std::move(hex);
+  body.surface = std::move(rebuilt->surface);
+  body.mapping = std::move(rebuilt->mapping);
+  return {};
+}
+
+// A surface body's elasticity as the project chooses it (<body model="springs|membrane">):
+// springs on the edges, or a co-rotational membrane of the same in-plane stiffness. A
+// triangular spring lattice of stiffness k behaves as a membrane with E·t = 2k/√3 and ν = 1/3
+// (equilateral lattice; Ostoja-Starzewski, "Lattice models in micromechanics", Appl. Mech.
+// Rev. 55, 2002), so switching keeps the feel; the membrane is 1 mm thick.
+Expected<void> apply_body_models(World& w) {
+  constexpr double kThickness = 0.001;
+  for (const BodySetup& setup : w.project.bodies) {
+    if (setup.model.empty()) continue;
+    auto it = std::find_if(w.bodies.begin(), w.bodies.end(), [&](const auto& b) { return b.name == setup.name; });
+    const std::string who = fmt::format("<body name=\"{}\" model=\"{}\">", setup.name, setup.model);
+    if (it == w.bodies.end() || !it->config) {
+      return make_error(ErrorCode::kInvalidArgument, fmt::format("{}: no deformable body of that name in the scene", who), w.file.string());
+    }
+    mechanics::ModelConfig config = *it->config;
+    if (setup.model == "hexahedra") {
+      if (auto ok = fill_with_hexahedra(*it, setup); !ok) {
+        return make_error(ok.error().code, fmt::format("{}: {}", who, ok.error().message), w.file.string());
+      }
+      continue;
+    }
+    if (!config.tets.empty() || config.triangles.empty()) {
+      return make_error(ErrorCode::kInvalidArgument,
+                        fmt::format("{}: the body is a volume (tetrahedra); a model is chosen for surface bodies (triangles)", who),
+                        w.file.string());
+    }
+    double stiffness = 0.0, damping = 0.0, rest_scale = 1.0;
+    bool had = false;
+    std::vector<mechanics::ForceFieldConfig> kept;
+    for (mechanics::ForceFieldConfig& f : config.force_fields) {
+      if (f.mesh_springs && !had) {
+        stiffness = f.mesh_springs->stiffness_n_per_m;
+        damping = f.mesh_springs->damping_n_s_per_m;
+        rest_scale = f.mesh_springs->rest_length_scale;
+        had = true;
+      } else if (f.triangle_fem && !had) {
+        stiffness = std::sqrt(3.0) / 2.0 * f.triangle_fem->young_modulus_pa * f.triangle_fem->thickness_m;
+        rest_scale = f.triangle_fem->rest_scale;
+        had = true;
+      }
+      if (!f.mesh_springs && !f.triangle_fem) kept.push_back(std::move(f));
+    }
+    if (!had) return make_error(ErrorCode::kInvalidArgument, fmt::format("{}: the body has no springs or membrane to replace", who), w.file.string());
+    mechanics::ForceFieldConfig field;
+    field.name = setup.model;
+    if (setup.model == "membrane") {
+      mechanics::TriangleFemConfig fem;
+      fem.young_modulus_pa = 2.0 * stiffness / (std::sqrt(3.0) * kThickness);
+      fem.poisson_ratio = 1.0 / 3.0;
+      fem.thickness_m = kThickness;
+      fem.rest_scale = rest_scale;
+      field.triangle_fem = fem;
+    } else {
+      field.mesh_springs = mechanics::MeshSpringConfig{stiffness, damping, rest_scale};
+    }
+    kept.insert(kept.begin(), std::move(field));
+    config.force_fields = std::move(kept);
+    auto rebuilt = make_deformable(config, std::nullopt, false);
+    if (!rebuilt) return std::unexpected(rebuilt.error());
+    it->model.emplace(std::move(*rebuilt->model));
+    it->config = std::move(config);
+  }
+  return {};
 }
 
 // Applies a project's <set> elements to the bodies they name (the same validation as the
@@ -121,7 +292,7 @@ Expected<void> apply_regions(World& w) {
     mechanics::ModelConfig config = *it->config;
     auto count = apply_material_region(config, region);
     if (!count) return make_error(ErrorCode::kInvalidArgument, fmt::format("{}: {}", who, count.error().message), w.file.string());
-    if (*count == 0) w.warnings.push_back(fmt::format("{}: no tetrahedron has its centroid inside; it changes nothing", who));
+    if (*count == 0) w.warnings.push_back(fmt::format("{}: no element is inside it; it changes nothing", who));
     auto rebuilt = make_deformable(config, std::nullopt, false);
     if (!rebuilt) return std::unexpected(rebuilt.error());
     it->model.emplace(std::move(*rebuilt->model));
@@ -277,7 +448,7 @@ Expected<void> add_sofa(World& w, const std::filesystem::path& scene_path, const
     return make_error(ErrorCode::kInvalidArgument, why, scene_path.string());
   }
   for (const SofaSceneModel& m : sofa->models) {
-    auto body = make_deformable(m.config, m.visual_mesh, m.visual_barycentric);
+    auto body = make_deformable(m.config, m.visual_mesh, m.visual_barycentric, m.fine_surface);
     if (!body) {
       Error e = body.error();
       if (e.file.empty()) e.file = scene_path.string();
@@ -463,8 +634,8 @@ DefaultProbe default_probe(const std::vector<coupling::SessionBody>& bodies, dou
   double compliance_world = 0.0;  // world units per N along the normal
   if (target.deformable()) {
     mechanics::MechanicalState state = mechanics::make_state(*target.model);
-    std::array<std::int32_t, 12> nodes{};
-    std::array<double, 12> weights{};
+    std::array<std::int32_t, coupling::SurfaceMapping::kMaxPointWeights> nodes{};
+    std::array<double, coupling::SurfaceMapping::kMaxPointWeights> weights{};
     const std::size_t count = target.mapping.point_weights(std::span(press_vertices.data(), press_count),
                                                            std::span(press_weights.data(), press_count), nodes, weights);
     Mat3 point_compliance;
@@ -519,7 +690,7 @@ void record_changes(HofProject& project, const coupling::Session& session) {
     }
     auto body = std::find_if(project.bodies.begin(), project.bodies.end(), [&](const auto& b) { return b.name == name; });
     if (body == project.bodies.end()) {
-      project.bodies.push_back(BodySetup{name, material});
+      project.bodies.push_back(BodySetup{name, material, {}, {}});
     } else {
       body->surface = material;
     }
@@ -542,6 +713,21 @@ Expected<void> add_project_scene(World& w, const std::filesystem::path& file) {
   // Lines of a scene held in memory are its own, not the file's: its messages say so (the
   // folder still anchors its files).
   const std::filesystem::path named = text ? file.parent_path() / (file.filename().string() + " (edited scene)") : w.scene_path;
+  if (!text && w.scene_path.extension() == ".x3d") {
+    // An X3D scene under a project: its shapes are the bodies; the project's settings (device,
+    // renderer, calibration, graphics) stay the project's, the scene's force effects are used
+    // when the project has none.
+    const HofProject kept = w.project;
+    if (auto ok = add_x3d(w, w.scene_path); !ok) {
+      Error e = ok.error();
+      e.message = fmt::format("its scene {}: {}", w.scene_path.string(), e.message);
+      return std::unexpected(e);
+    }
+    const haptics::ForceEffects effects = w.project.effects;
+    w.project = kept;
+    if (kept.effects.springs.empty() && kept.effects.viscosities.empty() && kept.effects.constants.empty()) w.project.effects = effects;
+    return {};
+  }
   if (auto ok = add_sofa(w, named, text); !ok) {
     Error inner = ok.error();
     if (w.scene_path == file) return std::unexpected(inner);
@@ -560,6 +746,7 @@ Expected<void> add_project_scene(World& w, const std::filesystem::path& file) {
 /// What every input shares once its bodies are read: the project's settings, the unit, the
 /// device (the default probe when the world is bare).
 Expected<World> finish_world(World w, bool sofa_scene, bool bare, const std::string& device_override) {
+  if (auto ok = apply_body_models(w); !ok) return std::unexpected(ok.error());
   if (auto ok = apply_parameters(w); !ok) return std::unexpected(ok.error());
   if (auto ok = apply_regions(w); !ok) return std::unexpected(ok.error());
   if (auto ok = apply_bodies(w); !ok) return std::unexpected(ok.error());
@@ -661,38 +848,92 @@ Expected<World> build_world(const HofProject& project, const std::filesystem::pa
 }
 
 Expected<std::size_t> apply_material_region(mechanics::ModelConfig& config, const MaterialRegion& region) {
-  if (!(region.young_modulus_pa > 0.0) || !std::isfinite(region.young_modulus_pa)) {
-    return make_error(ErrorCode::kInvalidArgument, fmt::format("youngModulus must be > 0 Pa, got {}", region.young_modulus_pa));
+  const auto positive = [](const std::optional<double>& v) { return !v || (*v > 0.0 && std::isfinite(*v)); };
+  if (!positive(region.young_modulus_pa)) {
+    return make_error(ErrorCode::kInvalidArgument, fmt::format("youngModulus must be > 0 Pa, got {}", *region.young_modulus_pa));
   }
-  std::vector<std::vector<double>*> targets;
+  if (region.poisson_ratio && !(*region.poisson_ratio > -1.0 && *region.poisson_ratio < 0.5)) {
+    return make_error(ErrorCode::kInvalidArgument, fmt::format("poissonRatio must be in (-1, 0.5), got {}", *region.poisson_ratio));
+  }
+  if (!positive(region.mass_density_kg_per_m3)) {
+    return make_error(ErrorCode::kInvalidArgument, fmt::format("massDensity must be > 0, got {}", *region.mass_density_kg_per_m3));
+  }
+  if (!region.young_modulus_pa && !region.poisson_ratio && !region.mass_density_kg_per_m3) {
+    return make_error(ErrorCode::kInvalidArgument, "sets nothing: give youngModulus, poissonRatio or massDensity");
+  }
+  // The elements a region selects: the body's volume elements (tetrahedra or hexahedra), else
+  // its triangles (a membrane).
+  const bool on_hexahedra = config.tets.empty() && !config.hexahedra.empty();
+  const bool on_triangles = config.tets.empty() && !on_hexahedra;
+  const std::size_t element_count =
+      on_hexahedra ? config.hexahedra.size() : on_triangles ? config.triangles.size() : config.tets.size();
+  struct Target {
+    std::vector<double>* young;
+    std::vector<double>* poisson;
+  };
+  std::vector<Target> targets;
   std::string names;
   for (mechanics::ForceFieldConfig& f : config.force_fields) {
-    if (!f.tetrahedron_fem && !f.neo_hookean) continue;
+    Target t{nullptr, nullptr};
+    if (f.tetrahedron_fem) t = {&f.tetrahedron_fem->element_young_modulus_pa, &f.tetrahedron_fem->element_poisson_ratio};
+    if (f.neo_hookean) t = {&f.neo_hookean->element_young_modulus_pa, &f.neo_hookean->element_poisson_ratio};
+    if (f.triangle_fem) t = {&f.triangle_fem->element_young_modulus_pa, &f.triangle_fem->element_poisson_ratio};
+    if (f.hexahedron_fem) t = {&f.hexahedron_fem->element_young_modulus_pa, &f.hexahedron_fem->element_poisson_ratio};
+    if (!t.young) continue;
     names += (names.empty() ? "" : ", ") + f.name;
     if (!region.force_field.empty() && f.name != region.force_field) continue;
-    targets.push_back(f.tetrahedron_fem ? &f.tetrahedron_fem->element_young_modulus_pa : &f.neo_hookean->element_young_modulus_pa);
+    targets.push_back(t);
   }
-  if (targets.empty()) {
+  const bool elastic = region.young_modulus_pa || region.poisson_ratio;
+  if (elastic && targets.empty()) {
     return make_error(ErrorCode::kInvalidArgument,
                       region.force_field.empty()
-                          ? std::string("the body has no tetrahedral force field (TetrahedronFEMForceField or Neo-Hookean)")
-                          : fmt::format("no tetrahedral force field '{}' (the body has: {})", region.force_field,
+                          ? std::string("the body has no FEM force field (TetrahedronFEMForceField, Neo-Hookean, "
+                                        "HexahedronFEMForceField or a membrane TriangleFEMForceField) whose material a region could set")
+                          : fmt::format("no FEM force field '{}' (the body has: {})", region.force_field,
                                         names.empty() ? std::string("none") : names));
   }
+  if (region.mass_density_kg_per_m3 && config.mass.kind != mechanics::MassKind::kDiagonal) {
+    return make_error(ErrorCode::kInvalidArgument,
+                      fmt::format("massDensity needs the body's mass to be a DiagonalMass (its '{}' is a UniformMass)", config.mass.name));
+  }
+  if (region.shape == MaterialRegion::Shape::kGroup && config.element_regions.size() != element_count) {
+    return make_error(ErrorCode::kInvalidArgument,
+                      fmt::format("physicalGroup=\"{}\": the body's mesh has no physical groups (a Gmsh file with tagged {})",
+                                  region.physical_group, on_hexahedra ? "elements; a grid has none" : on_triangles ? "triangles" : "tetrahedra"));
+  }
   std::size_t count = 0;
-  for (std::vector<double>* list : targets) list->resize(config.tets.size(), 0.0);
-  for (std::size_t t = 0; t < config.tets.size(); ++t) {
-    Vec3 centroid = Vec3::Zero();
-    for (const std::int32_t n : config.tets[t]) {
-      if (n < 0 || static_cast<std::size_t>(n) >= config.positions.size()) return make_error(ErrorCode::kInvalidMesh, "a tetrahedron refers to a missing node");
-      centroid += config.positions[static_cast<std::size_t>(n)] / 4.0;
+  for (const Target& t : targets) {
+    if (region.young_modulus_pa) t.young->resize(element_count, 0.0);
+    if (region.poisson_ratio) t.poisson->resize(element_count, 0.0);
+  }
+  if (region.mass_density_kg_per_m3) config.mass.element_mass_density_kg_per_m3.resize(element_count, 0.0);
+  for (std::size_t e = 0; e < element_count; ++e) {
+    bool inside = false;
+    if (region.shape == MaterialRegion::Shape::kGroup) {
+      inside = config.element_regions[e] == region.physical_group;
+    } else {
+      Vec3 centroid = Vec3::Zero();
+      const std::span<const std::int32_t> nodes = on_hexahedra   ? std::span<const std::int32_t>(config.hexahedra[e])
+                                                  : on_triangles ? std::span<const std::int32_t>(config.triangles[e])
+                                                                 : std::span<const std::int32_t>(config.tets[e]);
+      for (const std::int32_t n : nodes) {
+        if (n < 0 || static_cast<std::size_t>(n) >= config.positions.size()) {
+          return make_error(ErrorCode::kInvalidMesh, fmt::format("element {} refers to a missing node {}", e, n));
+        }
+        centroid += config.positions[static_cast<std::size_t>(n)] / static_cast<double>(nodes.size());
+      }
+      inside = region.shape == MaterialRegion::Shape::kSphere
+                   ? (centroid - region.center).norm() <= region.radius
+                   : (centroid.array() >= region.box_min.array()).all() && (centroid.array() <= region.box_max.array()).all();
     }
-    const bool inside = region.shape == MaterialRegion::Shape::kSphere
-                            ? (centroid - region.center).norm() <= region.radius
-                            : (centroid.array() >= region.box_min.array()).all() && (centroid.array() <= region.box_max.array()).all();
     if (!inside) continue;
     ++count;
-    for (std::vector<double>* list : targets) (*list)[t] = region.young_modulus_pa;
+    for (const Target& t : targets) {
+      if (region.young_modulus_pa) (*t.young)[e] = *region.young_modulus_pa;
+      if (region.poisson_ratio) (*t.poisson)[e] = *region.poisson_ratio;
+    }
+    if (region.mass_density_kg_per_m3) config.mass.element_mass_density_kg_per_m3[e] = *region.mass_density_kg_per_m3;
   }
   return count;
 }

@@ -1410,6 +1410,7 @@ void Gui::draw_scene(int width, int height) {
         renderer_->draw_sphere(r.center, r.radius, render::Rgba(1.0f, 0.55f, 0.1f, 0.3f));
         continue;
       }
+      if (r.shape != scene::MaterialRegion::Shape::kBox) continue;  // a physical group has no shape of its own
       std::vector<Vec3> lines;
       add_box_edges(lines, r.box_min, r.box_max);
       renderer_->draw_lines(lines, render::Rgba(1.0f, 0.55f, 0.1f, 1.0f));
@@ -1688,14 +1689,19 @@ void Gui::draw_structure_editor(BodyView& b) {
   ImGui::InputFloat(fmt::format("pin radius (0: auto)##{}", id).c_str(), &pin_radius_m_, 0.0f, 0.0f, "%.4g");
 
   // Material regions.
-  ImGui::TextDisabled("material regions (tetrahedra whose centroid is inside)");
+  ImGui::TextDisabled("tissue regions (elements whose centroid is inside, or a Gmsh physical group)");
   std::optional<std::vector<scene::MaterialRegion>> regions;
   for (std::size_t i = 0; i < project_.regions.size(); ++i) {
     const scene::MaterialRegion& r = project_.regions[i];
     if (r.body != b.name) continue;
-    ImGui::BulletText("%s: %s, E = %.4g Pa", r.name.c_str(),
-                      r.shape == scene::MaterialRegion::Shape::kSphere ? fmt::format("sphere r {:.3g}", r.radius).c_str() : "box",
-                      r.young_modulus_pa);
+    std::string material;
+    if (r.young_modulus_pa) material += fmt::format(" E = {:.4g} Pa", *r.young_modulus_pa);
+    if (r.poisson_ratio) material += fmt::format(" nu = {:.3g}", *r.poisson_ratio);
+    if (r.mass_density_kg_per_m3) material += fmt::format(" rho = {:.4g}", *r.mass_density_kg_per_m3);
+    const std::string where = r.shape == scene::MaterialRegion::Shape::kSphere ? fmt::format("sphere r {:.3g}", r.radius)
+                              : r.shape == scene::MaterialRegion::Shape::kBox  ? std::string("box")
+                                                                               : fmt::format("group {}", r.physical_group);
+    ImGui::BulletText("%s: %s,%s", r.name.c_str(), where.c_str(), material.c_str());
     ImGui::SameLine();
     if (ImGui::SmallButton(fmt::format("remove##region{}", i).c_str())) {
       regions = project_.regions;
@@ -1707,9 +1713,9 @@ void Gui::draw_structure_editor(BodyView& b) {
   ImGui::SameLine();
   ImGui::SetNextItemWidth(70);
   ImGui::InputFloat(fmt::format("x E##{}", id).c_str(), &region_factor_, 0.0f, 0.0f, "%.3g");
-  const bool has_tets =
-      std::any_of(b.config->force_fields.begin(), b.config->force_fields.end(), [](const auto& f) { return f.tetrahedron_fem || f.neo_hookean; });
-  if (!has_tets) ImGui::TextDisabled("(regions need a tetrahedral force field)");
+  const bool has_tets = std::any_of(b.config->force_fields.begin(), b.config->force_fields.end(),
+                                    [](const auto& f) { return f.tetrahedron_fem || f.neo_hookean || f.triangle_fem; });
+  if (!has_tets) ImGui::TextDisabled("(regions need an FEM force field)");
   if (has_tets && ImGui::Button(fmt::format("+ region at the stylus##{}", id).c_str())) {
     if (!last_.valid) {
       report("the stylus has no position yet", true);

@@ -192,12 +192,13 @@ bool contains(std::span<const std::string_view> keys, std::string_view key) {
 // ---------------------------------------------------------------------------------------
 // Keys shared by the simulated backends
 
-constexpr std::string_view kMotions = "poke, press-and-slide, circle, hold";
+constexpr std::string_view kMotions = "poke, press-and-slide, palpate, circle, hold";
 
 Expected<MotionKind> motion_kind(const SpecParser& p, std::string_view name) {
   if (name == "poke") return MotionKind::kPoke;
   if (name == "press-and-slide") return MotionKind::kPressAndSlide;
   if (name == "circle") return MotionKind::kCircle;
+  if (name == "palpate") return MotionKind::kPalpate;
   if (name == "hold") return MotionKind::kHold;
   if (name.empty()) return p.fail(fmt::format("missing motion (one of {})", kMotions));
   return p.fail(fmt::format("unknown motion '{}' (known: {})", name, kMotions));
@@ -207,6 +208,8 @@ std::span<const std::string_view> motion_keys(MotionKind kind) {
   static constexpr std::string_view kPoke[] = {"start", "direction", "approach", "depth", "speed", "hold", "repeat"};
   static constexpr std::string_view kSlide[] = {"start", "direction", "approach", "depth",       "speed", "hold",
                                                 "repeat", "slide",    "distance", "slide_speed"};
+  static constexpr std::string_view kPalpate[] = {"start", "direction", "approach", "depth", "speed",
+                                                  "hold",  "repeat",    "step",     "count"};
   static constexpr std::string_view kCircle[] = {"centre", "center", "normal", "radius", "period", "repeat"};
   static constexpr std::string_view kHold[] = {"start", "hold", "repeat"};
   switch (kind) {
@@ -214,6 +217,7 @@ std::span<const std::string_view> motion_keys(MotionKind kind) {
     case MotionKind::kPressAndSlide: return kSlide;
     case MotionKind::kCircle: return kCircle;
     case MotionKind::kHold: return kHold;
+    case MotionKind::kPalpate: return kPalpate;
   }
   return {};
 }
@@ -248,6 +252,16 @@ Expected<void> apply_motion_key(const SpecParser& p, const Option& o, MotionConf
   if (k == "slide") return set_vec(c.slide_direction);
   if (k == "distance") return set(c.slide_distance_m);
   if (k == "slide_speed") return set(c.slide_speed_m_per_s);
+  if (k == "step") return set_vec(c.palpation_step_m);
+  if (k == "count") {
+    double count = 0.0;
+    if (auto r = set(count); !r) return r;
+    if (!(count >= 1.0 && count <= static_cast<double>(kMaxPalpationPresses)) || count != std::floor(count)) {
+      return p.fail(fmt::format("count={}: a whole number of presses from 1 to {}", o.value, kMaxPalpationPresses));
+    }
+    c.palpation_count = static_cast<std::uint32_t>(count);
+    return {};
+  }
   if (k == "centre" || k == "center") return set_vec(c.centre_m);
   if (k == "normal") return set_vec(c.normal);
   if (k == "radius") return set(c.radius_m);

@@ -77,6 +77,20 @@ Expected<ScriptedMotion> ScriptedMotion::make(const MotionConfig& c) {
       m.add_segment(m.deepest_m_, m.start_m_, c.speed_m_per_s);
       break;
     }
+    case MotionKind::kPalpate: {
+      if (!finite(c.palpation_step_m)) return invalid("step is not finite");
+      if (c.palpation_count < 1 || c.palpation_count > kMaxPalpationPresses)
+        return invalid(fmt::format("count must be 1 to {} presses (got {})", kMaxPalpationPresses, c.palpation_count));
+      const Vec3 press = m.deepest_m_ - m.start_m_;
+      for (std::uint32_t k = 0; k < c.palpation_count; ++k) {
+        const Vec3 start = m.start_m_ + static_cast<double>(k) * c.palpation_step_m;
+        m.add_segment(start, start + press, c.speed_m_per_s);
+        m.add_hold(start + press, c.hold_s);
+        m.add_segment(start + press, start, c.speed_m_per_s);
+        if (k + 1 < c.palpation_count) m.add_segment(start, start + c.palpation_step_m, c.speed_m_per_s);
+      }
+      break;
+    }
     case MotionKind::kCircle:
       if (!finite(c.centre_m)) return invalid("centre is not finite");
       if (!finite(c.normal) || c.normal.norm() < 1e-12) return invalid("normal must be a non-zero vector");

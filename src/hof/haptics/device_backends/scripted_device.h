@@ -12,6 +12,10 @@
 ///  - `press-and-slide`: the poke's press, hold, then slide `distance` along the tangent
 ///    `slide` (projected into the plane normal to `direction`) at `slide_speed`, slide back,
 ///    retract.
+///  - `palpate`: a palpation sweep — `count` pokes, the k-th from `start` + k·`step`: press
+///    (approach + depth along `direction`) at `speed`, hold `hold` s, retract, move to the next
+///    start at `speed`; the last press retracts and stays. The clinician's raster over an
+///    organ to find a hard lump.
 ///  - `circle`: a circle of `radius` around `centre` in the plane normal to `normal`, one
 ///    turn per `period`, starting at centre + radius·u (u: first in-plane axis, see
 ///    plane_basis()).
@@ -34,7 +38,10 @@
 namespace hof::haptics {
 
 /// The built-in motions (see the file comment).
-enum class MotionKind : std::uint8_t { kPoke, kPressAndSlide, kCircle, kHold };
+enum class MotionKind : std::uint8_t { kPoke, kPressAndSlide, kCircle, kHold, kPalpate };
+
+/// Most presses of one palpation sweep (keeps a motion a small value type).
+inline constexpr std::uint32_t kMaxPalpationPresses = 16;
 
 /// The typed description of a motion; validated by ScriptedMotion::make().
 struct MotionConfig {
@@ -50,6 +57,9 @@ struct MotionConfig {
   Vec3 slide_direction{Vec3::Zero()};          ///< zero: first axis of plane_basis(direction)
   double slide_distance_m{0.02};
   double slide_speed_m_per_s{0.0};             ///< ≤ 0: same as speed
+  // palpate
+  Vec3 palpation_step_m{0.01, 0.0, 0.0};      ///< from one press's start to the next
+  std::uint32_t palpation_count{5};            ///< presses, 1..kMaxPalpationPresses
   // circle
   Vec3 centre_m{Vec3::Zero()};
   Vec3 normal{0.0, 1.0, 0.0};                  ///< plane normal (normalised by make())
@@ -96,7 +106,7 @@ class ScriptedMotion {
     Vec3 velocity{Vec3::Zero()};
     double duration_s{0.0};
   };
-  static constexpr int kMaxSegments = 7;
+  static constexpr int kMaxSegments = 4 * static_cast<int>(kMaxPalpationPresses);
 
   ScriptedMotion() = default;
   void add_segment(const Vec3& from, const Vec3& to, double speed_m_per_s);
