@@ -66,14 +66,19 @@ int run_bench(const BenchOptions& options) {
     const double median = 0.5 * (rates[rates.size() / 2 - 1] + rates[rates.size() / 2]);
     const double n = static_cast<double>(done);
     if (options.json) {
-      std::printf("{\"scene\": \"%s\", \"model\": \"%s\", \"nodes\": %zu, \"tetrahedra\": %zu, \"steps\": %ld, "
+      std::printf("{\"scene\": \"%s\", \"model\": \"%s\", \"nodes\": %zu, \"tetrahedra\": %zu, \"hexahedra\": %zu, \"triangles\": %zu, \"steps\": %ld, "
                   "\"steps_per_s\": {\"min\": %.1f, \"median\": %.1f, \"max\": %.1f}, "
                   "\"split_us\": {\"forces\": %.2f, \"assembly\": %.2f, \"solve\": %.2f}}\n",
-                  scene_path.c_str(), node_path.c_str(), model->node_count(), model->tets.size(), done, rates.front(), median,
+                  scene_path.c_str(), node_path.c_str(), model->node_count(), model->tets.size(), model->hexahedra.size(),
+                  model->tets.empty() && model->hexahedra.empty() ? model->triangles.size() : std::size_t{0}, done, rates.front(), median,
                   rates.back(), 1e6 * force / n, 1e6 * assembly / n, 1e6 * solve / n);
     } else {
-      std::printf("%s: model '%s' (%zu nodes, %zu tetrahedra), %ld steps of %.4g s\n", scene_path.c_str(),
-                  node_path.c_str(), model->node_count(), model->tets.size(), done, model->dt_s);
+      const std::string elements = !model->hexahedra.empty() ? fmt::format("{} hexahedra", model->hexahedra.size())
+                                   : !model->tets.empty() || model->triangles.empty()
+                                       ? fmt::format("{} tetrahedra", model->tets.size())
+                                       : fmt::format("{} triangles", model->triangles.size());
+      std::printf("%s: model '%s' (%zu nodes, %s), %ld steps of %.4g s\n", scene_path.c_str(), node_path.c_str(),
+                  model->node_count(), elements.c_str(), done, model->dt_s);
       std::printf("  steps/s   min %.1f, median %.1f, max %.1f\n", rates.front(), median, rates.back());
       std::printf("  per step  forces %.1f us, assembly %.1f us, solve %.1f us\n", 1e6 * force / n, 1e6 * assembly / n,
                   1e6 * solve / n);
