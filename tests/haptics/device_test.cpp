@@ -278,6 +278,46 @@ TEST(ScriptedMotion, PressAndSlideSlidesTangentially) {
   EXPECT_NEAR((m.position(m.duration()) - c.start_m).norm(), 0.0, 1e-15);
 }
 
+TEST(ScriptedMotion, PalpateSweepsPressesAlongTheStep) {
+  MotionConfig c;
+  c.kind = MotionKind::kPalpate;
+  c.start_m = Vec3(0.0, 0.05, 0.0);
+  c.direction = Vec3(0, -1, 0);
+  c.approach_m = 0.02;
+  c.depth_m = 0.01;
+  c.hold_s = 0.5;
+  c.palpation_step_m = Vec3(0.02, 0.0, 0.0);
+  c.palpation_count = 3;
+  const ScriptedMotion m = make_motion(c);
+  // Per press: 3 cm down, hold, 3 cm up, 2 cm across (not after the last) at 1 cm/s.
+  EXPECT_NEAR(m.duration(), 3 * (3.0 + 0.5 + 3.0) + 2 * 2.0, 1e-9);
+  // Each press reaches its deepest point, 2 cm further along x than the one before.
+  std::vector<double> deepest_x;
+  bool down = false;
+  for (double t = 0.0; t <= m.duration(); t += 1e-3) {
+    const Vec3 p = m.position(t);
+    const bool at_depth = std::abs(p.y() - 0.02) < 1e-9;
+    if (at_depth && !down) deepest_x.push_back(p.x());
+    down = at_depth;
+    EXPECT_GE(p.y(), 0.02 - 1e-12);  // never deeper than asked
+  }
+  ASSERT_EQ(deepest_x.size(), 3u);
+  for (std::size_t k = 0; k < 3; ++k) EXPECT_NEAR(deepest_x[k], 0.02 * static_cast<double>(k), 1e-9);
+  EXPECT_NEAR((m.position(m.duration()) - Vec3(0.04, 0.05, 0.0)).norm(), 0.0, 1e-12);  // the last start
+  // Repeated sweeps travel back (continuous), not jump.
+  c.repeat = 2;
+  const ScriptedMotion twice = make_motion(c);
+  for (double t = 0.0; t + 1e-3 <= twice.duration(); t += 1e-3) {
+    EXPECT_LT((twice.position(t + 1e-3) - twice.position(t)).norm(), 1.1e-5) << t;
+  }
+  // A spec string builds it, and a count out of range is refused by name.
+  auto device = open_device("scripted:palpate,start=0;0.05;0,direction=0;-1;0,step=0.02;0;0,count=3");
+  ASSERT_TRUE(device) << device.error().to_string();
+  auto bad = open_device("scripted:palpate,count=40");
+  ASSERT_FALSE(bad);
+  EXPECT_NE(bad.error().message.find("count=40"), std::string::npos) << bad.error().message;
+}
+
 TEST(ScriptedMotion, RejectsBadConfigs) {
   MotionConfig c;
   c.speed_m_per_s = 0.0;

@@ -289,3 +289,38 @@ TEST(ElementPoissonRatio, WrongLengthIsNamed) {
 
 }  // namespace
 }  // namespace hof::mechanics
+
+namespace hof::mechanics {
+namespace {
+
+TEST(MembraneFem, APreTensionedSheetIsStiffAcrossItsPlaneInTheTangent) {
+  // A flat drum skin (rest shape 95% of the drawn one, border held) pushed across its plane:
+  // the tension's restoring force is in the tangent the implicit solver uses (the
+  // initial-stress term) — without it the matrix would be zero across the plane.
+  const Sheet s = sheet(6, 6, 0.06, 0.06);
+  TriangleFemConfig fem;
+  fem.young_modulus_pa = 5000.0;
+  fem.thickness_m = 0.001;
+  fem.rest_scale = 0.95;
+  ModelConfig c = membrane_config(s, fem);
+  auto model = build_model(c);
+  ASSERT_TRUE(model.has_value()) << model.error().message;
+  MechanicalState state = make_state(*model);
+  const Eigen::Index centre = 3 * s.index(3, 3) + 2;  // z of the middle node
+  const double h = 1e-6;
+  Eigen::VectorXd x = state.x;
+  x[centre] += h;
+  Eigen::VectorXd f0 = Eigen::VectorXd::Zero(x.size()), f1 = Eigen::VectorXd::Zero(x.size());
+  compute_forces(*model, state, state.x, state.v, f0);
+  compute_forces(*model, state, x, state.v, f1);
+  const double restoring = -(f1[centre] - f0[centre]) / h;
+  ASSERT_GT(restoring, 0.0);  // the tension pulls it back
+  BlockSparseMatrix k = model->pattern;
+  k.set_zero();
+  compute_forces(*model, state, state.x, state.v, f0);  // the tangent at the flat state
+  model->force_fields[0]->add_stiffness(state.field_states[0], 1.0, k);
+  EXPECT_NEAR(k.to_dense()(centre, centre), restoring, 0.05 * restoring);
+}
+
+}  // namespace
+}  // namespace hof::mechanics

@@ -10,6 +10,8 @@
 #include <new>
 
 #include "hof/mechanics/step.h"
+#include "hof/mesh/boundary.h"
+#include "hof/mesh/hex_grid.h"
 #include "hof/mesh/liver_generator.h"
 
 
@@ -67,6 +69,44 @@ TEST(NoAllocation, StepsAllocateNothingAfterMakeState) {
     const long before = hof::testing::allocation_count();
     for (int i = 0; i < 5; ++i) ASSERT_TRUE(step(*model, state)) << c.name << ": " << state.divergence.reason;
     EXPECT_EQ(hof::testing::allocation_count() - before, 0) << c.name;
+  }
+}
+
+TEST(NoAllocation, HexahedralAndMembraneStepsAllocateNothing) {
+  const mesh::Mesh liver = *mesh::generate_liver(mesh::LiverResolution::kMedium);
+  const mesh::BoundarySurface surface = mesh::extract_boundary(liver.nodes, liver.tets);
+  auto grid = mesh::sparse_grid(surface.surface, {12, 8, 6});
+  ASSERT_TRUE(grid) << grid.error().to_string();
+  for (const bool hexahedral : {true, false}) {
+    ModelConfig config;
+    config.mass.kind = MassKind::kDiagonal;
+    config.mass.mass_density_kg_per_m3 = hexahedral ? 1060.0 : 1.06;
+    config.gravity_m_per_s2 = Vec3(0, 0, -9.81);
+    ForceFieldConfig field;
+    field.name = "fem";
+    if (hexahedral) {
+      config.positions = grid->nodes;
+      config.hexahedra = grid->hexes;
+      config.element_fill.assign(grid->hexes.size(), 1.0);
+      field.hexahedron_fem = HexahedronFemConfig{5400.0, 0.45, FemMethod::kLarge, {}, {}};
+    } else {
+      config.positions = surface.surface.vertices;
+      config.triangles = surface.surface.triangles;
+      TriangleFemConfig membrane;
+      membrane.young_modulus_pa = 5400.0;
+      membrane.thickness_m = 0.001;
+      field.triangle_fem = membrane;
+    }
+    config.force_fields = {field};
+    config.fixed.push_back(FixedConstraintConfig{"fixed", {0, 1, 2}, std::nullopt, false, {true, true, true}});
+    config.dt_s = 0.01;
+    auto model = build_model(config);
+    ASSERT_TRUE(model) << model.error().to_string();
+    MechanicalState state = make_state(*model);
+    for (int i = 0; i < 3; ++i) ASSERT_TRUE(step(*model, state));
+    const long before = hof::testing::allocation_count();
+    for (int i = 0; i < 5; ++i) ASSERT_TRUE(step(*model, state)) << state.divergence.reason;
+    EXPECT_EQ(hof::testing::allocation_count() - before, 0) << (hexahedral ? "hexahedra" : "membrane");
   }
 }
 

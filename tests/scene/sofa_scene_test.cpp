@@ -8,6 +8,7 @@
 #include <fstream>
 
 #include "hof/mechanics/step.h"
+#include "hof/mechanics/model_parameters.h"
 #include "hof/scene/sofa_scene.h"
 
 namespace hof::scene {
@@ -302,6 +303,29 @@ TEST_F(SofaSceneFiles, LinksToAnObjLoadersOutputsReadItsFile) {
   EXPECT_EQ(s->models[0].config.positions[1], Vec3(1, 0, 1));  // the loader's translation applied
 }
 
+TEST_F(SofaSceneFiles, RelativeAndAbsoluteLinksResolveAsInSofa) {
+  // The loader in a sibling node, reached by "@../", "@/root/..." and "@/..."; "@[-1]" is the
+  // component just before.
+  for (const std::string& link : {std::string("@../Data/l"), std::string("@/root/Data/l"), std::string("@/Data/l")}) {
+    auto s = read_sofa_scene(write("scene.scn",
+                                   "<Node name=\"root\">\n  <Node name=\"Data\">\n    <MeshGmshLoader name=\"l\" filename=\"tet.msh\"/>\n"
+                                   "  </Node>\n  <Node name=\"body\">\n    <EulerImplicitSolver/>\n"
+                                   "    <MeshTopology name=\"topo\" src=\"" + link + "\"/>\n"
+                                   "    <MechanicalObject name=\"dofs\" position=\"@[-1].position\"/>\n"
+                                   "    <TetrahedronFEMForceField youngModulus=\"1000\"/>\n  </Node>\n</Node>\n"));
+    ASSERT_TRUE(s.has_value()) << link << ": " << s.error().to_string();
+    ASSERT_EQ(s->models.size(), 1u);
+    EXPECT_EQ(s->models[0].config.positions.size(), 4u) << link;
+    EXPECT_EQ(s->models[0].config.tets.size(), 1u) << link;
+  }
+  // A link to a loader output that does not exist names the component, the attribute and data.
+  const Error e = read_error("<Node name=\"root\">\n  <EulerImplicitSolver/>\n  <MeshGmshLoader name=\"l\" filename=\"tet.msh\"/>\n"
+                             "  <MechanicalObject name=\"dofs\" position=\"@l.nosuchdata\"/>\n</Node>\n");
+  EXPECT_EQ(e.line, 4);
+  EXPECT_NE(e.message.find("MechanicalObject 'dofs'"), std::string::npos) << e.message;
+  EXPECT_NE(e.message.find("nosuchdata"), std::string::npos) << e.message;
+}
+
 TEST_F(SofaSceneFiles, AMechanicalObjectTransformsItsPositions) {
   // rotation (degrees about x, then y, then z), then scale, then translation; and the legacy dx.
   auto s = read_sofa_scene(write("scene.scn",
@@ -343,7 +367,7 @@ TEST_F(SofaSceneFiles, HexahedralGridsAreReadWithTheirFineSurfaceAndTheirErrorsN
   ASSERT_TRUE(s->models[0].fine_surface);
   EXPECT_EQ(s->models[0].fine_surface->triangles.size(), 12u);
   ASSERT_EQ(c.fixed.size(), 1u);
-  ASSERT_TRUE(c.fixed[0].box);
+  EXPECT_EQ(c.fixed[0].indices.size(), 16u);
   auto model = mechanics::build_model(c);
   ASSERT_TRUE(model.has_value()) << model.error().to_string();
   EXPECT_EQ(model->fixed_dofs.size(), 3u * 16u);  // the 16 nodes of the bottom face
@@ -354,12 +378,23 @@ TEST_F(SofaSceneFiles, HexahedralGridsAreReadWithTheirFineSurfaceAndTheirErrorsN
   s = read_sofa_scene(write("scene.scn", scene("    <SparseGridTopology n=\"5 5 5\" fileTopology=\"cube.obj\"/>",
                                                "    <HexahedronFEMForceField name=\"FEM\" youngModulus=\"3000\"/>")));
   ASSERT_TRUE(s.has_value()) << s.error().to_string();
-  const auto& young = s->models[0].config.force_fields[0].hexahedron_fem->element_young_modulus_pa;
-  ASSERT_EQ(young.size(), s->models[0].config.hexahedra.size());
-  const auto halved = std::count(young.begin(), young.end(), 1500.0);
+  const mechanics::ModelConfig& weighted = s->models[0].config;
+  ASSERT_EQ(weighted.element_fill.size(), weighted.hexahedra.size());
+  const auto halved = std::count(weighted.element_fill.begin(), weighted.element_fill.end(), 0.5);
   EXPECT_GT(halved, 0);
-  EXPECT_EQ(halved + std::count(young.begin(), young.end(), 0.0), static_cast<std::ptrdiff_t>(young.size()));
-  EXPECT_EQ(s->models[0].config.mass.element_mass_density_kg_per_m3.size(), young.size());
+  EXPECT_EQ(halved + std::count(weighted.element_fill.begin(), weighted.element_fill.end(), 1.0),
+            static_cast<std::ptrdiff_t>(weighted.hexahedra.size()));
+  // The fill scales whatever modulus the field gets later: a <set> halves there too.
+  mechanics::ModelConfig changed = weighted;
+  ASSERT_TRUE(mechanics::set_parameter(changed, "FEM", "youngModulus", 1000.0));
+  auto full = mechanics::build_model(changed);
+  changed.element_fill.clear();
+  auto unweighted = mechanics::build_model(changed);
+  ASSERT_TRUE(full && unweighted);
+  EXPECT_LT(full->total_mass_kg(), unweighted->total_mass_kg());
+  EXPECT_NEAR(full->total_mass_kg(),
+              unweighted->total_mass_kg() * (1.0 - 0.5 * static_cast<double>(halved) / static_cast<double>(weighted.hexahedra.size())),
+              1e-9 * unweighted->total_mass_kg());  // equal cells: each halved one loses half its mass
 
   // A regular grid: the box cut into (n − 1) cells per axis.
   s = read_sofa_scene(write("scene.scn", scene("    <RegularGridTopology n=\"3 2 2\" min=\"0 0 0\" max=\"2 1 1\"/>",
@@ -368,6 +403,18 @@ TEST_F(SofaSceneFiles, HexahedralGridsAreReadWithTheirFineSurfaceAndTheirErrorsN
   EXPECT_EQ(s->models[0].config.hexahedra.size(), 2u);
   EXPECT_EQ(s->models[0].config.positions.size(), 12u);
   EXPECT_FALSE(s->models[0].fine_surface);
+  // The state's transform moves the grid (and a sparse grid's fine surface with it).
+  std::string moved = scene("    <SparseGridTopology n=\"4 4 4\" fileTopology=\"cube.obj\"/>", "    <HexahedronFEMForceField/>");
+  moved.replace(moved.find("position=\"0 0 0\""), 16, "translation=\"0 0 10\"");
+  s = read_sofa_scene(write("scene.scn", moved));
+  ASSERT_TRUE(s.has_value()) << s.error().to_string();
+  double lowest = 1e9, lowest_surface = 1e9;
+  for (const Vec3& p : s->models[0].config.positions) lowest = std::min(lowest, p.z());
+  for (const Vec3& p : s->models[0].fine_surface->vertices) lowest_surface = std::min(lowest_surface, p.z());
+  EXPECT_GT(lowest, 9.9);
+  EXPECT_NEAR(lowest_surface, 10.0, 1e-12);
+  EXPECT_TRUE(s->models[0].config.fixed.empty());  // the BoxROI at z = 0 holds nothing now...
+  EXPECT_TRUE(std::ranges::any_of(s->warnings, [](const std::string& w) { return w.find("holds nothing") != std::string::npos; }));
 
   // Errors name the component and its line: a grid with no cell inside the surface, a
   // per-element list of the wrong length, a hexahedral force field without a grid.

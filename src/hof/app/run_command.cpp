@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <limits>
 #include <map>
 #include <cctype>
 #include <string_view>
@@ -299,7 +300,25 @@ int run_session(const RunOptions& options) {
   bool previous_broken = false;
   double next_row = 0.0;
   std::int64_t ended_rows = 0;
-  coupling::PressRecorder presses(session);
+  // Its bins are 0.5 mm: metres per length unit of the world (a SOFA scene states none: then
+  // its size stands in, as if it were an organ of 25 cm).
+  const double metres_per_unit = [&] {
+    const std::string& unit = world->length_unit;
+    if (unit == "m") return 1.0;
+    if (unit == "cm") return 0.01;
+    if (unit == "mm") return 0.001;
+    if (unit == "dm") return 0.1;
+    Vec3 lo = Vec3::Constant(std::numeric_limits<double>::max()), hi = -lo;
+    for (std::size_t i = 0; i < session.body_count(); ++i) {
+      for (const Vec3& p : session.body(i).surface.vertices) {
+        lo = lo.cwiseMin(p);
+        hi = hi.cwiseMax(p);
+      }
+    }
+    const double size = (hi - lo).norm();
+    return size > 0.0 && std::isfinite(size) ? 0.25 / size : 1.0;
+  }();
+  coupling::PressRecorder presses(session, metres_per_unit);
   auto on_sample = [&](const haptics::HapticSample& s) {
     if (needle.mounted && s.valid) {
       const auto phase = static_cast<procedures::NeedlePhase>(s.tool.phase);
@@ -320,15 +339,15 @@ int run_session(const RunOptions& options) {
       }
       previous_broken = s.tool.broken;
     }
+    // Indentation: how far the tissue surface at the contact has moved inward since the
+    // press began (press_recorder.h); each press numbered, for palpation.
+    const double indentation = presses.add(s);
     if (!telemetry) return;
     // No reading (a script that has ended, a device gone): not a device at the origin.
     if (!s.valid) {
       ++ended_rows;
       return;
     }
-    // Indentation: how far the tissue surface at the contact has moved inward since the
-    // press began (press_recorder.h); each press numbered, for palpation.
-    const double indentation = presses.add(s);
     std::string body;
     if (s.contact && s.triangle >= 0) {
       const std::int32_t b = session.body_of_triangle(s.triangle, s.layer);

@@ -65,12 +65,17 @@ Expected<std::vector<double>> build_masses(const ModelConfig& c) {
     }
     return densities[e];
   };
+  if (!c.element_fill.empty() && (!on_hexahedra || c.element_fill.size() != elements)) {
+    return make_error(ErrorCode::kInvalidArgument, fmt::format("model '{}': a fill fraction per hexahedron is needed ({} for {} elements)",
+                                                               c.name, c.element_fill.size(), elements));
+  }
   for (std::size_t e = 0; e < elements; ++e) {
     auto rho = density(e);
     if (!rho) return std::unexpected(rho.error());
     if (on_hexahedra) {
       const mesh::Hex& h = c.hexahedra[e];
-      const double eighth = *rho * std::abs(mesh::hex_volume(c.positions, h)) / 8.0;
+      const double fill = c.element_fill.empty() ? 1.0 : c.element_fill[e];
+      const double eighth = fill * *rho * std::abs(mesh::hex_volume(c.positions, h)) / 8.0;
       for (mesh::NodeIndex i : h) mass[static_cast<std::size_t>(i)] += eighth;
     } else if (on_triangles) {
       const mesh::Tri& t = c.triangles[e];
@@ -241,7 +246,20 @@ Expected<MechanicalModel> build_model(const ModelConfig& c) {
         m.force_fields.push_back(std::move(*field));
       }
     } else if (f.hexahedron_fem) {
-      auto field = HexahedronFemForceField::make(c.positions, c.hexahedra, *f.hexahedron_fem, f.name);
+      // A partly filled cell (element_fill) is that fraction as stiff, at whatever modulus.
+      HexahedronFemConfig hex = *f.hexahedron_fem;
+      if (!c.element_fill.empty()) {
+        if (hex.element_young_modulus_pa.size() != c.hexahedra.size()) hex.element_young_modulus_pa.assign(c.hexahedra.size(), 0.0);
+        for (std::size_t e = 0; e < c.hexahedra.size(); ++e) {
+          const double fill = c.element_fill[e];
+          if (!(fill > 0.0 && fill <= 1.0)) {
+            return make_error(ErrorCode::kInvalidArgument, fmt::format("model '{}': fill of hexahedron {} must be in (0, 1], got {}", c.name, e, fill));
+          }
+          double& young = hex.element_young_modulus_pa[e];
+          young = (young == 0.0 ? hex.young_modulus_pa : young) * fill;
+        }
+      }
+      auto field = HexahedronFemForceField::make(c.positions, c.hexahedra, hex, f.name);
       if (!field) return std::unexpected(field.error());
       m.force_fields.push_back(std::move(*field));
     } else if (f.triangle_fem) {

@@ -121,6 +121,10 @@ struct ModelConfig {
   std::vector<mesh::Tri> triangles;      ///< surface triangles (springs or membrane FEM on surfaces)
   /// Empty, or a tag per volume element (Gmsh physical group): what tissue regions select by.
   std::vector<std::int32_t> element_regions;
+  /// Empty, or per hexahedron the fraction of the cell the body fills (SOFA's sparse grid
+  /// `fillWeighted`: 0.5 where the surface passes through, else 1). It scales that element's
+  /// stiffness and mass whatever the modulus and density are set to (a <set>, a region).
+  std::vector<double> element_fill;
   MassConfig mass;
   std::vector<ForceFieldConfig> force_fields;
   std::vector<FixedConstraintConfig> fixed;

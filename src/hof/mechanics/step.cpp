@@ -182,9 +182,9 @@ bool step(const MechanicalModel& model, MechanicalState& state) {
       if (state.divergence.diverged) break;
       if (const std::int64_t element = field->find_invalid_element(state.x); element >= 0) {
         diverge(state, fmt::format("{} '{}'", field->type_name(), field->name()),
-                fmt::format("tetrahedron {} is inverted: linear (small) FEM cannot recover; use method "
+                fmt::format("{} {} is inverted: linear (small) FEM cannot recover; use method "
                             "\"large\" or \"polar\", or a Neo-Hookean material",
-                            element));
+                            field->type_name() == "HexahedronFEMForceField" ? "hexahedron" : field->type_name() == "TetrahedronFEMForceField" ? "tetrahedron" : "element", element));
       }
     }
     if (!state.divergence.diverged && node >= 0 && speed) {

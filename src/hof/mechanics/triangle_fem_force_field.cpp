@@ -1,5 +1,6 @@
 #include "hof/mechanics/triangle_fem_force_field.h"
 
+#include <Eigen/Eigenvalues>
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -120,6 +121,11 @@ Expected<std::unique_ptr<TriangleFemForceField>> TriangleFemForceField::make(con
                           : config.element_poisson_ratio[t];
     // K_e = t A Bᵀ D B: the constant-strain triangle (Turner et al. 1956; Zienkiewicz & Taylor §6.2).
     // On the rest shape (scaled by restScale).
+    // The initial-stress term: the nodal forces (rest-shape gradients, t·A of the rest shape)
+    // turn with the element as it lies, whose edges are 1/restScale of the rest ones.
+    e.gradients = grad;
+    e.thickness_area = config.thickness_m * area * config.rest_scale * config.rest_scale * config.rest_scale;
+    e.stress = elasticity(young, nu, config.plane_strain) * b;
     e.stiffness = config.thickness_m * area * config.rest_scale * config.rest_scale * b.transpose() * elasticity(young, nu, config.plane_strain) * b;
     field->elements_.push_back(e);
   }
@@ -129,6 +135,7 @@ Expected<std::unique_ptr<TriangleFemForceField>> TriangleFemForceField::make(con
 ForceFieldState TriangleFemForceField::make_state() const {
   ForceFieldState s;
   s.element_matrices.assign(elements_.size(), Mat3::Zero());
+  s.element_scalars.assign(3 * elements_.size(), 0.0);  // Voigt stress per element
   for (std::size_t t = 0; t < elements_.size(); ++t) s.element_matrices[t].leftCols<2>() = elements_[t].rest_frame;
   return s;
 }
@@ -173,7 +180,9 @@ void TriangleFemForceField::add_force(const Eigen::VectorXd& x, const Eigen::Vec
     const Element& e = elements_[t];
     const Frame r = frame(e, x);
     state.element_matrices[t].leftCols<2>() = r;
-    const Eigen::Matrix<double, 6, 1> local = -(e.stiffness * displacement(e, r, x));
+    const Eigen::Matrix<double, 6, 1> u = displacement(e, r, x);
+    Eigen::Map<Eigen::Vector3d>(state.element_scalars.data() + 3 * t) = e.stress * u;
+    const Eigen::Matrix<double, 6, 1> local = -(e.stiffness * u);
     for (std::size_t i = 0; i < 3; ++i) {
       f.segment<3>(3 * static_cast<Eigen::Index>(e.nodes[i])) += r * local.segment<2>(static_cast<Eigen::Index>(2 * i));
     }
@@ -181,15 +190,25 @@ void TriangleFemForceField::add_force(const Eigen::VectorXd& x, const Eigen::Vec
 }
 
 void TriangleFemForceField::add_stiffness(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const {
-  // K_ab = R K_e[ab] Rᵀ: the co-rotational stiffness without the geometric (rotation) term,
-  // as SOFA assembles it.
+  // K_ab = R K_e[ab] Rᵀ (the co-rotational stiffness as SOFA assembles it, without the
+  // frame's rotation term) plus the tension's initial-stress term.
   for (std::size_t t = 0; t < elements_.size(); ++t) {
     const Element& e = elements_[t];
     const Frame r = state.element_matrices[t].leftCols<2>();
+    // The tension's initial-stress term, its compression clamped at 0 (a slack membrane
+    // buckles rather than pushes): σ⁺ from the eigen-decomposition of the 2x2 stress.
+    const Eigen::Vector3d voigt = Eigen::Map<const Eigen::Vector3d>(state.element_scalars.data() + 3 * t);
+    Eigen::Matrix2d sigma;
+    sigma << voigt.x(), voigt.z(), voigt.z(), voigt.y();
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig;
+    eig.computeDirect(sigma);
+    const Eigen::Matrix2d tension =
+        eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).asDiagonal() * eig.eigenvectors().transpose();
     for (std::size_t a = 0; a < 3; ++a) {
       for (std::size_t b = 0; b < 3; ++b) {
         const Eigen::Matrix2d local = e.stiffness.block<2, 2>(static_cast<Eigen::Index>(2 * a), static_cast<Eigen::Index>(2 * b));
-        k.block(e.slots[3 * a + b]) += scale * (r * local * r.transpose());
+        const double geometric = e.thickness_area * e.gradients[a].dot(tension * e.gradients[b]);
+        k.block(e.slots[3 * a + b]) += scale * (r * local * r.transpose() + geometric * Mat3::Identity());
       }
     }
   }

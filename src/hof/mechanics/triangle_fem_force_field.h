@@ -7,7 +7,10 @@
 /// forces are rotated back (Felippa, "A systematic approach to the element-independent
 /// corotational dynamics of finite elements", 2000; Nesme et al., EG 2005, for the QR frame).
 /// `small` keeps the rest frame (linear, not invariant to rotations). A membrane has no
-/// bending stiffness: an untensioned flat sheet is free across its plane, as in SOFA.
+/// bending stiffness: an untensioned flat sheet is free across its plane, as in SOFA. Its
+/// tangent adds the initial-stress (geometric) term of the tension, t·A·(∇N_aᵀ σ⁺ ∇N_b)·I
+/// (Bathe, "Finite Element Procedures", §6.3; compression clamped at 0 as the springs do), so
+/// that a pre-tensioned drum skin is stiff across its plane in the implicit solve too.
 
 #include <array>
 #include <cstdint>
@@ -72,6 +75,9 @@ class TriangleFemForceField final : public ForceField {
     Frame rest_frame;
     Vec3 rest_origin;                     // rest position of corner 0
     Matrix6 stiffness;                    // t·A·BᵀDB in the element frame, (u0x u0y u1x u1y u2x u2y)
+    Eigen::Matrix<double, 3, 6> stress;   // D·B: the Voigt stress (xx, yy, xy) of a displacement
+    std::array<Eigen::Vector2d, 3> gradients;  // ∇N_i in the element frame, 1/m
+    double thickness_area;                // t·A of the rest shape × restScale (initial-stress term), m³
     std::array<std::int32_t, 9> slots;    // block (a, b) at 3a + b
   };
 

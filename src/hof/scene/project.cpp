@@ -531,7 +531,9 @@ Expected<HofProject> parse_project(const std::string& text, const std::filesyste
     } else if (shape == "group") {
       region.shape = MaterialRegion::Shape::kGroup;
       if (!node.attribute("physicalGroup")) r.fail(node, "<region shape=\"group\"> needs physicalGroup=\"TAG\" (a Gmsh physical tag)");
-      region.physical_group = static_cast<std::int32_t>(r.get(node, "physicalGroup", 0.0));
+      const double tag = r.get(node, "physicalGroup", 0.0);
+      if (!(std::abs(tag) < 2e9) || tag != std::floor(tag)) r.fail(node, "<region physicalGroup> must be a whole number (a Gmsh physical tag)");
+      else region.physical_group = static_cast<std::int32_t>(tag);
     } else {
       r.fail(node, fmt::format("<region> shape=\"{}\": expected sphere, box or group", shape));
     }

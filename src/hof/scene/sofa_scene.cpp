@@ -262,7 +262,8 @@ Expected<std::optional<bool>> Reader::boolean(const Component& c, std::string_vi
 
 // ---- links, files and geometry ----------------------------------------------------------------
 
-// "@a/b/name.field", "@../name", "@[-1].field", "@name": the component (and `field`, if any).
+// "@a/b/name.field", "@../name", "@[-1].field", "@/root/a/name", "@name": the component (and
+// `field`, if any).
 // A single name is looked up in the node, then in its ancestors (SOFA's context lookup).
 Expected<Component*> Reader::resolve_link(const Component& from, std::string_view key, std::string_view link,
                                           std::string& field) {
@@ -286,6 +287,19 @@ Expected<Component*> Reader::resolve_link(const Component& from, std::string_vie
     const auto target = static_cast<std::int64_t>(from.index) + k;
     if (target < 0) return unresolved("no such previous component");
     return node->components[static_cast<std::size_t>(target)].get();
+  }
+  // Absolute: "@/Liver/loader" from the root node; "@/root/Liver/loader" names the root too.
+  bool absolute = false;
+  if (path.starts_with('/')) {
+    absolute = true;
+    while (node->parent) node = node->parent;
+    path.remove_prefix(1);
+    const std::size_t slash = path.find('/');
+    const std::string_view first = path.substr(0, slash);
+    if (slash != std::string_view::npos && first == node->name &&
+        std::ranges::none_of(node->children, [&](const auto& n) { return n->name == first; })) {
+      path.remove_prefix(slash + 1);
+    }
   }
   std::vector<std::string_view> parts;
   for (std::size_t start = 0;;) {
@@ -313,7 +327,7 @@ Expected<Component*> Reader::resolve_link(const Component& from, std::string_vie
     if (it == node->children.end()) return unresolved(fmt::format("no node '{}' in '{}'", p, node->path));
     node = it->get();
   }
-  for (SceneNode* n = node; n; n = parts.empty() ? n->parent : nullptr) {
+  for (SceneNode* n = node; n; n = parts.empty() && !absolute ? n->parent : nullptr) {
     for (auto& c : n->components)
       if (c->name == last) return c.get();
   }

@@ -65,7 +65,20 @@ Expected<SofaSceneModel> Reader::make_model(SceneNode& node, Component* state) {
     // A hexahedral model: the grid's nodes are the state (a MechanicalObject's own positions,
     // if any, are SOFA's placeholder and give way to the topology's).
     if (auto r = apply_grid(*grid, out); !r) return std::unexpected(r.error());
-    if (state) state->used = true;
+    if (state) {
+      // The state's translation/rotation/scale moves the grid's nodes, and the fine surface
+      // with them (it rests where the grid rests).
+      state->used = true;
+      MeshData moved;
+      moved.positions = m.positions;
+      if (auto r = transform_state(*state, moved); !r) return std::unexpected(r.error());
+      m.positions = std::move(moved.positions);
+      if (out.fine_surface) {
+        moved.positions = out.fine_surface->vertices;
+        if (auto r = transform_state(*state, moved); !r) return std::unexpected(r.error());
+        out.fine_surface->vertices = std::move(moved.positions);
+      }
+    }
   } else if (const Component* hex = not_yet({"HexahedronFEMForceField", "HexahedralFEMForceField"})) {
     return fail(*hex, fmt::format("node '{}': {} needs a hexahedral topology (RegularGridTopology or SparseGridTopology) "
                                   "in the node",
@@ -141,13 +154,6 @@ Expected<SofaSceneModel> Reader::make_model(SceneNode& node, Component* state) {
     }
   }
   if (!have_mass) warn(node.line, fmt::format("node '{}': no mass; DiagonalMass massDensity=1 assumed", node.path));
-  if (!half_filled_.empty() && m.mass.kind == mechanics::MassKind::kDiagonal && m.mass.element_mass_density_kg_per_m3.empty()) {
-    // A fillWeighted sparse grid's surface cells hold half the matter.
-    m.mass.element_mass_density_kg_per_m3.assign(m.hexahedra.size(), 0.0);
-    for (std::size_t h = 0; h < m.hexahedra.size(); ++h) {
-      if (half_filled_[h]) m.mass.element_mass_density_kg_per_m3[h] = 0.5 * m.mass.mass_density_kg_per_m3;
-    }
-  }
   if (m.force_fields.empty()) {
     // A body with no elasticity HoF simulates would only fall: refused, naming what it has.
     for (auto& c : node.components) {
@@ -368,20 +374,30 @@ Expected<void> Reader::apply_mass(Component& c, ModelConfig& m, std::size_t n) {
 Expected<void> Reader::apply_grid(Component& c, SofaSceneModel& out) {
   c.used = true;
   ModelConfig& m = out.config;
-  half_filled_.clear();
   // n: nodes per axis (SOFA's `n`, or the old nx ny nz).
   std::array<int, 3> n{2, 2, 2};
   if (const std::string* text = c.attr("n")) {
     auto v = numbers(c, "n", *text);
     if (!v) return std::unexpected(v.error());
     if (v->size() != 3) return fail(c, fmt::format("attribute n: expected 3 node counts, got {} values", v->size()));
-    for (std::size_t a = 0; a < 3; ++a) n[a] = static_cast<int>((*v)[a]);
+    for (std::size_t a = 0; a < 3; ++a) {
+      const double count = (*v)[a];
+      if (!(count >= 2.0 && count <= 512.0) || count != std::floor(count)) {
+        return fail(c, fmt::format("attribute n: {} is not a whole number of nodes from 2 to 512", count), ErrorCode::kInvalidArgument);
+      }
+      n[a] = static_cast<int>(count);
+    }
   }
   for (std::size_t a = 0; a < 3; ++a) {
     static constexpr std::array<const char*, 3> kKeys{"nx", "ny", "nz"};
     auto v = number(c, kKeys[a]);
     if (!v) return std::unexpected(v.error());
-    if (*v) n[a] = static_cast<int>(**v);
+    if (*v) {
+      if (!(**v >= 2.0 && **v <= 512.0) || **v != std::floor(**v)) {
+        return fail(c, fmt::format("attribute {}: {} is not a whole number of nodes from 2 to 512", kKeys[a], **v), ErrorCode::kInvalidArgument);
+      }
+      n[a] = static_cast<int>(**v);
+    }
   }
   for (std::size_t a = 0; a < 3; ++a) {
     if (n[a] < 2 || n[a] > 512) {
@@ -450,11 +466,15 @@ Expected<void> Reader::apply_grid(Component& c, SofaSceneModel& out) {
   }
   m.positions = std::move(grid->nodes);
   m.hexahedra = std::move(grid->hexes);
-  // fillWeighted (SOFA's default): cells on the surface are half full (stiffness, mass).
+  // fillWeighted (SOFA's default): a cell the surface passes through is about half full —
+  // half the stiffness and half the mass, whatever the modulus and density become.
   auto weighted = boolean(c, "fillWeighted");
   if (!weighted) return std::unexpected(weighted.error());
   if (c.type == "SparseGridTopology" && weighted->value_or(true)) {
-    half_filled_.assign(grid->hex_on_surface.begin(), grid->hex_on_surface.end());
+    m.element_fill.assign(grid->hex_on_surface.size(), 1.0);
+    for (std::size_t h = 0; h < grid->hex_on_surface.size(); ++h) {
+      if (grid->hex_on_surface[h]) m.element_fill[h] = 0.5;
+    }
   }
   return {};
 }
@@ -559,14 +579,6 @@ Expected<void> Reader::apply_force_field(Component& c, ModelConfig& m) {
     else if (method == "polar") fem.method = mechanics::FemMethod::kPolar;
     else return fail(c, fmt::format("attribute method: '{}' is not small, large or polar", method));
     if (c.type != "HexahedronFEMForceField") warn(c.line, fmt::format("{}: read as HexahedronFEMForceField", c.label()));
-    // SOFA's sparse grid (fillWeighted, its default) gives a cell the surface passes through
-    // half the stiffness of a full one: the matter inside it is about half.
-    if (!half_filled_.empty() && fem.element_young_modulus_pa.empty()) {
-      fem.element_young_modulus_pa.assign(m.hexahedra.size(), 0.0);
-      for (std::size_t h = 0; h < m.hexahedra.size(); ++h) {
-        if (half_filled_[h]) fem.element_young_modulus_pa[h] = 0.5 * fem.young_modulus_pa;
-      }
-    }
     ff.hexahedron_fem = std::move(fem);
   } else if (c.type == "TriangleFEMForceField" || c.type == "TriangularFEMForceField") {
     if (!m.tets.empty()) {
@@ -665,7 +677,20 @@ Expected<void> Reader::apply_fixed(Component& c, ModelConfig& m) {
   c.used = true;
   mechanics::FixedConstraintConfig f;
   f.name = c.name;
-  // indices="@roi.indices": the nodes a BoxROI selects (SOFA's usual way to hold a grid).
+  auto all = boolean(c, "fixAll");
+  if (!all) return std::unexpected(all.error());
+  f.fix_all = all->value_or(false);
+  if (c.type == "PartialFixedProjectiveConstraint") {
+    if (const std::string* text = c.attr("fixedDirections")) {
+      auto v = numbers(c, "fixedDirections", *text);
+      if (!v) return std::unexpected(v.error());
+      if (v->size() != 3) return fail(c, "attribute fixedDirections: expected 3 flags");
+      for (std::size_t k = 0; k < 3; ++k) f.directions[k] = (*v)[k] != 0.0;
+    }
+  }
+  if (c.written != c.type) warn(c.line, fmt::format("{}: read as {}", c.label(), c.type));
+  // indices="@roi.indices": the nodes inside a BoxROI's boxes (SOFA's usual way to hold a
+  // grid), taken as indices now, as SOFA computes them at init.
   if (const std::string* text = c.attr("indices"); text && trim(*text).starts_with('@')) {
     std::string field;
     auto target = resolve_link(c, "indices", *text, field);
@@ -678,33 +703,31 @@ Expected<void> Reader::apply_fixed(Component& c, ModelConfig& m) {
     auto v = numbers(roi, "box", *box_text);
     if (!v) return std::unexpected(v.error());
     if (v->empty() || v->size() % 6 != 0) return fail(roi, fmt::format("attribute box: {} numbers, expected 6 per box", v->size()));
-    for (std::size_t b = 0; b < v->size(); b += 6) {
-      mechanics::FixedConstraintConfig part = f;
-      part.box = std::make_pair(Vec3((*v)[b], (*v)[b + 1], (*v)[b + 2]), Vec3((*v)[b + 3], (*v)[b + 4], (*v)[b + 5]));
-      m.fixed.push_back(std::move(part));
+    for (std::size_t i = 0; i < m.positions.size(); ++i) {
+      for (std::size_t b = 0; b < v->size(); b += 6) {
+        const Vec3 lo((*v)[b], (*v)[b + 1], (*v)[b + 2]), hi((*v)[b + 3], (*v)[b + 4], (*v)[b + 5]);
+        if ((m.positions[i].array() >= lo.array()).all() && (m.positions[i].array() <= hi.array()).all()) {
+          f.indices.push_back(static_cast<std::int32_t>(i));
+          break;
+        }
+      }
     }
+    // SOFA accepts a box that holds nothing; it is worth a word, since the body may fly off.
+    if (f.indices.empty()) {
+      warn(roi.line, fmt::format("{}: no node of '{}' lies in its box; {} holds nothing", roi.label(), m.name, c.label()));
+      return {};
+    }
+    m.fixed.push_back(std::move(f));
     return {};
   }
   auto idx = indices(c, "indices");
-  auto all = boolean(c, "fixAll");
   if (!idx) return std::unexpected(idx.error());
-  if (!all) return std::unexpected(all.error());
   if (*idx) f.indices = **idx;
-  f.fix_all = all->value_or(false);
   for (std::int32_t i : f.indices)
     if (i >= static_cast<std::int32_t>(m.positions.size()))
       return fail(c, fmt::format("attribute indices: node {} out of range (the model has {} nodes)", i,
                                  m.positions.size()),
                   ErrorCode::kInvalidArgument);
-  if (c.type == "PartialFixedProjectiveConstraint") {
-    if (const std::string* text = c.attr("fixedDirections")) {
-      auto v = numbers(c, "fixedDirections", *text);
-      if (!v) return std::unexpected(v.error());
-      if (v->size() != 3) return fail(c, "attribute fixedDirections: expected 3 flags");
-      for (std::size_t k = 0; k < 3; ++k) f.directions[k] = (*v)[k] != 0.0;
-    }
-  }
-  if (c.written != c.type) warn(c.line, fmt::format("{}: read as {}", c.label(), c.type));
   m.fixed.push_back(std::move(f));
   return {};
 }

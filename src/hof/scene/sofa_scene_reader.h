@@ -174,9 +174,7 @@ class Reader {
   bool legacy_{false};  ///< the file uses 2008 syntax (Object tags or 2008-only names)
   std::unique_ptr<SceneNode> root_;
   std::unordered_map<const Component*, MeshData> data_cache_;
-  /// Of the model being read: 1 for each hexahedron of a fillWeighted sparse grid that the
-  /// surface passes through (half full), else empty.
-  std::vector<std::uint8_t> half_filled_;
+
   std::set<const Component*> in_progress_;
   SofaScene scene_;
 };

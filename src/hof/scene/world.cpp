@@ -110,7 +110,8 @@ Expected<coupling::SessionBody> make_deformable(const mechanics::ModelConfig& co
 // the corners of the cell it lies in), and the surface following the grid trilinearly.
 Expected<void> fill_with_hexahedra(coupling::SessionBody& body, const BodySetup& setup) {
   const mechanics::ModelConfig& tet = *body.config;
-  if (tet.tets.empty()) return make_error(ErrorCode::kInvalidArgument, "the body is not a volume (no tetrahedra) to fill");
+  if (!tet.hexahedra.empty()) return make_error(ErrorCode::kInvalidArgument, "the body is hexahedral already");
+  if (tet.tets.empty()) return make_error(ErrorCode::kInvalidArgument, "the body is a surface (no tetrahedra) with nothing inside to fill");
   std::array<int, 3> n = setup.grid;
   if (n[0] <= 0) {
     // Cells of a tenth of the largest extent.
@@ -142,15 +143,11 @@ Expected<void> fill_with_hexahedra(coupling::SessionBody& body, const BodySetup&
   }
   if (!fem) return make_error(ErrorCode::kInvalidArgument, "the body has no FEM or Neo-Hookean force field to take the material from");
   // As SOFA's sparse grid (fillWeighted, its default): a cell the surface passes through is
-  // about half full — half the stiffness and half the mass.
-  fem->element_young_modulus_pa.assign(grid->hexes.size(), 0.0);
-  hex.mass.element_mass_density_kg_per_m3.assign(grid->hexes.size(), 0.0);
+  // about half full — half the stiffness and half the mass, whatever they are set to later.
+  hex.element_fill.assign(grid->hexes.size(), 1.0);
   for (std::size_t h = 0; h < grid->hexes.size(); ++h) {
-    if (!grid->hex_on_surface[h]) continue;
-    fem->element_young_modulus_pa[h] = 0.5 * fem->young_modulus_pa;
-    hex.mass.element_mass_density_kg_per_m3[h] = 0.5 * hex.mass.mass_density_kg_per_m3;
+    if (grid->hex_on_surface[h]) hex.element_fill[h] = 0.5;
   }
-  if (hex.mass.kind != mechanics::MassKind::kDiagonal) hex.mass.element_mass_density_kg_per_m3.clear();
   hex.force_fields.clear();
   mechanics::ForceFieldConfig field;
   field.name = "FEM";
@@ -167,6 +164,15 @@ Expected<void> fill_with_hexahedra(coupling::SessionBody& body, const BodySetup&
   std::vector<std::int32_t> hex_of_cell(static_cast<std::size_t>((n[0] - 1) * (n[1] - 1) * (n[2] - 1)), -1);
   for (std::size_t h = 0; h < grid->hex_cells.size(); ++h) hex_of_cell[static_cast<std::size_t>(grid->hex_cells[h])] = static_cast<std::int32_t>(h);
   for (mechanics::FixedConstraintConfig& fixed : hex.fixed) {
+    if (fixed.box) {
+      // A box held the tetrahedral nodes inside it: those nodes, then their cells.
+      for (std::size_t i = 0; i < tet.positions.size(); ++i) {
+        if ((tet.positions[i].array() >= fixed.box->first.array()).all() && (tet.positions[i].array() <= fixed.box->second.array()).all()) {
+          fixed.indices.push_back(static_cast<std::int32_t>(i));
+        }
+      }
+      fixed.box.reset();
+    }
     if (fixed.indices.empty()) continue;
     std::vector<std::int32_t> corners;
     for (const std::int32_t i : fixed.indices) {
@@ -216,7 +222,8 @@ Expected<void> apply_body_models(World& w) {
     }
     if (!config.tets.empty() || config.triangles.empty()) {
       return make_error(ErrorCode::kInvalidArgument,
-                        fmt::format("{}: the body is a volume (tetrahedra); a model is chosen for surface bodies (triangles)", who),
+                        fmt::format("{}: the body is a volume ({}); springs and membranes are models of surface bodies (triangles)", who,
+                                    config.hexahedra.empty() ? "tetrahedra" : "hexahedra"),
                         w.file.string());
     }
     double stiffness = 0.0, damping = 0.0, rest_scale = 1.0;
@@ -724,7 +731,9 @@ Expected<void> add_project_scene(World& w, const std::filesystem::path& file) {
       return std::unexpected(e);
     }
     const haptics::ForceEffects effects = w.project.effects;
+    const bool two_sided = w.project.touchable_face == collision::TouchableFace::kFrontAndBack;
     w.project = kept;
+    if (two_sided) w.project.touchable_face = collision::TouchableFace::kFrontAndBack;  // solid='false' shapes
     if (kept.effects.springs.empty() && kept.effects.viscosities.empty() && kept.effects.constants.empty()) w.project.effects = effects;
     return {};
   }

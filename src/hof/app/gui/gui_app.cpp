@@ -1045,11 +1045,13 @@ const std::vector<std::string> kForceFields{"TetrahedronFEMForceField large", "T
                                             "TetrahedronFEMForceField polar", "NeoHookean (TetrahedronHyperelasticityFEMForceField)",
                                             "MeshSpringForceField"};
 
-/// E and ν of a model's first tetrahedral force field (SOFA's defaults otherwise).
+/// E and ν of a model's first FEM force field (SOFA's defaults otherwise).
 std::pair<double, double> elastic_moduli(const mechanics::ModelConfig& c) {
   for (const mechanics::ForceFieldConfig& f : c.force_fields) {
     if (f.tetrahedron_fem) return {f.tetrahedron_fem->young_modulus_pa, f.tetrahedron_fem->poisson_ratio};
     if (f.neo_hookean) return {f.neo_hookean->young_modulus_pa, f.neo_hookean->poisson_ratio};
+    if (f.hexahedron_fem) return {f.hexahedron_fem->young_modulus_pa, f.hexahedron_fem->poisson_ratio};
+    if (f.triangle_fem) return {f.triangle_fem->young_modulus_pa, f.triangle_fem->poisson_ratio};
   }
   return {5000.0, 0.45};
 }
@@ -1714,7 +1716,7 @@ void Gui::draw_structure_editor(BodyView& b) {
   ImGui::SetNextItemWidth(70);
   ImGui::InputFloat(fmt::format("x E##{}", id).c_str(), &region_factor_, 0.0f, 0.0f, "%.3g");
   const bool has_tets = std::any_of(b.config->force_fields.begin(), b.config->force_fields.end(),
-                                    [](const auto& f) { return f.tetrahedron_fem || f.neo_hookean || f.triangle_fem; });
+                                    [](const auto& f) { return f.tetrahedron_fem || f.neo_hookean || f.triangle_fem || f.hexahedron_fem; });
   if (!has_tets) ImGui::TextDisabled("(regions need an FEM force field)");
   if (has_tets && ImGui::Button(fmt::format("+ region at the stylus##{}", id).c_str())) {
     if (!last_.valid) {

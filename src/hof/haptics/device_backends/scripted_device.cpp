@@ -89,6 +89,10 @@ Expected<ScriptedMotion> ScriptedMotion::make(const MotionConfig& c) {
         m.add_segment(start + press, start, c.speed_m_per_s);
         if (k + 1 < c.palpation_count) m.add_segment(start, start + c.palpation_step_m, c.speed_m_per_s);
       }
+      // Repeated sweeps travel back to the first start rather than jump there.
+      if (c.repeat != 1) {
+        m.add_segment(m.start_m_ + static_cast<double>(c.palpation_count - 1) * c.palpation_step_m, m.start_m_, c.speed_m_per_s);
+      }
       break;
     }
     case MotionKind::kCircle:

@@ -14,8 +14,8 @@
 ///    retract.
 ///  - `palpate`: a palpation sweep — `count` pokes, the k-th from `start` + k·`step`: press
 ///    (approach + depth along `direction`) at `speed`, hold `hold` s, retract, move to the next
-///    start at `speed`; the last press retracts and stays. The clinician's raster over an
-///    organ to find a hard lump.
+///    start at `speed`; the last press retracts and stays (with `repeat`, travels back to the
+///    first start). The clinician's raster over an organ to find a hard lump.
 ///  - `circle`: a circle of `radius` around `centre` in the plane normal to `normal`, one
 ///    turn per `period`, starting at centre + radius·u (u: first in-plane axis, see
 ///    plane_basis()).
