@@ -732,7 +732,12 @@ Expected<void> add_project_scene(World& w, const std::filesystem::path& file) {
     }
     const haptics::ForceEffects effects = w.project.effects;
     const bool two_sided = w.project.touchable_face == collision::TouchableFace::kFrontAndBack;
+    const Vec3 scene_viewpoint = w.project.graphics.viewpoint_m;
     w.project = kept;
+    // A project that keeps the default view looks from the scene's Viewpoint.
+    if (kept.graphics.viewpoint_m == GraphicsSetup{}.viewpoint_m && kept.graphics.look_at_m == GraphicsSetup{}.look_at_m) {
+      w.project.graphics.viewpoint_m = scene_viewpoint;
+    }
     if (two_sided) w.project.touchable_face = collision::TouchableFace::kFrontAndBack;  // solid='false' shapes
     if (kept.effects.springs.empty() && kept.effects.viscosities.empty() && kept.effects.constants.empty()) w.project.effects = effects;
     return {};
