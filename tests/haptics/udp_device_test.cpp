@@ -348,6 +348,58 @@ TEST(UdpDevice, OnlyTheConfiguredHostIsHeard) {
   EXPECT_FALSE(device->read(0.0).valid);
 }
 
+TEST(UdpDevice, ASecondSenderCannotTakeTheSessionOver) {
+  // Two senders on this machine: the first to send a state has the device; the second (another
+  // port) is refused and counted, its positions never read, no force ever sent to it.
+  UdpDeviceConfig config;  // no host: a local bridge, loopback only
+  config.timeout_s = 0.05;
+  auto opened = UdpDevice::open(config);
+  ASSERT_TRUE(opened) << opened.error().to_string();
+  UdpDevice& device = **opened;
+  Peer owner, intruder;
+  DeviceReading r;
+  ASSERT_TRUE(stream_until_valid(device, owner, 1, r));
+  device.write_force(Vec3(0.5, 0.0, 0.0), Vec3::Zero());
+  udp::StatePacket hijack = state(1000000);
+  hijack.position_m = Vec3(9.0, 9.0, 9.0);
+  ASSERT_TRUE(eventually([&] {
+    intruder.send(device.local_port(), hijack);
+    intruder.send(device.local_port(), udp::HelloPacket{});
+    return device.stats().other_sender >= 4;
+  }));
+  EXPECT_NE(device.read(0.0).position_m, hijack.position_m);
+  EXPECT_FALSE(intruder.receive_force(20)) << "a force went to the second sender";
+  // ... also after the owner falls silent (timed out): the session stays the owner's.
+  ASSERT_TRUE(eventually([&] { return device.health() == DeviceHealth::kTimedOut; }));
+  for (int i = 0; i < 5; ++i) intruder.send(device.local_port(), state(static_cast<std::uint32_t>(i)));
+  EXPECT_FALSE(intruder.receive_force(20));
+  EXPECT_EQ(device.health(), DeviceHealth::kTimedOut);
+  // The owner comes back (same port, sequence restarted) and has it again.
+  ASSERT_TRUE(stream_until_valid(device, owner, 0, r));
+  EXPECT_EQ(device.health(), DeviceHealth::kOk);
+}
+
+TEST(UdpDevice, ALocalBridgeListensOnLoopbackOnly) {
+  UdpDeviceConfig config;
+  auto opened = UdpDevice::open(config);
+  ASSERT_TRUE(opened) << opened.error().to_string();
+  // A datagram to the port on another local address (not loopback's 127.0.0.1) finds nobody.
+  Peer stranger("127.0.0.2");
+  if (!stranger.ok()) GTEST_SKIP() << "cannot bind 127.0.0.2 here";
+  const int fd = ::socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+  ASSERT_GE(fd, 0);
+  sockaddr_in local{};
+  local.sin_family = AF_INET;
+  local.sin_port = htons((*opened)->local_port());
+  ::inet_pton(AF_INET, "127.0.0.2", &local.sin_addr);  // the port on 127.0.0.2: not bound there
+  std::array<std::uint8_t, udp::kMaxPacketSize> bytes{};
+  const std::size_t size = udp::encode(state(1), bytes);
+  for (int i = 0; i < 5; ++i) ::sendto(fd, bytes.data(), size, 0, reinterpret_cast<const sockaddr*>(&local), sizeof(local));
+  ::close(fd);
+  std::this_thread::sleep_for(std::chrono::milliseconds(30));
+  EXPECT_EQ((*opened)->stats().datagrams, 0u);
+}
+
 TEST(UdpDevice, HelloSetsTheSpecWhenOpenWaitsForIt) {
   // Find a free port, then let a peer thread greet it while open() waits.
   std::uint16_t port = 0;

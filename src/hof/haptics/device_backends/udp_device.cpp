@@ -258,7 +258,7 @@ struct UdpDevice::Impl {
   SeqLock<udp::HelloPacket> hello;
 
   struct Counters {
-    std::atomic<std::uint64_t> datagrams{0}, states{0}, hellos{0}, stale{0}, malformed{0}, foreign{0},
+    std::atomic<std::uint64_t> datagrams{0}, states{0}, hellos{0}, stale{0}, malformed{0}, foreign{0}, other_sender{0},
         forces_sent{0}, send_errors{0};
   } counters;
 
@@ -338,6 +338,13 @@ void UdpDevice::Impl::handle(std::span<const std::uint8_t> bytes, const sockaddr
     bump(counters.foreign);
     return;
   }
+  // The first sender of an accepted state has the session for as long as the device is open:
+  // anyone else (another address, or another port on the same host) is refused and counted.
+  // A restarted bridge keeps its source port to be taken back (docs/device-protocol.md).
+  if (has_peer && (peer.sin_addr.s_addr != from.sin_addr.s_addr || peer.sin_port != from.sin_port)) {
+    bump(counters.other_sender);
+    return;
+  }
   switch (udp::packet_type(bytes)) {
     case udp::PacketType::kState: {
       udp::StatePacket s;
@@ -360,7 +367,7 @@ void UdpDevice::Impl::handle(std::span<const std::uint8_t> bytes, const sockaddr
 }
 
 void UdpDevice::Impl::accept_state(const udp::StatePacket& s, const sockaddr_in& from, Clock::time_point now) {
-  // One peer at a time: a new address starts a new sequence.
+  // One peer (handle() refused any other): the first state starts its sequence.
   const bool same_peer =
       has_peer && peer.sin_addr.s_addr == from.sin_addr.s_addr && peer.sin_port == from.sin_port;
   if (!resync && same_peer && !udp::newer(s.sequence, last_sequence)) {
@@ -458,7 +465,8 @@ Expected<std::unique_ptr<UdpDevice>> UdpDevice::open(const UdpDeviceConfig& conf
   if (impl->sock < 0) return fail(ErrorCode::kIo, fmt::format("cannot create a socket: {}", std::strerror(errno)));
   sockaddr_in addr{};
   addr.sin_family = AF_INET;
-  addr.sin_addr.s_addr = htonl(INADDR_ANY);
+  // A local bridge: the loopback interface only, unreachable from the network.
+  addr.sin_addr.s_addr = htonl(config.host.empty() || impl->host_addr.s_addr == htonl(INADDR_LOOPBACK) ? INADDR_LOOPBACK : INADDR_ANY);
   addr.sin_port = htons(config.port);
   if (::bind(impl->sock, reinterpret_cast<const sockaddr*>(&addr), sizeof(addr)) != 0) {
     return fail(ErrorCode::kIo, fmt::format("cannot bind the UDP port: {}", std::strerror(errno)));
@@ -534,7 +542,7 @@ UdpDeviceStats UdpDevice::stats() const {
   const auto& c = impl_->counters;
   const auto get = [](const std::atomic<std::uint64_t>& a) { return a.load(std::memory_order_relaxed); };
   return UdpDeviceStats{get(c.datagrams), get(c.states),    get(c.hellos),      get(c.stale),
-                        get(c.malformed), get(c.foreign),   get(c.forces_sent), get(c.send_errors)};
+                        get(c.malformed), get(c.foreign),   get(c.other_sender), get(c.forces_sent), get(c.send_errors)};
 }
 
 std::optional<udp::HelloPacket> UdpDevice::last_hello() const {

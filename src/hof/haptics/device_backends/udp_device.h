@@ -152,7 +152,10 @@ std::size_t encode(const ForcePacket& packet, std::span<std::uint8_t> out);
 
 /// Where UdpDevice listens and how it judges freshness (from the spec `udp:...`).
 struct UdpDeviceConfig {
-  std::string host;           ///< empty: accept any peer; else only datagrams from this IPv4 host
+  /// Empty: the bridge runs on this machine — HoF listens on the loopback address only, so no
+  /// other host can reach the port. Else the bridge's IPv4 host: HoF listens on every
+  /// interface and takes datagrams from that host only.
+  std::string host;
   std::uint16_t port{0};      ///< UDP port HoF listens on; 0 picks a free one (local_port())
   double timeout_s{0.1};      ///< no accepted state for this long (counted from open()) →
                               ///< kTimedOut, readings invalid; the next state recovers
@@ -168,6 +171,9 @@ struct UdpDeviceStats {
   std::uint64_t stale{0};        ///< states dropped: sequence not newer than the last accepted
   std::uint64_t malformed{0};    ///< bad magic, version, size, flags or numbers
   std::uint64_t foreign{0};      ///< from a host other than the configured one
+  /// From a second sender once the first has the session (another address or port): refused,
+  /// never takes over — no one else drives the device or receives its forces.
+  std::uint64_t other_sender{0};
   std::uint64_t forces_sent{0};
   std::uint64_t send_errors{0};
 };
