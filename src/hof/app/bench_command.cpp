@@ -73,10 +73,7 @@ int run_bench(const BenchOptions& options) {
                   model->tets.empty() && model->hexahedra.empty() ? model->triangles.size() : std::size_t{0}, done, rates.front(), median,
                   rates.back(), 1e6 * force / n, 1e6 * assembly / n, 1e6 * solve / n);
     } else {
-      const std::string elements = !model->hexahedra.empty() ? fmt::format("{} hexahedra", model->hexahedra.size())
-                                   : !model->tets.empty() || model->triangles.empty()
-                                       ? fmt::format("{} tetrahedra", model->tets.size())
-                                       : fmt::format("{} triangles", model->triangles.size());
+      const std::string elements = model->element_summary();
       std::printf("%s: model '%s' (%zu nodes, %s), %ld steps of %.4g s\n", scene_path.c_str(), node_path.c_str(),
                   model->node_count(), elements.c_str(), done, model->dt_s);
       std::printf("  steps/s   min %.1f, median %.1f, max %.1f\n", rates.front(), median, rates.back());

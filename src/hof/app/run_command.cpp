@@ -569,11 +569,7 @@ int run_check(const CheckOptions& options) {
     for (const coupling::SessionBody& b : world->bodies) {
       touchable += b.surface.triangles.empty() ? 0 : 1;
       if (b.deformable()) {
-        const std::string elements = !b.model->hexahedra.empty()
-                                         ? fmt::format("{} hexahedra", b.model->hexahedra.size())
-                                         : !b.model->tets.empty() || b.model->triangles.empty()
-                                               ? fmt::format("{} tetrahedra", b.model->tets.size())
-                                               : fmt::format("{} triangles", b.model->triangles.size());
+        const std::string elements = b.model->element_summary();
         std::printf("  model '%s': %zu nodes, %s, %zu surface triangles (deformable, dt %g s)\n", json_safe(b.name).c_str(),
                     b.model->node_count(), elements.c_str(), b.surface.triangles.size(), b.model->dt_s);
       } else {

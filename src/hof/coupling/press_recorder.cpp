@@ -55,9 +55,9 @@ double PressRecorder::add(const haptics::HapticSample& s) {
       p.loading_force_sum[bin] += force;
       ++p.loading_count[bin];
     }
+    update_stiffness(p);  // only the loading curve changes it
   }
   last_indentation_ = std::max(last_indentation_, indentation);
-  update_stiffness(p);
   return indentation;
 }
 

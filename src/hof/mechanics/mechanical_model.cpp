@@ -150,6 +150,12 @@ Expected<std::vector<std::pair<Config, std::vector<mesh::Tet>>>> split_by_poisso
 
 }  // namespace
 
+std::string MechanicalModel::element_summary() const {
+  if (!hexahedra.empty()) return fmt::format("{} hexahedra", hexahedra.size());
+  if (!tets.empty() || triangles.empty()) return fmt::format("{} tetrahedra", tets.size());
+  return fmt::format("{} triangles", triangles.size());
+}
+
 double MechanicalModel::total_mass_kg() const { return std::accumulate(node_mass_kg.begin(), node_mass_kg.end(), 0.0); }
 
 Expected<MechanicalModel> build_model(const ModelConfig& c) {

@@ -159,6 +159,9 @@ struct MechanicalModel {
   bool needs_matrix{false};                           ///< implicit or static solver
 
   [[nodiscard]] std::size_t node_count() const { return rest_positions.size(); }
+  /// What the model is made of, for reports: "N hexahedra", "N tetrahedra" or, for a surface
+  /// model, "N triangles".
+  [[nodiscard]] std::string element_summary() const;
   [[nodiscard]] double total_mass_kg() const;
 };
 

@@ -60,7 +60,12 @@ BoundarySurface extract_boundary(const std::vector<Vec3>& nodes, const std::vect
     out.triangle_tet.push_back(t);
     for (NodeIndex n : tri) out.volume_to_surface[n] = 0;  // mark; numbered below
   }
-  // Number surface vertices in increasing volume-node order.
+  number_boundary_vertices(nodes, out);
+  return out;
+}
+
+void number_boundary_vertices(const std::vector<Vec3>& nodes, BoundarySurface& out) {
+  // Surface vertices in increasing volume-node order.
   for (std::size_t n = 0; n < nodes.size(); ++n) {
     if (out.volume_to_surface[n] < 0) continue;
     out.volume_to_surface[n] = static_cast<std::int32_t>(out.surface_to_volume.size());
@@ -72,7 +77,6 @@ BoundarySurface extract_boundary(const std::vector<Vec3>& nodes, const std::vect
     out.surface.triangles.push_back(
         {out.volume_to_surface[tri[0]], out.volume_to_surface[tri[1]], out.volume_to_surface[tri[2]]});
   }
-  return out;
 }
 
 std::vector<Edge> tet_edges(const std::vector<Tet>& tets) {

@@ -35,6 +35,12 @@ struct BoundarySurface {
 [[nodiscard]] BoundarySurface extract_boundary(const std::vector<Vec3>& nodes,
                                                const std::vector<Tet>& tets);
 
+/// Completes a boundary whose volume_triangles (and triangle_tet) are filled and whose
+/// volume_to_surface marks every node they use (any value ≥ 0, −1 elsewhere): numbers the
+/// surface vertices in increasing volume-node order and builds `surface`. Shared by the
+/// tetrahedral and hexahedral boundaries.
+void number_boundary_vertices(const std::vector<Vec3>& nodes, BoundarySurface& out);
+
 /// An undirected edge, smaller index first.
 using Edge = std::array<NodeIndex, 2>;
 

@@ -374,17 +374,7 @@ BoundarySurface hex_boundary(const std::vector<Vec3>& nodes, const std::vector<H
       for (NodeIndex n : tri) out.volume_to_surface[n] = 0;  // mark; numbered below
     }
   }
-  for (std::size_t n = 0; n < nodes.size(); ++n) {
-    if (out.volume_to_surface[n] < 0) continue;
-    out.volume_to_surface[n] = static_cast<std::int32_t>(out.surface_to_volume.size());
-    out.surface_to_volume.push_back(static_cast<NodeIndex>(n));
-    out.surface.vertices.push_back(nodes[n]);
-  }
-  out.surface.triangles.reserve(out.volume_triangles.size());
-  for (const Tri& tri : out.volume_triangles) {
-    out.surface.triangles.push_back(
-        {out.volume_to_surface[tri[0]], out.volume_to_surface[tri[1]], out.volume_to_surface[tri[2]]});
-  }
+  number_boundary_vertices(nodes, out);
   return out;
 }
 
