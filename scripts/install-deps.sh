@@ -7,7 +7,8 @@ packages=(
   build-essential cmake ninja-build pkg-config git
   libeigen3-dev libtet1.5-dev libpugixml-dev libglfw3-dev libimgui-dev libepoxy-dev
   libfmt-dev nlohmann-json3-dev libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev libtbb-dev
-  gnuplot-nox xvfb xauth libgl1-mesa-dri libspnav-dev
+  gnuplot-nox xvfb xauth libgl1-mesa-dri libspnav-dev libsodium-dev
+  clang-16 libclang-rt-16-dev
 )
 
 missing=()

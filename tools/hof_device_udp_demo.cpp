@@ -46,6 +46,7 @@ struct Options {
   double rate_hz{1000.0};
   double print_hz{10.0};
   bool no_velocity{false};
+  std::string key_file;  ///< set: the authenticated protocol (version 2)
 };
 
 /// A UDP socket bound to `local_port`, with the resolved address of HoF.
@@ -81,10 +82,17 @@ std::optional<std::string> open_link(const Options& o, Link& link) {
   return std::nullopt;
 }
 
+/// With a key: the key and the session HoF issued in its latest challenge (0: none yet).
+struct Auth {
+  std::optional<udp::Key> key;
+  std::uint64_t session{0};
+};
+
 template <class Packet>
-void send(const Link& link, const Packet& packet) {
+void send(const Link& link, const Auth& auth, const Packet& packet) {
   std::array<std::uint8_t, udp::kMaxPacketSize> bytes{};
-  const std::size_t size = udp::encode(packet, bytes);
+  std::size_t size = udp::encode(packet, bytes);
+  if (auth.key) size = udp::seal(bytes, size, auth.session, *auth.key);
   ::sendto(link.fd, bytes.data(), size, MSG_DONTWAIT, reinterpret_cast<const sockaddr*>(&link.hof), sizeof(link.hof));
 }
 
@@ -112,7 +120,17 @@ int run(const Options& o) {
     fmt::print(stderr, "hof-device-udp-demo: {}\n", *error);
     return 1;
   }
-  fmt::print("sending '{}' to {}:{} at {} Hz for {} s\n", spec, o.host, o.port, o.rate_hz, o.seconds);
+  Auth auth;
+  if (!o.key_file.empty()) {
+    auto key = udp::read_key_file(o.key_file);
+    if (!key) {
+      fmt::print(stderr, "hof-device-udp-demo: {}\n", key.error().to_string());
+      return 1;
+    }
+    auth.key = *key;
+  }
+  fmt::print("sending '{}' to {}:{} at {} Hz for {} s{}\n", spec, o.host, o.port, o.rate_hz, o.seconds,
+             auth.key ? " (authenticated, protocol version 2)" : "");
 
   const auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / o.rate_hz));
   const auto print_every = std::chrono::duration<double>(1.0 / o.print_hz);
@@ -124,6 +142,7 @@ int run(const Options& o) {
   std::uint32_t sequence = 0;
   std::uint64_t forces = 0;
   std::optional<udp::ForcePacket> last_force;
+  Clock::time_point last_force_at = start;
   bool hof_closed = false;
 
   while (g_interrupted == 0) {
@@ -131,7 +150,9 @@ int run(const Options& o) {
     const double t = std::chrono::duration<double>(now - start).count();
     if (t > o.seconds) break;
     if (now >= next_hello) {  // HoF may start after us: greet it every second
-      send(link, hello);
+      // With a key a hello asks for a new session: only when there is none, or HoF went quiet
+      // (it may have restarted and forgotten ours).
+      if (!auth.key || auth.session == 0 || now - last_force_at > std::chrono::seconds(1)) send(link, auth, hello);
       next_hello += std::chrono::seconds(1);
     }
 
@@ -139,10 +160,24 @@ int run(const Options& o) {
     std::array<std::uint8_t, 256> bytes{};
     ssize_t n = 0;
     while ((n = ::recv(link.fd, bytes.data(), bytes.size(), MSG_DONTWAIT)) > 0) {
+      std::span<const std::uint8_t> packet(bytes.data(), static_cast<std::size_t>(n));
+      std::array<std::uint8_t, udp::kMaxPacketSize> body{};
+      if (auth.key) {  // only what HoF sealed with our key, in our session
+        std::uint64_t session = 0;
+        const std::size_t size = udp::unseal(packet, *auth.key, session, body);
+        if (size == 0) continue;
+        packet = std::span<const std::uint8_t>(body.data(), size);
+        if (udp::ChallengePacket c; udp::decode(packet, c)) {
+          auth.session = session;
+          continue;
+        }
+        if (session != auth.session) continue;
+      }
       udp::ForcePacket f;
-      if (!udp::decode(std::span<const std::uint8_t>(bytes.data(), static_cast<std::size_t>(n)), f)) continue;
+      if (!udp::decode(packet, f)) continue;
       ++forces;
       last_force = f;
+      last_force_at = Clock::now();
       hof_closed = hof_closed || f.closing;
     }
     if (last_force) (*device)->write_force(last_force->force_n, last_force->torque_n_m);
@@ -160,7 +195,7 @@ int run(const Options& o) {
     s.has_velocity = !o.no_velocity;
     s.velocity_m_per_s = r.velocity_m_per_s;
     s.buttons = r.buttons;
-    send(link, s);
+    if (!auth.key || auth.session != 0) send(link, auth, s);  // authenticated: only once HoF answered
 
     if (now >= next_print) {
       const hof::Vec3 f = last_force ? last_force->force_n : hof::Vec3::Zero();
@@ -196,6 +231,9 @@ int main(int argc, char** argv) {
   app.add_option("--rate", o.rate_hz, "States per second")->check(CLI::Range(1.0, 20000.0))->capture_default_str();
   app.add_option("--print-rate", o.print_hz, "Lines printed per second")->check(CLI::Range(0.1, 1000.0))->capture_default_str();
   app.add_flag("--no-velocity", o.no_velocity, "Leave velocity out of the states (HoF then differentiates)");
+  app.add_option("--key", o.key_file,
+                 "Shared key file (hof device keygen): speak the authenticated protocol, as HoF's udp:HOST:PORT,key=FILE")
+      ->check(CLI::ExistingFile);
   CLI11_PARSE(app, argc, argv);
   std::signal(SIGINT, on_interrupt);
   std::signal(SIGTERM, on_interrupt);

@@ -4,6 +4,7 @@
 // so the tests pass on a loaded machine and never hang.
 
 #include <arpa/inet.h>
+#include <sys/stat.h>
 #include <netinet/in.h>
 #include <poll.h>
 #include <sys/socket.h>
@@ -20,6 +21,9 @@
 #include <limits>
 #include <functional>
 #include <optional>
+#include <vector>
+#include <filesystem>
+#include <fstream>
 #include <thread>
 
 #include "hof/haptics/device.h"
@@ -71,6 +75,24 @@ class Peer {
     std::array<std::uint8_t, udp::kMaxPacketSize> bytes{};
     const std::size_t size = udp::encode(packet, bytes);
     send_raw(port, bytes.data(), size);
+  }
+
+  /// Sends `packet` sealed with `key` for `session` (the authenticated protocol, version 2).
+  template <class Packet>
+  void send_sealed(std::uint16_t port, const Packet& packet, std::uint64_t session, const udp::Key& key) const {
+    std::array<std::uint8_t, udp::kMaxPacketSize> bytes{};
+    const std::size_t size = udp::seal(bytes, udp::encode(packet, bytes), session, key);
+    send_raw(port, bytes.data(), size);
+  }
+
+  /// The next datagram within `wait_ms`, raw.
+  std::optional<std::vector<std::uint8_t>> receive_raw(int wait_ms = 5) const {
+    pollfd p{fd_, POLLIN, 0};
+    if (::poll(&p, 1, wait_ms) <= 0) return std::nullopt;
+    std::array<std::uint8_t, 256> bytes{};
+    const ssize_t n = ::recv(fd_, bytes.data(), bytes.size(), MSG_DONTWAIT);
+    if (n <= 0) return std::nullopt;
+    return std::vector<std::uint8_t>(bytes.begin(), bytes.begin() + n);
   }
 
   /// The next force packet within `wait_ms`, if any.
@@ -454,6 +476,213 @@ TEST(UdpDevice, CloseReturnsPromptlyAndSendsAFinalZeroForce) {
   auto second = open_device(fmt::format("udp:{}", holder->local_port()));
   ASSERT_FALSE(second);
   EXPECT_NE(second.error().message.find("cannot bind the UDP port"), std::string::npos) << second.error().message;
+}
+
+// ---------------------------------------------------------------------------------------
+// The authenticated protocol (version 2): a shared key, a session per hello, HMAC-SHA256
+
+udp::Key test_key(std::uint8_t seed) {
+  udp::Key key{};
+  for (std::size_t i = 0; i < key.size(); ++i) key[i] = static_cast<std::uint8_t>(seed + 7 * i);
+  return key;
+}
+
+/// What a sealed datagram holds once its tag checks out with `key`.
+struct Unsealed {
+  std::vector<std::uint8_t> body;
+  std::uint64_t session{0};
+};
+std::optional<Unsealed> unseal(const std::vector<std::uint8_t>& bytes, const udp::Key& key) {
+  Unsealed u;
+  u.body.resize(udp::kMaxPacketSize);
+  const std::size_t size = udp::unseal(bytes, key, u.session, u.body);
+  if (size == 0) return std::nullopt;
+  u.body.resize(size);
+  return u;
+}
+
+TEST(UdpProtocol, ASealedPacketRoundTripsAndAnyChangedByteIsRefused) {
+  const udp::Key key = test_key(1);
+  std::array<std::uint8_t, udp::kMaxPacketSize> bytes{};
+  const std::size_t plain = udp::encode(state(42), bytes);
+  const std::size_t size = udp::seal(bytes, plain, 0x1122334455667788ULL, key);
+  ASSERT_EQ(size, udp::kStateWithVelocitySize + udp::kAuthTrailerSize);
+  EXPECT_EQ(bytes[4], 2);  // version 2 on the wire
+  const std::vector<std::uint8_t> sealed(bytes.begin(), bytes.begin() + static_cast<std::ptrdiff_t>(size));
+  auto opened = unseal(sealed, key);
+  ASSERT_TRUE(opened);
+  EXPECT_EQ(opened->session, 0x1122334455667788ULL);
+  udp::StatePacket back;
+  ASSERT_TRUE(udp::decode(opened->body, back));
+  EXPECT_EQ(back.sequence, 42u);
+  // Every single changed byte (body, session or tag), a wrong key, a cut or a version-1
+  // packet: refused.
+  for (std::size_t i = 0; i < sealed.size(); ++i) {
+    std::vector<std::uint8_t> forged = sealed;
+    forged[i] ^= 0x01;
+    EXPECT_FALSE(unseal(forged, key)) << "byte " << i;
+  }
+  EXPECT_FALSE(unseal(sealed, test_key(2)));
+  EXPECT_FALSE(unseal(std::vector<std::uint8_t>(sealed.begin(), sealed.end() - 1), key));
+  EXPECT_FALSE(unseal(std::vector<std::uint8_t>(bytes.begin(), bytes.begin() + static_cast<std::ptrdiff_t>(plain)), key));
+}
+
+/// Opens a keyed device on loopback, greets it from `peer` and returns the session of the
+/// challenge it answers with (0 if none came).
+std::uint64_t handshake(UdpDevice& device, const Peer& peer, const udp::Key& key, std::uint32_t hello_sequence) {
+  std::uint64_t session = 0;
+  eventually([&] {
+    udp::HelloPacket h;
+    h.sequence = hello_sequence;
+    peer.send_sealed(device.local_port(), h, 0, key);
+    while (auto raw = peer.receive_raw(5)) {
+      auto u = unseal(*raw, key);
+      udp::ChallengePacket c;
+      if (u && udp::decode(u->body, c) && c.echo_sequence == hello_sequence) session = u->session;
+    }
+    return session != 0;
+  });
+  return session;
+}
+
+std::unique_ptr<UdpDevice> open_keyed(const udp::Key& key, double timeout_s = 1.0) {
+  UdpDeviceConfig config;
+  config.timeout_s = timeout_s;
+  config.key = key;
+  auto d = UdpDevice::open(config);
+  EXPECT_TRUE(d) << d.error().to_string();
+  return d ? std::move(*d) : nullptr;
+}
+
+TEST(UdpDevice, WithAKeyOnlyAuthenticatedStatesOfTheSessionDriveTheDevice) {
+  const udp::Key key = test_key(3);
+  auto device = open_keyed(key);
+  ASSERT_TRUE(device);
+  device->write_force(Vec3(0.25, 0.0, 0.0), Vec3::Zero());
+  Peer bridge, forger;
+  // Plain (version 1) states and states sealed with another key are refused and never answered.
+  ASSERT_TRUE(eventually([&] {
+    forger.send(device->local_port(), state(1));
+    forger.send_sealed(device->local_port(), state(2), 0, test_key(9));
+    return device->stats().unauthenticated >= 4;
+  }));
+  EXPECT_FALSE(device->read(0.0).valid);
+  EXPECT_FALSE(forger.receive_raw(20)) << "HoF answered an unauthenticated sender";
+
+  // The bridge: hello → challenge (a session) → sealed states of that session are read, and the
+  // force comes back sealed for that session.
+  const std::uint64_t session = handshake(*device, bridge, key, 7);
+  ASSERT_NE(session, 0u);
+  std::optional<udp::ForcePacket> force;
+  std::uint32_t seq = 1;
+  ASSERT_TRUE(eventually([&] {
+    bridge.send_sealed(device->local_port(), state(seq++, 0.02), session, key);
+    while (auto raw = bridge.receive_raw(2)) {
+      auto u = unseal(*raw, key);
+      udp::ForcePacket f;
+      if (u && u->session == session && udp::decode(u->body, f)) force = f;
+    }
+    return force.has_value() && device->read(0.0).valid;
+  }));
+  EXPECT_DOUBLE_EQ(device->read(0.0).position_m.x(), 0.02);
+  EXPECT_EQ(force->force_n, Vec3(0.25, 0.0, 0.0));
+  // A state sealed for no session (0) or a made-up one is refused as a replay.
+  const auto replayed_before = device->stats().replayed;
+  bridge.send_sealed(device->local_port(), state(seq + 100, 5.0), session + 1, key);
+  ASSERT_TRUE(eventually([&] { return device->stats().replayed > replayed_before; }));
+  EXPECT_NE(device->read(0.0).position_m.x(), 5.0);
+}
+
+TEST(UdpDevice, AReplayedStateIsRefusedInItsSessionAndAfter) {
+  const udp::Key key = test_key(4);
+  auto device = open_keyed(key, 0.05);
+  ASSERT_TRUE(device);
+  Peer bridge;
+  const std::uint64_t first = handshake(*device, bridge, key, 1);
+  ASSERT_NE(first, 0u);
+  std::uint32_t seq = 10;
+  ASSERT_TRUE(eventually([&] {
+    bridge.send_sealed(device->local_port(), state(seq++, 0.01), first, key);
+    return device->read(0.0).valid;
+  }));
+  // A recorded state (an older sequence of this session) sent again: stale, not read.
+  udp::StatePacket recorded = state(5, 0.07);
+  const auto stale_before = device->stats().stale;
+  bridge.send_sealed(device->local_port(), recorded, first, key);
+  ASSERT_TRUE(eventually([&] { return device->stats().stale > stale_before; }));
+  EXPECT_NE(device->read(0.0).position_m.x(), 0.07);
+  // After a timeout the sequence check does not relax (with a key a restarted bridge asks for a
+  // new session instead).
+  ASSERT_TRUE(eventually([&] { return device->health() == DeviceHealth::kTimedOut; }));
+  bridge.send_sealed(device->local_port(), recorded, first, key);
+  ASSERT_TRUE(eventually([&] { return device->stats().stale > stale_before + 1; }));
+  EXPECT_EQ(device->health(), DeviceHealth::kTimedOut);
+  // A new hello starts a new session: everything sealed for the old one is a replay.
+  const std::uint64_t second = handshake(*device, bridge, key, 2);
+  ASSERT_NE(second, 0u);
+  EXPECT_NE(second, first);
+  const auto replayed_before = device->stats().replayed;
+  bridge.send_sealed(device->local_port(), state(seq + 1000, 0.07), first, key);
+  ASSERT_TRUE(eventually([&] { return device->stats().replayed > replayed_before; }));
+  EXPECT_NE(device->read(0.0).position_m.x(), 0.07);
+  // ... while the new session starts again from any sequence.
+  std::uint32_t fresh = 0;
+  ASSERT_TRUE(eventually([&] {
+    bridge.send_sealed(device->local_port(), state(fresh++, 0.03), second, key);
+    return device->read(0.0).valid;
+  }));
+  EXPECT_DOUBLE_EQ(device->read(0.0).position_m.x(), 0.03);
+}
+
+TEST(UdpDevice, ABridgeOnAnotherMachineNeedsAKey) {
+  UdpDeviceConfig config;
+  config.host = "192.0.2.10";  // TEST-NET-1 (RFC 5737): never a real host
+  auto refused = UdpDevice::open(config);
+  ASSERT_FALSE(refused);
+  EXPECT_NE(refused.error().message.find("key=FILE"), std::string::npos) << refused.error().message;
+  config.key = test_key(5);
+  auto opened = UdpDevice::open(config);
+  ASSERT_TRUE(opened) << opened.error().to_string();
+  // The same through the spec string: the key comes from a file.
+  auto spec = open_device("udp:192.0.2.10:0");
+  ASSERT_FALSE(spec);
+  EXPECT_NE(spec.error().message.find("key=FILE"), std::string::npos) << spec.error().message;
+}
+
+TEST(UdpKeyFile, KeygenWritesAPrivateKeyThatReadsBackAndBadFilesAreNamed) {
+  const auto dir = std::filesystem::temp_directory_path() / fmt::format("hof-key-{}", ::getpid());
+  std::filesystem::create_directories(dir);
+  const std::string path = (dir / "bridge.key").string();
+  std::filesystem::remove(path);
+  ASSERT_TRUE(udp::write_new_key_file(path));
+  struct stat info {};
+  ASSERT_EQ(::stat(path.c_str(), &info), 0);
+  EXPECT_EQ(info.st_mode & 0777U, 0600U);
+  auto key = udp::read_key_file(path);
+  ASSERT_TRUE(key) << key.error().to_string();
+  EXPECT_NE(*key, udp::Key{});
+  EXPECT_FALSE(udp::write_new_key_file(path)) << "an existing key was overwritten";
+  EXPECT_EQ(*udp::read_key_file(path), *key);
+  auto device = open_device(fmt::format("udp:127.0.0.1:0,key={}", path));
+  EXPECT_TRUE(device) << device.error().to_string();
+
+  const auto write = [&](const std::string& name, const std::string& text, unsigned mode) {
+    const std::string p = (dir / name).string();
+    std::ofstream(p) << text;
+    std::filesystem::permissions(p, static_cast<std::filesystem::perms>(mode));
+    return p;
+  };
+  const std::string hex64(64, 'a');
+  const auto readable = udp::read_key_file(write("shared.key", hex64, 0644));
+  ASSERT_FALSE(readable);
+  EXPECT_NE(readable.error().message.find("chmod 600"), std::string::npos) << readable.error().message;
+  EXPECT_NE(readable.error().to_string().find("shared.key"), std::string::npos);
+  EXPECT_FALSE(udp::read_key_file(write("short.key", std::string(62, 'a'), 0600)));
+  EXPECT_FALSE(udp::read_key_file(write("nothex.key", std::string(63, 'a') + "g", 0600)));
+  EXPECT_TRUE(udp::read_key_file(write("spaced.key", hex64.substr(0, 32) + "\n" + hex64.substr(32) + "\n", 0600)));
+  EXPECT_FALSE(udp::read_key_file(dir.string()));  // a directory
+  EXPECT_FALSE(udp::read_key_file((dir / "missing.key").string()));
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 #include "hof/app/bench_command.h"
 #include "hof/app/gui/gui_app.h"
 #include "hof/app/run_command.h"
+#include "hof/haptics/device_backends/udp_auth.h"
 
 namespace {
 
@@ -131,6 +132,22 @@ void add_run_commands(CLI::App& app, int& status) {
   CLI::App* check_cmd = app.add_subcommand("check", "Validate a project, scene or mesh and print every problem");
   check_cmd->add_option("file", check.file, "File to check")->required();
   check_cmd->callback([&] { status = hof::app::run_check(check); });
+
+  CLI::App* device_cmd = app.add_subcommand("device", "Haptic device tools");
+  device_cmd->require_subcommand(1);
+  static std::string key_file;
+  CLI::App* keygen = device_cmd->add_subcommand(
+      "keygen", "Write a new shared key for a UDP bridge on another machine (udp:HOST:PORT,key=FILE)");
+  keygen->add_option("file", key_file, "Key file to create (mode 0600; never overwritten)")->required();
+  keygen->callback([&] {
+    if (auto written = hof::haptics::udp::write_new_key_file(key_file); !written) {
+      std::fprintf(stderr, "hof: %s\n", written.error().to_string().c_str());
+      status = 1;
+      return;
+    }
+    std::printf("wrote a new key to %s: copy it to the bridge's machine over a secure channel (scp)\n",
+                key_file.c_str());
+  });
 }
 
 }  // namespace

@@ -367,7 +367,7 @@ Expected<std::unique_ptr<Device>> open_simulated(const SpecParser& p, bool hand)
 }
 
 Expected<std::unique_ptr<Device>> open_udp(const SpecParser& p) {
-  static constexpr std::string_view kKeys[] = {"timeout", "hello_wait", "model"};
+  static constexpr std::string_view kKeys[] = {"timeout", "hello_wait", "key", "model"};
   UdpDeviceConfig config;
   const std::string_view arg = p.argument();
   if (arg.empty()) return p.fail("missing port (udp:PORT or udp:HOST:PORT)");
@@ -389,6 +389,11 @@ Expected<std::unique_ptr<Device>> open_udp(const SpecParser& p) {
       (o.key == "timeout" ? config.timeout_s : config.hello_wait_s) = *v;
     } else if (o.key == "model") {
       r = apply_model(p, o, config.spec);
+    } else if (o.key == "key") {
+      if (o.value.empty()) return p.fail("key needs a file (key=FILE; make one with `hof device keygen FILE`)");
+      auto key = udp::read_key_file(std::string(o.value));
+      if (!key) return p.fail(key.error().to_string());
+      config.key = *key;
     } else {
       r = p.unknown_key(o, "udp", kKeys);
     }

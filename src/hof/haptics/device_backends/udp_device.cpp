@@ -29,6 +29,7 @@ namespace {
 constexpr std::array<char, 4> kStateMagic{'H', 'O', 'F', 'S'};
 constexpr std::array<char, 4> kHelloMagic{'H', 'O', 'F', 'H'};
 constexpr std::array<char, 4> kForceMagic{'H', 'O', 'F', 'F'};
+constexpr std::array<char, 4> kChallengeMagic{'H', 'O', 'F', 'C'};
 
 class Writer {
  public:
@@ -86,6 +87,7 @@ PacketType packet_type(std::span<const std::uint8_t> bytes) {
   if (starts_with(bytes, kStateMagic)) return PacketType::kState;
   if (starts_with(bytes, kHelloMagic)) return PacketType::kHello;
   if (starts_with(bytes, kForceMagic)) return PacketType::kForce;
+  if (starts_with(bytes, kChallengeMagic)) return PacketType::kChallenge;
   return PacketType::kUnknown;
 }
 
@@ -133,6 +135,25 @@ std::size_t encode(const ForcePacket& f, std::span<std::uint8_t> out) {
   w.vec(f.force_n);
   w.vec(f.torque_n_m);
   return kForceSize;
+}
+
+std::size_t encode(const ChallengePacket& c, std::span<std::uint8_t> out) {
+  if (out.size() < kChallengeSize) return 0;
+  Writer w(out.data());
+  w.magic(kChallengeMagic);
+  w.u16(kVersion);  // seal() makes it 2: a challenge only exists sealed
+  w.u16(0);
+  w.u32(c.echo_sequence);
+  w.u32(0);
+  return kChallengeSize;
+}
+
+bool decode(std::span<const std::uint8_t> bytes, ChallengePacket& out) {
+  if (bytes.size() != kChallengeSize) return false;
+  Reader r(bytes.data());
+  if (!r.magic(kChallengeMagic) || r.u16() != kVersion || r.u16() != 0) return false;
+  out.echo_sequence = r.u32();
+  return r.u32() == 0;
 }
 
 bool decode(std::span<const std::uint8_t> bytes, StatePacket& out) {
@@ -259,7 +280,7 @@ struct UdpDevice::Impl {
 
   struct Counters {
     std::atomic<std::uint64_t> datagrams{0}, states{0}, hellos{0}, stale{0}, malformed{0}, foreign{0}, other_sender{0},
-        forces_sent{0}, send_errors{0};
+        unauthenticated{0}, replayed{0}, forces_sent{0}, send_errors{0};
   } counters;
 
   // Receiver thread only (and close() after the join).
@@ -273,6 +294,9 @@ struct UdpDevice::Impl {
   std::uint64_t accepted{0};
   std::uint32_t force_sequence{0};
   Clock::time_point last_accept{};
+  // With a key: the session nonce of the latest challenge (0: none issued yet). Only states
+  // carrying it are read, so a datagram recorded in an earlier session cannot be replayed.
+  std::uint64_t session{0};
 
   // Reader (haptic tick) only.
   StateSnapshot last_read{};
@@ -289,6 +313,9 @@ struct UdpDevice::Impl {
   void handle(std::span<const std::uint8_t> bytes, const sockaddr_in& from, Clock::time_point now);
   void accept_state(const udp::StatePacket& s, const sockaddr_in& from, Clock::time_point now);
   void send_force(bool closing);
+  void send_challenge(std::uint32_t hello_sequence, const sockaddr_in& to);
+  /// Sends `buffer[0, size)` (sealed first when there is a key); false if it did not go out.
+  bool send_datagram(std::span<std::uint8_t> buffer, std::size_t size, const sockaddr_in& to);
 };
 
 // The receiver loop: wait for the socket or the wake pipe, drain the socket, then check the
@@ -326,17 +353,31 @@ void UdpDevice::Impl::run() {
       }
     }
     if (Clock::now() - last_accept > timeout) {
-      resync = true;  // a restarted peer may begin again at sequence 0
+      // A restarted peer may begin again at sequence 0. With a key it gets a new session
+      // through a hello instead, so the sequence check never relaxes (replay protection).
+      if (!config.key) resync = true;
       DeviceHealth expected = DeviceHealth::kOk;
       health.compare_exchange_strong(expected, DeviceHealth::kTimedOut, std::memory_order_acq_rel);
     }
   }
 }
 
-void UdpDevice::Impl::handle(std::span<const std::uint8_t> bytes, const sockaddr_in& from, Clock::time_point now) {
+void UdpDevice::Impl::handle(std::span<const std::uint8_t> raw, const sockaddr_in& from, Clock::time_point now) {
   if (filter_host && from.sin_addr.s_addr != host_addr.s_addr) {
     bump(counters.foreign);
     return;
+  }
+  // With a key, only datagrams sealed with it are read (any version-1 datagram is refused).
+  std::array<std::uint8_t, udp::kMaxPacketSize> body_buffer{};
+  std::span<const std::uint8_t> bytes = raw;
+  std::uint64_t packet_session = 0;
+  if (config.key) {
+    const std::size_t size = udp::unseal(raw, *config.key, packet_session, body_buffer);
+    if (size == 0) {
+      bump(counters.unauthenticated);
+      return;
+    }
+    bytes = std::span<const std::uint8_t>(body_buffer.data(), size);
   }
   // The first sender of an accepted state has the session for as long as the device is open:
   // anyone else (another address, or another port on the same host) is refused and counted.
@@ -349,6 +390,10 @@ void UdpDevice::Impl::handle(std::span<const std::uint8_t> bytes, const sockaddr
     case udp::PacketType::kState: {
       udp::StatePacket s;
       if (!udp::decode(bytes, s)) break;
+      if (config.key && (session == 0 || packet_session != session)) {
+        bump(counters.replayed);  // sealed by the key holder, but for another session
+        return;
+      }
       accept_state(s, from, now);
       return;
     }
@@ -358,9 +403,17 @@ void UdpDevice::Impl::handle(std::span<const std::uint8_t> bytes, const sockaddr
       hello.store(h);
       bump(counters.hellos);
       resync = true;
+      if (config.key) {
+        // A new session for every hello: the states of any earlier one (recorded and replayed
+        // by a third party) no longer match. A replayed hello can only end the session, not
+        // drive the device: the challenge is useless without the key.
+        session = udp::random_session();
+        send_challenge(h.sequence, from);
+      }
       return;
     }
-    case udp::PacketType::kForce:  // HoF never receives forces
+    case udp::PacketType::kForce:      // HoF never receives forces
+    case udp::PacketType::kChallenge:  // nor challenges
     case udp::PacketType::kUnknown: break;
   }
   bump(counters.malformed);
@@ -422,11 +475,20 @@ void UdpDevice::Impl::send_force(bool closing) {
   packet.force_n = Vec3(f.f[0], f.f[1], f.f[2]);
   packet.torque_n_m = Vec3(f.t[0], f.t[1], f.t[2]);
   packet.closing = closing;
-  std::array<std::uint8_t, udp::kForceSize> bytes{};
-  const std::size_t size = udp::encode(packet, bytes);
-  const ssize_t sent = ::sendto(sock, bytes.data(), size, MSG_DONTWAIT | MSG_NOSIGNAL,
-                                reinterpret_cast<const sockaddr*>(&peer), sizeof(peer));
-  bump(sent == static_cast<ssize_t>(size) ? counters.forces_sent : counters.send_errors);
+  std::array<std::uint8_t, udp::kMaxPacketSize> bytes{};
+  bump(send_datagram(bytes, udp::encode(packet, bytes), peer) ? counters.forces_sent : counters.send_errors);
+}
+
+void UdpDevice::Impl::send_challenge(std::uint32_t hello_sequence, const sockaddr_in& to) {
+  std::array<std::uint8_t, udp::kMaxPacketSize> bytes{};
+  if (!send_datagram(bytes, udp::encode(udp::ChallengePacket{hello_sequence}, bytes), to)) bump(counters.send_errors);
+}
+
+bool UdpDevice::Impl::send_datagram(std::span<std::uint8_t> buffer, std::size_t size, const sockaddr_in& to) {
+  if (config.key) size = udp::seal(buffer, size, session, *config.key);
+  const ssize_t sent = ::sendto(sock, buffer.data(), size, MSG_DONTWAIT | MSG_NOSIGNAL,
+                                reinterpret_cast<const sockaddr*>(&to), sizeof(to));
+  return size > 0 && sent == static_cast<ssize_t>(size);
 }
 
 // ---------------------------------------------------------------------------------------
@@ -459,6 +521,15 @@ Expected<std::unique_ptr<UdpDevice>> UdpDevice::open(const UdpDeviceConfig& conf
     impl->host_addr = reinterpret_cast<const sockaddr_in*>(found->ai_addr)->sin_addr;
     impl->filter_host = true;
     ::freeaddrinfo(found);
+    // Plain datagrams from the network could be forged by anyone on it (a source address
+    // proves nothing in UDP): a bridge on another machine must authenticate.
+    const bool loopback = (ntohl(impl->host_addr.s_addr) >> 24) == 127;
+    if (!loopback && !config.key) {
+      return fail(ErrorCode::kInvalidArgument,
+                  fmt::format("a bridge on another machine ('{}') needs a shared key: add key=FILE "
+                              "(make one with `hof device keygen FILE`; docs/device-protocol.md)",
+                              config.host));
+    }
   }
 
   impl->sock = ::socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
@@ -466,7 +537,8 @@ Expected<std::unique_ptr<UdpDevice>> UdpDevice::open(const UdpDeviceConfig& conf
   sockaddr_in addr{};
   addr.sin_family = AF_INET;
   // A local bridge: the loopback interface only, unreachable from the network.
-  addr.sin_addr.s_addr = htonl(config.host.empty() || impl->host_addr.s_addr == htonl(INADDR_LOOPBACK) ? INADDR_LOOPBACK : INADDR_ANY);
+  const bool local_bridge = config.host.empty() || (ntohl(impl->host_addr.s_addr) >> 24) == 127;
+  addr.sin_addr.s_addr = htonl(local_bridge ? INADDR_LOOPBACK : INADDR_ANY);
   addr.sin_port = htons(config.port);
   if (::bind(impl->sock, reinterpret_cast<const sockaddr*>(&addr), sizeof(addr)) != 0) {
     return fail(ErrorCode::kIo, fmt::format("cannot bind the UDP port: {}", std::strerror(errno)));
@@ -541,8 +613,19 @@ std::uint16_t UdpDevice::local_port() const { return impl_->port; }
 UdpDeviceStats UdpDevice::stats() const {
   const auto& c = impl_->counters;
   const auto get = [](const std::atomic<std::uint64_t>& a) { return a.load(std::memory_order_relaxed); };
-  return UdpDeviceStats{get(c.datagrams), get(c.states),    get(c.hellos),      get(c.stale),
-                        get(c.malformed), get(c.foreign),   get(c.other_sender), get(c.forces_sent), get(c.send_errors)};
+  UdpDeviceStats s;
+  s.datagrams = get(c.datagrams);
+  s.states = get(c.states);
+  s.hellos = get(c.hellos);
+  s.stale = get(c.stale);
+  s.malformed = get(c.malformed);
+  s.foreign = get(c.foreign);
+  s.other_sender = get(c.other_sender);
+  s.unauthenticated = get(c.unauthenticated);
+  s.replayed = get(c.replayed);
+  s.forces_sent = get(c.forces_sent);
+  s.send_errors = get(c.send_errors);
+  return s;
 }
 
 std::optional<udp::HelloPacket> UdpDevice::last_hello() const {

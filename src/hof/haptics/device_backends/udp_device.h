@@ -23,6 +23,7 @@
 #include <type_traits>
 
 #include "hof/haptics/device.h"
+#include "hof/haptics/device_backends/udp_auth.h"
 
 namespace hof::haptics {
 
@@ -82,7 +83,9 @@ inline constexpr std::size_t kStateSize = 80;               ///< 'HOFS' without 
 inline constexpr std::size_t kStateWithVelocitySize = 104;  ///< 'HOFS' with velocity
 inline constexpr std::size_t kHelloSize = 88;               ///< 'HOFH'
 inline constexpr std::size_t kForceSize = 64;               ///< 'HOFF'
-inline constexpr std::size_t kMaxPacketSize = kStateWithVelocitySize;
+inline constexpr std::size_t kChallengeSize = 16;           ///< 'HOFC' (version 2 only)
+/// The largest datagram of either version (a sealed state with velocity).
+inline constexpr std::size_t kMaxPacketSize = kStateWithVelocitySize + kAuthTrailerSize;
 inline constexpr std::size_t kModelNameSize = 32;
 
 inline constexpr std::uint16_t kStateHasVelocity = 1U << 0;  ///< state flag: velocity follows
@@ -120,8 +123,14 @@ struct ForcePacket {
   bool closing{false};             ///< HoF is closing: render zero and stop waiting
 };
 
+/// HoF → bridge, version 2 only ('HOFC'): the answer to an authenticated hello. Its sealed
+/// trailer carries the new session nonce, which every later state must carry.
+struct ChallengePacket {
+  std::uint32_t echo_sequence{0};  ///< sequence of the hello it answers
+};
+
 /// The packet kinds, told apart by their magic.
-enum class PacketType : std::uint8_t { kState, kHello, kForce, kUnknown };
+enum class PacketType : std::uint8_t { kState, kHello, kForce, kChallenge, kUnknown };
 
 /// Which packet `bytes` claims to be (by its magic); kUnknown when too short or foreign.
 [[nodiscard]] PacketType packet_type(std::span<const std::uint8_t> bytes);
@@ -130,12 +139,14 @@ enum class PacketType : std::uint8_t { kState, kHello, kForce, kUnknown };
 std::size_t encode(const StatePacket& packet, std::span<std::uint8_t> out);
 std::size_t encode(const HelloPacket& packet, std::span<std::uint8_t> out);
 std::size_t encode(const ForcePacket& packet, std::span<std::uint8_t> out);
+std::size_t encode(const ChallengePacket& packet, std::span<std::uint8_t> out);
 
 /// Decoders check magic, version, exact size, flags and that every number is finite (and the
 /// quaternion non-zero: it is normalised). They return false for a malformed packet.
 [[nodiscard]] bool decode(std::span<const std::uint8_t> bytes, StatePacket& out);
 [[nodiscard]] bool decode(std::span<const std::uint8_t> bytes, HelloPacket& out);
 [[nodiscard]] bool decode(std::span<const std::uint8_t> bytes, ForcePacket& out);
+[[nodiscard]] bool decode(std::span<const std::uint8_t> bytes, ChallengePacket& out);
 
 /// True when sequence `a` is newer than `b` in wrap-around (serial number) arithmetic.
 [[nodiscard]] constexpr bool newer(std::uint32_t a, std::uint32_t b) {
@@ -161,6 +172,9 @@ struct UdpDeviceConfig {
                               ///< kTimedOut, readings invalid; the next state recovers
   double hello_wait_s{0.0};   ///< open() waits up to this long for a hello to set spec()
   DeviceSpec spec{};          ///< spec until (and unless) a hello arrives within hello_wait_s
+  /// Set: the authenticated protocol (version 2) — only sealed datagrams with a valid tag are
+  /// read, forces go out sealed. Required when `host` is not a loopback address.
+  std::optional<udp::Key> key;
 };
 
 /// Counters kept by the receiver thread (relaxed, for diagnostics).
@@ -174,6 +188,8 @@ struct UdpDeviceStats {
   /// From a second sender once the first has the session (another address or port): refused,
   /// never takes over — no one else drives the device or receives its forces.
   std::uint64_t other_sender{0};
+  std::uint64_t unauthenticated{0};  ///< with a key: no valid tag (forged, corrupted, or version 1)
+  std::uint64_t replayed{0};         ///< with a key: a state of another (older) session
   std::uint64_t forces_sent{0};
   std::uint64_t send_errors{0};
 };
@@ -184,7 +200,8 @@ struct UdpDeviceStats {
 class UdpDevice final : public Device {
  public:
   /// Binds the port, resolves the host and starts the receiver thread. Errors (kIo or
-  /// kInvalidArgument): socket/bind failure (port in use), unknown host, bad timeout.
+  /// kInvalidArgument): socket/bind failure (port in use), unknown host, bad timeout, a
+  /// remote (non-loopback) host without a key.
   [[nodiscard]] static Expected<std::unique_ptr<UdpDevice>> open(const UdpDeviceConfig& config);
   ~UdpDevice() override;
 
