@@ -10,11 +10,16 @@
 #include <string_view>
 #include <vector>
 #include <cmath>
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <cstdlib>
 #include <fstream>
+#include <sys/stat.h>
+#include <unistd.h>
 #include <nlohmann/json.hpp>
 
+#include "hof/core/file_write.h"
 #include "hof/core/progress.h"
 #include "hof/core/text.h"
 #include "hof/coupling/press_recorder.h"
@@ -54,10 +59,15 @@ std::string file_safe(const std::string& name) {
 
 std::string csv_number(double v) { return fmt::format("{:.9g}", v); }
 
-// Text safe inside a gnuplot single-quoted string.
+// Text safe inside a gnuplot single-quoted string. A control character (a newline in a body
+// name, written &#10; in the scene) would end the gnuplot command mid-string and lose the
+// plot: it becomes a space.
 std::string gnuplot_text(const std::string& text) {
   std::string out;
-  for (char c : text) out += c == '\'' ? std::string("''") : std::string(1, c);
+  for (char c : text) {
+    if (c == '\'') out += "''";
+    else out += static_cast<unsigned char>(c) < 0x20 || c == 0x7f ? ' ' : c;
+  }
   return out;
 }
 
@@ -227,6 +237,41 @@ std::string csv_text(const std::string& text) {
   return out + "\"";
 }
 
+// Closes the telemetry stream and makes sure the rows written during the run are on disk
+// under the report folder. If the folder (or the file) was removed while the session ran, the
+// rows still live in the open, unlinked file: the folder is made again and they are copied
+// out of it. Returns a problem to report ("" when the file is whole).
+std::string finish_telemetry(std::FILE* telemetry, const std::filesystem::path& dir) {
+  std::string problem;
+  if (std::fflush(telemetry) != 0 || std::ferror(telemetry)) {
+    problem = fmt::format("telemetry.csv is incomplete: {}", std::strerror(errno));
+  }
+  struct stat info {};
+  const int fd = ::fileno(telemetry);
+  if (::fstat(fd, &info) == 0 && info.st_nlink == 0) {
+    std::error_code ec;
+    std::filesystem::create_directories(dir, ec);
+    std::string rows;
+    std::array<char, 1 << 16> buffer{};
+    ssize_t n = 0;
+    off_t offset = 0;
+    while ((n = ::pread(fd, buffer.data(), buffer.size(), offset)) > 0) {
+      rows.append(buffer.data(), static_cast<std::size_t>(n));
+      offset += n;
+    }
+    if (auto written = write_file_atomically(dir / "telemetry.csv", rows); !written) {
+      problem = fmt::format("the report folder was removed during the run and telemetry.csv could not be written again: {}",
+                            written.error().to_string());
+    } else if (problem.empty()) {
+      problem = "the report folder was removed during the run: it was made again, with the whole telemetry";
+    }
+  }
+  if (std::fclose(telemetry) != 0 && problem.empty()) {
+    problem = fmt::format("telemetry.csv is incomplete: {}", std::strerror(errno));
+  }
+  return problem;
+}
+
 }  // namespace
 
 int run_session(const RunOptions& options) {
@@ -272,7 +317,8 @@ int run_session(const RunOptions& options) {
     std::error_code ec;
     std::filesystem::create_directories(*options.out, ec);
     if (ec) return fail(Error{ErrorCode::kIo, "cannot create the report folder: " + ec.message(), options.out->string(), 0, -1});
-    telemetry = std::fopen((*options.out / "telemetry.csv").c_str(), "w");
+    // Read-write: if the folder is removed mid-run the rows are read back from this stream.
+    telemetry = std::fopen((*options.out / "telemetry.csv").c_str(), "w+");
     if (!telemetry) return fail(Error{ErrorCode::kIo, "cannot write telemetry.csv", options.out->string(), 0, -1});
     std::fputs("t,device_x,device_y,device_z,proxy_x,proxy_y,proxy_z,force_x,force_y,force_z,contact,penetration,period,"
                "indentation,body",
@@ -376,7 +422,9 @@ int run_session(const RunOptions& options) {
   const auto progress = make_terminal_progress(options.quiet);
   const coupling::SessionReport report = options.deterministic ? session.run_virtual(seconds, on_sample, progress)
                                                                : session.run_realtime(seconds, on_sample, progress);
-  if (telemetry) std::fclose(telemetry);
+  // The session has run: from here on nothing may lose its results.
+  std::string telemetry_problem;
+  if (telemetry) telemetry_problem = finish_telemetry(telemetry, *options.out);
 
   const auto& periods = report.haptic_periods;
   const double clamped_share = report.contact_time_s > 0.0
@@ -468,12 +516,25 @@ int run_session(const RunOptions& options) {
                          {"puncture_force_n", needle.tissue.puncture_force_n}};
   }
 
+  if (!telemetry_problem.empty()) summary["telemetry_problem"] = telemetry_problem;
+  int report_status = 0;  // 3 when part of the report could not be written
   if (options.out) {
-    // Written first and whole: whatever happens after, the session's results are on disk.
-    {
-      std::ofstream out(*options.out / "summary.json");
-      out << summary.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) << "\n";
-      if (!out) return fail(Error{ErrorCode::kIo, "cannot write summary.json", options.out->string(), 0, -1});
+    // Written first and whole (atomically): whatever happens after, the session's results are
+    // on disk. The folder is made again if it was removed during the run. If even that fails
+    // (a full disk), the summary goes to the terminal rather than being lost.
+    std::error_code ec;
+    std::filesystem::create_directories(*options.out, ec);
+    const std::string text = summary.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
+    if (auto written = write_file_atomically(*options.out / "summary.json", text); !written) {
+      std::fprintf(stderr, "hof: %s\nhof: the session's summary follows, so that its results are not lost:\n%s",
+                   written.error().to_string().c_str(), text.c_str());
+      return 3;
+    }
+    if (!telemetry_problem.empty()) {
+      std::fprintf(stderr, "hof: warning: %s\n", telemetry_problem.c_str());
+      if (telemetry_problem.find("incomplete") != std::string::npos || telemetry_problem.find("could not") != std::string::npos) {
+        report_status = 3;
+      }
     }
     for (std::size_t i = 0; i < session.body_count(); ++i) {
       const coupling::SessionBody& body = session.body(i);
@@ -485,7 +546,10 @@ int run_session(const RunOptions& options) {
       // A hexahedral model as its boundary (the mesh files hold tetrahedra and triangles).
       if (!body.model->hexahedra.empty()) final_state.triangles = mesh::hex_boundary(body.model->rest_positions, body.model->hexahedra).volume_triangles;
       else if (final_state.tets.empty()) final_state.triangles = body.model->triangles;
-      if (auto ok = mesh::write_vtu(final_state, *options.out / (file_safe(body.name) + ".vtu")); !ok) return fail(ok.error());
+      if (auto ok = mesh::write_vtu(final_state, *options.out / (file_safe(body.name) + ".vtu")); !ok) {
+        std::fprintf(stderr, "hof: %s\n", ok.error().to_string().c_str());
+        report_status = 3;  // the rest of the report is still written
+      }
     }
     std::string touched;
     for (const coupling::BodyReport& b : report.bodies) {
@@ -553,7 +617,7 @@ int run_session(const RunOptions& options) {
     std::fprintf(stderr, "hof: warning: the device started inside %s (not counted as fall-through)\n", list.c_str());
   }
   (void)ended_rows;
-  return report.diverged ? 2 : 0;
+  return report.diverged ? 2 : report_status;
 }
 
 int run_check(const CheckOptions& options) {

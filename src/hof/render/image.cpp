@@ -4,7 +4,10 @@
 #include <stb_image.h>
 #include <stb_image_write.h>
 
+#include <string>
 #include <system_error>
+
+#include "hof/core/file_write.h"
 
 namespace hof::render {
 
@@ -15,14 +18,15 @@ Expected<void> write_png(const Image& image, const std::filesystem::path& path) 
   }
   std::error_code ec;
   if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path(), ec);
-  std::filesystem::path temporary = path;
-  temporary += ".part";
-  if (!stbi_write_png(temporary.c_str(), image.width, image.height, 3, image.rgb.data(), image.width * 3)) {
-    return make_error(ErrorCode::kIo, "cannot write the PNG", path.string());
+  // Encoded in memory, then written atomically: a full disk never leaves half a PNG.
+  std::string png;
+  const auto append = [](void* context, void* data, int size) {
+    static_cast<std::string*>(context)->append(static_cast<const char*>(data), static_cast<std::size_t>(size));
+  };
+  if (!stbi_write_png_to_func(append, &png, image.width, image.height, 3, image.rgb.data(), image.width * 3)) {
+    return make_error(ErrorCode::kIo, "cannot encode the PNG", path.string());
   }
-  std::filesystem::rename(temporary, path, ec);
-  if (ec) return make_error(ErrorCode::kIo, "cannot write the PNG: " + ec.message(), path.string());
-  return {};
+  return write_file_atomically(path, png);
 }
 
 Expected<Image> read_png(const std::filesystem::path& path) {

@@ -1,5 +1,7 @@
 #include "hof/scene/project.h"
 
+#include "hof/core/file_write.h"
+
 #include "hof/core/text.h"
 
 #include "hof/scene/x3d_scene.h"
@@ -743,17 +745,9 @@ Expected<HofProject> parse_project(const std::string& text, const std::filesyste
 }
 
 Expected<void> write_project(const HofProject& project, const std::filesystem::path& path) {
-  const std::filesystem::path temporary = path.string() + ".tmp";
-  {
-    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-    if (!out) return make_error(ErrorCode::kIo, "cannot write the project file", temporary.string());
-    out << to_xml(project);
-    if (!out) return make_error(ErrorCode::kIo, "write failed (disk full?)", temporary.string());
-  }
-  std::error_code ec;
-  std::filesystem::rename(temporary, path, ec);
-  if (ec) return make_error(ErrorCode::kIo, fmt::format("cannot replace the project file: {}", ec.message()), path.string());
-  return {};
+  // Temporary file, flushed, then renamed: a full disk, a crash or a folder removed mid-save
+  // leaves the previous project whole, never half a file.
+  return write_file_atomically(path, to_xml(project));
 }
 
 std::filesystem::path scene_file(const HofProject& project, const std::filesystem::path& project_file) {

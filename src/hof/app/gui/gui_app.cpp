@@ -31,6 +31,7 @@
 
 #include "hof/app/gui/gui_app.h"
 #include "hof/app/gui/gui_script.h"
+#include "hof/core/file_write.h"
 #include "hof/coupling/session.h"
 #include "hof/haptics/device_backends/mouse_device.h"
 #include "hof/haptics/surface_snapshot.h"
@@ -493,8 +494,9 @@ void Gui::remember_recent(const std::filesystem::path& file) {
   const auto path = recent_files_path();
   if (path.empty()) return;
   std::filesystem::create_directories(path.parent_path(), ec);
-  std::ofstream out(path);
-  for (const auto& r : recent_) out << r.string() << '\n';
+  std::string text;
+  for (const auto& r : recent_) text += r.string() + '\n';
+  (void)write_file_atomically(path, text);  // a convenience list: a failure costs nothing
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1202,14 +1204,7 @@ Expected<void> Gui::stop_recording() {
   for (const haptics::ReplaySample& s : r.samples) {
     text += fmt::format("{:.6f},{:.9g},{:.9g},{:.9g},{}\n", s.t_s, s.position_m.x(), s.position_m.y(), s.position_m.z(), s.buttons);
   }
-  const std::filesystem::path part = r.file.string() + ".part";
-  {
-    std::ofstream out(part, std::ios::binary | std::ios::trunc);
-    out << text;
-    if (!out) return make_error(ErrorCode::kIo, "cannot write the recording", r.file.string());
-  }
-  std::filesystem::rename(part, r.file, ec);
-  if (ec) return make_error(ErrorCode::kIo, "cannot write the recording: " + ec.message(), r.file.string());
+  if (auto written = write_file_atomically(r.file, text); !written) return std::unexpected(written.error());
   // Beside it, the project that replays it with the settings it began with and the calibration
   // the window used: `hof run NAME.hof --deterministic` reproduces the demonstration (the
   // settings changed meanwhile are listed as events in the recording's comments).
