@@ -15,6 +15,7 @@
 #include <cstring>
 #include <cstdlib>
 #include <fstream>
+#include <sys/resource.h>
 #include <sys/stat.h>
 #include <unistd.h>
 #include <nlohmann/json.hpp>
@@ -237,6 +238,14 @@ std::string csv_text(const std::string& text) {
   return out + "\"";
 }
 
+// Ticks whose period exceeded `limit_s` (a missed haptic deadline), from the 1 µs histogram.
+std::uint64_t periods_over(const haptics::PeriodStats& periods, double limit_s) {
+  std::uint64_t n = 0;
+  const auto& bins = periods.bins();
+  for (std::size_t b = static_cast<std::size_t>(limit_s * 1e6) + 1; b < bins.size(); ++b) n += bins[b];
+  return n;
+}
+
 // Closes the telemetry stream and makes sure the rows written during the run are on disk
 // under the report folder. If the folder (or the file) was removed while the session ran, the
 // rows still live in the open, unlinked file: the folder is made again and they are copied
@@ -447,7 +456,11 @@ int run_session(const RunOptions& options) {
                        {"period_p50_s", periods.quantile_s(0.5)},
                        {"period_p99_s", periods.quantile_s(0.99)},
                        {"period_max_s", periods.max_s()},
-                       {"overruns", periods.overruns()}};
+                       {"overruns", periods.overruns()},
+                       {"periods_over_2ms", periods_over(periods, 2e-3)}};
+  // Peak resident memory of the process (getrusage reports KiB on Linux): a soak compares it
+  // with the memory early in the run.
+  if (rusage usage{}; ::getrusage(RUSAGE_SELF, &usage) == 0) summary["peak_rss_bytes"] = static_cast<std::int64_t>(usage.ru_maxrss) * 1024;
   summary["simulation"] = {{"steps", report.simulation_steps}, {"dt_s", session.dt()}, {"steps_per_s", report.simulation_steps_per_s}};
   summary["graphics_equivalent_fps"] = {
       {"untouched", report.rate_untouched}, {"deforming", report.rate_deforming}, {"in_contact", report.rate_in_contact}};
