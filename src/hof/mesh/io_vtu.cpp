@@ -11,6 +11,7 @@
 #include <pugixml.hpp>
 
 #include "hof/mesh/detail/text_reader.h"
+#include "hof/mesh/xml_depth.h"
 #include "hof/mesh/mesh_io.h"
 
 namespace hof::mesh {
@@ -159,6 +160,10 @@ Expected<ReadResult> VtuReader::run() {
   if (!parsed) {
     return make_error(ErrorCode::kParse, std::string("not valid XML: ") + parsed.description(),
                       file_, line_at(parsed.offset));
+  }
+  if (const pugi::xml_node deep = first_too_deep_element(doc)) {
+    return make_error(ErrorCode::kParse, "<" + std::string(deep.name()) + "> is nested deeper than " + std::to_string(kMaxXmlDepth) + " levels",
+                      file_, line_at(deep.offset_debug()));
   }
   const pugi::xml_node root = doc.child("VTKFile");
   if (!root) {

@@ -1,4 +1,5 @@
 #include "hof/scene/project.h"
+#include "hof/mesh/xml_depth.h"
 
 #include "hof/core/file_write.h"
 
@@ -480,6 +481,11 @@ Expected<HofProject> parse_project(const std::string& text, const std::filesyste
   if (!parsed) {
     return std::unexpected(Error{ErrorCode::kParse, fmt::format("malformed XML: {}", parsed.description()), path.string(),
                                  line_of(text, parsed.offset), -1});
+  }
+  if (const pugi::xml_node deep = mesh::first_too_deep_element(doc)) {
+    return std::unexpected(Error{ErrorCode::kParse,
+                                 fmt::format("<{}> is nested deeper than {} levels", deep.name(), mesh::kMaxXmlDepth),
+                                 path.string(), line_of(text, deep.offset_debug()), -1});
   }
   Reader r{text, path.string(), std::nullopt};
   const pugi::xml_node root = doc.child("hof");

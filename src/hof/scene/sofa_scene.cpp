@@ -1,4 +1,5 @@
 #include "hof/scene/sofa_scene.h"
+#include "hof/mesh/xml_depth.h"
 
 #include <algorithm>
 #include <charconv>
@@ -105,6 +106,9 @@ Expected<SofaScene> Reader::run() {
       doc.load_buffer(text_.data(), text_.size(), pugi::parse_default, pugi::encoding_utf8);
   if (!parsed)
     return fail(ErrorCode::kParse, line_of(parsed.offset), fmt::format("malformed XML: {}", parsed.description()));
+  if (const pugi::xml_node deep = mesh::first_too_deep_element(doc))
+    return fail(ErrorCode::kParse, line_of(deep.offset_debug()),
+                fmt::format("<{}> is nested deeper than {} levels", deep.name(), mesh::kMaxXmlDepth));
   pugi::xml_node xml_root = doc.document_element();
   // A HoF project carries its scene inline: <hof><mechanics><Node …>, or, in the thesis'
   // appendix format, <hof><sofa><sg><Node …>.

@@ -4,6 +4,7 @@
 // the single entry point, so nothing escapes this file.
 
 #include "hof/scene/x3d_scene.h"
+#include "hof/mesh/xml_depth.h"
 
 #include <fmt/format.h>
 #include <pugixml.hpp>
@@ -170,6 +171,10 @@ class Reader {
     pugi::xml_document doc;
     const auto parsed = doc.load_buffer(text_.data(), text_.size(), pugi::parse_default);
     if (!parsed) fail(ErrorCode::kParse, line_at(parsed.offset), fmt::format("malformed XML: {}", parsed.description()));
+    if (const pugi::xml_node deep = mesh::first_too_deep_element(doc)) {
+      fail(ErrorCode::kParse, line_at(deep.offset_debug()),
+           fmt::format("<{}> is nested deeper than {} levels", deep.name(), mesh::kMaxXmlDepth));
+    }
     collect_defs(doc);
     const pugi::xml_node root = doc.document_element();
     if (!root) fail(ErrorCode::kParse, 1, "no root element");
