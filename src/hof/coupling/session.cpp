@@ -668,6 +668,9 @@ void Session::publish(double clock_s) {
     }
     haptics::SurfaceSnapshot& slot = layer.surfaces.write_slot();
     haptics::update_snapshot(slot, layer.positions, layer.velocities, clock_s);
+    // update_snapshot counts the publishes of its own slot (one in three): the buffer's count
+    // makes the sequence a reader sees (a sample's snapshot_sequence) increase with every one.
+    slot.sequence = layer.surfaces.published() + 1;
     slot.local.valid = false;
     const bool touched_here = last_body_ >= 0 && bodies_[static_cast<std::size_t>(last_body_)].layer == l;
     if (config_.coupling == ContactCoupling::kCompliance && touched_here && contact_ticks_since_publish_ > 0 &&
@@ -701,7 +704,9 @@ void Session::publish(double clock_s) {
     }
     layer.surfaces.publish();
     if (graphics_wanted_.load(std::memory_order_acquire)) {
-      haptics::update_snapshot(layer.graphics.write_slot(), layer.positions, layer.velocities, clock_s);
+      haptics::SurfaceSnapshot& shown = layer.graphics.write_slot();
+      haptics::update_snapshot(shown, layer.positions, layer.velocities, clock_s);
+      shown.sequence = layer.graphics.published() + 1;
       layer.graphics.publish();
     }
   }
@@ -740,12 +745,20 @@ bool Session::step_world(SessionReport& report, StateTimer& timer, double clock_
   const bool stepping = !paused_ || single_steps_ > 0;
   if (stepping) {
     if (paused_) --single_steps_;
-    if (!advance_bodies(report)) return false;
+    if (!advance_bodies(report)) {
+      // Nothing more is published: the haptic loop fades the force out now rather than
+      // rendering the last geometry until it is old enough for the watchdog.
+      loop_->set_simulation_failed(true);
+      return false;
+    }
     ++report.simulation_steps;
     steps_taken_.fetch_add(1, std::memory_order_relaxed);
   }
   // Published while paused too: the haptic loop's watchdog sees a live simulation.
   publish(clock_s);
+  // Stepping again after a failure (a reset or a new model took the divergence away): the
+  // geometry just published is trusted again, and the force fades back in.
+  if (stepping && loop_->simulation_failed()) loop_->set_simulation_failed(false);
   double moving = 0.0;
   for (const BodyRuntime& r : bodies_) {
     if (r.body.deformable() && r.state.v.size()) moving = std::max(moving, r.state.v.cwiseAbs().maxCoeff());
@@ -791,7 +804,34 @@ SessionReport Session::run_virtual(double seconds, const std::function<void(cons
         if (on_sample) on_sample(sample);
       }
     }
-    if (!step_world(report, timer, static_cast<double>(virtual_ticks_ + tick) * tick_period)) break;
+    if (!step_world(report, timer, static_cast<double>(virtual_ticks_ + tick) * tick_period)) {
+      // The simulation has stopped (diverged): as the haptic thread does in real time, the
+      // loop goes on ticking without it until the safety filter has faded the force to zero,
+      // so that the run leaves the device at rest rather than holding the last force. The
+      // fade takes fade_out_s, then the slew limit brings what is left to zero; the count
+      // bounds it should a device's spec make the force never settle.
+      const haptics::SafetyConfig& safety = config_.haptics.safety;
+      const haptics::DeviceSpec& spec = loop_->device().spec();
+      const double slew_s = spec.max_force_rate_n_per_s > 0.0 ? spec.max_force_n / spec.max_force_rate_n_per_s : 0.0;
+      const auto fade_ticks = static_cast<std::int64_t>(std::ceil((safety.fade_out_s + slew_s) / tick_period)) + 2;
+      for (std::int64_t k = 0; k < fade_ticks; ++k, ++tick) {
+        loop_->tick(static_cast<double>(virtual_ticks_ + tick) * tick_period);
+        bool at_rest = false;
+        while (loop_->telemetry().pop(sample)) {
+          at_rest = sample.force.isZero(0.0);
+          if (on_sample) on_sample(sample);
+        }
+        if (at_rest) {
+          ++tick;
+          break;
+        }
+      }
+      // Their contacts act on nothing (the bodies no longer step).
+      haptics::HapticContact c;
+      while (loop_->contacts().pop(c)) {
+      }
+      break;
+    }
     ++steps;
     if (progress && (steps % 16 == 0 || tick >= total_ticks)) {
       progress("haptic session (virtual time)", std::min(1.0, static_cast<double>(tick) / static_cast<double>(total_ticks)));

@@ -189,7 +189,28 @@ void HapticLoop::tick_impl(double time_s, double period_s, bool overrun) {
 
   // Read and calibrate.
   const DeviceReading reading = device.read(time_s);
-  const bool valid = reading.valid && reading.position_m.allFinite() && reading.velocity_m_per_s.allFinite();
+  // A reading with any non-finite field (or a zero quaternion, which is no rotation at all) is
+  // garbage as a whole: its position is not trusted either. A finite, non-unit quaternion is
+  // only rounding or scale, and is normalised for the tool (its axis).
+  const double orientation_norm = reading.orientation.coeffs().norm();
+  const bool finite = reading.valid && reading.position_m.allFinite() && reading.velocity_m_per_s.allFinite() &&
+                     std::isfinite(orientation_norm) && orientation_norm > 0.0;
+  // A jump of metres in one tick (see SafetyConfig::max_reading_jump_m): far from the last
+  // reading rendered and from the one before. Rendering it would drag the proxy across the
+  // scene (sliding along every surface in the way) and back the next tick, with a force at the
+  // device's limit in between. The history starts again with the proxy (a device switched, a
+  // calibration changed).
+  if (!proxy_initialised_) have_reading_history_ = false;
+  bool jumped = false;
+  if (finite) {
+    const double limit = config_.safety.max_reading_jump_m;
+    jumped = have_reading_history_ && limit > 0.0 && (reading.position_m - last_rendered_position_).norm() > limit &&
+             (reading.position_m - last_reading_position_).norm() > limit;
+    last_reading_position_ = reading.position_m;
+    if (!jumped) last_rendered_position_ = reading.position_m;
+    have_reading_history_ = true;
+  }
+  const bool valid = finite && !jumped;
   const Vec3 x = valid ? config_.calibration.to_world(reading.position_m) : Vec3::Zero();
   const Vec3 v = valid ? config_.calibration.vector_to_world(reading.velocity_m_per_s) : Vec3::Zero();
   if (valid && !proxy_initialised_) {
@@ -225,7 +246,7 @@ void HapticLoop::tick_impl(double time_s, double period_s, bool overrun) {
       input.dt_s = dt;
       input.position = x;
       input.velocity = v;
-      input.orientation = config_.calibration.orientation * reading.orientation;
+      input.orientation = config_.calibration.orientation * Eigen::Quaterniond(reading.orientation.coeffs() / orientation_norm);
       input.contacts = std::span<const ContactState>(contacts.data(), layers_.size());
       input.surfaces = std::span<const SurfaceSnapshot* const>(surfaces.data(), layers_.size());
       input.max_stiffness_n_per_m = device.spec().max_stiffness_n_per_m / world_scale_;
@@ -250,6 +271,8 @@ void HapticLoop::tick_impl(double time_s, double period_s, bool overrun) {
                         : surface.is_static ? 0.0
                                             : time_s - surface.time_s);
   }
+  // A failed simulation's last geometry counts as stale now (set_simulation_failed).
+  if (simulation_failed_.load(std::memory_order_acquire)) age = std::numeric_limits<double>::infinity();
   const SafetyFilter::Reading reading_state = !reading.valid ? SafetyFilter::Reading::kMissing
                                               : valid        ? SafetyFilter::Reading::kValid
                                                              : SafetyFilter::Reading::kNonFinite;
@@ -308,6 +331,10 @@ void HapticLoop::start() {
   if (running_.load()) return;
   stop_requested_.store(false);
   running_.store(true, std::memory_order_release);
+  // The clock starts at the call, not when the thread first runs (which a loaded machine may
+  // delay): a caller that starts its own clock just before (the session's simulation, whose
+  // snapshots carry its time) then shares this origin, and snapshot ages are not read short.
+  origin_s_ = monotonic_seconds();
   thread_ = std::thread([this] { run_thread(); });
 }
 
@@ -327,7 +354,7 @@ void HapticLoop::run_thread() {
     pthread_setschedparam(pthread_self(), SCHED_FIFO, &param);
   }
   const double period = 1.0 / config_.rate_hz;
-  const double origin = monotonic_seconds();
+  const double origin = origin_s_;
   double next = origin;
   double last_start = origin;
   bool first = true;

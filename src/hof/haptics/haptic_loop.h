@@ -152,6 +152,13 @@ class HapticLoop {
   void stop();
   [[nodiscard]] bool running() const { return running_.load(std::memory_order_acquire); }
 
+  /// The simulation behind the surfaces has failed (diverged): its last geometry is not to be
+  /// trusted, so the ticks treat it as stale at once — the watchdog fades the force out over
+  /// SafetyConfig::fade_out_s instead of rendering it until it is max_snapshot_age_s old.
+  /// Cleared (false) when the simulation steps again. Any thread.
+  void set_simulation_failed(bool failed) { simulation_failed_.store(failed, std::memory_order_release); }
+  [[nodiscard]] bool simulation_failed() const { return simulation_failed_.load(std::memory_order_acquire); }
+
   /// Latest sample (consumer side: one reader thread).
   TripleBuffer<HapticSample>& samples() { return samples_; }
   /// Every tick's sample, for logging (one consumer).
@@ -199,13 +206,19 @@ class HapticLoop {
   double max_force_n_{0.0};       // the user's force limit (tick thread), kept across device switches
   std::atomic<bool> running_{false};
   std::atomic<bool> stop_requested_{false};
+  std::atomic<bool> simulation_failed_{false};
   std::atomic<std::uint64_t> ticks_{0};
   std::thread thread_;
   Eigen::Matrix3d world_to_device_{Eigen::Matrix3d::Identity()};
   double world_scale_{1.0};       // world units per metre of device travel
   Tool* tool_{nullptr};
   double last_time_s_{-1.0};
+  double origin_s_{0.0};  // real-time mode: CLOCK_MONOTONIC at start(), s
   bool proxy_initialised_{false};
+  // The readings' recent positions (device frame), to tell a glitch from a motion.
+  Vec3 last_reading_position_{Vec3::Zero()};
+  Vec3 last_rendered_position_{Vec3::Zero()};
+  bool have_reading_history_{false};
 };
 
 }  // namespace hof::haptics

@@ -25,11 +25,17 @@ struct SafetyConfig {
   /// A force limit below the device's (a fragile device, a first lesson), N; 0: the device's.
   /// The force sent never exceeds the smaller of the two.
   double max_force_n{0.0};
+  /// A reading farther than this from both the last reading rendered and the one before it
+  /// (device frame, m) is garbage — a glitch, not a motion: no stylus moves a metre between two
+  /// readings (the largest workspaces are ~0.1 m in radius). It is not rendered, so the proxy
+  /// cannot be dragged across the scene and back in one tick. A reading that stays where it
+  /// jumped is taken from the next tick on (the device was moved there). 0: no check.
+  double max_reading_jump_m{1.0};
 };
 
 /// Counters of what the filter had to do (read by reports; written by the haptic thread).
 struct SafetyCounters {
-  std::uint64_t non_finite{0};   ///< ticks with a NaN/Inf force or reading
+  std::uint64_t non_finite{0};   ///< ticks with a NaN/Inf force or a garbage reading (NaN/Inf, zero quaternion, a jump of metres)
   std::uint64_t no_reading{0};   ///< ticks without a device sample (absent, timed out, script ended)
   std::uint64_t clamped{0};      ///< ticks whose force exceeded the device maximum
   std::uint64_t rate_limited{0}; ///< ticks whose force change exceeded the slew limit
