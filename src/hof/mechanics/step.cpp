@@ -63,7 +63,7 @@ void compute_forces(const MechanicalModel& model, MechanicalState& state, const 
 }
 
 bool compute_point_compliance(const MechanicalModel& model, MechanicalState& state, std::span<const std::int32_t> nodes,
-                              std::span<const double> weights, Mat3& compliance) {
+                              std::span<const double> weights, Mat3& compliance, int max_iterations) {
   if (model.fixed_dofs.empty() || nodes.size() != weights.size() || !model.needs_matrix) return false;
   SolverWorkspace& w = state.work;
   // Linearise at the current state (refreshes element rotations), K alone, fixed dofs held.
@@ -96,7 +96,7 @@ bool compute_point_compliance(const MechanicalModel& model, MechanicalState& sta
     w.p = w.z;
     double rho = w.r.dot(w.z);
     bool converged = false;
-    for (int it = 0; it < 5000; ++it) {
+    for (int it = 0; it < max_iterations; ++it) {
       k.multiply(w.p, w.ap);
       const double curvature = w.p.dot(w.ap);
       if (!(curvature > 0.0)) break;

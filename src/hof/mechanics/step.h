@@ -32,9 +32,10 @@ void compute_forces(const MechanicalModel& model, MechanicalState& state, const 
 /// (Saupin, Duriez & Cotin, ISBMS 2008). The point is Σ weights[k]·x[nodes[k]]. Solved by
 /// block-Jacobi-preconditioned CG to 1e-10 relative residual in the state's scratch (call it
 /// between steps; no allocation). Returns false when the body is not held (singular
-/// stiffness) or the solve fails.
+/// stiffness) or the solve fails or needs more than `max_iterations` per axis.
 bool compute_point_compliance(const MechanicalModel& model, MechanicalState& state,
-                              std::span<const std::int32_t> nodes, std::span<const double> weights, Mat3& compliance);
+                              std::span<const std::int32_t> nodes, std::span<const double> weights, Mat3& compliance,
+                              int max_iterations = 5000);
 
 /// The elastic force the body exerts at a point (N): the force fields' forces (no gravity, no
 /// external input) summed over the nodes that carry the point (`weights` > 0). For a body

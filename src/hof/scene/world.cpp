@@ -558,7 +558,13 @@ DefaultProbe default_probe(const std::vector<coupling::SessionBody>& bodies, dou
   std::vector<Vec3> arrival = surface.vertices;
   if (target.deformable() && target.model->gravity_m_per_s2.norm() > 0.0) {
     mechanics::MechanicalState state = mechanics::make_state(*target.model);
-    const auto steps = static_cast<std::int64_t>(std::ceil(clearance_dev / kProbeSpeed / target.model->dt_s - 1e-9));
+    // At most ~2 million node-steps (a second or two): on a body of a million elements the
+    // whole approach would take minutes before the session starts; a shorter look-ahead only
+    // makes the press point a little less exact. A count, not a clock, keeps it deterministic.
+    constexpr double kMaxNodeSteps = 2e6;
+    const auto wanted = static_cast<std::int64_t>(std::ceil(clearance_dev / kProbeSpeed / target.model->dt_s - 1e-9));
+    const auto affordable = static_cast<std::int64_t>(kMaxNodeSteps / static_cast<double>(std::max<std::size_t>(target.model->node_count(), 1)));
+    const std::int64_t steps = std::min(wanted, affordable);
     bool ok = true;
     for (std::int64_t k = 0; k < steps && ok; ++k) ok = mechanics::step(*target.model, state);
     if (ok) target.mapping.apply({state.x.data(), static_cast<std::size_t>(state.x.size())}, arrival);
@@ -646,8 +652,12 @@ DefaultProbe default_probe(const std::vector<coupling::SessionBody>& bodies, dou
     const std::size_t count = target.mapping.point_weights(std::span(press_vertices.data(), press_count),
                                                            std::span(press_weights.data(), press_count), nodes, weights);
     Mat3 point_compliance;
+    // A bounded solve (~2·10⁸ block products): on a body of a million elements an unbounded
+    // one takes minutes; without the compliance the press depth is set by the rendering
+    // stiffness alone (a shallower, safe press).
+    const int max_iterations = static_cast<int>(std::clamp(2e8 / (3.0 * static_cast<double>(target.model->node_count())), 50.0, 5000.0));
     if (mechanics::compute_point_compliance(*target.model, state, std::span(nodes.data(), count),
-                                            std::span(weights.data(), count), point_compliance) &&
+                                            std::span(weights.data(), count), point_compliance, max_iterations) &&
         point_compliance.allFinite()) {
       compliance_world = std::max(0.0, normal.dot(point_compliance * normal));
     }
