@@ -77,6 +77,27 @@ TEST(InputLimits, AVtuFileNestingDeeplyIsRefused) {
   expect_depth_error(read.error(), "deep.vtu", 2);
 }
 
+TEST(InputLimits, AnX3dUseInsideTheNodeItNamesIsACycleNamedByLine) {
+  const auto path = write("cycle.x3d", "<X3D>\n<Scene>\n<Transform DEF=\"a\">\n<Transform USE=\"a\"/>\n</Transform>\n</Scene>\n</X3D>\n");
+  auto scene = read_x3d_scene(path);
+  ASSERT_FALSE(scene);
+  EXPECT_NE(scene.error().message.find("a cycle"), std::string::npos) << scene.error().to_string();
+  EXPECT_EQ(scene.error().line, 4);
+}
+
+TEST(InputLimits, AnX3dThatDoublesThroughUseFortyTimesIsRefusedNotExpanded) {
+  // Each group USEs the previous one twice: 2^40 shapes from 42 lines ("billion laughs").
+  std::string text = "<X3D>\n<Scene>\n<Group DEF=\"g0\"><Shape><Box/></Shape></Group>\n";
+  for (int i = 1; i <= 40; ++i) {
+    text += "<Group DEF=\"g" + std::to_string(i) + "\"><Group USE=\"g" + std::to_string(i - 1) + "\"/><Group USE=\"g" +
+            std::to_string(i - 1) + "\"/></Group>\n";
+  }
+  text += "</Scene>\n</X3D>\n";
+  auto scene = read_x3d_scene(write("laughs.x3d", text));
+  ASSERT_FALSE(scene);
+  EXPECT_NE(scene.error().message.find("expands to more than"), std::string::npos) << scene.error().to_string();
+}
+
 TEST(InputLimits, ScenesJustUnderTheLimitStillRead) {
   // The limit refuses only absurd files: a scene nesting 200 nodes is read.
   const auto path = write("deep-ok.scn", "<Node name=\"root\">\n" +

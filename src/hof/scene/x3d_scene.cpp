@@ -218,6 +218,13 @@ class Reader {
       for (pugi::xml_node d : it->second)
         if (d.offset_debug() < n.offset_debug()) found = d;
     if (!found) fail(ErrorCode::kParse, line_of(n), fmt::format("<{} USE='{}'>: no node DEF'd with that name before", n.name(), use));
+    // A USE inside the node it names would contain itself: an endless tree.
+    for (pugi::xml_node a = n.parent(); a; a = a.parent()) {
+      if (a == found) {
+        fail(ErrorCode::kParse, line_of(n),
+             fmt::format("<{} USE='{}'> is inside the node it names (line {}): a cycle", n.name(), use, line_of(found)));
+      }
+    }
     return found;
   }
 
@@ -258,6 +265,9 @@ class Reader {
     std::vector<std::int64_t> out;
     for (double v : numbers(n, field)) {
       if (v != std::floor(v)) fail(ErrorCode::kParse, line_of(n), fmt::format("<{}> field {}: {} is not an integer", n.name(), field, v));
+      // Past ±2⁶³ the conversion is undefined (found by fuzz_x3d): no index or count is that large.
+      if (!(v >= -0x1p63 && v < 0x1p63))
+        fail(ErrorCode::kParse, line_of(n), fmt::format("<{}> field {}: {} is out of range", n.name(), field, v));
       out.push_back(static_cast<std::int64_t>(v));
     }
     return out;
@@ -302,6 +312,12 @@ class Reader {
   }
 
   void visit(pugi::xml_node original, const Mat4& X) {
+    // USE copies subtrees: a chain of nodes each USE'd twice by the next doubles the tree at
+    // every link (2^40 nodes from 40 lines). Bounded, so such a file is refused, not a hang.
+    if (++visited_ > kMaxVisitedNodes) {
+      fail(ErrorCode::kParse, line_of(original),
+           fmt::format("the scene expands to more than {} nodes through USE", kMaxVisitedNodes));
+    }
     const std::string_view tag = original.name();
     if (tag == "head" || tag == "meta" || tag == "component" || tag == "unit") return;
     const pugi::xml_node n = resolve(original);
@@ -672,6 +688,8 @@ class Reader {
   std::string text_;
   std::vector<std::ptrdiff_t> line_starts_;
   std::map<std::string, std::vector<pugi::xml_node>, std::less<>> defs_;
+  static constexpr std::int64_t kMaxVisitedNodes = 1000000;
+  std::int64_t visited_{0};
   X3dScene scene_;
   int layer_{0};  // haptic layer of the shapes being visited
 };
