@@ -111,6 +111,21 @@ if(NOT name MATCHES "^Gr.*e$")
   message(FATAL_ERROR "the Latin-1 body name was not kept (escaped): ${name}")
 endif()
 
+# A newline in a body name (&#10;) once ended the gnuplot title mid-string and lost every
+# plot of a run that touched the body: control characters are written as spaces.
+file(WRITE ${WORK}/newline.x3d "<?xml version='1.0'?>\n<X3D><Scene><Shape DEF='Two&#10;lines'><Appearance>"
+     "<SmoothSurface/></Appearance><Box size='0.1 0.1 0.1'/></Shape></Scene></X3D>\n")
+execute_process(COMMAND ${HOF} run ${WORK}/newline.x3d --deterministic --seconds 2 --quiet --out ${WORK}/newline
+                RESULT_VARIABLE rc ERROR_VARIABLE err)
+file(READ ${WORK}/newline/plots.gp plots)
+if(NOT rc EQUAL 0 OR NOT plots MATCHES "set title 'newline.x3d - Two lines'\n")
+  message(FATAL_ERROR "a body name with a newline broke the plot scripts (rc ${rc}): ${err}")
+endif()
+find_program(GNUPLOT gnuplot)
+if(GNUPLOT AND NOT EXISTS ${WORK}/newline/force_over_time.png)
+  message(FATAL_ERROR "a body name with a newline lost the plots: ${err}")
+endif()
+
 # Numeric options are range-checked with a clear message starting with `hof:`.
 foreach(bad "--telemetry-rate;-5" "--seconds;1e9" "--seconds;0" "--steps;-3")
   execute_process(COMMAND ${HOF} run ${SOURCE}/examples/liver-palpation-simple.hof --deterministic ${bad} --quiet

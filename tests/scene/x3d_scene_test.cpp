@@ -412,6 +412,15 @@ TEST(X3dScene, ErrorsCarryFileAndLine) {
   expect_error("use_before_def.x3d", "<Scene>\n<Shape USE='S'/>\n<Shape DEF='S'/></Scene>", 2, "USE='S'");
   expect_error("enum.x3d", "<Scene><GlobalSettings>\n<HapticsOptions touchableFace='SIDE'/></GlobalSettings></Scene>", 2,
                "touchableFace");
+  // Found by fuzz_x3d (the anchor DeformableShape.x3d with an index of 1.33e125): converting
+  // an integer-valued number past 2⁶³ was undefined behaviour; now a clear error.
+  expect_error("huge_index.x3d", R"(<Scene>
+  <Shape>
+    <IndexedTriangleSet index='0 1 1.33e125'>
+      <Coordinate point='0 0 0 1 0 0 0 1 0'/>
+    </IndexedTriangleSet>
+  </Shape>
+</Scene>)", 3, "1.33e+125 is out of range");
   const auto missing = read_x3d_scene("/nonexistent/none.x3d");
   ASSERT_FALSE(missing.has_value());
   EXPECT_EQ(missing.error().code, ErrorCode::kIo);

@@ -278,7 +278,6 @@ void BlockSparseMatrix::complete_from_upper(std::size_t first, std::size_t last)
 
 void BlockSparseMatrix::complete_from_upper_single(std::size_t first, std::size_t last) {
   using Floats4 = float __attribute__((vector_size(16)));
-  using Mask = int __attribute__((vector_size(16)));
   constexpr std::int64_t kColumn = kSingleColumnStride;
   auto load4 = [](const float* p) {
     Floats4 v;
@@ -293,11 +292,12 @@ void BlockSparseMatrix::complete_from_upper_single(std::size_t first, std::size_
       const float* upper = single_block(mirror_[s]);
       const Floats4 c0 = load4(upper), c1 = load4(upper + kColumn), c2 = load4(upper + 2 * kColumn);
       // Rows of the upper block (lane 3 of every column is zero) are the lower's columns.
-      const Floats4 lo01 = __builtin_shuffle(c0, c1, Mask{0, 4, 1, 5});  // c0₀ c1₀ c0₁ c1₁
-      const Floats4 hi01 = __builtin_shuffle(c0, c1, Mask{2, 6, 3, 7});  // c0₂ c1₂ 0 0
-      const Floats4 transposed[3] = {__builtin_shuffle(lo01, c2, Mask{0, 1, 4, 7}),
-                                     __builtin_shuffle(lo01, c2, Mask{2, 3, 5, 7}),
-                                     __builtin_shuffle(hi01, c2, Mask{0, 1, 6, 7})};
+      // (__builtin_shufflevector: GCC 12 and clang spell it alike; lanes of the second vector are 4–7.)
+      const Floats4 lo01 = __builtin_shufflevector(c0, c1, 0, 4, 1, 5);  // c0₀ c1₀ c0₁ c1₁
+      const Floats4 hi01 = __builtin_shufflevector(c0, c1, 2, 6, 3, 7);  // c0₂ c1₂ 0 0
+      const Floats4 transposed[3] = {__builtin_shufflevector(lo01, c2, 0, 1, 4, 7),
+                                     __builtin_shufflevector(lo01, c2, 2, 3, 5, 7),
+                                     __builtin_shufflevector(hi01, c2, 0, 1, 6, 7)};
       float* lower = single_block(s);
       for (int q = 0; q < 3; ++q) {
         store4(lower + kColumn * q, transposed[q]);

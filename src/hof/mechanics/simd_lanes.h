@@ -77,25 +77,26 @@ inline void store_four_nodes_single(float* p, Lanes a, Lanes b, Lanes c) {
 #endif
 }
 
+// __builtin_shufflevector (constant lane indices, the second vector's lanes numbered 4 to
+// 7) is spelled the same by GCC (12 and later) and clang, which has no __builtin_shuffle.
+
 /// v with lane 3 set to zero.
 [[nodiscard]] inline Lanes clear_lane3(Lanes v) {
-  using Mask = long long __attribute__((vector_size(32)));
-  return __builtin_shuffle(v, splat(0.0), Mask{0, 1, 2, 4});
+  return __builtin_shufflevector(v, splat(0.0), 0, 1, 2, 4);
 }
 
 /// Lanes (x_k, y_k, z_k, 0) of element k from the x, y, z lanes of four elements: the 4x4
 /// transpose, for storing per-element vectors with whole-register writes.
 inline void transpose_xyz(Lanes x, Lanes y, Lanes z, Lanes out[4]) {
-  using Mask = long long __attribute__((vector_size(32)));
   const Lanes zero = splat(0.0);
-  const Lanes xy_even = __builtin_shuffle(x, y, Mask{0, 4, 2, 6});     // x0 y0 x2 y2
-  const Lanes xy_odd = __builtin_shuffle(x, y, Mask{1, 5, 3, 7});      // x1 y1 x3 y3
-  const Lanes z0_even = __builtin_shuffle(z, zero, Mask{0, 4, 2, 6});  // z0 0 z2 0
-  const Lanes z0_odd = __builtin_shuffle(z, zero, Mask{1, 5, 3, 7});   // z1 0 z3 0
-  out[0] = __builtin_shuffle(xy_even, z0_even, Mask{0, 1, 4, 5});
-  out[1] = __builtin_shuffle(xy_odd, z0_odd, Mask{0, 1, 4, 5});
-  out[2] = __builtin_shuffle(xy_even, z0_even, Mask{2, 3, 6, 7});
-  out[3] = __builtin_shuffle(xy_odd, z0_odd, Mask{2, 3, 6, 7});
+  const Lanes xy_even = __builtin_shufflevector(x, y, 0, 4, 2, 6);     // x0 y0 x2 y2
+  const Lanes xy_odd = __builtin_shufflevector(x, y, 1, 5, 3, 7);      // x1 y1 x3 y3
+  const Lanes z0_even = __builtin_shufflevector(z, zero, 0, 4, 2, 6);  // z0 0 z2 0
+  const Lanes z0_odd = __builtin_shufflevector(z, zero, 1, 5, 3, 7);   // z1 0 z3 0
+  out[0] = __builtin_shufflevector(xy_even, z0_even, 0, 1, 4, 5);
+  out[1] = __builtin_shufflevector(xy_odd, z0_odd, 0, 1, 4, 5);
+  out[2] = __builtin_shufflevector(xy_even, z0_even, 2, 3, 6, 7);
+  out[3] = __builtin_shufflevector(xy_odd, z0_odd, 2, 3, 6, 7);
 }
 
 }  // namespace hof::mechanics::simd

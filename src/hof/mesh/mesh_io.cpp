@@ -4,6 +4,7 @@
 
 #include "hof/mesh/mesh_io.h"
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -51,13 +52,17 @@ Expected<std::string> read_whole_file(const std::filesystem::path& path) {
   std::string bytes;
   const auto size_hint = std::filesystem::file_size(path, ec);
   if (!ec) bytes.reserve(static_cast<std::size_t>(size_hint));
+  // The first read asks for one byte more than the hint, so that a file of the size stated
+  // is read (and its end seen) at once, without zero-filling a whole chunk for a small file.
   constexpr std::size_t kChunk = std::size_t{1} << 20;
+  std::size_t chunk = ec ? kChunk : std::min(kChunk, static_cast<std::size_t>(size_hint) + 1);
   std::size_t used = 0;
   while (true) {
-    bytes.resize(used + kChunk);
-    const std::size_t got = std::fread(bytes.data() + used, 1, kChunk, f.get());
+    bytes.resize(used + chunk);
+    const std::size_t got = std::fread(bytes.data() + used, 1, chunk, f.get());
     used += got;
-    if (got < kChunk) break;
+    if (got < chunk) break;
+    chunk = kChunk;
   }
   bytes.resize(used);
   if (std::ferror(f.get()) != 0) {

@@ -688,7 +688,7 @@ class Reader {
   std::string text_;
   std::vector<std::ptrdiff_t> line_starts_;
   std::map<std::string, std::vector<pugi::xml_node>, std::less<>> defs_;
-  static constexpr std::int64_t kMaxVisitedNodes = 1000000;
+  static constexpr std::int64_t kMaxVisitedNodes = 200000;
   std::int64_t visited_{0};
   X3dScene scene_;
   int layer_{0};  // haptic layer of the shapes being visited
