@@ -109,3 +109,26 @@ TEST(InputLimits, ScenesJustUnderTheLimitStillRead) {
 
 }  // namespace
 }  // namespace hof::scene
+
+namespace hof::scene {
+namespace {
+
+TEST(InputLimits, ProjectCountsOutOfRangeAreErrorsNotConversions) {
+  // Found by fuzz_hof: 3.3e85 was cast to int (undefined behaviour) before any check.
+  for (const std::string& attribute : {std::string("<options maxTrianglesInLeaf=\"3.3e85\"/>"),
+                                       std::string("<safety maxConsecutiveOverruns=\"-1e300\"/>"),
+                                       std::string("<options maxTrianglesInLeaf=\"2.5\"/>")}) {
+    const std::string text = "<hof version=\"1\">\n<mechanics scene=\"x.scn\"/>\n<haptics>\n" + attribute + "\n</haptics>\n</hof>\n";
+    auto project = parse_project(text, "counts.hof");
+    ASSERT_FALSE(project) << attribute;
+    EXPECT_NE(project.error().message.find("whole number"), std::string::npos) << project.error().to_string();
+    EXPECT_EQ(project.error().line, 4) << project.error().to_string();
+  }
+  const std::string grid = "<hof version=\"1\">\n<mechanics scene=\"x.scn\"/>\n<bodies>\n<body name=\"b\" model=\"hexahedra\" grid=\"1e300 4 4\"/>\n</bodies>\n</hof>\n";
+  auto project = parse_project(grid, "grid.hof");
+  ASSERT_FALSE(project);
+  EXPECT_EQ(project.error().line, 4) << project.error().to_string();
+}
+
+}  // namespace
+}  // namespace hof::scene

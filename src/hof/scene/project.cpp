@@ -91,6 +91,17 @@ struct Reader {
     }
     return v;
   }
+  /// A whole number in [lo, hi] (checked before any conversion to int: casting an
+  /// out-of-range double is undefined behaviour).
+  int get_count(const pugi::xml_node& node, const char* name, int fallback, int lo, int hi) {
+    const double v = get(node, name, fallback);
+    if (!(v >= lo && v <= hi && v == std::floor(v))) {
+      fail(node, fmt::format("<{}> {}=\"{}\" must be a whole number from {} to {}", node.name(), name,
+                             node.attribute(name).value(), lo, hi));
+      return fallback;
+    }
+    return static_cast<int>(v);
+  }
   bool get_bool(const pugi::xml_node& node, const char* name, bool fallback) {
     const pugi::xml_attribute a = node.attribute(name);
     if (!a) return fallback;
@@ -580,10 +591,11 @@ Expected<HofProject> parse_project(const std::string& text, const std::filesyste
       std::array<int, 3> grid{0, 0, 0};
       if (b.attribute("grid")) {
         const Vec3 n = r.get_vec(b, "grid", Vec3::Zero());
-        for (int a = 0; a < 3; ++a) grid[static_cast<std::size_t>(a)] = static_cast<int>(n[a]);
         if (model != "hexahedra") r.fail(b, "<body grid=...> goes with model=\"hexahedra\"");
         if (!(n.array() >= 2.0).all() || !(n.array() <= 512.0).all() || !(n.array() == n.array().floor()).all()) {
           r.fail(b, "<body grid=\"nx ny nz\">: whole numbers of nodes per axis, 2 to 512");
+        } else {  // converted only once in range
+          for (int a = 0; a < 3; ++a) grid[static_cast<std::size_t>(a)] = static_cast<int>(n[a]);
         }
       }
       p.bodies.push_back(BodySetup{name, surface, model, grid});
@@ -633,7 +645,7 @@ Expected<HofProject> parse_project(const std::string& text, const std::filesyste
     if (const pugi::xml_node s = h.child("surface")) p.surface = read_surface(r, s);
     if (const pugi::xml_node o = h.child("options")) {
       p.use_bound_tree = r.get_bool(o, "useBoundTree", p.use_bound_tree);
-      p.max_triangles_in_leaf = static_cast<int>(r.get(o, "maxTrianglesInLeaf", p.max_triangles_in_leaf));
+      p.max_triangles_in_leaf = r.get_count(o, "maxTrianglesInLeaf", p.max_triangles_in_leaf, 1, 1000000);
     }
     if (const pugi::xml_node st = h.child("stylus")) {
       p.stylus_radius_m = r.get(st, "radius", p.stylus_radius_m);
@@ -667,7 +679,7 @@ Expected<HofProject> parse_project(const std::string& text, const std::filesyste
       p.safety.fade_in_s = r.get(s, "fadeIn", p.safety.fade_in_s);
       p.safety.fade_out_s = r.get(s, "fadeOut", p.safety.fade_out_s);
       p.safety.max_snapshot_age_s = r.get(s, "maxSnapshotAge", p.safety.max_snapshot_age_s);
-      p.safety.max_consecutive_overruns = static_cast<int>(r.get(s, "maxConsecutiveOverruns", p.safety.max_consecutive_overruns));
+      p.safety.max_consecutive_overruns = r.get_count(s, "maxConsecutiveOverruns", p.safety.max_consecutive_overruns, 1, 1000000);
       p.safety.max_force_n = r.get(s, "maxForce", p.safety.max_force_n);
       if (!(p.safety.max_force_n >= 0.0)) r.fail(s, fmt::format("<safety> maxForce must be >= 0 N (0: the device's own limit), got {}", p.safety.max_force_n));
     }
