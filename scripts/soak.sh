@@ -44,7 +44,7 @@ echo
 
 # Memory: the largest sample after the first minute against the first one after it.
 read -r first last max < <(awk 'NR > 1 && $1 >= 60 { if (!f) f = $2; l = $2; if ($2 > m) m = $2 } END { print f + 0, l + 0, m + 0 }' "$out/rss.dat")
-gnuplot -e "set terminal pngcairo size 960,400; set output '$out/rss.png'; set xlabel 'time (s)'; set ylabel 'resident memory (MiB)'; set yrange [0:*]; set grid; plot '$out/rss.dat' using 1:2 with lines title 'hof: resident memory'" 2>/dev/null || true
+gnuplot -e "set terminal pngcairo size 960,400; set output '$out/rss.png'; set xlabel 'time (s)'; set ylabel 'resident memory (MiB)'; set yrange [0:*]; set grid; set key bottom right; plot '$out/rss.dat' using 1:2 with lines title 'hof: resident memory'" 2>/dev/null || true
 
 status=0
 if [ -f "$out/summary.json" ]; then
