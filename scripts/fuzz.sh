@@ -20,7 +20,9 @@ all=(msh obj stl off vtu sofa_legacy scn hof x3d trajectory udp session)
 targets=("$@")
 [[ ${#targets[@]} -eq 0 ]] && targets=("${all[@]}")
 jobs=${HOF_FUZZ_JOBS:-2}
-build=build/fuzz
+# HOF_FUZZ_BUILD=build/asan: use a tree already configured with HOF_FUZZ=ON (the asan preset,
+# which test.sh builds anyway) instead of configuring build/fuzz.
+build=${HOF_FUZZ_BUILD:-build/fuzz}
 # HOF_FUZZ_KEEP_GOING=1 (the long documented runs): libFuzzer's fork mode, which saves a
 # crash and goes on fuzzing, so that one run finds every crash rather than the first.
 keep_going=${HOF_FUZZ_KEEP_GOING:-0}
@@ -48,9 +50,13 @@ dictionary() {
 }
 
 start=$(date +%s)
-echo "fuzz: configuring and building $build (clang++-16, ASan + UBSan + libFuzzer)"
-cmake -S . -B "$build" -G Ninja -DCMAKE_CXX_COMPILER="${HOF_FUZZ_CXX:-clang++-16}" \
-  -DCMAKE_BUILD_TYPE=RelWithDebInfo -DHOF_FUZZ=ON -DHOF_BUILD_TESTS=OFF -DHOF_BUILD_BENCH=OFF >/dev/null
+if [[ -z ${HOF_FUZZ_BUILD:-} ]]; then
+  echo "fuzz: configuring and building $build (clang++-16, ASan + UBSan + libFuzzer)"
+  cmake -S . -B "$build" -G Ninja -DCMAKE_CXX_COMPILER="${HOF_FUZZ_CXX:-clang++-16}" \
+    -DCMAKE_BUILD_TYPE=RelWithDebInfo -DHOF_FUZZ=ON -DHOF_BUILD_TESTS=OFF -DHOF_BUILD_BENCH=OFF >/dev/null
+else
+  echo "fuzz: building the targets in $build"
+fi
 cmake --build "$build" -j "$jobs" --target "${targets[@]/#/fuzz_}" | tail -n 1
 echo "fuzz: seeds"
 fuzz/make-seeds.sh "$build/seeds" >/dev/null
@@ -111,5 +117,5 @@ while (( running > 0 )); do
   running=$((running - 1))
 done
 rm -rf "$TMPDIR"
-echo "fuzz: done in $(( $(date +%s) - start )) s$([[ $failed -ne 0 ]] && echo '; FOUND PROBLEMS (see build/fuzz/artifacts, build/fuzz/logs)')"
+echo "fuzz: done in $(( $(date +%s) - start )) s$([[ $failed -ne 0 ]] && echo "; FOUND PROBLEMS (see $build/artifacts, $build/logs)")"
 exit $failed

@@ -66,6 +66,8 @@ print(f"soak: {s['wall_s']:.0f} s wall, {h['ticks']} haptic ticks at {h['rate_hz
       f"p99 {1e6*h['period_p99_s']:.0f} us, max {1e6*h['period_max_s']:.0f} us; ticks over 2 ms: {h['periods_over_2ms']}; overruns {h['overruns']}")
 print(f"soak: simulation {s['simulation']['steps']} steps ({s['simulation']['steps_per_s']:.0f}/s); contact {s['contact_time_s']:.0f} s; "
       f"max force {s['max_force_n']:.3f} N; presses {len(s['presses'])}; diverged {s['diverged']}")
+print(f"soak: haptic thread scheduling {h.get('scheduling', '?')}; memory locked {h.get('memory_locked', '?')}; "
+      f"CPU time stolen by the host during the run {s.get('host_cpu_steal_s', float('nan')):.1f} s")
 print(f"soak: memory after 60 s {first:.1f} MiB, at the end {last:.1f} MiB (growth {growth:+.1f} MiB), peak {peak:.1f} MiB")
 print(f"soak: telemetry rows {rows}, force anomalies (non-finite or above {limit} N) {bad}, largest force {worst:.3f} N")
 ok = h["periods_over_2ms"] == 0 and bad == 0 and not s["diverged"] and growth < 0.05 * max(first, 1.0) + 2.0

@@ -322,12 +322,15 @@ TEST(CommandSeam, ABadValueIsRefusedWithAMessageAndChangesNothing) {
 }
 
 TEST(CommandSeam, AStiffnessChangedInVirtualTimeActsAtTheNextStep) {
-  // Two identical sessions; one gets stiffer springs after 0.5 s: the runs agree to that
-  // step and differ from the next one on.
+  // Two identical sessions; one gets stiffer springs after 1 s, while the probe presses (from
+  // 0.8 s): the runs agree to that step and differ from the next one on. (Before the contact the
+  // springs are at rest length and exert nothing, whatever their stiffness: the runs would
+  // differ only by rounding, which an -O1 build does not produce.)
   auto a = springs_liver_session(poke_device(Vec3(0.03, 0, 0.09), Vec3(0, 0, -1), 0.04, 0.01, 0.05, 0.3));
   auto b = springs_liver_session(poke_device(Vec3(0.03, 0, 0.09), Vec3(0, 0, -1), 0.04, 0.01, 0.05, 0.3));
-  a->run_virtual(0.5, {});
-  b->run_virtual(0.5, {});
+  const SessionReport pressed = a->run_virtual(1.0, {});
+  b->run_virtual(1.0, {});
+  ASSERT_GT(pressed.bodies.at(0).max_displacement_m, 1e-4) << "the probe must deform the liver before the change";
   ASSERT_TRUE(a->state().x.isApprox(b->state().x, 0.0));
   ASSERT_TRUE(b->submit(command::SetParameter{"Liver", "springs", "stiffness", 500.0}));
   EXPECT_TRUE(b->parameter_changes().empty()) << "recorded once applied, not when submitted";

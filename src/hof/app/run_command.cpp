@@ -6,6 +6,7 @@
 #include <array>
 #include <limits>
 #include <map>
+#include <optional>
 #include <cctype>
 #include <string_view>
 #include <vector>
@@ -15,6 +16,7 @@
 #include <cstring>
 #include <cstdlib>
 #include <fstream>
+#include <sys/mman.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -239,6 +241,31 @@ std::string csv_text(const std::string& text) {
 }
 
 // Ticks whose period exceeded `limit_s` (a missed haptic deadline), from the 1 µs histogram.
+// CPU time the hypervisor gave to other guests while this machine's CPUs wanted to run (the
+// "steal" column of /proc/stat, all CPUs, in seconds). On a virtual machine a haptic deadline
+// missed by milliseconds is most often this, which no scheduling inside the guest can prevent.
+std::optional<double> host_cpu_steal_s() {
+  std::ifstream stat("/proc/stat");
+  std::string cpu;
+  std::array<double, 8> ticks{};  // user nice system idle iowait irq softirq steal
+  if (!(stat >> cpu) || cpu != "cpu") return std::nullopt;
+  for (double& t : ticks) {
+    if (!(stat >> t)) return std::nullopt;
+  }
+  const long per_s = ::sysconf(_SC_CLK_TCK);
+  return per_s > 0 ? std::optional<double>(ticks[7] / static_cast<double>(per_s)) : std::nullopt;
+}
+
+const char* scheduling_name(haptics::HapticLoop::Scheduling s) {
+  switch (s) {
+    case haptics::HapticLoop::Scheduling::realtime: return "SCHED_FIFO";
+    case haptics::HapticLoop::Scheduling::refused: return "refused (normal priority: run as root or grant CAP_SYS_NICE / rtprio)";
+    case haptics::HapticLoop::Scheduling::not_requested: return "not requested (virtual time)";
+    case haptics::HapticLoop::Scheduling::not_started: break;
+  }
+  return "not started";
+}
+
 std::uint64_t periods_over(const haptics::PeriodStats& periods, double limit_s) {
   std::uint64_t n = 0;
   const auto& bins = periods.bins();
@@ -429,6 +456,10 @@ int run_session(const RunOptions& options) {
     std::fputs(fmt::format(",{}\n", presses.current()).c_str(), telemetry);
   };
   const auto progress = make_terminal_progress(options.quiet);
+  // Real time: keep every page of the process in memory, so that the haptic thread never waits
+  // for a page to come back from disk (where the system permits it; the report says which).
+  const bool memory_locked = !options.deterministic && ::mlockall(MCL_CURRENT | MCL_FUTURE) == 0;
+  const std::optional<double> steal_before = host_cpu_steal_s();
   const coupling::SessionReport report = options.deterministic ? session.run_virtual(seconds, on_sample, progress)
                                                                : session.run_realtime(seconds, on_sample, progress);
   // The session has run: from here on nothing may lose its results.
@@ -457,7 +488,12 @@ int run_session(const RunOptions& options) {
                        {"period_p99_s", periods.quantile_s(0.99)},
                        {"period_max_s", periods.max_s()},
                        {"overruns", periods.overruns()},
-                       {"periods_over_2ms", periods_over(periods, 2e-3)}};
+                       {"periods_over_2ms", periods_over(periods, 2e-3)},
+                       {"scheduling", scheduling_name(session.haptic_loop().scheduling())},
+                       {"memory_locked", memory_locked}};
+  if (const std::optional<double> steal_after = host_cpu_steal_s(); steal_before && steal_after) {
+    summary["host_cpu_steal_s"] = *steal_after - *steal_before;
+  }
   // Peak resident memory of the process (getrusage reports KiB on Linux): a soak compares it
   // with the memory early in the run.
   if (rusage usage{}; ::getrusage(RUSAGE_SELF, &usage) == 0) summary["peak_rss_bytes"] = static_cast<std::int64_t>(usage.ru_maxrss) * 1024;
@@ -623,6 +659,10 @@ int run_session(const RunOptions& options) {
     std::fprintf(stderr, "hof: warning: the force was at the device's limit (%.1f N) for %.0f%% of the contact time: the "
                          "surface is too stiff for this device or the press too deep\n",
                  max_force, 100.0 * clamped_share);
+  }
+  if (!options.deterministic && !options.quiet && session.haptic_loop().scheduling() == haptics::HapticLoop::Scheduling::refused) {
+    std::fprintf(stderr, "hof: note: the haptic thread ran at normal priority (real-time scheduling was refused): on a "
+                         "busy machine its period can stretch; run as root or grant rtprio (docs/reliability.md)\n");
   }
   if (!started_inside.empty()) {
     std::string list;

@@ -351,7 +351,10 @@ void HapticLoop::run_thread() {
     // carry on without it where that is not permitted.
     sched_param param{};
     param.sched_priority = std::min(80, sched_get_priority_max(SCHED_FIFO));
-    pthread_setschedparam(pthread_self(), SCHED_FIFO, &param);
+    const bool granted = pthread_setschedparam(pthread_self(), SCHED_FIFO, &param) == 0;
+    scheduling_.store(static_cast<int>(granted ? Scheduling::realtime : Scheduling::refused), std::memory_order_release);
+  } else {
+    scheduling_.store(static_cast<int>(Scheduling::not_requested), std::memory_order_release);
   }
   const double period = 1.0 / config_.rate_hz;
   const double origin = origin_s_;

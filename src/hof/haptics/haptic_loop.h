@@ -177,6 +177,11 @@ class HapticLoop {
   ForceEffects& effects() { return effects_; }
   [[nodiscard]] double nominal_period_s() const { return 1.0 / config_.rate_hz; }
 
+  /// What the real-time thread got when it asked for SCHED_FIFO (a report says it: without it,
+  /// deadline misses on a loaded machine are expected, not a defect).
+  enum class Scheduling : int { not_started, not_requested, realtime, refused };
+  [[nodiscard]] Scheduling scheduling() const { return static_cast<Scheduling>(scheduling_.load(std::memory_order_acquire)); }
+
  private:
   void run_thread();
   void tick_impl(double time_s, double period_s, bool overrun);
@@ -208,6 +213,7 @@ class HapticLoop {
   std::atomic<bool> stop_requested_{false};
   std::atomic<bool> simulation_failed_{false};
   std::atomic<std::uint64_t> ticks_{0};
+  std::atomic<int> scheduling_{static_cast<int>(Scheduling::not_started)};
   std::thread thread_;
   Eigen::Matrix3d world_to_device_{Eigen::Matrix3d::Identity()};
   double world_scale_{1.0};       // world units per metre of device travel

@@ -118,7 +118,7 @@ mesh::TriMesh make_box(const Vec3& size) {
 // Cylinder (top_radius = bottom_radius) or Cone (top_radius = 0: one apex vertex).
 mesh::TriMesh make_round(double bottom_radius, double top_radius, double height, bool side, bool bottom, bool top) {
   mesh::TriMesh m;
-  const int n = kRoundSlices;
+  constexpr int n = kRoundSlices;  // a constant: the lambdas below need not capture it
   for (int j = 0; j < n; ++j) {
     const double t = 2.0 * std::numbers::pi * j / n;
     m.vertices.emplace_back(bottom_radius * std::sin(t), -0.5 * height, bottom_radius * std::cos(t));
@@ -132,8 +132,8 @@ mesh::TriMesh make_round(double bottom_radius, double top_radius, double height,
       m.vertices.emplace_back(top_radius * std::sin(t), 0.5 * height, top_radius * std::cos(t));
     }
   }
-  const auto b = [n](int j) { return static_cast<mesh::NodeIndex>(j % n); };
-  const auto tp = [n, cone](int j) { return static_cast<mesh::NodeIndex>(cone ? n : n + j % n); };
+  const auto b = [](int j) { return static_cast<mesh::NodeIndex>(j % n); };
+  const auto tp = [cone](int j) { return static_cast<mesh::NodeIndex>(cone ? n : n + j % n); };
   for (int j = 0; j < n && side; ++j) {
     if (cone) m.triangles.push_back({b(j), b(j + 1), tp(j)});
     else add_quad(m, b(j), b(j + 1), tp(j + 1), tp(j));
