@@ -19,7 +19,7 @@ device="scripted:palpate,start=0.0;0;0.09,direction=0;0;-1,approach=0.04,depth=0
 
 if [ "${SOAK_GUI:-0}" = 1 ]; then
   printf 'wait %s\nscreenshot %s/gui-end.png\nquit\n' "$seconds" "$out" >"$out/script.txt"
-  xvfb-run -a -s "-screen 0 1280x720x24" "$hof" gui "$project" --size 1280x720 --script "$out/script.txt" \
+  xvfb-run -a -s "-screen 0 1280x720x24" "$hof" gui "$project" --device "$device" --size 1280x720 --script "$out/script.txt" \
     >"$out/run.log" 2>&1 &
 else
   "$hof" run "$project" --device "$device" --seconds "$seconds" --telemetry-rate 100 --quiet --out "$out" \

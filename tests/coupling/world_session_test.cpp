@@ -503,6 +503,7 @@ TEST(CommandSeam, AnotherDeviceIsSwitchedToWithItsOwnForceLimit) {
 }
 
 TEST(CommandSeam, TheHapticTickNeverAllocatesWhenSettingsChange) {
+  HOF_SKIP_UNLESS_COUNTING_ALLOCATIONS();
   // A loop fed new settings (renderer, materials, effects) through its triple buffer, and
   // switched to another device.
   const mesh::TriMesh surface = box(Vec3(-0.02, -0.04, -0.02), Vec3(0.02, 0.0, 0.02));

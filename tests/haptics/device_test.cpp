@@ -703,6 +703,7 @@ TEST(SpacemouseDevice, IntegratesTranslationFromAFakeSpacenavd) {
 // Real-time rules
 
 TEST(DeviceBackends, ReadAndWriteForceNeverAllocate) {
+  HOF_SKIP_UNLESS_COUNTING_ALLOCATIONS();
   TempDir dir;
   const auto path = dir.write("n.csv", "t,x,y,z,qw,qx,qy,qz,button\n0,0,0,0,1,0,0,0,0\n1,0.01,0,0,0,0,0,1,1\n");
   std::vector<std::unique_ptr<Device>> devices;

@@ -86,6 +86,7 @@ TEST(ForceEffects, ViscosityIsStokesDragAndConstantAdds) {
 }
 
 TEST(HapticTick, AllocatesNothing) {
+  HOF_SKIP_UNLESS_COUNTING_ALLOCATIONS();
   testing::ProgrammedDevice device([](double t) { return Vec3(0.03 * std::sin(5 * t), 0.0, 0.002 - 0.01 * std::min(t, 0.5)); });
   TripleBuffer<SurfaceSnapshot> surfaces(floor_snapshot());
   surfaces.write_slot() = floor_snapshot();

@@ -47,6 +47,7 @@ std::vector<Case> cases() {
 }
 
 TEST(NoAllocation, StepsAllocateNothingAfterMakeState) {
+  HOF_SKIP_UNLESS_COUNTING_ALLOCATIONS();
   const mesh::Mesh liver = *mesh::generate_liver(mesh::LiverResolution::kMedium);  // parallel paths run
   for (const Case& c : cases()) {
     ModelConfig config;
@@ -73,6 +74,7 @@ TEST(NoAllocation, StepsAllocateNothingAfterMakeState) {
 }
 
 TEST(NoAllocation, HexahedralAndMembraneStepsAllocateNothing) {
+  HOF_SKIP_UNLESS_COUNTING_ALLOCATIONS();
   const mesh::Mesh liver = *mesh::generate_liver(mesh::LiverResolution::kMedium);
   const mesh::BoundarySurface surface = mesh::extract_boundary(liver.nodes, liver.tets);
   auto grid = mesh::sparse_grid(surface.surface, {12, 8, 6});
@@ -111,6 +113,7 @@ TEST(NoAllocation, HexahedralAndMembraneStepsAllocateNothing) {
 }
 
 TEST(NoAllocation, TheCounterCounts) {
+  HOF_SKIP_UNLESS_COUNTING_ALLOCATIONS();
   const long before = hof::testing::allocation_count();
   auto* p = new std::vector<int>(100);
   delete p;

@@ -187,6 +187,7 @@ TEST(NeedleTool, SceneLengthsInMillimetresAreConverted) {
 }
 
 TEST(NeedleTool, TheTickDoesNotAllocate) {
+  HOF_SKIP_UNLESS_COUNTING_ALLOCATIONS();
   Bench b(NeedleConfig{});
   b.tick(Vec3(0, 0, 0.001), Vec3(0, 0, -0.01));
   const long before = hof::testing::thread_allocation_count();
