@@ -458,7 +458,13 @@ int run_session(const RunOptions& options) {
   const auto progress = make_terminal_progress(options.quiet);
   // Real time: keep every page of the process in memory, so that the haptic thread never waits
   // for a page to come back from disk (where the system permits it; the report says which).
-  const bool memory_locked = !options.deterministic && ::mlockall(MCL_CURRENT | MCL_FUTURE) == 0;
+  // Only where the lock has no ceiling (root, or an unlimited RLIMIT_MEMLOCK): under a finite
+  // ceiling MCL_FUTURE would turn the first allocation past it into a failure mid-run.
+  const bool may_lock = [] {
+    rlimit limit{};
+    return ::geteuid() == 0 || (::getrlimit(RLIMIT_MEMLOCK, &limit) == 0 && limit.rlim_cur == RLIM_INFINITY);
+  }();
+  const bool memory_locked = !options.deterministic && may_lock && ::mlockall(MCL_CURRENT | MCL_FUTURE) == 0;
   const std::optional<double> steal_before = host_cpu_steal_s();
   const coupling::SessionReport report = options.deterministic ? session.run_virtual(seconds, on_sample, progress)
                                                                : session.run_realtime(seconds, on_sample, progress);
