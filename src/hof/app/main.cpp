@@ -87,6 +87,13 @@ void add_run_commands(CLI::App& app, int& status) {
   run_cmd->add_option("--out", out, "Folder for telemetry.csv, summary.json, the final state (.vtu) and plots");
   run_cmd->add_option("--telemetry-rate", run.telemetry_rate_hz, "Rows per second in telemetry.csv (0 = every haptic tick)");
   run_cmd->add_flag("-q,--quiet", run.quiet, "No progress output");
+  static const std::map<std::string, hof::haptics::KeepAwake> keep_awake_modes{
+      {"auto", hof::haptics::KeepAwake::automatic}, {"on", hof::haptics::KeepAwake::on}, {"off", hof::haptics::KeepAwake::off}};
+  run_cmd->add_option("--keep-cpus-awake", run.keep_awake,
+                      "auto|on|off: real time, keep the CPUs from halting so the haptic thread wakes on time (auto: on a "
+                      "virtual machine; docs/reliability.md)")
+      ->transform(CLI::CheckedTransformer(keep_awake_modes, CLI::ignore_case))
+      ->default_str("auto");
   run_cmd->callback([&, seconds_opt, steps_opt] {
     if (seconds_opt->count()) run.seconds = seconds;
     if (steps_opt->count()) run.steps = steps;
@@ -112,6 +119,10 @@ void add_run_commands(CLI::App& app, int& status) {
   gui_cmd->add_option("--script", gui_script, "Run the actions of this file (one per line), then exit");
   gui_cmd->add_option("--size", gui_size, "Window size WIDTHxHEIGHT (default 1280x720)");
   gui_cmd->add_flag("-q,--quiet", gui.quiet, "No messages on the terminal");
+  gui_cmd->add_option("--keep-cpus-awake", gui.keep_awake,
+                      "auto|on|off: keep the CPUs from halting so the haptic thread wakes on time (auto: on a virtual machine)")
+      ->transform(CLI::CheckedTransformer(keep_awake_modes, CLI::ignore_case))
+      ->default_str("auto");
   gui_cmd->callback([&] {
     if (!gui_file.empty()) gui.file = gui_file;
     if (!gui_script.empty()) gui.script = gui_script;

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <nlohmann/json.hpp>
 
+#include "hof/app/detail/cli_failure.h"
 #include "hof/core/progress.h"
 #include "hof/mesh/boundary.h"
 #include "hof/mesh/liver_generator.h"
@@ -16,15 +17,7 @@ namespace hof::app {
 
 namespace {
 
-int fail(const Error& error) {
-  std::fprintf(stderr, "hof: %s\n", error.to_string().c_str());
-  return 1;
-}
-
-int fail(const std::string& message) {
-  std::fprintf(stderr, "hof: %s\n", message.c_str());
-  return 1;
-}
+using detail::fail;
 
 Expected<mesh::MshVersion> msh_version(int v) {
   if (v == 2) return mesh::MshVersion::k2_2;

@@ -22,6 +22,8 @@
 #include <unistd.h>
 #include <nlohmann/json.hpp>
 
+#include "hof/app/detail/cli_failure.h"
+#include "hof/haptics/cpu_keep_awake.h"
 #include "hof/core/file_write.h"
 #include "hof/core/progress.h"
 #include "hof/core/text.h"
@@ -40,14 +42,8 @@ namespace hof::app {
 
 namespace {
 
-int fail(const Error& e) {
-  std::fprintf(stderr, "hof: %s\n", e.to_string().c_str());
-  return 1;
-}
-int fail(const std::string& message) {
-  std::fprintf(stderr, "hof: %s\n", message.c_str());
-  return 1;
-}
+using detail::fail;
+
 
 // Text as UTF-8 (a Latin-1 name's bytes become U+FFFD), so that a report (JSON, CSV, the
 // terminal) is never refused for a name.
@@ -131,14 +127,20 @@ void write_press_curves(const std::filesystem::path& dir, const coupling::PressR
 void write_plots(const std::filesystem::path& dir, const coupling::SessionReport& report, const std::string& title,
                  const std::string& unit, bool quiet, const NeedleRun& needle, const coupling::PressRecorder& presses) {
   const std::size_t press_count = presses.presses().size();
-  // Period histogram data (µs, count), every bin that holds a tick.
+  // Period histogram data (µs, count), every bin that holds a tick. The last bin collects every
+  // period past the histogram's range; it is drawn apart, at the longest period, so that a
+  // stall of 25 ms is neither off the chart nor shown as 20 ms.
+  const auto& period_bins = report.haptic_periods.bins();
+  const std::uint32_t beyond_range = period_bins.empty() ? 0u : period_bins.back();
+  const double longest_us = 1e6 * report.haptic_periods.max_s();
   {
     std::ofstream h(dir / "haptic_period_histogram.dat");
-    const auto& bins = report.haptic_periods.bins();
-    for (std::size_t b = 0; b < bins.size(); ++b) {
-      if (bins[b]) h << b << " " << bins[b] << "\n";
+    for (std::size_t b = 0; b + 1 < period_bins.size(); ++b) {
+      if (period_bins[b]) h << b << " " << period_bins[b] << "\n";
     }
+    if (beyond_range) h << "\n\n" << longest_us << " " << beyond_range << "\n";
   }
+  const double deadline_us = 2000.0;  // the deadline docs/reliability.md holds the loop to
   const bool metres = unit == "m";
   const std::string length = metres ? "mm" : unit;
   const std::string scale = metres ? "*1000" : "";
@@ -171,8 +173,16 @@ void write_plots(const std::filesystem::path& dir, const coupling::SessionReport
                    "ps 0.3 title 'renderer spring: proxy - device (in contact)'\n",
                    length, scale)},
       {"haptic_period_histogram",
-       "set xlabel 'haptic period (us)'\nset ylabel 'ticks'\nset logscale y\nset yrange [0.5:*]\nset style fill solid\n"
-       "set boxwidth 1\nplot 'haptic_period_histogram.dat' using 1:2 with boxes title 'ticks per 1 us bin'\n"},
+       fmt::format("set xlabel 'haptic period (us)'\nset ylabel 'ticks'\nset logscale y\nset yrange [0.5:*]\n"
+                   "set xrange [0:{0:.0f}]\nset style fill solid\nset boxwidth 1\n"
+                   "set arrow from {1:.0f}, graph 0 to {1:.0f}, graph 1 nohead dt 2 lc rgb 'red'\n"
+                   "set label '2 ms deadline' at {1:.0f}, graph 0.95 offset 0.5, 0 tc rgb 'red'\n"
+                   "plot 'haptic_period_histogram.dat' index 0 using 1:2 with boxes title 'ticks per 1 us bin'{2}\n",
+                   1.05 * std::max(longest_us, 1.2 * deadline_us), deadline_us,
+                   beyond_range ? fmt::format(", 'haptic_period_histogram.dat' index 1 using 1:2 with impulses lw 4 "
+                                              "lc rgb 'red' title '{} ticks of 20 ms or more (longest {:.1f} ms)'",
+                                              beyond_range, 1e-3 * longest_us)
+                                : std::string())},
   };
   if (press_count >= 2 && press_count <= 12 && metres) {
     // A palpation sweep: each press's loading curve, titled with where it touched.
@@ -465,6 +475,9 @@ int run_session(const RunOptions& options) {
     return ::geteuid() == 0 || (::getrlimit(RLIMIT_MEMLOCK, &limit) == 0 && limit.rlim_cur == RLIM_INFINITY);
   }();
   const bool memory_locked = !options.deterministic && may_lock && ::mlockall(MCL_CURRENT | MCL_FUTURE) == 0;
+  // Real time on a virtual machine: keep its CPUs from halting (cpu_keep_awake.h says why).
+  std::optional<haptics::CpuKeepAwake> keep_awake;
+  if (!options.deterministic) keep_awake.emplace(options.keep_awake);
   const std::optional<double> steal_before = host_cpu_steal_s();
   const coupling::SessionReport report = options.deterministic ? session.run_virtual(seconds, on_sample, progress)
                                                                : session.run_realtime(seconds, on_sample, progress);
@@ -496,7 +509,9 @@ int run_session(const RunOptions& options) {
                        {"overruns", periods.overruns()},
                        {"periods_over_2ms", periods_over(periods, 2e-3)},
                        {"scheduling", scheduling_name(session.haptic_loop().scheduling())},
-                       {"memory_locked", memory_locked}};
+                       {"memory_locked", memory_locked},
+                       {"cpus_kept_awake", keep_awake ? keep_awake->spinners() : 0},
+                       {"keep_awake", keep_awake ? keep_awake->reason() : "off (virtual time)"}};
   if (const std::optional<double> steal_after = host_cpu_steal_s(); steal_before && steal_after) {
     summary["host_cpu_steal_s"] = *steal_after - *steal_before;
   }

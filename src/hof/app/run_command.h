@@ -7,6 +7,8 @@
 #include <optional>
 #include <string>
 
+#include "hof/haptics/cpu_keep_awake.h"
+
 namespace hof::app {
 
 struct RunOptions {
@@ -19,6 +21,8 @@ struct RunOptions {
   std::optional<std::filesystem::path> out;  ///< report folder
   double telemetry_rate_hz{0.0};          ///< 0 = every haptic tick
   bool quiet{false};
+  /// Real time: keep the CPUs from halting (auto: on a virtual machine; cpu_keep_awake.h).
+  haptics::KeepAwake keep_awake{haptics::KeepAwake::automatic};
 };
 
 int run_session(const RunOptions& options);

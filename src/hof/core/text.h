@@ -12,4 +12,12 @@ namespace hof {
 /// U+FFFD (the replacement character); valid text is returned unchanged.
 [[nodiscard]] std::string valid_utf8(std::string_view text);
 
+/// `text` without its leading and trailing ASCII white space (space, tab, CR, LF, FF, VT).
+[[nodiscard]] constexpr std::string_view trim_whitespace(std::string_view text) {
+  constexpr std::string_view kWhitespace = " \t\r\n\f\v";
+  const auto first = text.find_first_not_of(kWhitespace);
+  if (first == std::string_view::npos) return {};
+  return text.substr(first, text.find_last_not_of(kWhitespace) - first + 1);
+}
+
 }  // namespace hof

@@ -67,7 +67,7 @@ std::int64_t line_of(const std::string& text, std::ptrdiff_t offset) {
   return line;
 }
 
-struct Reader {
+struct ProjectReader {
   const std::string& text;
   std::string file;
   std::optional<Error> error;
@@ -124,7 +124,7 @@ struct Reader {
   }
 };
 
-haptics::SurfaceMaterial read_surface(Reader& r, const pugi::xml_node& s) {
+haptics::SurfaceMaterial read_surface(ProjectReader& r, const pugi::xml_node& s) {
   haptics::SurfaceMaterial m;
   const std::string type = s.attribute("type").as_string("SmoothSurface");
   if (type == "SmoothSurface") m.kind = haptics::SurfaceKind::kSmooth;
@@ -210,7 +210,7 @@ std::string needle_xml(const procedures::NeedleConfig& n) {
 
 // N numbers of an attribute (e.g. fungPre="a b d0 F0"), else an error naming it.
 template <std::size_t N>
-bool read_numbers(Reader& r, const pugi::xml_node& node, const char* name, std::array<double, N>& out, const char* meaning) {
+bool read_numbers(ProjectReader& r, const pugi::xml_node& node, const char* name, std::array<double, N>& out, const char* meaning) {
   const pugi::xml_attribute a = node.attribute(name);
   if (!a) return false;
   std::istringstream in(a.value());
@@ -230,7 +230,7 @@ bool read_numbers(Reader& r, const pugi::xml_node& node, const char* name, std::
   return true;
 }
 
-procedures::TissueNeedleParameters read_tissue(Reader& r, const pugi::xml_node& node, procedures::TissueNeedleParameters t) {
+procedures::TissueNeedleParameters read_tissue(ProjectReader& r, const pugi::xml_node& node, procedures::TissueNeedleParameters t) {
   t.pierceable = r.get_bool(node, "pierceable", t.pierceable);
   const std::string model = node.attribute("model").as_string(std::string(procedures::model_name(t.model)).c_str());
   if (model == "fung") t.model = procedures::NeedleForceModel::kFung;
@@ -265,7 +265,7 @@ procedures::TissueNeedleParameters read_tissue(Reader& r, const pugi::xml_node& 
   return t;
 }
 
-procedures::NeedleConfig read_needle(Reader& r, const pugi::xml_node& node) {
+procedures::NeedleConfig read_needle(ProjectReader& r, const pugi::xml_node& node) {
   procedures::NeedleConfig n;
   const std::string axis = node.attribute("axis").as_string("motion");
   if (axis == "motion") n.axis = procedures::NeedleAxis::kMotion;
@@ -498,7 +498,7 @@ Expected<HofProject> parse_project(const std::string& text, const std::filesyste
                                  fmt::format("<{}> is nested deeper than {} levels", deep.name(), mesh::kMaxXmlDepth),
                                  path.string(), line_of(text, deep.offset_debug()), -1});
   }
-  Reader r{text, path.string(), std::nullopt};
+  ProjectReader r{text, path.string(), std::nullopt};
   const pugi::xml_node root = doc.child("hof");
   if (!root) return make_error(ErrorCode::kParse, "not a HoF project: the root element must be <hof>", path.string(), 1);
   HofProject p;

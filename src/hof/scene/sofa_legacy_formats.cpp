@@ -12,7 +12,7 @@ namespace hof::scene::detail {
 namespace {
 
 // Splits a line on blanks.
-std::vector<std::string_view> tokens_of(std::string_view line) {
+std::vector<std::string_view> blank_separated_tokens(std::string_view line) {
   std::vector<std::string_view> out;
   std::size_t i = 0;
   while (i < line.size()) {
@@ -52,7 +52,7 @@ Expected<LegacyMesh> read_legacy_mesh(const std::filesystem::path& path) {
   LegacyMesh out;
   for (std::size_t l = 0; l < lines->size(); ++l) {
     const auto line_no = static_cast<std::int64_t>(l + 1);
-    const auto tok = tokens_of((*lines)[l]);
+    const auto tok = blank_separated_tokens((*lines)[l]);
     if (tok.empty() || tok[0].starts_with('#')) continue;
     // `tetra` and `triangle` are kept; other element kinds are counted.
     std::size_t count = 0;
@@ -83,7 +83,7 @@ Expected<Xs3File> read_xs3(const std::filesystem::path& path) {
   std::int64_t declared = -1;
   for (std::size_t l = 0; l < lines->size(); ++l) {
     const auto line_no = static_cast<std::int64_t>(l + 1);
-    const auto tok = tokens_of((*lines)[l]);
+    const auto tok = blank_separated_tokens((*lines)[l]);
     if (tok.empty() || tok[0].starts_with('#')) continue;
     if (tok[0] == "Xsp") {
       header = true;

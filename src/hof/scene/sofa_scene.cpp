@@ -39,7 +39,7 @@ const std::map<std::string, std::string, std::less<>>& alias_table() {
   return table;
 }
 
-std::vector<std::string_view> tokens_of(std::string_view s) {
+std::vector<std::string_view> value_tokens(std::string_view s) {
   std::vector<std::string_view> out;
   std::size_t i = 0;
   while (i < s.size()) {
@@ -209,7 +209,7 @@ Expected<void> Reader::build_node(const pugi::xml_node& xml, SceneNode& node) {
 
 Expected<std::vector<double>> Reader::numbers(const Component& c, std::string_view key, const std::string& text) const {
   std::vector<double> out;
-  for (std::string_view tok : tokens_of(text)) {
+  for (std::string_view tok : value_tokens(text)) {
     double v = 0.0;
     const auto [ptr, ec] = std::from_chars(tok.data(), tok.data() + tok.size(), v);
     if (ec != std::errc{} || ptr != tok.data() + tok.size() || !std::isfinite(v))
@@ -245,7 +245,7 @@ Expected<std::optional<std::vector<std::int32_t>>> Reader::indices(const Compone
   const std::string* text = c.attr(key);
   if (!text) return std::optional<std::vector<std::int32_t>>{};
   std::vector<std::int32_t> out;
-  for (std::string_view tok : tokens_of(*text)) {
+  for (std::string_view tok : value_tokens(*text)) {
     std::int32_t v = 0;
     const auto [ptr, ec] = std::from_chars(tok.data(), tok.data() + tok.size(), v);
     if (ec != std::errc{} || ptr != tok.data() + tok.size() || v < 0)

@@ -158,9 +158,9 @@ void transform_mesh(mesh::TriMesh& m, const Mat4& X) {
     for (auto& t : m.triangles) std::swap(t[1], t[2]);
 }
 
-class Reader {
+class X3dReader {
  public:
-  Reader(fs::path file, std::string text) : file_(std::move(file)), text_(std::move(text)) {
+  X3dReader(fs::path file, std::string text) : file_(std::move(file)), text_(std::move(text)) {
     scene_.file = file_;
     line_starts_.push_back(0);
     for (std::size_t i = 0; i < text_.size(); ++i)
@@ -702,7 +702,7 @@ Expected<X3dScene> read_x3d_scene(const std::filesystem::path& path) {
   std::ostringstream buffer;
   buffer << in.rdbuf();
   try {
-    Reader reader(path, buffer.str());
+    X3dReader reader(path, buffer.str());
     return reader.run();
   } catch (const ParseFailure& f) {
     return std::unexpected(f.error);

@@ -9,6 +9,8 @@
 #include <optional>
 #include <string>
 
+#include "hof/haptics/cpu_keep_awake.h"
+
 namespace hof::app {
 
 struct GuiOptions {
@@ -17,6 +19,8 @@ struct GuiOptions {
   std::optional<std::filesystem::path> script;  ///< run these actions, then exit
   int width{1280}, height{720};
   bool quiet{false};
+  /// Keep the CPUs from halting so the haptic thread wakes on time (cpu_keep_awake.h).
+  haptics::KeepAwake keep_awake{haptics::KeepAwake::automatic};
 };
 
 /// Runs the window until it is closed (or the script ends). Returns the exit status: 0, or 1

@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "hof/core/text.h"
 #include "hof/haptics/device.h"
 #include "hof/haptics/device_backends/mouse_device.h"
 #include "hof/haptics/device_backends/replay_device.h"
@@ -53,13 +54,7 @@ Expected<DeviceSpec> device_spec_for_model(std::string_view model) {
 
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
-
-std::string_view trim(std::string_view s) {
-  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
-  while (!s.empty() && (s.back() == ' ' || s.back() == '\t')) s.remove_suffix(1);
-  return s;
-}
+constexpr double kHoldForever = std::numeric_limits<double>::infinity();
 
 struct Option {
   std::string_view key;
@@ -86,13 +81,13 @@ class SpecParser {
   Expected<void> split() {
     std::string_view rest = spec_;
     const auto head_end = rest.find_first_of(":,");
-    backend_ = trim(rest.substr(0, head_end));
+    backend_ = trim_whitespace(rest.substr(0, head_end));
     if (head_end == std::string_view::npos) return {};
     if (rest[head_end] == ':') {
       has_argument_ = true;
       rest.remove_prefix(head_end + 1);
       const auto comma = rest.find(',');
-      argument_ = trim(rest.substr(0, comma));
+      argument_ = trim_whitespace(rest.substr(0, comma));
       if (comma == std::string_view::npos) return {};
       rest.remove_prefix(comma);
     } else {
@@ -101,14 +96,14 @@ class SpecParser {
     while (!rest.empty()) {  // rest starts with ','
       rest.remove_prefix(1);
       const auto comma = rest.find(',');
-      const std::string_view token = trim(rest.substr(0, comma));
+      const std::string_view token = trim_whitespace(rest.substr(0, comma));
       rest.remove_prefix(comma == std::string_view::npos ? rest.size() : comma);
       if (token.empty()) return fail("empty option (two commas in a row or a trailing comma)");
       Option o;
       const auto eq = token.find('=');
-      o.key = trim(token.substr(0, eq));
+      o.key = trim_whitespace(token.substr(0, eq));
       if (eq != std::string_view::npos) {
-        o.value = trim(token.substr(eq + 1));
+        o.value = trim_whitespace(token.substr(eq + 1));
         o.has_value = true;
       }
       if (o.key.empty()) return fail(fmt::format("option '{}' has no key", token));
@@ -146,7 +141,7 @@ class SpecParser {
       const auto semi = text.find(';');
       const bool last = i == 2;
       if (last != (semi == std::string_view::npos)) return bad();  // exactly two ';'
-      auto c = number(Option{o.key, trim(text.substr(0, semi)), true});
+      auto c = number(Option{o.key, trim_whitespace(text.substr(0, semi)), true});
       if (!c) return bad();
       v[i] = *c;
       if (!last) text.remove_prefix(semi + 1);
@@ -244,7 +239,7 @@ Expected<void> apply_motion_key(const SpecParser& p, const Option& o, MotionConf
   if (k == "speed") return set(c.speed_m_per_s);
   if (k == "hold") {
     if (o.value == "forever" || o.value == "inf") {
-      c.hold_s = kInf;
+      c.hold_s = kHoldForever;
       return {};
     }
     return set(c.hold_s);
@@ -321,7 +316,7 @@ Expected<SimulatedConfig> parse_simulated(const SpecParser& p, bool hand) {
   auto kind = motion_kind(p, p.argument());
   if (!kind) return std::unexpected(kind.error());
   c.motion.kind = *kind;
-  if (*kind == MotionKind::kHold) c.motion.hold_s = kInf;  // a held target stays unless told
+  if (*kind == MotionKind::kHold) c.motion.hold_s = kHoldForever;  // a held target stays unless told
   const auto keys = motion_keys(*kind);
   for (const Option& o : p.options()) {
     Expected<void> r;

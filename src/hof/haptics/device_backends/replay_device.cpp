@@ -1,3 +1,4 @@
+#include "hof/core/text.h"
 #include "hof/haptics/device_backends/replay_device.h"
 
 #include <fmt/format.h>
@@ -19,17 +20,10 @@ namespace {
 enum class Column : std::uint8_t { kT, kX, kY, kZ, kQw, kQx, kQy, kQz, kButton };
 constexpr std::array<std::string_view, 9> kColumnNames{"t", "x", "y", "z", "qw", "qx", "qy", "qz", "button"};
 
-std::string_view trim(std::string_view s) {
-  const auto is_space = [](char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n'; };
-  while (!s.empty() && is_space(s.front())) s.remove_prefix(1);
-  while (!s.empty() && is_space(s.back())) s.remove_suffix(1);
-  return s;
-}
-
 /// The line without its comment, trimmed.
 std::string_view content(std::string_view line) {
   if (const auto hash = line.find('#'); hash != std::string_view::npos) line = line.substr(0, hash);
-  return trim(line);
+  return trim_whitespace(line);
 }
 
 /// Splits on ',' into `out` (trimmed fields).
@@ -37,7 +31,7 @@ void split_fields(std::string_view s, std::vector<std::string_view>& out) {
   out.clear();
   while (true) {
     const auto comma = s.find(',');
-    out.push_back(trim(s.substr(0, comma)));
+    out.push_back(trim_whitespace(s.substr(0, comma)));
     if (comma == std::string_view::npos) break;
     s.remove_prefix(comma + 1);
   }
