@@ -67,6 +67,7 @@ print(f"soak: {s['wall_s']:.0f} s wall, {h['ticks']} haptic ticks at {h['rate_hz
 print(f"soak: simulation {s['simulation']['steps']} steps ({s['simulation']['steps_per_s']:.0f}/s); contact {s['contact_time_s']:.0f} s; "
       f"max force {s['max_force_n']:.3f} N; presses {len(s['presses'])}; diverged {s['diverged']}")
 print(f"soak: haptic thread scheduling {h.get('scheduling', '?')}; memory locked {h.get('memory_locked', '?')}; "
+      f"CPUs kept awake {h.get('cpus_kept_awake', '?')} ({h.get('keep_awake', '?')}); "
       f"CPU time stolen by the host during the run {s.get('host_cpu_steal_s', float('nan')):.1f} s")
 print(f"soak: memory after 60 s {first:.1f} MiB, at the end {last:.1f} MiB (growth {growth:+.1f} MiB), peak {peak:.1f} MiB")
 print(f"soak: telemetry rows {rows}, force anomalies (non-finite or above {limit} N) {bad}, largest force {worst:.3f} N")

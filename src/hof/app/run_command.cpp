@@ -174,9 +174,9 @@ void write_plots(const std::filesystem::path& dir, const coupling::SessionReport
                    length, scale)},
       {"haptic_period_histogram",
        fmt::format("set xlabel 'haptic period (us)'\nset ylabel 'ticks'\nset logscale y\nset yrange [0.5:*]\n"
-                   "set xrange [0:{0:.0f}]\nset style fill solid\nset boxwidth 1\n"
+                   "set xrange [0:{0:.0f}]\nset style fill solid\nset boxwidth 1\nset key top right\n"
                    "set arrow from {1:.0f}, graph 0 to {1:.0f}, graph 1 nohead dt 2 lc rgb 'red'\n"
-                   "set label '2 ms deadline' at {1:.0f}, graph 0.95 offset 0.5, 0 tc rgb 'red'\n"
+                   "set label '2 ms deadline' at {1:.0f}, graph 0.6 offset 0.5, 0 tc rgb 'red'\n"
                    "plot 'haptic_period_histogram.dat' index 0 using 1:2 with boxes title 'ticks per 1 us bin'{2}\n",
                    1.05 * std::max(longest_us, 1.2 * deadline_us), deadline_us,
                    beyond_range ? fmt::format(", 'haptic_period_histogram.dat' index 1 using 1:2 with impulses lw 4 "
