@@ -10,6 +10,7 @@
 // the static solver does one Newton iteration per step.
 
 #include <benchmark/benchmark.h>
+#include <fmt/format.h>
 
 #include <array>
 #include <cstdio>
@@ -216,6 +217,17 @@ void BM_MembraneLiver(benchmark::State& bench) {
   bench.counters["triangles"] = static_cast<double>(c.triangles.size());
 }
 
+// The haptic rate (issue 17): co-rotational FEM at dt = 1 ms, CG with `iterations` from zero
+// or warm-started from the last step's solution (tests/mechanics/haptic_rate_fem_test.cpp
+// holds the warm start's error to that of 25 iterations from zero).
+void BM_HapticRateLiver(benchmark::State& bench, mesh::LiverResolution r, int iterations, bool warm_start) {
+  ModelConfig c = liver_config(liver(r), Field::kLarge, OdeSolverKind::kEulerImplicit);
+  c.dt_s = 1e-3;
+  c.linear.iterations = iterations;
+  c.linear.warm_start = warm_start;
+  run_steps(bench, c);
+}
+
 void register_all() {
   using R = mesh::LiverResolution;
   const std::pair<Field, const char*> fields[] = {{Field::kSprings, "MeshSprings"},
@@ -233,6 +245,12 @@ void register_all() {
         const std::string name = std::string("Liver/") + std::string(mesh::to_string(r)) + "/" + field_name + "/" + solver_name;
         benchmark::RegisterBenchmark(name.c_str(), BM_Liver, r, field, solver)->Unit(benchmark::kMicrosecond)->MinTime(0.3);
       }
+    }
+  }
+  for (R r : {R::kSimple, R::kMedium, R::kFine}) {
+    for (const auto& [iterations, warm] : {std::pair{25, false}, std::pair{kHapticRateCgIterations, true}}) {
+      const std::string name = fmt::format("HapticRate/{}/FEMLarge/dt1ms/CG{}{}", mesh::to_string(r), iterations, warm ? "Warm" : "");
+      benchmark::RegisterBenchmark(name.c_str(), BM_HapticRateLiver, r, iterations, warm)->Unit(benchmark::kMicrosecond)->MinTime(0.5);
     }
   }
   benchmark::RegisterBenchmark("SofaLiverScn/FEMLarge/ImplicitCG25", BM_SofaLiverScn)->Unit(benchmark::kMicrosecond)->MinTime(0.5);

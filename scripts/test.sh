@@ -45,8 +45,8 @@ stage "2/3 AddressSanitizer + UndefinedBehaviorSanitizer build, tests and fuzzin
 cmake --preset asan >/dev/null
 cmake --build --preset asan
 # Minutes each under the sanitizers (every example run end to end, the LDLT reference solves of
-# the medium liver, the allocation count over every model): --all runs them, CI does not.
-slow='^(cli\.run_examples|ComplianceCoupling\.|TumourPalpation\.|NoAllocation\.)'
+# the medium liver (compliance coupling, the haptic-rate CG), the allocation count over every model): --all runs them, CI does not.
+slow='^(cli\.run_examples|ComplianceCoupling\.|TumourPalpation\.|NoAllocation\.|HapticRateFem\.WarmStartedCg)'
 if [[ $mode == all ]]; then
   ctest --preset asan -E '^GuiWindow\.'
 else

@@ -23,6 +23,7 @@ struct Case {
   ForceFieldConfig field;
   OdeSolverKind solver;
   LinearSolverKind linear;
+  bool warm_start{false};
 };
 
 std::vector<Case> cases() {
@@ -40,6 +41,7 @@ std::vector<Case> cases() {
   neo.neo_hookean = NeoHookeanConfig{5400.0, 0.45, {}, {}};
   return {{"springs/implicit-cg", springs, OdeSolverKind::kEulerImplicit, LinearSolverKind::kConjugateGradient},
           {"large/implicit-cg", large, OdeSolverKind::kEulerImplicit, LinearSolverKind::kConjugateGradient},
+          {"large/implicit-cg-warm", large, OdeSolverKind::kEulerImplicit, LinearSolverKind::kConjugateGradient, true},
           {"polar/implicit-ldlt", polar, OdeSolverKind::kEulerImplicit, LinearSolverKind::kSparseLdlt},
           {"neo/static-cg", neo, OdeSolverKind::kStatic, LinearSolverKind::kConjugateGradient},
           {"large/explicit", large, OdeSolverKind::kEulerExplicit, LinearSolverKind::kConjugateGradient},
@@ -62,6 +64,7 @@ TEST(NoAllocation, StepsAllocateNothingAfterMakeState) {
     config.ode.newton_iterations = 2;
     config.linear.kind = c.linear;
     config.linear.block_jacobi = true;
+    config.linear.warm_start = c.warm_start;
     config.dt_s = c.solver == OdeSolverKind::kEulerImplicit || c.solver == OdeSolverKind::kStatic ? 0.02 : 1e-5;
     auto model = build_model(config);
     ASSERT_TRUE(model) << model.error().to_string();

@@ -6,6 +6,7 @@
 
 #include "hof/app/mesh_commands.h"
 #include "hof/app/bench_command.h"
+#include "hof/app/evaluation.h"
 #include "hof/app/gui/gui_app.h"
 #include "hof/app/run_command.h"
 #include "hof/haptics/device_backends/udp_auth.h"
@@ -103,13 +104,31 @@ void add_run_commands(CLI::App& app, int& status) {
   });
 
   static hof::app::BenchOptions bench;
+  static hof::app::EvaluationOptions evaluation;
   CLI::App* bench_cmd = app.add_subcommand(
-      "bench", "Time the mechanics of a scene as fast as it goes (compare with runSofa -g batch -n N)");
-  bench_cmd->add_option("--scene", bench.scene, "Project (.hof), SOFA scene (.scn) or X3D scene (.x3d)")->required();
-  bench_cmd->add_option("--steps", bench.steps, "Simulation steps to time")->capture_default_str();
-  bench_cmd->add_option("--threads", bench.threads, "Threads (0 = all cores)")->capture_default_str();
-  bench_cmd->add_flag("--json", bench.json, "Print the figures as JSON");
-  bench_cmd->callback([&] { status = hof::app::run_bench(bench); });
+      "bench",
+      "Re-run the thesis' evaluation on this machine (tables, results.json/.csv, plots, report.md), or with --scene time "
+      "one scene's mechanics as fast as it goes (compare with runSofa -g batch -n N)");
+  CLI::Option* scene_opt =
+      bench_cmd->add_option("--scene", bench.scene, "Time this project (.hof), SOFA scene (.scn) or X3D scene (.x3d) alone");
+  bench_cmd->add_option("--steps", bench.steps, "With --scene: simulation steps to time")->capture_default_str();
+  bench_cmd->add_option("--threads", bench.threads, "With --scene: threads (0 = all cores)")->capture_default_str();
+  bench_cmd->add_flag("--json", bench.json, "With --scene: print the figures as JSON");
+  CLI::Option* quick_opt = bench_cmd->add_flag("--quick", evaluation.quick, "The evaluation in seconds: the smallest liver, short batches");
+  CLI::Option* only_opt = bench_cmd->add_option("--only", evaluation.only, "Only the cells whose name matches this regular expression");
+  CLI::Option* out_opt = bench_cmd->add_option("--out", evaluation.out, "Folder for the report")->capture_default_str();
+  for (CLI::Option* o : {quick_opt, only_opt, out_opt}) o->excludes(scene_opt);
+  bench_cmd->callback([&status, scene_opt, out_opt] {
+    if (scene_opt->count()) {
+      status = hof::app::run_bench(bench);
+      return;
+    }
+    evaluation.command_line = "hof bench";
+    if (evaluation.quick) evaluation.command_line += " --quick";
+    if (!evaluation.only.empty()) evaluation.command_line += " --only '" + evaluation.only + "'";
+    if (out_opt->count()) evaluation.command_line += " --out " + evaluation.out.string();
+    status = hof::app::run_evaluation(evaluation);
+  });
 
   static hof::app::GuiOptions gui;
   static std::string gui_file, gui_script, gui_size;

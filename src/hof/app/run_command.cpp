@@ -23,6 +23,7 @@
 #include <nlohmann/json.hpp>
 
 #include "hof/app/detail/cli_failure.h"
+#include "hof/app/detail/plots.h"
 #include "hof/haptics/cpu_keep_awake.h"
 #include "hof/core/file_write.h"
 #include "hof/core/progress.h"
@@ -57,18 +58,6 @@ std::string file_safe(const std::string& name) {
 }
 
 std::string csv_number(double v) { return fmt::format("{:.9g}", v); }
-
-// Text safe inside a gnuplot single-quoted string. A control character (a newline in a body
-// name, written &#10; in the scene) would end the gnuplot command mid-string and lose the
-// plot: it becomes a space.
-std::string gnuplot_text(const std::string& text) {
-  std::string out;
-  for (char c : text) {
-    if (c == '\'') out += "''";
-    else out += static_cast<unsigned char>(c) < 0x20 || c == 0x7f ? ' ' : c;
-  }
-  return out;
-}
 
 // What a needle run measured, for the report and its plots.
 struct NeedleRun {
@@ -146,10 +135,7 @@ void write_plots(const std::filesystem::path& dir, const coupling::SessionReport
   const std::string scale = metres ? "*1000" : "";
   // One small gnuplot script per plot, so that a plot with no data (no contact, say) does not
   // stop the others; plots.gp collects them for the user.
-  struct Plot {
-    std::string name;
-    std::string body;
-  };
+  using detail::Plot;
   std::vector<Plot> plots{
       {"force_over_time",
        "set datafile separator ','\nset xlabel 'time (s)'\nset ylabel 'force (N)'\n"
@@ -221,21 +207,8 @@ void write_plots(const std::filesystem::path& dir, const coupling::SessionReport
                      "'telemetry.csv' every ::1 using 1:19 with lines lc rgb 'gray40' title 'sent to the device (after safety)', "
                      "'telemetry.csv' every ::1 using 1:($16*1000) axes x1y2 with lines lc rgb 'black' dt 2 title 'depth'\n"});
   }
-  std::ofstream all(dir / "plots.gp");
   std::string failed;
-  for (const Plot& plot : plots) {
-    for (const char* ext : {"png", "svg"}) {
-      const std::string script =
-          fmt::format("set terminal {} size 960,540 noenhanced\nset output '{}.{}'\nset grid\nset key top left\nset title '{}'\n{}",
-                      std::string(ext) == "png" ? "pngcairo" : "svg", plot.name, ext, gnuplot_text(title), plot.body);
-      all << script << "\n";
-      const std::filesystem::path file = dir / fmt::format("{}.{}.gp", plot.name, ext);
-      std::ofstream(file) << script;
-      const std::string command = fmt::format("cd '{}' && gnuplot '{}' 2>/dev/null", dir.string(), file.filename().string());
-      if (std::system(command.c_str()) != 0 && std::string(ext) == "png") failed += (failed.empty() ? "" : ", ") + plot.name;
-      std::filesystem::remove(file);
-    }
-  }
+  for (const std::string& name : detail::render_plots(dir, title, plots)) failed += (failed.empty() ? "" : ", ") + name;
   if (!failed.empty() && !quiet) {
     std::fprintf(stderr, "hof: note: no plot for %s (no data, or gnuplot missing); plots.gp is in %s\n", failed.c_str(),
                  dir.c_str());

@@ -370,11 +370,26 @@ bool solve_cg(const MechanicalModel& model, MechanicalState& state, const Eigen:
     else a.multiply_rows(z, w.az, d0 / 3, d1 / 3);
   };
 
-  // r = b, z = M⁻¹ r, x = 0; |b|² and rᵀz.
+  // A warm start begins at the last solution x₀: its residual b − A x₀ needs one product
+  // (into Ap, which the first direction pass overwrites), made as the iterations make theirs.
+  const bool warm = cfg.warm_start && w.cg_previous.size() == x.size();
+  const double* guess = w.cg_previous.data();
+  if (warm) {
+    if (single) {
+      parallel_chunks(nodes, 1024, [&](std::size_t n0, std::size_t n1) {
+        BlockSparseMatrix::round_to_single(guess, z_single, n0, n1);
+      });
+      a.multiply_single(z_single, w.ap);
+    } else {
+      a.multiply(w.cg_previous, w.ap);
+    }
+  }
+
+  // r = b − A x₀, z = M⁻¹ r, x = x₀ (0 unless warm); |b|², rᵀz and |r|².
   over_chunks([&](std::size_t c, std::size_t d0, std::size_t d1) {
     for (std::size_t d = d0; d < d1; ++d) {
-      xs[d] = 0.0;
-      rs[d] = bs[d];
+      xs[d] = warm ? guess[d] : 0.0;
+      rs[d] = warm ? bs[d] - aps[d] : bs[d];
     }
     const double bb = dot_range(bs, bs, d0, d1);
     if (precondition) {
@@ -397,12 +412,16 @@ bool solve_cg(const MechanicalModel& model, MechanicalState& state, const Eigen:
     publish(c);
     part0[c] = bb;
     part1[c] = dot_range(rs, zs, d0, d1);
+    part2[c] = warm ? dot_range(rs, rs, d0, d1) : bb;
   });
   const double b_norm2 = sum(part0);
   double rho = sum(part1);
   state.stats.linear_iterations = 0;
   state.stats.linear_residual = 0.0;
-  if (!(b_norm2 > 0.0)) return std::isfinite(b_norm2);
+  if (!(b_norm2 > 0.0)) {
+    if (warm) x.setZero();  // b = 0: the solution is 0, whatever the guess
+    return std::isfinite(b_norm2);
+  }
 
   // Pass B with β = 0: p = z, Ap = Az; pᵀAp.
   auto direction_pass = [&](double beta) {
@@ -411,10 +430,10 @@ bool solve_cg(const MechanicalModel& model, MechanicalState& state, const Eigen:
       part0[c] = cg_update_direction(ps, aps, zs, azs, beta, d0 / 3, d1 / 3);
     });
   };
-  double r_norm2 = b_norm2;
+  double r_norm2 = sum(part2);
   double first_curvature = 0.0;
   int iteration = 0;
-  if (cfg.iterations > 0 && b_norm2 / b_norm2 > cfg.tolerance) direction_pass(0.0);
+  if (cfg.iterations > 0 && r_norm2 / b_norm2 > cfg.tolerance) direction_pass(0.0);
   for (; iteration < cfg.iterations; ++iteration) {
     if (r_norm2 / b_norm2 <= cfg.tolerance) break;
     const double curvature = sum(part0);
@@ -447,7 +466,9 @@ bool solve_cg(const MechanicalModel& model, MechanicalState& state, const Eigen:
   }
   state.stats.linear_iterations = iteration;
   state.stats.linear_residual = r_norm2 / b_norm2;
-  return std::isfinite(r_norm2) && x.allFinite();
+  const bool finite = std::isfinite(r_norm2) && x.allFinite();
+  if (cfg.warm_start && finite) w.cg_previous = x;  // sized by make_state: no allocation
+  return finite;
 }
 
 }  // namespace

@@ -347,7 +347,7 @@ MechanicalState make_state(const MechanicalModel& model) {
   for (std::size_t i = 0; i < model.node_count(); ++i) s.x.segment<3>(3 * static_cast<Eigen::Index>(i)) = model.rest_positions[i];
   for (const auto& field : model.force_fields) s.field_states.push_back(field->make_state());
   SolverWorkspace& w = s.work;
-  for (Eigen::VectorXd* vec : {&w.b, &w.dv, &w.r, &w.p, &w.z, &w.ap, &w.az, &w.diag_inv, &w.x_saved, &w.v_saved, &w.k1x,
+  for (Eigen::VectorXd* vec : {&w.b, &w.dv, &w.cg_previous, &w.r, &w.p, &w.z, &w.ap, &w.az, &w.diag_inv, &w.x_saved, &w.v_saved, &w.k1x,
                                &w.k1v, &w.k2x, &w.k2v, &w.k3x, &w.k3v, &w.k4x, &w.k4v, &w.xt, &w.vt}) {
     *vec = Eigen::VectorXd::Zero(dofs);
   }

@@ -48,6 +48,7 @@ class PreorderedLdlt : public Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>,
 /// Solver scratch, sized by make_state().
 struct SolverWorkspace {
   Eigen::VectorXd b, dv, r, p, z, ap, az, diag_inv;  // CG and implicit Euler (3N)
+  Eigen::VectorXd cg_previous;                     // (3N) the last CG solution: a warm start's guess
   Eigen::VectorXd x_saved, v_saved;               // last good state, restored on divergence
   Eigen::VectorXd k1x, k1v, k2x, k2v, k3x, k3v, k4x, k4v, xt, vt;  // RK4
   std::vector<float, Eigen::aligned_allocator<float>> p_single;  // CG direction rounded, 4 per node (+ exchange copies)

@@ -308,6 +308,9 @@ Expected<void> Reader::apply_linear(Component& c, ModelConfig& m) {
   m.linear.iterations = static_cast<int>(it->value_or(25.0));
   m.linear.tolerance = tol->value_or(1e-5);
   m.linear.threshold = th->value_or(1e-5);
+  auto warm = boolean(c, "warmStart");
+  if (!warm) return std::unexpected(warm.error());
+  m.linear.warm_start = warm->value_or(false);
   return {};
 }
 

@@ -1,0 +1,990 @@
+#include "hof/app/evaluation.h"
+
+#include <fmt/format.h>
+#include <sys/utsname.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <ctime>
+#include <fstream>
+#include <functional>
+#include <limits>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <regex>
+#include <thread>
+#include <vector>
+
+#include "hof/app/detail/cli_failure.h"
+#include "hof/app/detail/plots.h"
+#include "hof/core/file_write.h"
+#include "hof/core/progress.h"
+#include "hof/mechanics/step.h"
+#include "hof/mesh/boundary.h"
+#include "hof/mesh/hex_grid.h"
+#include "hof/mesh/liver_generator.h"
+
+namespace hof::app {
+namespace {
+
+using namespace hof::mechanics;
+using mesh::LiverResolution;
+using Clock = std::chrono::steady_clock;
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// How long each cell is measured. Full: five batches of at least 0.2 s (the median of five
+// is robust to one descheduled batch on a loaded machine), stability over 1 s of simulated
+// time (the thesis' runs went on until the liver rested, l. 1260), three error samples.
+struct Budget {
+  int batches;
+  double batch_s;
+  double horizon_s;         // simulated time a cell must survive to count as stable
+  double stability_wall_s;  // ... unless checking it would take longer than this
+  int error_samples;
+  int steps_between_samples;
+};
+
+Budget budget_for(bool quick) { return quick ? Budget{3, 0.02, 0.1, 0.3, 2, 5} : Budget{5, 0.2, 1.0, 4.0, 3, 10}; }
+
+// One measurement of the matrix. Fields that do not apply stay NaN / empty.
+struct Cell {
+  std::string section, name;
+  std::string mesh, field, settings, solver;
+  double dt_s{kNaN};
+  int iterations{0};
+  bool warm_start{false};
+  int threads{0};
+  std::size_t nodes{0}, elements{0}, triangles{0};
+  double median{kNaN}, min{kNaN}, max{kNaN};  // steps/s
+  long steps{0};
+  bool measured{false};
+  bool stable{true};
+  double stable_over_s{0.0};  // simulated time it ran without diverging
+  std::string failure;
+  double step_error{kNaN};  // relative, against an exact LDLᵀ solve of the same step
+  double forces_us{kNaN}, assembly_us{kNaN}, solve_us{kNaN};
+};
+
+// ---------------------------------------------------------------------------------------
+// Bodies: the four standard livers, and a hexahedral sparse grid over the medium one.
+
+struct Body {
+  std::string name;
+  std::vector<Vec3> nodes;
+  std::vector<mesh::Tet> tets;
+  std::vector<mesh::Hex> hexes;
+  std::size_t surface_triangles{0};
+};
+
+class Bodies {
+ public:
+  Expected<const Body*> liver(LiverResolution r) {
+    const std::string name(mesh::to_string(r));
+    if (auto it = bodies_.find(name); it != bodies_.end()) return &it->second;
+    auto m = mesh::generate_liver(r);
+    if (!m) return std::unexpected(m.error());
+    Body b{name, m->nodes, m->tets, {}, mesh::extract_boundary(m->nodes, m->tets).surface.triangles.size()};
+    return &bodies_.emplace(name, std::move(b)).first->second;
+  }
+  // SOFA's SparseGridTopology over the medium liver's surface, 24×16×10 nodes: cells of about 1 cm.
+  Expected<const Body*> sparse_grid() {
+    const std::string name = "sparse-grid";
+    if (auto it = bodies_.find(name); it != bodies_.end()) return &it->second;
+    auto medium = liver(LiverResolution::kMedium);
+    if (!medium) return std::unexpected(medium.error());
+    auto grid = mesh::sparse_grid(mesh::extract_boundary((*medium)->nodes, (*medium)->tets).surface, {24, 16, 10});
+    if (!grid) return std::unexpected(grid.error());
+    Body b{name, grid->nodes, {}, grid->hexes, mesh::hex_boundary(grid->nodes, grid->hexes).surface.triangles.size()};
+    return &bodies_.emplace(name, std::move(b)).first->second;
+  }
+  Expected<const Body*> by_name(const std::string& name) {
+    if (name == "sparse-grid") return sparse_grid();
+    return liver(*mesh::parse_liver_resolution(name));
+  }
+
+ private:
+  std::map<std::string, Body> bodies_;
+};
+
+// ---------------------------------------------------------------------------------------
+// Model settings.
+
+enum class Field { kSprings, kSmall, kLarge, kNeoHookean, kHexahedra };
+enum class Settings { kThesis, kPhysiological };
+
+const char* field_name(Field f) {
+  switch (f) {
+    case Field::kSprings: return "springs";
+    case Field::kSmall: return "linear-fem";
+    case Field::kLarge: return "corotational-fem";
+    case Field::kNeoHookean: return "neo-hookean";
+    case Field::kHexahedra: return "hexahedral-fem";
+  }
+  return "?";
+}
+
+const char* settings_name(Settings s) { return s == Settings::kThesis ? "thesis" : "physiological"; }
+
+enum class Solver { kExplicitEuler, kSymplecticEuler, kRungeKutta4, kStatic, kImplicitCg, kImplicitLdlt };
+
+const char* solver_name(Solver s) {
+  switch (s) {
+    case Solver::kExplicitEuler: return "explicit-euler";
+    case Solver::kSymplecticEuler: return "symplectic-euler";
+    case Solver::kRungeKutta4: return "rk4";
+    case Solver::kStatic: return "static-cg";
+    case Solver::kImplicitCg: return "implicit-cg";
+    case Solver::kImplicitLdlt: return "implicit-ldlt";
+  }
+  return "?";
+}
+
+// The thesis' settings (l. 1254, 1271): gravity 9.8, total mass 1 kg, mesh springs 10,000 /
+// 15, FEM E = 100, ν = 0.4, in SOFA's unit-free scenes. The physiological ones: liver
+// E ≈ 5 kPa, ν ≈ 0.45, 1060 kg/m³ (literature.md §6). Our livers are in metres with z up, so
+// gravity points along −z (the thesis' liver was y-up). Both rest on their lowest 4 mm (a
+// table under the organ), which keeps every model's motion bounded under gravity.
+ModelConfig body_config(const Body& b, Field field, Settings s) {
+  ModelConfig c;
+  c.name = "liver";
+  c.positions = b.nodes;
+  c.tets = b.tets;
+  c.hexahedra = b.hexes;
+  const bool thesis = s == Settings::kThesis;
+  if (thesis) {
+    c.mass.kind = MassKind::kUniform;
+    c.mass.total_mass_kg = 1.0;
+  } else {
+    c.mass.kind = MassKind::kDiagonal;
+    c.mass.mass_density_kg_per_m3 = 1060.0;
+  }
+  c.gravity_m_per_s2 = Vec3(0, 0, thesis ? -9.8 : -9.81);
+  const double young = thesis ? 100.0 : 5000.0;
+  const double poisson = thesis ? 0.4 : 0.45;
+  ForceFieldConfig f;
+  f.name = field_name(field);
+  switch (field) {
+    case Field::kSprings: {
+      double stiffness = 10000.0, damping = 15.0;
+      if (!thesis) {
+        // Springs have no Young's modulus; a spring over an edge of length l standing for a
+        // rod of section l² gives k ≈ E·l (a dimensional estimate, not a fitted law), with
+        // the thesis' damping ratio to stiffness kept.
+        double length = 0.0;
+        for (const mesh::Tet& t : b.tets) length += (b.nodes[static_cast<std::size_t>(t[0])] - b.nodes[static_cast<std::size_t>(t[1])]).norm();
+        stiffness = young * length / static_cast<double>(std::max<std::size_t>(b.tets.size(), 1));
+        damping = 15.0 * stiffness / 10000.0;
+      }
+      f.mesh_springs = MeshSpringConfig{stiffness, damping, 1.0};
+      break;
+    }
+    case Field::kSmall: f.tetrahedron_fem = TetrahedronFemConfig{young, poisson, FemMethod::kSmall, {}, {}}; break;
+    case Field::kLarge: f.tetrahedron_fem = TetrahedronFemConfig{young, poisson, FemMethod::kLarge, {}, {}}; break;
+    case Field::kNeoHookean: f.neo_hookean = NeoHookeanConfig{young, poisson, {}, {}}; break;
+    case Field::kHexahedra: {
+      HexahedronFemConfig h;
+      h.young_modulus_pa = young;
+      h.poisson_ratio = poisson;
+      h.method = FemMethod::kLarge;
+      f.hexahedron_fem = h;
+      break;
+    }
+  }
+  c.force_fields.push_back(f);
+  double lowest = std::numeric_limits<double>::infinity();
+  for (const Vec3& p : b.nodes) lowest = std::min(lowest, p.z());
+  FixedConstraintConfig fixed;
+  fixed.name = "table";
+  for (std::size_t i = 0; i < b.nodes.size(); ++i) {
+    if (b.nodes[i].z() < lowest + 0.004) fixed.indices.push_back(static_cast<std::int32_t>(i));
+  }
+  c.fixed.push_back(fixed);
+  c.ode.rayleigh_mass = c.ode.rayleigh_stiffness = 0.1;
+  c.ode.newton_iterations = 1;
+  c.linear.iterations = 25;
+  // The iteration count is what is measured: no early stop on the residual.
+  c.linear.tolerance = c.linear.threshold = 1e-12;
+  c.dt_s = 0.02;
+  c.threads = 0;
+  return c;
+}
+
+void set_solver(ModelConfig& c, Solver s, double dt_s) {
+  c.dt_s = dt_s;
+  switch (s) {
+    case Solver::kExplicitEuler: c.ode.kind = OdeSolverKind::kEulerExplicit; c.ode.symplectic = false; break;
+    case Solver::kSymplecticEuler: c.ode.kind = OdeSolverKind::kEulerExplicit; c.ode.symplectic = true; break;
+    case Solver::kRungeKutta4: c.ode.kind = OdeSolverKind::kRungeKutta4; break;
+    case Solver::kStatic:
+      // Every step makes its Newton iteration, as SOFA's StaticSolver with a fixed count
+      // does: a step skipped because the residual is already small would time nothing.
+      c.ode.kind = OdeSolverKind::kStatic;
+      c.ode.newton_residual_tolerance_n = 0.0;
+      break;
+    case Solver::kImplicitCg: c.ode.kind = OdeSolverKind::kEulerImplicit; break;
+    case Solver::kImplicitLdlt:
+      c.ode.kind = OdeSolverKind::kEulerImplicit;
+      c.linear.kind = LinearSolverKind::kSparseLdlt;
+      break;
+  }
+}
+
+// ---------------------------------------------------------------------------------------
+// Measuring a cell.
+
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+// A step that diverged, or a node more than 1 m from where it started (a liver is 0.2 m: it
+// has left the scene even if every number is still finite).
+bool checked_step(const MechanicalModel& model, MechanicalState& state, const Eigen::VectorXd& start, Cell& cell) {
+  if (!step(model, state)) {
+    cell.failure = fmt::format("{}: {}", state.divergence.component, state.divergence.reason);
+    return false;
+  }
+  if ((state.x - start).cwiseAbs().maxCoeff() > 1.0) {
+    cell.failure = fmt::format("a node moved more than 1 m at step {}", state.steps);
+    return false;
+  }
+  return true;
+}
+
+void time_cell(const ModelConfig& config, const Budget& budget, Cell& cell) {
+  auto model = build_model(config);
+  if (!model) {
+    cell.stable = false;
+    cell.failure = model.error().to_string();
+    return;
+  }
+  cell.nodes = model->node_count();
+  MechanicalState state = make_state(*model);
+  const Eigen::VectorXd start = state.x;
+  std::vector<double> rates;
+  double forces = 0, assembly = 0, solve = 0;
+  long timed = 0;
+  bool ok = checked_step(*model, state, start, cell) && checked_step(*model, state, start, cell);  // warm-up
+  for (int b = 0; ok && b < budget.batches; ++b) {
+    const auto t0 = Clock::now();
+    long n = 0;
+    double elapsed = 0.0;
+    do {
+      ok = checked_step(*model, state, start, cell);
+      if (!ok) break;
+      forces += state.stats.force_s;
+      assembly += state.stats.assembly_s;
+      solve += state.stats.solve_s;
+      ++n;
+      elapsed = seconds_since(t0);
+    } while (elapsed < budget.batch_s);
+    // A batch cut short by a divergence still tells how fast the steps ran until then.
+    if (n > 0 && elapsed > 0.0) rates.push_back(static_cast<double>(n) / elapsed);
+    timed += n;
+  }
+  const auto t_check = Clock::now();
+  while (ok && static_cast<double>(state.steps) * model->dt_s < budget.horizon_s && seconds_since(t_check) < budget.stability_wall_s) {
+    ok = checked_step(*model, state, start, cell);
+  }
+  cell.stable = ok;
+  cell.stable_over_s = static_cast<double>(ok ? state.steps : std::max<std::int64_t>(state.steps - 1, 0)) * model->dt_s;
+  cell.steps = timed;
+  if (!rates.empty()) {
+    std::sort(rates.begin(), rates.end());
+    cell.median = rates[rates.size() / 2];
+    cell.min = rates.front();
+    cell.max = rates.back();
+    cell.measured = true;
+  }
+  if (timed > 0) {
+    const auto n = static_cast<double>(timed);
+    cell.forces_us = 1e6 * forces / n;
+    cell.assembly_us = 1e6 * assembly / n;
+    cell.solve_us = 1e6 * solve / n;
+  }
+}
+
+// The largest relative error of a step made by `config` (an iterative solve) against an exact
+// LDLᵀ solve of the same step from the same state: |Δ − Δ_exact| / |Δ_exact|, Δ the change of
+// velocity (dynamic solvers) or of position (static). The inexact model follows its own
+// trajectory, so a warm start has its own history; samples are `steps_between_samples` apart.
+double step_error(const ModelConfig& config, const Budget& budget) {
+  ModelConfig exact_config = config;
+  exact_config.linear.kind = LinearSolverKind::kSparseLdlt;
+  auto model = build_model(config);
+  auto exact = build_model(exact_config);
+  if (!model || !exact) return kNaN;
+  MechanicalState state = make_state(*model);
+  MechanicalState exact_state = make_state(*exact);
+  const bool static_solver = config.ode.kind == OdeSolverKind::kStatic;
+  double worst = 0.0;
+  for (int s = 0; s < budget.error_samples; ++s) {
+    // The static solver's steps are Newton iterations towards one equilibrium: the first
+    // ones, from rest, are the solves that matter (later ones correct almost nothing).
+    const int between = static_solver ? (s == 0 ? 0 : 1) : budget.steps_between_samples;
+    for (int i = 0; i < between; ++i) {
+      if (!step(*model, state)) return kNaN;
+    }
+    const Eigen::VectorXd x0 = state.x, v0 = state.v;
+    exact_state.x = x0;
+    exact_state.v = v0;
+    if (!step(*model, state) || !step(*exact, exact_state)) return kNaN;
+    const Eigen::VectorXd d = static_solver ? Eigen::VectorXd(state.x - x0) : Eigen::VectorXd(state.v - v0);
+    const Eigen::VectorXd d_exact = static_solver ? Eigen::VectorXd(exact_state.x - x0) : Eigen::VectorXd(exact_state.v - v0);
+    const double scale = d_exact.norm();
+    if (!(scale > 0.0)) continue;
+    worst = std::max(worst, (d - d_exact).norm() / scale);
+  }
+  return worst;
+}
+
+// ---------------------------------------------------------------------------------------
+// The plan: every cell with the code that measures it, filtered by --only before running.
+
+struct PlannedCell {
+  Cell cell;
+  std::function<void(Cell&)> run;
+};
+
+std::string dt_label(double dt) { return fmt::format("dt{:g}", dt); }
+
+std::vector<PlannedCell> plan(bool quick, Bodies& bodies) {
+  const Budget budget = budget_for(quick);
+  std::vector<PlannedCell> cells;
+  const std::vector<std::string> livers =
+      quick ? std::vector<std::string>{"simple"} : std::vector<std::string>{"simple", "coarse", "medium", "fine"};
+
+  auto with_body = [&bodies](const std::string& body_name, Cell& cell) -> const Body* {
+    auto b = bodies.by_name(body_name);
+    if (!b) {
+      cell.stable = false;
+      cell.failure = b.error().to_string();
+      return nullptr;
+    }
+    cell.nodes = (*b)->nodes.size();
+    cell.elements = (*b)->tets.empty() ? (*b)->hexes.size() : (*b)->tets.size();
+    cell.triangles = (*b)->surface_triangles;
+    return *b;
+  };
+
+  // Figure 29: mesh sizes.
+  std::vector<std::string> meshes = livers;
+  meshes.push_back("sparse-grid");
+  for (const std::string& m : meshes) {
+    Cell c;
+    c.section = "meshes";
+    c.name = "meshes/" + m;
+    c.mesh = m;
+    cells.push_back({c, [with_body, m](Cell& cell) { cell.measured = with_body(m, cell) != nullptr; }});
+  }
+
+  // Figure 30: force fields per mesh, implicit Euler + CG 25 at dt 0.02.
+  for (Settings s : {Settings::kThesis, Settings::kPhysiological}) {
+    for (const std::string& m : meshes) {
+      const bool grid = m == "sparse-grid";
+      for (Field f : grid ? std::vector<Field>{Field::kHexahedra}
+                          : std::vector<Field>{Field::kSprings, Field::kSmall, Field::kLarge, Field::kNeoHookean}) {
+        Cell c;
+        c.section = "force_fields";
+        c.name = fmt::format("force_fields/{}/{}/{}", settings_name(s), m, field_name(f));
+        c.mesh = m;
+        c.field = field_name(f);
+        c.settings = settings_name(s);
+        c.solver = solver_name(Solver::kImplicitCg);
+        c.dt_s = 0.02;
+        c.iterations = 25;
+        cells.push_back({c, [with_body, m, f, s, budget](Cell& cell) {
+                           const Body* b = with_body(m, cell);
+                           if (!b) return;
+                           ModelConfig config = body_config(*b, f, s);
+                           set_solver(config, Solver::kImplicitCg, 0.02);
+                           time_cell(config, budget, cell);
+                         }});
+      }
+    }
+  }
+
+  // Figure 31: solvers on the thesis' mesh springs at dt 0.002 and 0.02 (stability marked).
+  for (double dt : {0.002, 0.02}) {
+    for (const std::string& m : livers) {
+      for (Solver sv : {Solver::kExplicitEuler, Solver::kSymplecticEuler, Solver::kRungeKutta4, Solver::kStatic,
+                        Solver::kImplicitCg, Solver::kImplicitLdlt}) {
+        Cell c;
+        c.section = "solvers";
+        c.name = fmt::format("solvers/{}/{}/{}", dt_label(dt), m, solver_name(sv));
+        c.mesh = m;
+        c.field = field_name(Field::kSprings);
+        c.settings = settings_name(Settings::kThesis);
+        c.solver = solver_name(sv);
+        c.dt_s = dt;
+        c.iterations = sv == Solver::kImplicitCg || sv == Solver::kStatic ? 25 : 0;
+        cells.push_back({c, [with_body, m, sv, dt, budget](Cell& cell) {
+                           const Body* b = with_body(m, cell);
+                           if (!b) return;
+                           ModelConfig config = body_config(*b, Field::kSprings, Settings::kThesis);
+                           set_solver(config, sv, dt);
+                           time_cell(config, budget, cell);
+                         }});
+      }
+    }
+  }
+
+  // Figures 32–33: CG iterations with the static solver and implicit Euler at dt 0.02, on
+  // the thesis' springs and on the physiological co-rotational FEM; error against LDLᵀ.
+  const std::string cg_mesh = quick ? "simple" : "medium";
+  const std::vector<int> counts = quick ? std::vector<int>{1, 5, 25} : std::vector<int>{1, 2, 3, 5, 7, 10, 15, 20, 25, 30, 40, 50};
+  for (Solver sv : {Solver::kStatic, Solver::kImplicitCg}) {
+    for (auto [f, s] : {std::pair{Field::kSprings, Settings::kThesis}, std::pair{Field::kLarge, Settings::kPhysiological}}) {
+      for (int k : counts) {
+        Cell c;
+        c.section = "cg_iterations";
+        c.name = fmt::format("cg_iterations/{}/{}/{}/{}/cg{}", solver_name(sv), cg_mesh, field_name(f), settings_name(s), k);
+        c.mesh = cg_mesh;
+        c.field = field_name(f);
+        c.settings = settings_name(s);
+        c.solver = solver_name(sv);
+        c.dt_s = 0.02;
+        c.iterations = k;
+        cells.push_back({c, [with_body, cg_mesh, sv, f, s, k, budget](Cell& cell) {
+                           const Body* b = with_body(cg_mesh, cell);
+                           if (!b) return;
+                           ModelConfig config = body_config(*b, f, s);
+                           set_solver(config, sv, 0.02);
+                           config.linear.iterations = k;
+                           time_cell(config, budget, cell);
+                           if (cell.stable) cell.step_error = step_error(config, budget);
+                         }});
+      }
+    }
+  }
+
+  // The haptic rate: co-rotational FEM, physiological, implicit Euler at dt = 1 ms; SOFA's
+  // 25 CG iterations from zero against the warm-started haptic-rate CG; 1 and 2 threads.
+  const std::vector<std::string> rate_meshes =
+      quick ? std::vector<std::string>{"simple"} : std::vector<std::string>{"simple", "medium", "fine"};
+  for (const std::string& m : rate_meshes) {
+    for (bool warm : {false, true}) {
+      for (int threads : {1, 2}) {
+        const int k = warm ? kHapticRateCgIterations : 25;
+        Cell c;
+        c.section = "haptic_rate";
+        c.name = fmt::format("haptic_rate/{}/cg{}{}/threads{}", m, k, warm ? "-warm" : "", threads);
+        c.mesh = m;
+        c.field = field_name(Field::kLarge);
+        c.settings = settings_name(Settings::kPhysiological);
+        c.solver = solver_name(Solver::kImplicitCg);
+        c.dt_s = 0.001;
+        c.iterations = k;
+        c.warm_start = warm;
+        c.threads = threads;
+        cells.push_back({c, [with_body, m, k, warm, threads, budget](Cell& cell) {
+                           const Body* b = with_body(m, cell);
+                           if (!b) return;
+                           ModelConfig config = body_config(*b, Field::kLarge, Settings::kPhysiological);
+                           set_solver(config, Solver::kImplicitCg, 0.001);
+                           config.linear.iterations = k;
+                           config.linear.warm_start = warm;
+                           config.threads = threads;
+                           time_cell(config, budget, cell);
+                           // The error does not depend on the thread count: measured once.
+                           if (cell.stable && threads == 1) cell.step_error = step_error(config, budget);
+                         }});
+      }
+    }
+  }
+  return cells;
+}
+
+// ---------------------------------------------------------------------------------------
+// Derived results: the springs / FEM ratios and the haptic-rate goals.
+
+const Cell* find(const std::vector<Cell>& cells, const std::string& name) {
+  for (const Cell& c : cells) {
+    if (c.name == name) return &c;
+  }
+  return nullptr;
+}
+
+struct Ratio {
+  std::string settings;
+  std::string mesh;
+  double force_field{kNaN};  // co-rotational FEM cost / springs cost, forces + assembly
+  double step{kNaN};         // whole step: springs steps/s / FEM steps/s
+};
+
+// Both models must have run stably: a collapsing liver's steps time something else.
+std::vector<Ratio> springs_over_fem(const std::vector<Cell>& cells) {
+  std::vector<Ratio> out;
+  for (const char* s : {"thesis", "physiological"}) {
+    for (const char* m : {"simple", "coarse", "medium", "fine"}) {
+      const Cell* springs = find(cells, fmt::format("force_fields/{}/{}/springs", s, m));
+      const Cell* fem = find(cells, fmt::format("force_fields/{}/{}/corotational-fem", s, m));
+      if (!springs || !fem || !springs->measured || !fem->measured || !springs->stable || !fem->stable) continue;
+      out.push_back({s, m, (fem->forces_us + fem->assembly_us) / (springs->forces_us + springs->assembly_us),
+                     springs->median / fem->median});
+    }
+  }
+  return out;
+}
+
+struct Goal {
+  std::string what;
+  std::string unit;
+  double target{kNaN};
+  double measured{kNaN};
+  bool higher_is_better{true};
+  [[nodiscard]] bool known() const { return std::isfinite(measured); }
+  [[nodiscard]] bool met() const { return known() && (higher_is_better ? measured >= target : measured <= target); }
+};
+
+std::vector<Goal> goals(const std::vector<Cell>& cells, const std::vector<Ratio>& ratios) {
+  std::vector<Goal> out;
+  const std::string warm = fmt::format("cg{}-warm", kHapticRateCgIterations);
+  auto rate = [&](const std::string& m, int threads) {
+    const Cell* c = find(cells, fmt::format("haptic_rate/{}/{}/threads{}", m, warm, threads));
+    return c && c->measured && c->stable ? c->median : kNaN;
+  };
+  out.push_back({"medium liver, co-rotational FEM, dt 1 ms, one thread (a session's simulation core)", "steps/s", 1000.0, rate("medium", 1)});
+  out.push_back({"medium liver, two threads", "steps/s", 2000.0, rate("medium", 2)});
+  out.push_back({"fine liver, two threads", "steps/s", 500.0, rate("fine", 2)});
+  out.push_back({"simple liver, two threads", "steps/s", 20000.0, rate("simple", 2)});
+  for (const char* m : {"simple", "medium", "fine"}) {
+    const Cell* w = find(cells, fmt::format("haptic_rate/{}/{}/threads1", m, warm));
+    const Cell* cold = find(cells, fmt::format("haptic_rate/{}/cg25/threads1", m));
+    if (!w || !cold) continue;
+    out.push_back({fmt::format("{} liver: step error of the haptic-rate CG at most that of 25 cold iterations ({:.3g})", m, cold->step_error),
+                   "relative", cold->step_error, w->step_error, false});
+  }
+  for (const Ratio& r : ratios) {
+    out.push_back({fmt::format("{} liver, {} settings: co-rotational FEM / springs, force field's own cost (thesis: springs 2x faster)",
+                               r.mesh, r.settings), "x", 2.0,
+                   r.force_field});
+  }
+  return out;
+}
+
+// ---------------------------------------------------------------------------------------
+// Output.
+
+std::string number(double v, const char* format = "{:.4g}") { return std::isfinite(v) ? fmt::format(fmt::runtime(format), v) : "-"; }
+
+std::string machine_description() {
+  std::string cpu = "unknown CPU";
+  std::ifstream info("/proc/cpuinfo");
+  for (std::string line; std::getline(info, line);) {
+    if (line.rfind("model name", 0) == 0) {
+      cpu = line.substr(line.find(':') + 2);
+      break;
+    }
+  }
+  utsname u{};
+  uname(&u);
+  return fmt::format("{}, {} hardware threads, {} {}", cpu, std::thread::hardware_concurrency(), u.sysname, u.release);
+}
+
+nlohmann::json cell_json(const Cell& c) {
+  auto num = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
+  return {{"section", c.section},
+          {"name", c.name},
+          {"mesh", c.mesh},
+          {"field", c.field},
+          {"settings", c.settings},
+          {"solver", c.solver},
+          {"dt_s", num(c.dt_s)},
+          {"cg_iterations", c.iterations},
+          {"warm_start", c.warm_start},
+          {"threads", c.threads},
+          {"nodes", c.nodes},
+          {"elements", c.elements},
+          {"surface_triangles", c.triangles},
+          {"steps_per_s", {{"median", num(c.median)}, {"min", num(c.min)}, {"max", num(c.max)}}},
+          {"timed_steps", c.steps},
+          {"stable", c.stable},
+          {"stable_over_s", c.stable_over_s},
+          {"failure", c.failure},
+          {"step_error", num(c.step_error)},
+          {"split_us", {{"forces", num(c.forces_us)}, {"assembly", num(c.assembly_us)}, {"solve", num(c.solve_us)}}}};
+}
+
+std::string csv(const std::vector<Cell>& cells) {
+  std::string out =
+      "section,name,mesh,field,settings,solver,dt_s,cg_iterations,warm_start,threads,nodes,elements,surface_triangles,"
+      "steps_per_s_median,steps_per_s_min,steps_per_s_max,timed_steps,stable,stable_over_s,step_error,forces_us,assembly_us,"
+      "solve_us\n";
+  auto n = [](double v) { return std::isfinite(v) ? fmt::format("{:.9g}", v) : std::string(); };
+  for (const Cell& c : cells) {
+    out += fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", c.section, c.name, c.mesh, c.field,
+                       c.settings, c.solver, n(c.dt_s), c.iterations, c.warm_start ? 1 : 0, c.threads, c.nodes, c.elements,
+                       c.triangles, n(c.median), n(c.min), n(c.max), c.steps, c.stable ? 1 : 0, n(c.stable_over_s),
+                       n(c.step_error), n(c.forces_us), n(c.assembly_us), n(c.solve_us));
+  }
+  return out;
+}
+
+std::string rate_text(const Cell& c) {
+  if (!c.measured) return c.stable ? "-" : "unstable";
+  return fmt::format("{} [{}..{}]{}", number(c.median, "{:.0f}"), number(c.min, "{:.0f}"), number(c.max, "{:.0f}"),
+                     c.stable ? "" : " unstable");
+}
+
+// Markdown tables (also printed on stdout: they read as plain text too).
+std::string tables(const std::vector<Cell>& cells, const std::vector<Ratio>& ratios, const std::vector<Goal>& goal_list) {
+  std::string out;
+  auto section = [&](const char* name) {
+    std::vector<const Cell*> in;
+    for (const Cell& c : cells) {
+      if (c.section == name) in.push_back(&c);
+    }
+    return in;
+  };
+  if (auto m = section("meshes"); !m.empty()) {
+    out += "## Meshes (thesis Figure 29)\n\n| mesh | nodes | elements | surface triangles |\n|---|---:|---:|---:|\n";
+    for (const Cell* c : m) out += fmt::format("| {} | {} | {} {} | {} |\n", c->mesh, c->nodes, c->elements, c->mesh == "sparse-grid" ? "hexahedra" : "tetrahedra", c->triangles);
+    out += "\n";
+  }
+  if (auto f = section("force_fields"); !f.empty()) {
+    out += "## Force fields (thesis Figure 30): implicit Euler, CG 25, dt 0.02 s\n\nsteps/s median [min..max]; the split is "
+           "per step (forces / assembly / solve, us).\n\n| settings | mesh | force field | steps/s | forces | assembly | solve |\n"
+           "|---|---|---|---|---:|---:|---:|\n";
+    for (const Cell* c : f) {
+      out += fmt::format("| {} | {} | {} | {} | {} | {} | {} |\n", c->settings, c->mesh, c->field, rate_text(*c), number(c->forces_us, "{:.1f}"),
+                         number(c->assembly_us, "{:.1f}"), number(c->solve_us, "{:.1f}"));
+    }
+    out += "\n";
+  }
+  if (!ratios.empty()) {
+    out += "### Springs against co-rotational FEM (where both ran stably)\n\n| settings | mesh | FEM / springs, force field's own "
+           "cost | springs / FEM, whole step |\n|---|---|---:|---:|\n";
+    for (const Ratio& r : ratios) {
+      out += fmt::format("| {} | {} | {} | {} |\n", r.settings, r.mesh, number(r.force_field, "{:.2f}"), number(r.step, "{:.2f}"));
+    }
+    out += "\nThe thesis measured springs about twice as fast as co-rotational FEM on Liver Medium (l. 1262): SOFA's "
+           "matrix-free CG re-applied each element's stiffness at every iteration, so the force field's cost was paid 25 "
+           "times per step. HoF assembles one matrix with the same pattern for both models and solves it once, so the "
+           "shared solve hides the difference in the whole step; the force field's own cost (forces + assembly) is where "
+           "the models differ.\n\n";
+  }
+  if (auto s = section("solvers"); !s.empty()) {
+    out += "## Solvers (thesis Figure 31): mesh springs, thesis settings\n\n| dt (s) | mesh | solver | steps/s | stable over |\n"
+           "|---:|---|---|---|---|\n";
+    for (const Cell* c : s) {
+      out += fmt::format("| {:g} | {} | {} | {} | {} |\n", c->dt_s, c->mesh, c->solver, rate_text(*c),
+                         c->stable ? fmt::format("{:.3g} s", c->stable_over_s) : fmt::format("diverged after {:.3g} s: {}", c->stable_over_s, c->failure));
+    }
+    out += "\n";
+  }
+  if (auto g = section("cg_iterations"); !g.empty()) {
+    out += "## CG iterations (thesis Figures 32–33): dt 0.02 s\n\n| solver | mesh | model | CG iterations | steps/s | step error vs LDLT | stable |\n"
+           "|---|---|---|---:|---|---:|---|\n";
+    for (const Cell* c : g) {
+      out += fmt::format("| {} | {} | {} {} | {} | {} | {} | {} |\n", c->solver, c->mesh, c->field, c->settings, c->iterations, rate_text(*c),
+                         number(c->step_error, "{:.3g}"), c->stable ? "yes" : "no");
+    }
+    out += "\n";
+  }
+  if (auto h = section("haptic_rate"); !h.empty()) {
+    out += "## The haptic rate: co-rotational FEM, physiological, implicit Euler, dt 1 ms\n\n| mesh | CG | threads | steps/s | "
+           "step error vs LDLT | split forces / assembly / solve (us) |\n|---|---|---:|---|---:|---|\n";
+    for (const Cell* c : h) {
+      out += fmt::format("| {} | {}{} | {} | {} | {} | {} / {} / {} |\n", c->mesh, c->iterations, c->warm_start ? " warm-started" : " from zero",
+                         c->threads, rate_text(*c), number(c->step_error, "{:.3g}"), number(c->forces_us, "{:.0f}"),
+                         number(c->assembly_us, "{:.0f}"), number(c->solve_us, "{:.0f}"));
+    }
+    out += "\n";
+  }
+  if (!goal_list.empty()) {
+    out += "## Goals\n\n| goal | target | measured | met |\n|---|---:|---:|---|\n";
+    for (const Goal& g : goal_list) {
+      std::string verdict = "not measured";
+      if (g.known()) {
+        const double factor = g.higher_is_better ? g.measured / g.target : g.target / g.measured;
+        verdict = g.met() ? fmt::format("yes ({:.2f}x)", factor) : fmt::format("no: missed by {:.2f}x", 1.0 / factor);
+      }
+      out += fmt::format("| {} | {} {} | {} | {} |\n", g.what, number(g.target), g.unit, number(g.measured), verdict);
+    }
+    out += "\n";
+  }
+  return out;
+}
+
+// Plot data: one .dat per figure beside its PNG/SVG, `?` where a cell was not measured.
+std::string dat_value(double v) { return std::isfinite(v) && v > 0.0 ? fmt::format("{:.6g}", v) : "?"; }
+
+std::vector<detail::Plot> write_plot_data(const std::filesystem::path& dir, const std::vector<Cell>& cells, const std::vector<Ratio>& ratios) {
+  std::vector<detail::Plot> plots;
+  const std::string histogram =
+      "set datafile missing '?'\nset style data histograms\nset style histogram cluster gap 1\nset style fill solid 0.8 border -1\n"
+      "set boxwidth 0.9\nset logscale y\nset key top left\n";
+  // Figure 29.
+  {
+    std::ofstream d(dir / "fig29_meshes.dat");
+    d << "mesh nodes elements triangles\n";
+    int rows = 0;
+    for (const Cell& c : cells) {
+      if (c.section == "meshes" && c.measured) {
+        d << c.mesh << " " << c.nodes << " " << c.elements << " " << c.triangles << "\n";
+        ++rows;
+      }
+    }
+    if (rows) {
+      plots.push_back({"fig29_meshes", histogram + "set ylabel 'count'\nset title 'Figure 29: mesh sizes (the sparse grid counts hexahedra)'\n"
+                                                   "plot 'fig29_meshes.dat' using 2:xtic(1) title 'nodes', '' using 3 title 'elements', "
+                                                   "'' using 4 title 'surface triangles'\n"});
+    }
+  }
+  // Figure 30, each settings.
+  for (const char* s : {"thesis", "physiological"}) {
+    const std::string name = fmt::format("fig30_force_fields_{}", s);
+    std::ofstream d(dir / (name + ".dat"));
+    d << "mesh springs linear-fem corotational-fem neo-hookean hexahedral-fem\n";
+    int rows = 0;
+    for (const char* m : {"simple", "coarse", "medium", "fine", "sparse-grid"}) {
+      std::string line = m;
+      bool any = false;
+      for (const char* f : {"springs", "linear-fem", "corotational-fem", "neo-hookean", "hexahedral-fem"}) {
+        const Cell* c = find(cells, fmt::format("force_fields/{}/{}/{}", s, m, f));
+        const bool ok = c && c->measured && c->stable;
+        any = any || ok;
+        line += " " + (ok ? dat_value(c->median) : std::string("?"));
+      }
+      if (any) {
+        d << line << "\n";
+        ++rows;
+      }
+    }
+    if (rows) {
+      plots.push_back({name, histogram + fmt::format("set ylabel 'steps/s (median; unstable cells left out)'\nset title 'Figure 30: force "
+                                                     "fields, implicit Euler + CG 25, dt 0.02 s, {} settings'\n"
+                                                     "plot for [k=2:6] '{}.dat' using k:xtic(1) title columnheader(k)\n",
+                                                     s, name)});
+    }
+  }
+  if (!ratios.empty()) {
+    std::ofstream d(dir / "fig30_springs_vs_fem.dat");
+    d << "case force_field step thesis\n";
+    for (const Ratio& r : ratios) {
+      d << r.mesh << "/" << r.settings << " " << dat_value(r.force_field) << " " << dat_value(r.step) << " "
+        << (r.mesh == "medium" && r.settings == "thesis" ? "2" : "?") << "\n";
+    }
+    plots.push_back({"fig30_springs_vs_fem",
+                     "set datafile missing '?'\nset style data histograms\nset style histogram cluster gap 1\nset style fill solid 0.8 border -1\n"
+                     "set yrange [0:*]\nset ylabel 'springs faster by (x)'\nset title 'Mesh springs against co-rotational FEM (mesh/settings)'\n"
+                     "plot 'fig30_springs_vs_fem.dat' using 2:xtic(1) title 'force field own cost (forces + assembly)', "
+                     "'' using 3 title 'whole step (steps/s)', '' using ($0):4 with points pt 7 ps 2 lc rgb 'black' title 'thesis (SOFA, Liver Medium)'\n"});
+  }
+  // Figure 31, each dt: steps/s per mesh per solver; unstable cells as red crosses at the rate
+  // they ran at before diverging (or at the bottom when they never completed a batch).
+  for (double dt : {0.002, 0.02}) {
+    const std::string name = fmt::format("fig31_solvers_dt{:g}", dt);
+    std::ofstream d(dir / (name + ".dat"));
+    std::ofstream u(dir / (name + "_unstable.dat"));
+    const char* solvers[] = {"explicit-euler", "symplectic-euler", "rk4", "static-cg", "implicit-cg", "implicit-ldlt"};
+    d << "index mesh";
+    for (const char* sv : solvers) d << " " << sv;
+    d << "\n";
+    int rows = 0, index = 0, unstable = 0;
+    for (const char* m : {"simple", "coarse", "medium", "fine"}) {
+      std::string line = fmt::format("{} {}", index, m);
+      bool any = false;
+      int stacked = 0;
+      for (const char* sv : solvers) {
+        const Cell* c = find(cells, fmt::format("solvers/{}/{}/{}", dt_label(dt), m, sv));
+        if (c) any = true;
+        line += " " + (c && c->stable && c->measured ? dat_value(c->median) : std::string("?"));
+        if (c && !c->stable) {
+          // At the rate it ran before diverging; one that diverged before a batch finished
+          // sits at the bottom, stacked with the others so that each label stays readable.
+          u << index << " " << (c->measured ? dat_value(c->median) : fmt::format("{:g}", std::pow(2.0, stacked++))) << " " << sv << "\n";
+          ++unstable;
+        }
+      }
+      if (any) {
+        d << line << "\n";
+        ++rows;
+        ++index;
+      }
+    }
+    if (rows) {
+      std::string body = fmt::format("set datafile missing '?'\nset logscale y\nset xrange [-0.5:{}]\nset yrange [0.7:*]\nset ylabel 'steps/s (median)'\nset key outside right\n"
+                                     "set title 'Figure 31: solvers on mesh springs (thesis settings), dt {:g} s'\n"
+                                     "plot for [k=3:8] '{}.dat' using 1:k:xtic(2) with linespoints lw 2 pt 7 title columnheader(k)",
+                                     index - 0.5, dt, name);
+      if (unstable) {
+        body += fmt::format(", '{0}_unstable.dat' using 1:2 with points pt 2 ps 2 lw 2 lc rgb 'red' title 'unstable (diverged)', "
+                            "'{0}_unstable.dat' using 1:2:3 with labels left offset 1.2,0 tc rgb 'red' notitle",
+                            name);
+      }
+      plots.push_back({name, body + "\n"});
+    }
+  }
+  // Figures 32–33: steps/s and error against CG iterations.
+  for (const char* sv : {"static-cg", "implicit-cg"}) {
+    const std::string name = fmt::format("fig{}_{}_cg_iterations", std::string(sv) == "static-cg" ? 32 : 33, sv);
+    std::ofstream d(dir / (name + ".dat"));
+    d << "iterations springs_rate springs_error fem_rate fem_error\n";
+    std::map<int, std::array<double, 4>> rows;
+    std::string mesh_name;
+    for (const Cell& c : cells) {
+      if (c.section != "cg_iterations" || c.solver != sv) continue;
+      auto& row = rows.try_emplace(c.iterations, std::array<double, 4>{kNaN, kNaN, kNaN, kNaN}).first->second;
+      const int col = c.field == "springs" ? 0 : 2;
+      if (c.stable) {
+        row[static_cast<std::size_t>(col)] = c.median;
+        row[static_cast<std::size_t>(col + 1)] = c.step_error;
+      }
+      mesh_name = c.mesh;
+    }
+    for (const auto& [k, r] : rows) d << k << " " << dat_value(r[0]) << " " << dat_value(r[1]) << " " << dat_value(r[2]) << " " << dat_value(r[3]) << "\n";
+    if (!rows.empty()) {
+      plots.push_back({name, fmt::format("set datafile missing '?'\nset xlabel 'CG iterations'\nset ylabel 'steps/s'\nset y2label 'step error "
+                                         "against an exact LDLT solve (relative)'\nset logscale y2\nset y2tics\nset ytics nomirror\n"
+                                         "set key below\nset title 'Figure {}: {} on the {} liver, dt 0.02 s'\n"
+                                         "plot '{}.dat' using 1:2 with linespoints lw 2 pt 7 title 'steps/s, springs (thesis)', "
+                                         "'' using 1:4 with linespoints lw 2 pt 5 title 'steps/s, co-rotational FEM (5 kPa)', "
+                                         "'' using 1:3 axes x1y2 with linespoints dt 2 pt 7 title 'error, springs', "
+                                         "'' using 1:5 axes x1y2 with linespoints dt 2 pt 5 title 'error, co-rotational FEM'\n",
+                                         std::string(sv) == "static-cg" ? 32 : 33, sv, mesh_name, name)});
+    }
+  }
+  // The haptic rate against its goals.
+  {
+    std::ofstream d(dir / "haptic_rate.dat");
+    d << "mesh cold25_1 cold25_2 warm_1 warm_2 goal_2threads\n";
+    const std::map<std::string, double> goal_2 = {{"simple", 20000.0}, {"medium", 2000.0}, {"fine", 500.0}};
+    int rows = 0;
+    for (const char* m : {"simple", "medium", "fine"}) {
+      std::string line = m;
+      bool any = false;
+      for (const std::string& cg : {std::string("cg25"), fmt::format("cg{}-warm", kHapticRateCgIterations)}) {
+        for (int t : {1, 2}) {
+          const Cell* c = find(cells, fmt::format("haptic_rate/{}/{}/threads{}", m, cg, t));
+          any = any || c;
+          line += " " + (c && c->measured && c->stable ? dat_value(c->median) : std::string("?"));
+        }
+      }
+      if (any) {
+        d << line << " " << goal_2.at(m) << "\n";
+        ++rows;
+      }
+    }
+    if (rows) {
+      plots.push_back({"haptic_rate",
+                       histogram + fmt::format("set ylabel 'steps/s (median)'\nset key outside right\nset title 'Co-rotational FEM at dt 1 ms "
+                                               "(5 kPa liver): the haptic rate is 1000 steps/s'\n"
+                                               "plot 'haptic_rate.dat' using 2:xtic(1) title 'CG 25 from zero, 1 thread', '' using 3 title "
+                                               "'CG 25 from zero, 2 threads', '' using 4 title 'CG {0} warm, 1 thread', '' using 5 title "
+                                               "'CG {0} warm, 2 threads', '' using ($0+0.2):6 with points pt 6 ps 2 lw 2 lc rgb 'black' "
+                                               "title 'goal, 2 threads', 1000 with lines dt 2 lc rgb 'red' title '1 kHz'\n",
+                                               kHapticRateCgIterations)});
+    }
+  }
+  return plots;
+}
+
+}  // namespace
+
+int run_evaluation(const EvaluationOptions& options) {
+  std::regex only;
+  try {
+    only = std::regex(options.only.empty() ? std::string(".") : options.only);
+  } catch (const std::regex_error& e) {
+    return detail::fail(fmt::format("--only '{}': not a regular expression ({})", options.only, e.what()));
+  }
+  std::error_code ec;
+  std::filesystem::create_directories(options.out, ec);
+  if (ec) return detail::fail(fmt::format("{}: cannot create the report folder: {}", options.out.string(), ec.message()));
+
+  Bodies bodies;
+  std::vector<PlannedCell> planned;
+  for (PlannedCell& p : plan(options.quick, bodies)) {
+    if (std::regex_search(p.cell.name, only)) planned.push_back(std::move(p));
+  }
+  if (planned.empty()) return detail::fail(fmt::format("--only '{}' matches no cell (names look like force_fields/thesis/medium/springs)", options.only));
+
+  const ProgressSink progress = make_terminal_progress(false);
+  const auto started = Clock::now();
+  std::vector<Cell> cells;
+  for (std::size_t i = 0; i < planned.size(); ++i) {
+    progress(fmt::format("hof bench: {} ({}/{})", planned[i].cell.name, i + 1, planned.size()), static_cast<double>(i) / static_cast<double>(planned.size()));
+    Cell cell = planned[i].cell;
+    planned[i].run(cell);
+    cells.push_back(std::move(cell));
+  }
+  progress("hof bench: done", 1.0);
+  const double total_s = seconds_since(started);
+
+  const std::vector<Ratio> ratios = springs_over_fem(cells);
+  const std::vector<Goal> goal_list = goals(cells, ratios);
+  const std::string table_text = tables(cells, ratios, goal_list);
+  std::fputs(table_text.c_str(), stdout);
+
+  const std::string machine = machine_description();
+  std::time_t now = std::time(nullptr);
+  char date[32];
+  std::strftime(date, sizeof date, "%Y-%m-%d %H:%M UTC", std::gmtime(&now));
+
+  nlohmann::json results = {{"command", options.command_line},
+                            {"date", date},
+                            {"machine", machine},
+                            {"quick", options.quick},
+                            {"only", options.only},
+                            {"seconds", total_s},
+                            {"haptic_rate_cg_iterations", kHapticRateCgIterations},
+                            {"cells", nlohmann::json::array()},
+                            {"springs_vs_fem", nlohmann::json::array()},
+                            {"goals", nlohmann::json::array()}};
+  for (const Cell& c : cells) results["cells"].push_back(cell_json(c));
+  for (const Ratio& r : ratios) {
+    results["springs_vs_fem"].push_back({{"settings", r.settings},
+                                         {"mesh", r.mesh},
+                                         {"fem_over_springs_force_field_cost", std::isfinite(r.force_field) ? nlohmann::json(r.force_field) : nlohmann::json()},
+                                         {"springs_over_fem_step_rate", std::isfinite(r.step) ? nlohmann::json(r.step) : nlohmann::json()}});
+  }
+  for (const Goal& g : goal_list) {
+    results["goals"].push_back({{"goal", g.what},
+                                {"unit", g.unit},
+                                {"target", std::isfinite(g.target) ? nlohmann::json(g.target) : nlohmann::json()},
+                                {"measured", g.known() ? nlohmann::json(g.measured) : nlohmann::json()},
+                                {"met", g.known() ? nlohmann::json(g.met()) : nlohmann::json()}});
+  }
+
+  const std::vector<detail::Plot> plots = write_plot_data(options.out, cells, ratios);
+  const std::vector<std::string> failed = detail::render_plots(options.out, "", plots);
+
+  std::string report = fmt::format(
+      "# HoF evaluation\n\nMade by `{}` on {} in {:.0f} s.\n\nMachine: {}.\n\n"
+      "Each cell: steps/s as the median [min..max] of {} timed batches of at least {} s; stable means no divergence and no node "
+      "moving more than 1 m over {} s of simulated time (or as much as {} s of checking allowed). Step errors are against an "
+      "exact LDLT solve of the same step from the same state (relative norm of the velocity change; of the displacement for "
+      "the static solver). Thesis settings: gravity 9.8, total mass 1 kg, springs 10,000 / 15, FEM E = 100, nu = 0.4 "
+      "(unit-free in SOFA, here SI on a liver in metres); physiological: E = 5 kPa, nu = 0.45, 1060 kg/m3. Every body rests "
+      "on its lowest 4 mm.\n\n",
+      options.command_line, date, total_s, machine, budget_for(options.quick).batches, budget_for(options.quick).batch_s,
+      budget_for(options.quick).horizon_s, budget_for(options.quick).stability_wall_s);
+  report += table_text;
+  report += "## Plots\n\n";
+  for (const detail::Plot& p : plots) {
+    if (std::find(failed.begin(), failed.end(), p.name) == failed.end()) report += fmt::format("![{0}]({0}.png)\n\n", p.name);
+  }
+  report +=
+      "## Not measured by this version\n\nThe haptic renderers (god-object, Ruspini, penalty) with and without the bound tree, the "
+      "whole framework in real time (thesis Figure 34), two livers against one, and the coupling schemes against the static "
+      "FEM reaction are not yet part of `hof bench`; `hof_bench_haptics` and `hof_bench_coupling` time the renderers and the "
+      "coupling, and `hof run` reports a session's rates.\n";
+
+  std::string write_errors;
+  for (const auto& [file, text] : {std::pair{"results.json", results.dump(2) + "\n"}, std::pair{"results.csv", csv(cells)},
+                                   std::pair{"report.md", report}}) {
+    if (auto w = write_file_atomically(options.out / file, text); !w) write_errors += w.error().to_string() + "\n";
+  }
+  if (!write_errors.empty()) return detail::fail("the report could not be written:\n" + write_errors);
+  if (!failed.empty()) {
+    std::string names;
+    for (const std::string& f : failed) names += (names.empty() ? "" : ", ") + f;
+    std::fprintf(stderr, "hof: note: no plot for %s (gnuplot missing?); plots.gp is in %s\n", names.c_str(), options.out.c_str());
+  }
+  std::fprintf(stderr, "hof bench: %zu cells in %.0f s; report in %s/report.md\n", cells.size(), total_s, options.out.c_str());
+  return 0;
+}
+
+}  // namespace hof::app
