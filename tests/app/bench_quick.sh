@@ -13,7 +13,7 @@ out="$work/report"
 "$hof" bench --quick --out "$out" >"$work/stdout.txt" 2>"$work/stderr.txt" || fail "hof bench --quick: exit status $? ($(tail -3 "$work/stderr.txt"))"
 for f in results.json results.csv report.md plots.gp fig29_meshes.png fig29_meshes.svg fig30_force_fields_thesis.png \
          fig30_force_fields_physiological.png fig31_solvers_dt0.002.png fig31_solvers_dt0.02.png \
-         fig32_static-cg_cg_iterations.png fig33_implicit-cg_cg_iterations.png haptic_rate.png haptic_rate.svg; do
+         fig32_static-cg_cg_iterations.png fig33_implicit-cg_cg_iterations.png renderers.png threads.png haptic_rate.png haptic_rate.svg; do
   [ -s "$out/$f" ] || fail "$f missing or empty"
 done
 grep -q "^## Goals" "$work/stdout.txt" || fail "the tables were not printed"
@@ -23,10 +23,14 @@ out = sys.argv[1]
 r = json.load(open(os.path.join(out, "results.json")))
 cells = r["cells"]
 sections = {c["section"] for c in cells}
-assert sections == {"meshes", "force_fields", "solvers", "cg_iterations", "haptic_rate"}, sections
+assert sections == {"meshes", "force_fields", "solvers", "threads", "renderers", "cg_iterations", "haptic_rate"}, sections
 for c in cells:
     if c["section"] == "meshes":
         assert c["nodes"] > 0 and c["elements"] > 0 and c["surface_triangles"] > 0, c
+    elif c["section"] == "renderers":
+        t = c["tick_us"]
+        assert 0 < t["p50"] <= t["p99"] <= t["max"], c["name"]
+        assert c["contact_fraction"] > 0.5, (c["name"], "the device path must touch the liver")
     elif c["stable"]:
         rate = c["steps_per_s"]
         assert rate["median"] and rate["min"] <= rate["median"] <= rate["max"], c["name"]

@@ -10,6 +10,7 @@
 #include <ctime>
 #include <fstream>
 #include <functional>
+#include <numbers>
 #include <limits>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -21,6 +22,8 @@
 #include "hof/app/detail/plots.h"
 #include "hof/core/file_write.h"
 #include "hof/core/progress.h"
+#include "hof/haptics/haptic_renderer.h"
+#include "hof/haptics/surface_snapshot.h"
 #include "hof/mechanics/step.h"
 #include "hof/mesh/boundary.h"
 #include "hof/mesh/hex_grid.h"
@@ -66,6 +69,11 @@ struct Cell {
   std::string failure;
   double step_error{kNaN};  // relative, against an exact LDLᵀ solve of the same step
   double forces_us{kNaN}, assembly_us{kNaN}, solve_us{kNaN};
+  // Haptic renderers: the cost of one tick (µs) and the share of ticks in contact.
+  std::string renderer;
+  bool bound_tree{true};
+  double tick_p50_us{kNaN}, tick_p99_us{kNaN}, tick_max_us{kNaN};
+  double contact_fraction{kNaN};
 };
 
 // ---------------------------------------------------------------------------------------
@@ -77,6 +85,7 @@ struct Body {
   std::vector<mesh::Tet> tets;
   std::vector<mesh::Hex> hexes;
   std::size_t surface_triangles{0};
+  mesh::TriMesh surface;
 };
 
 class Bodies {
@@ -86,7 +95,8 @@ class Bodies {
     if (auto it = bodies_.find(name); it != bodies_.end()) return &it->second;
     auto m = mesh::generate_liver(r);
     if (!m) return std::unexpected(m.error());
-    Body b{name, m->nodes, m->tets, {}, mesh::extract_boundary(m->nodes, m->tets).surface.triangles.size()};
+    mesh::TriMesh surface = mesh::extract_boundary(m->nodes, m->tets).surface;
+    Body b{name, m->nodes, m->tets, {}, surface.triangles.size(), surface};
     return &bodies_.emplace(name, std::move(b)).first->second;
   }
   // SOFA's SparseGridTopology over the medium liver's surface, 24×16×10 nodes: cells of about 1 cm.
@@ -97,7 +107,8 @@ class Bodies {
     if (!medium) return std::unexpected(medium.error());
     auto grid = mesh::sparse_grid(mesh::extract_boundary((*medium)->nodes, (*medium)->tets).surface, {24, 16, 10});
     if (!grid) return std::unexpected(grid.error());
-    Body b{name, grid->nodes, {}, grid->hexes, mesh::hex_boundary(grid->nodes, grid->hexes).surface.triangles.size()};
+    mesh::TriMesh surface = mesh::hex_boundary(grid->nodes, grid->hexes).surface;
+    Body b{name, grid->nodes, {}, grid->hexes, surface.triangles.size(), surface};
     return &bodies_.emplace(name, std::move(b)).first->second;
   }
   Expected<const Body*> by_name(const std::string& name) {
@@ -338,6 +349,64 @@ double step_error(const ModelConfig& config, const Budget& budget) {
   return worst;
 }
 
+// One haptic tick per device reading, as the haptic loop makes it: the device slides along
+// a loop over the liver's top, 3 mm under the surface (a contact every tick), the surface at
+// rest (the thesis' useBoundTree test, l. 1221). Each tick is timed alone: p50/p99/max.
+void time_renderer(const mesh::TriMesh& surface, haptics::RendererKind kind, bool bound_tree, const Budget& budget, Cell& cell) {
+  collision::AabbTreeOptions tree;
+  tree.use_bound_tree = bound_tree;
+  const haptics::SurfaceSnapshot snapshot = haptics::make_snapshot(surface, tree);
+  Vec3 lo = surface.vertices.front(), hi = lo;
+  for (const Vec3& p : surface.vertices) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  const Vec3 centre = 0.5 * (lo + hi), half = 0.5 * (hi - lo);
+  auto top = [&](double x, double y) {
+    const collision::SweepHit hit = snapshot.tree.first_hit_segment(snapshot.view(), Vec3(x, y, hi.z() + 1.0), Vec3(x, y, lo.z() - 1.0));
+    return hit.triangle >= 0 ? std::optional<double>(hit.point.z()) : std::nullopt;
+  };
+  constexpr int kPath = 2000;
+  std::vector<Vec3> path;
+  path.reserve(kPath);
+  for (int i = 0; i < kPath; ++i) {
+    const double a = 2 * std::numbers::pi * i / kPath;
+    const double x = centre.x() + 0.4 * half.x() * std::cos(a), y = centre.y() + 0.4 * half.y() * std::sin(a);
+    if (auto z = top(x, y)) path.emplace_back(x, y, *z - 0.003);
+  }
+  if (path.empty()) {
+    cell.stable = false;
+    cell.failure = "no point of the surface under the device's path";
+    return;
+  }
+  haptics::RendererConfig config;
+  config.kind = kind;
+  haptics::SurfaceMaterial material;
+  material.stiffness = 1.0;
+  haptics::HapticRenderer renderer(config, material, 1000.0);
+  renderer.reset(path[0] + Vec3(0, 0, 0.02));  // from above, as a hand arrives
+  std::vector<double> ticks;
+  ticks.reserve(1 << 20);
+  std::size_t contacts = 0;
+  const auto t_start = Clock::now();
+  const double total_s = budget.batches * budget.batch_s;
+  for (std::size_t i = 0; ticks.size() < ticks.capacity() && seconds_since(t_start) < total_s; ++i) {
+    const auto t0 = Clock::now();
+    const haptics::ContactState& c = renderer.update(path[i % path.size()], Vec3::Zero(), snapshot, false, 1e-3);
+    const auto t1 = Clock::now();
+    contacts += c.in_contact ? 1 : 0;
+    ticks.push_back(std::chrono::duration<double, std::micro>(t1 - t0).count());
+  }
+  std::sort(ticks.begin(), ticks.end());
+  auto quantile = [&](double q) { return ticks[static_cast<std::size_t>(q * static_cast<double>(ticks.size() - 1))]; };
+  cell.steps = static_cast<long>(ticks.size());
+  cell.tick_p50_us = quantile(0.5);
+  cell.tick_p99_us = quantile(0.99);
+  cell.tick_max_us = ticks.back();
+  cell.contact_fraction = static_cast<double>(contacts) / static_cast<double>(ticks.size());
+  cell.measured = true;
+}
+
 // ---------------------------------------------------------------------------------------
 // The plan: every cell with the code that measures it, filtered by --only before running.
 
@@ -424,6 +493,50 @@ std::vector<PlannedCell> plan(bool quick, Bodies& bodies) {
                            ModelConfig config = body_config(*b, Field::kSprings, Settings::kThesis);
                            set_solver(config, sv, dt);
                            time_cell(config, budget, cell);
+                         }});
+      }
+    }
+  }
+
+  // Threads (the thesis' OpenMP test, l. 1242): one core against two, co-rotational FEM.
+  for (const std::string& m : livers) {
+    for (int threads : {1, 2}) {
+      Cell c;
+      c.section = "threads";
+      c.name = fmt::format("threads/{}/corotational-fem/threads{}", m, threads);
+      c.mesh = m;
+      c.field = field_name(Field::kLarge);
+      c.settings = settings_name(Settings::kPhysiological);
+      c.solver = solver_name(Solver::kImplicitCg);
+      c.dt_s = 0.02;
+      c.iterations = 25;
+      c.threads = threads;
+      cells.push_back({c, [with_body, m, threads, budget](Cell& cell) {
+                         const Body* b = with_body(m, cell);
+                         if (!b) return;
+                         ModelConfig config = body_config(*b, Field::kLarge, Settings::kPhysiological);
+                         set_solver(config, Solver::kImplicitCg, 0.02);
+                         config.threads = threads;
+                         time_cell(config, budget, cell);
+                       }});
+    }
+  }
+
+  // Haptic renderers × bound tree × mesh: the cost of a tick.
+  for (const std::string& m : livers) {
+    for (auto [kind, renderer] : {std::pair{haptics::RendererKind::kGodObject, "god-object"}, std::pair{haptics::RendererKind::kRuspini, "ruspini"},
+                                  std::pair{haptics::RendererKind::kPenalty, "penalty"}}) {
+      for (bool tree : {true, false}) {
+        Cell c;
+        c.section = "renderers";
+        c.name = fmt::format("renderers/{}/{}/{}", m, renderer, tree ? "bound-tree" : "no-tree");
+        c.mesh = m;
+        c.renderer = renderer;
+        c.bound_tree = tree;
+        cells.push_back({c, [with_body, m, kind, tree, budget](Cell& cell) {
+                           const Body* b = with_body(m, cell);
+                           if (!b) return;
+                           time_renderer(b->surface, kind, tree, budget, cell);
                          }});
       }
     }
@@ -603,20 +716,26 @@ nlohmann::json cell_json(const Cell& c) {
           {"stable_over_s", c.stable_over_s},
           {"failure", c.failure},
           {"step_error", num(c.step_error)},
-          {"split_us", {{"forces", num(c.forces_us)}, {"assembly", num(c.assembly_us)}, {"solve", num(c.solve_us)}}}};
+          {"split_us", {{"forces", num(c.forces_us)}, {"assembly", num(c.assembly_us)}, {"solve", num(c.solve_us)}}},
+          {"renderer", c.renderer},
+          {"bound_tree", c.bound_tree},
+          {"tick_us", {{"p50", num(c.tick_p50_us)}, {"p99", num(c.tick_p99_us)}, {"max", num(c.tick_max_us)}}},
+          {"contact_fraction", num(c.contact_fraction)}};
 }
 
 std::string csv(const std::vector<Cell>& cells) {
   std::string out =
       "section,name,mesh,field,settings,solver,dt_s,cg_iterations,warm_start,threads,nodes,elements,surface_triangles,"
       "steps_per_s_median,steps_per_s_min,steps_per_s_max,timed_steps,stable,stable_over_s,step_error,forces_us,assembly_us,"
-      "solve_us\n";
+      "solve_us,renderer,bound_tree,tick_p50_us,tick_p99_us,tick_max_us,contact_fraction\n";
   auto n = [](double v) { return std::isfinite(v) ? fmt::format("{:.9g}", v) : std::string(); };
   for (const Cell& c : cells) {
-    out += fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", c.section, c.name, c.mesh, c.field,
-                       c.settings, c.solver, n(c.dt_s), c.iterations, c.warm_start ? 1 : 0, c.threads, c.nodes, c.elements,
+    out += fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", c.section, c.name, c.mesh,
+                       c.field, c.settings, c.solver, n(c.dt_s), c.iterations, c.warm_start ? 1 : 0, c.threads, c.nodes, c.elements,
                        c.triangles, n(c.median), n(c.min), n(c.max), c.steps, c.stable ? 1 : 0, n(c.stable_over_s),
-                       n(c.step_error), n(c.forces_us), n(c.assembly_us), n(c.solve_us));
+                       n(c.step_error), n(c.forces_us), n(c.assembly_us), n(c.solve_us), c.renderer,
+                       c.renderer.empty() ? "" : (c.bound_tree ? "1" : "0"), n(c.tick_p50_us), n(c.tick_p99_us), n(c.tick_max_us),
+                       n(c.contact_fraction));
   }
   return out;
 }
@@ -678,6 +797,28 @@ std::string tables(const std::vector<Cell>& cells, const std::vector<Ratio>& rat
     for (const Cell* c : s) {
       out += fmt::format("| {:g} | {} | {} | {} | {} |\n", c->dt_s, c->mesh, c->solver, rate_text(*c),
                          c->stable ? fmt::format("{:.3g} s", c->stable_over_s) : fmt::format("diverged after {:.3g} s: {}", c->stable_over_s, c->failure));
+    }
+    out += "\n";
+  }
+  if (auto t = section("threads"); !t.empty()) {
+    out += "## Threads (thesis: the OpenMP test): co-rotational FEM, physiological, implicit Euler, CG 25, dt 0.02 s\n\n"
+           "| mesh | threads | steps/s | forces | assembly | solve (us) | speed-up |\n|---|---:|---|---:|---:|---:|---:|\n";
+    for (const Cell* c : t) {
+      const Cell* one = find(cells, fmt::format("threads/{}/corotational-fem/threads1", c->mesh));
+      out += fmt::format("| {} | {} | {} | {} | {} | {} | {} |\n", c->mesh, c->threads, rate_text(*c), number(c->forces_us, "{:.0f}"),
+                         number(c->assembly_us, "{:.0f}"), number(c->solve_us, "{:.0f}"),
+                         one && one->measured ? number(c->median / one->median, "{:.2f}x") : std::string("-"));
+    }
+    out += "\n";
+  }
+  if (auto r = section("renderers"); !r.empty()) {
+    out += "## Haptic renderers: the cost of one tick (thesis: useBoundTree)\n\nThe device slides 3 mm under the liver's top, "
+           "the surface at rest.\n\n| mesh | renderer | bound tree | tick p50 (us) | p99 | max | ticks in contact |\n"
+           "|---|---|---|---:|---:|---:|---:|\n";
+    for (const Cell* c : r) {
+      out += fmt::format("| {} | {} | {} | {} | {} | {} | {} |\n", c->mesh, c->renderer, c->bound_tree ? "on" : "off",
+                         number(c->tick_p50_us, "{:.2f}"), number(c->tick_p99_us, "{:.2f}"), number(c->tick_max_us, "{:.1f}"),
+                         std::isfinite(c->contact_fraction) ? fmt::format("{:.0f}%", 100.0 * c->contact_fraction) : std::string("-"));
     }
     out += "\n";
   }
@@ -823,6 +964,54 @@ std::vector<detail::Plot> write_plot_data(const std::filesystem::path& dir, cons
                             name);
       }
       plots.push_back({name, body + "\n"});
+    }
+  }
+  // Threads: steps/s per mesh, one against two.
+  {
+    std::ofstream d(dir / "threads.dat");
+    d << "mesh one-thread two-threads\n";
+    int rows = 0;
+    for (const char* m : {"simple", "coarse", "medium", "fine"}) {
+      const Cell* one = find(cells, fmt::format("threads/{}/corotational-fem/threads1", m));
+      const Cell* two = find(cells, fmt::format("threads/{}/corotational-fem/threads2", m));
+      if (!one && !two) continue;
+      auto rate = [](const Cell* c) { return c && c->measured && c->stable ? dat_value(c->median) : std::string("?"); };
+      d << m << " " << rate(one) << " " << rate(two) << "\n";
+      ++rows;
+    }
+    if (rows) {
+      plots.push_back({"threads", histogram + "set ylabel 'steps/s (median)'\nset title 'One thread against two: co-rotational FEM, "
+                                              "implicit Euler + CG 25, dt 0.02 s'\n"
+                                              "plot 'threads.dat' using 2:xtic(1) title 'one thread', '' using 3 title 'two threads'\n"});
+    }
+  }
+  // Renderers: p99 tick cost per mesh, each renderer with and without the bound tree.
+  {
+    std::ofstream d(dir / "renderers.dat");
+    const char* renderers[] = {"god-object", "ruspini", "penalty"};
+    d << "mesh";
+    for (const char* r : renderers) d << " " << r << "-tree " << r << "-no-tree";
+    d << "\n";
+    int rows = 0;
+    for (const char* m : {"simple", "coarse", "medium", "fine"}) {
+      std::string line = m;
+      bool any = false;
+      for (const char* r : renderers) {
+        for (const char* t : {"bound-tree", "no-tree"}) {
+          const Cell* c = find(cells, fmt::format("renderers/{}/{}/{}", m, r, t));
+          any = any || (c && c->measured);
+          line += " " + (c && c->measured ? dat_value(c->tick_p99_us) : std::string("?"));
+        }
+      }
+      if (any) {
+        d << line << "\n";
+        ++rows;
+      }
+    }
+    if (rows) {
+      plots.push_back({"renderers", histogram + "set ylabel 'tick cost p99 (us)'\nset key outside right\nset title 'Haptic renderers, "
+                                                "one tick (device 3 mm under the top surface)'\n"
+                                                "plot for [k=2:7] 'renderers.dat' using k:xtic(1) title columnheader(k)\n"});
     }
   }
   // Figures 32–33: steps/s and error against CG iterations.
@@ -975,10 +1164,9 @@ int run_evaluation(const EvaluationOptions& options) {
     if (std::find(failed.begin(), failed.end(), p.name) == failed.end()) report += fmt::format("![{0}]({0}.png)\n\n", p.name);
   }
   report +=
-      "## Not measured by this version\n\nThe haptic renderers (god-object, Ruspini, penalty) with and without the bound tree, the "
-      "whole framework in real time (thesis Figure 34), two livers against one, and the coupling schemes against the static "
-      "FEM reaction are not yet part of `hof bench`; `hof_bench_haptics` and `hof_bench_coupling` time the renderers and the "
-      "coupling, and `hof run` reports a session's rates.\n";
+      "## Not measured by this version\n\nThe whole framework in real time (thesis Figure 34), two livers against one, and the coupling schemes against the static "
+      "FEM reaction are not yet part of `hof bench`; `hof_bench_coupling` times the coupling, and `hof run` reports a "
+      "session's rates.\n";
 
   std::string write_errors;
   for (const auto& [file, text] : {std::pair{"results.json", results.dump(2) + "\n"}, std::pair{"results.csv", csv(cells)},
