@@ -91,6 +91,7 @@ TEST(HapticRateFem, WarmStartedCgSolvesEachStepAtLeastAsWellAsTwentyFiveIteratio
   ModelConfig warm_config = cold_config;
   warm_config.linear.iterations = kHapticRateCgIterations;
   warm_config.linear.warm_start = true;
+  warm_config.ode.matrix_reuse_steps = kHapticRateMatrixReuseSteps;
   Solver exact = make_solver(exact_config);
   Solver cold = make_solver(cold_config);
   Solver warm = make_solver(warm_config);

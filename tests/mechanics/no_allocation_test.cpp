@@ -65,6 +65,7 @@ TEST(NoAllocation, StepsAllocateNothingAfterMakeState) {
     config.linear.kind = c.linear;
     config.linear.block_jacobi = true;
     config.linear.warm_start = c.warm_start;
+    config.ode.matrix_reuse_steps = c.warm_start ? kHapticRateMatrixReuseSteps : 1;
     config.dt_s = c.solver == OdeSolverKind::kEulerImplicit || c.solver == OdeSolverKind::kStatic ? 0.02 : 1e-5;
     auto model = build_model(config);
     ASSERT_TRUE(model) << model.error().to_string();

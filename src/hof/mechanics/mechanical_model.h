@@ -92,6 +92,11 @@ struct OdeSolverConfig {
   int newton_iterations{10};        ///< static solver
   double newton_residual_tolerance_n{1e-6};  ///< static solver: stop when |f| (N) is below
   double newton_correction_tolerance{1e-10}; ///< static solver: stop when |Δx| / |x| is below
+  /// Implicit Euler: assemble A = αM + βK every this many steps and reuse it in between. The
+  /// forces are evaluated afresh every step, so the step still converges to the right
+  /// motion and equilibria are exact; only the linearisation lags by up to N−1 steps, which at
+  /// the haptic period (1 ms) is a small change of rotations. 1 (SOFA's behaviour): every step.
+  int matrix_reuse_steps{1};
 };
 
 enum class LinearSolverKind : std::uint8_t {
@@ -123,6 +128,8 @@ struct LinearSolverConfig {
 /// from zero, measured against an exact LDLᵀ solve of the same step
 /// (tests/mechanics/haptic_rate_fem_test.cpp; the error of both in `hof bench`).
 inline constexpr int kHapticRateCgIterations = 10;
+/// Steps one assembled matrix serves in the haptic-rate mode (OdeSolverConfig::matrix_reuse_steps).
+inline constexpr int kHapticRateMatrixReuseSteps = 2;
 
 struct ModelConfig {
   std::string name{"model"};

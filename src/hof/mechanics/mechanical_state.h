@@ -61,6 +61,10 @@ struct SolverWorkspace {
   std::vector<std::int32_t> cg_send_start;         // (CG chunks+1) each chunk's range in cg_send_from/to
   std::vector<std::int32_t> cg_send_from, cg_send_to;  // node of the chunk, node index of its copy
   BlockSparseMatrix system;                        // A = αM + βK, values refilled each step
+  // The step at which implicit Euler assembled `system` for itself with these coefficients
+  // (−1: it holds something else, e.g. the compliance's K): what matrix reuse may reuse.
+  std::int64_t system_assembled_step{-1};
+  double system_mass_coeff{0.0}, system_stiffness_coeff{0.0};
   std::vector<Eigen::Matrix3d> block_jacobi;       // (N) inverse diagonal blocks
   // Sparse direct solver: CSC copy of `system` and the value map from block storage.
   // Sparse direct solver on the fill-reducing (AMD) permutation P A Pᵀ, lower triangle,

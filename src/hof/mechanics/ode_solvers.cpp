@@ -100,7 +100,16 @@ bool implicit_euler_step(const MechanicalModel& model, MechanicalState& state) {
   state.stats.force_s = seconds_since(t0);
 
   t0 = Clock::now();
-  assemble_system(model, state, 1.0 + h * rm, h * (h + rk));
+  const double mass_coeff = 1.0 + h * rm, stiffness_coeff = h * (h + rk);
+  const bool reuse = w.system_assembled_step >= 0 && state.steps > w.system_assembled_step &&
+                     state.steps - w.system_assembled_step < model.ode.matrix_reuse_steps && w.system_mass_coeff == mass_coeff &&
+                     w.system_stiffness_coeff == stiffness_coeff;
+  if (!reuse) {
+    assemble_system(model, state, mass_coeff, stiffness_coeff);
+    w.system_assembled_step = state.steps;
+    w.system_mass_coeff = mass_coeff;
+    w.system_stiffness_coeff = stiffness_coeff;
+  }
   state.stats.assembly_s = seconds_since(t0);
 
   t0 = Clock::now();
