@@ -6,7 +6,7 @@
 #include <Eigen/Eigenvalues>
 #include <cmath>
 
-#include "hof/mechanics/linear_system.h"
+#include "hof/mechanics/assembly.h"
 #include "hof/mechanics/step.h"
 #include "test_meshes.h"
 

@@ -6,7 +6,7 @@
 #include <cmath>
 #include <numeric>
 
-#include "hof/mechanics/linear_system.h"
+#include "hof/mechanics/linear_solve.h"
 #include "hof/mechanics/mechanical_state.h"
 #include "hof/mechanics/neo_hookean_force_field.h"
 #include "hof/mesh/hex_grid.h"

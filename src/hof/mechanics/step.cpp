@@ -4,9 +4,7 @@
 
 #include <cmath>
 
-#include "hof/mechanics/linear_system.h"
-#include "hof/mechanics/ode_solvers.h"
-#include "hof/mechanics/parallel.h"
+#include "hof/mechanics/integrators.h"
 
 namespace hof::mechanics {
 
@@ -44,108 +42,6 @@ std::pair<std::int64_t, bool> find_bad_node(const MechanicalModel& model, const 
 }
 
 }  // namespace
-
-void compute_forces(const MechanicalModel& model, MechanicalState& state, const Eigen::VectorXd& x,
-                    const Eigen::VectorXd& v, Eigen::VectorXd& f) {
-  // Gravity and the coupling input first, then each force field adds its share.
-  const Vec3 g = model.gravity_m_per_s2;
-  const std::size_t n = model.node_count();
-  parallel_chunks(n, 1024, [&](std::size_t b, std::size_t e) {
-    for (std::size_t i = b; i < e; ++i) {
-      const Eigen::Index k = 3 * static_cast<Eigen::Index>(i);
-      f.segment<3>(k) = model.node_mass_kg[i] * g + state.external_force.segment<3>(k);
-    }
-  });
-  for (std::size_t k = 0; k < model.force_fields.size(); ++k) {
-    model.force_fields[k]->add_force(x, v, state.field_states[k], f);
-  }
-  detail::project(model, f);
-}
-
-bool compute_point_compliance(const MechanicalModel& model, MechanicalState& state, std::span<const std::int32_t> nodes,
-                              std::span<const double> weights, Mat3& compliance, int max_iterations) {
-  if (model.fixed_dofs.empty() || nodes.size() != weights.size() || !model.needs_matrix) return false;
-  SolverWorkspace& w = state.work;
-  // Linearise at the current state (refreshes element rotations), K alone, fixed dofs held.
-  compute_forces(model, state, state.x, state.v, w.xt);
-  detail::assemble_system(model, state, 0.0, 1.0, detail::AssemblyTarget::kDouble);
-  const BlockSparseMatrix& k = w.system;
-  for (std::size_t n = 0; n < model.node_count(); ++n) {
-    w.block_jacobi[n] = k.block(k.diagonal_slot(static_cast<std::int32_t>(n))).inverse();
-  }
-  for (int axis = 0; axis < 3; ++axis) {
-    // Right-hand side Hᵀ e_axis: the unit force at the point, spread by its weights.
-    w.b.setZero();
-    for (std::size_t i = 0; i < nodes.size(); ++i) w.b[3 * static_cast<Eigen::Index>(nodes[i]) + axis] += weights[i];
-    detail::project(model, w.b);
-    const double b_norm = w.b.norm();
-    if (!(b_norm > 0.0)) {
-      compliance.col(axis).setZero();
-      continue;
-    }
-    // Preconditioned CG on K y = b (K is symmetric positive definite with the fixed dofs held).
-    w.dv.setZero();
-    w.r = w.b;
-    auto precondition = [&](const Eigen::VectorXd& in, Eigen::VectorXd& out) {
-      for (std::size_t n = 0; n < model.node_count(); ++n) {
-        const Eigen::Index i = 3 * static_cast<Eigen::Index>(n);
-        out.segment<3>(i).noalias() = w.block_jacobi[n] * in.segment<3>(i);
-      }
-    };
-    precondition(w.r, w.z);
-    w.p = w.z;
-    double rho = w.r.dot(w.z);
-    bool converged = false;
-    for (int it = 0; it < max_iterations; ++it) {
-      k.multiply(w.p, w.ap);
-      const double curvature = w.p.dot(w.ap);
-      if (!(curvature > 0.0)) break;
-      const double alpha = rho / curvature;
-      w.dv += alpha * w.p;
-      w.r -= alpha * w.ap;
-      if (w.r.norm() <= 1e-10 * b_norm) {
-        converged = true;
-        break;
-      }
-      precondition(w.r, w.z);
-      const double rho_next = w.r.dot(w.z);
-      w.p = w.z + (rho_next / rho) * w.p;
-      rho = rho_next;
-    }
-    if (!converged || !w.dv.allFinite()) return false;
-    Vec3 column = Vec3::Zero();
-    for (std::size_t i = 0; i < nodes.size(); ++i) column += weights[i] * w.dv.segment<3>(3 * static_cast<Eigen::Index>(nodes[i]));
-    compliance.col(axis) = column;
-  }
-  // The true compliance is symmetric; remove the solver's round-off asymmetry.
-  compliance = 0.5 * (compliance + compliance.transpose()).eval();
-  return compliance.allFinite();
-}
-
-Vec3 point_elastic_force(const MechanicalModel& model, MechanicalState& state, std::span<const std::int32_t> nodes,
-                         std::span<const double> weights) {
-  Eigen::VectorXd& f = state.work.k1x;
-  f.setZero();
-  for (std::size_t k = 0; k < model.force_fields.size(); ++k) {
-    model.force_fields[k]->add_force(state.x, state.v, state.field_states[k], f);
-  }
-  Vec3 total = Vec3::Zero();
-  for (std::size_t i = 0; i < nodes.size(); ++i) {
-    bool seen = false;  // a node listed twice counts once
-    for (std::size_t j = 0; j < i; ++j) seen = seen || nodes[j] == nodes[i];
-    if (!seen && weights[i] > 1e-12) total += f.segment<3>(3 * static_cast<Eigen::Index>(nodes[i]));
-  }
-  return total;
-}
-
-double max_residual_force(const MechanicalModel& model, MechanicalState& state) {
-  compute_forces(model, state, state.x, state.v, state.f);
-  double worst = 0.0;
-  for (std::size_t i = 0; i < model.node_count(); ++i) {
-    worst = std::max(worst, state.f.segment<3>(3 * static_cast<Eigen::Index>(i)).norm());
-  }
-  return worst;
-}
 
 bool step(const MechanicalModel& model, MechanicalState& state) {
   if (state.divergence.diverged) return false;

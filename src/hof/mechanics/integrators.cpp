@@ -1,11 +1,13 @@
-#include "hof/mechanics/ode_solvers.h"
+#include "hof/mechanics/integrators.h"
 
 #include <chrono>
 #include <cmath>
 
-#include "hof/mechanics/linear_system.h"
+#include "hof/mechanics/assembly.h"
+#include "hof/mechanics/forces.h"
+#include "hof/mechanics/linear_solve.h"
 #include "hof/mechanics/parallel.h"
-#include "hof/mechanics/step.h"
+#include "hof/mechanics/vector_kernels.h"
 
 namespace hof::mechanics::detail {
 

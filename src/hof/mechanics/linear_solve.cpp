@@ -1,7 +1,7 @@
 // The LDLᵀ factorisation keeps its work vectors on the stack (no heap allocation in a step)
 // whatever the model size: the default limit would move them to the heap above 16k dofs.
 #define EIGEN_STACK_ALLOCATION_LIMIT 0
-#include "hof/mechanics/linear_system.h"
+#include "hof/mechanics/linear_solve.h"
 
 #include <algorithm>
 #include <cmath>
@@ -9,12 +9,11 @@
 
 #include "hof/mechanics/cg_kernels.h"
 #include "hof/mechanics/parallel.h"
-#include "hof/mechanics/simd_lanes.h"
+#include "hof/mechanics/vector_kernels.h"
 
 namespace hof::mechanics::detail {
 
 namespace {
-constexpr std::size_t kVectorChunk = 4096;
 
 // The conjugate-gradient solve's fixed split of the nodes: chunks of about 256 nodes, their
 // count a multiple of 8. The static split gives each thread a contiguous run of chunks, and
@@ -34,120 +33,6 @@ CgChunks cg_chunks(std::size_t nodes) {
   const std::size_t count = (nodes + 256 * 8 - 1) / (256 * 8) * 8;
   return {count, (nodes + count - 1) / count};
 }
-
-// Σ a[d]·b[d] over [d0, d1) in four interleaved partial sums (independent add chains: the
-// loop is not bound by the adder's latency), combined in a fixed order: deterministic.
-double dot_range(const double* a, const double* b, std::size_t d0, std::size_t d1) {
-  simd::Lanes sum = simd::splat(0.0);
-  std::size_t d = d0;
-  for (; d + 4 <= d1; d += 4) sum += simd::load(a + d) * simd::load(b + d);
-  double tail = 0.0;
-  for (; d < d1; ++d) tail += a[d] * b[d];
-  return ((sum[0] + sum[1]) + (sum[2] + sum[3])) + tail;
-}
-}
-
-double dot(const Eigen::VectorXd& a, const Eigen::VectorXd& b, std::vector<double>& partials) {
-  const double* pa = a.data();
-  const double* pb = b.data();
-  return deterministic_sum(static_cast<std::size_t>(a.size()), kVectorChunk, partials,
-                           [&](std::size_t begin, std::size_t end) { return dot_range(pa, pb, begin, end); });
-}
-
-void axpy(double alpha, const Eigen::VectorXd& x, Eigen::VectorXd& y) {
-  const double* px = x.data();
-  double* py = y.data();
-  parallel_chunks(static_cast<std::size_t>(x.size()), kVectorChunk, [&](std::size_t begin, std::size_t end) {
-    for (std::size_t i = begin; i < end; ++i) py[i] += alpha * px[i];
-  });
-}
-
-void project(const MechanicalModel& model, Eigen::VectorXd& vector) {
-  for (std::int32_t d : model.fixed_dofs) vector[d] = 0.0;
-}
-
-namespace {
-
-// The single-precision copy alone, when one field's stiffness covers the whole pattern.
-bool assemble_single_only(const MechanicalModel& model, MechanicalState& state, double mass_coeff,
-                          double stiffness_coeff) {
-  const ForceField* only = nullptr;
-  std::size_t only_index = 0;
-  for (std::size_t k = 0; k < model.force_fields.size(); ++k) {
-    if (!model.force_fields[k]->has_stiffness()) continue;
-    if (only != nullptr) return false;
-    only = model.force_fields[k].get();
-    only_index = k;
-  }
-  BlockSparseMatrix& a = state.work.system;
-  if (only == nullptr || !only->set_stiffness_single(state.field_states[only_index], stiffness_coeff, a)) return false;
-  constexpr std::int64_t kColumn = BlockSparseMatrix::kSingleColumnStride;
-  for (std::size_t n = 0; n < model.node_count(); ++n) {
-    float* block = a.single_block(a.diagonal_slot(static_cast<std::int32_t>(n)));
-    const auto mass = static_cast<float>(mass_coeff * model.node_mass_kg[n]);
-    for (int q = 0; q < 3; ++q) block[kColumn * q + q] += mass;
-  }
-  // Fixed degrees of freedom: identity rows and columns (projection P A P + (I − P)).
-  const auto& row_start = a.row_start();
-  for (std::int32_t d : model.fixed_dofs) {
-    const std::int32_t n = d / 3;
-    const int axis = d % 3;
-    for (std::int64_t s = row_start[n]; s < row_start[n + 1]; ++s) {
-      float* row_block = a.single_block(s);
-      for (int q = 0; q < 3; ++q) row_block[kColumn * q + axis] = 0.0f;
-      float* column_block = a.single_block(a.mirror_slot(s));
-      for (int i = 0; i < 3; ++i) column_block[kColumn * axis + i] = 0.0f;
-    }
-    a.single_block(a.diagonal_slot(n))[kColumn * axis + axis] = 1.0f;
-  }
-  return true;
-}
-
-}  // namespace
-
-void assemble_system(const MechanicalModel& model, MechanicalState& state, double mass_coeff, double stiffness_coeff,
-                     AssemblyTarget target) {
-  state.work.system_assembled_step = -1;  // the caller says whether this is implicit Euler's own A
-  if (target == AssemblyTarget::kSolver && uses_single_precision(model) &&
-      assemble_single_only(model, state, mass_coeff, stiffness_coeff)) {
-    return;
-  }
-  BlockSparseMatrix& a = state.work.system;
-  // The first field that covers the whole pattern sets the values (no clearing pass).
-  bool initialised = false;
-  for (std::size_t k = 0; k < model.force_fields.size(); ++k) {
-    const ForceField& field = *model.force_fields[k];
-    if (!field.has_stiffness()) continue;
-    if (!initialised) {
-      initialised = true;
-      if (field.set_stiffness(state.field_states[k], stiffness_coeff, a)) continue;
-      a.set_zero();
-    }
-    field.add_stiffness(state.field_states[k], stiffness_coeff, a);
-  }
-  if (!initialised) a.set_zero();
-  for (std::size_t n = 0; n < model.node_count(); ++n) {
-    a.block(a.diagonal_slot(static_cast<std::int32_t>(n))).diagonal().array() += mass_coeff * model.node_mass_kg[n];
-  }
-  // Fixed degrees of freedom: identity rows and columns (projection P A P + (I − P)).
-  const auto& row_start = a.row_start();
-  for (std::int32_t d : model.fixed_dofs) {
-    const std::int32_t n = d / 3;
-    const int axis = d % 3;
-    for (std::int64_t s = row_start[n]; s < row_start[n + 1]; ++s) {
-      a.block(s).row(axis).setZero();
-      a.block(a.mirror_slot(s)).col(axis).setZero();
-    }
-    a.block(a.diagonal_slot(n))(axis, axis) = 1.0;
-  }
-  if (uses_single_precision(model)) a.update_single_precision();
-}
-
-bool uses_single_precision(const MechanicalModel& model) {
-  return model.linear.kind == LinearSolverKind::kConjugateGradient && model.linear.mixed_precision;
-}
-
-namespace {
 
 // The CG's exchange between threads (see solve_cg). The chunks are split into one
 // contiguous part per thread, as the solve's static split runs them; for each part, the

@@ -1,7 +1,9 @@
 #pragma once
 /// @file
-/// The time integrators behind step(). Each advances state.x and state.v by model.dt_s and
-/// returns false if its linear solve broke down.
+/// The time integrators behind step() (see step.h for the stages). Each runs the stages its
+/// scheme needs — forces, then for the implicit and static ones assembly and solve — and
+/// integrates: advances state.x and state.v by model.dt_s. Returns false if its linear solve
+/// broke down.
 
 #include "hof/mechanics/mechanical_model.h"
 #include "hof/mechanics/mechanical_state.h"

@@ -1,0 +1,50 @@
+#include "hof/mechanics/forces.h"
+
+#include "hof/mechanics/parallel.h"
+#include "hof/mechanics/vector_kernels.h"
+
+namespace hof::mechanics {
+
+void compute_forces(const MechanicalModel& model, MechanicalState& state, const Eigen::VectorXd& x,
+                    const Eigen::VectorXd& v, Eigen::VectorXd& f) {
+  // Gravity and the coupling input first, then each force field adds its share.
+  const Vec3 g = model.gravity_m_per_s2;
+  const std::size_t n = model.node_count();
+  parallel_chunks(n, 1024, [&](std::size_t b, std::size_t e) {
+    for (std::size_t i = b; i < e; ++i) {
+      const Eigen::Index k = 3 * static_cast<Eigen::Index>(i);
+      f.segment<3>(k) = model.node_mass_kg[i] * g + state.external_force.segment<3>(k);
+    }
+  });
+  for (std::size_t k = 0; k < model.force_fields.size(); ++k) {
+    model.force_fields[k]->add_force(x, v, state.field_states[k], f);
+  }
+  detail::project(model, f);
+}
+
+Vec3 point_elastic_force(const MechanicalModel& model, MechanicalState& state, std::span<const std::int32_t> nodes,
+                         std::span<const double> weights) {
+  Eigen::VectorXd& f = state.work.k1x;
+  f.setZero();
+  for (std::size_t k = 0; k < model.force_fields.size(); ++k) {
+    model.force_fields[k]->add_force(state.x, state.v, state.field_states[k], f);
+  }
+  Vec3 total = Vec3::Zero();
+  for (std::size_t i = 0; i < nodes.size(); ++i) {
+    bool seen = false;  // a node listed twice counts once
+    for (std::size_t j = 0; j < i; ++j) seen = seen || nodes[j] == nodes[i];
+    if (!seen && weights[i] > 1e-12) total += f.segment<3>(3 * static_cast<Eigen::Index>(nodes[i]));
+  }
+  return total;
+}
+
+double max_residual_force(const MechanicalModel& model, MechanicalState& state) {
+  compute_forces(model, state, state.x, state.v, state.f);
+  double worst = 0.0;
+  for (std::size_t i = 0; i < model.node_count(); ++i) {
+    worst = std::max(worst, state.f.segment<3>(3 * static_cast<Eigen::Index>(i)).norm());
+  }
+  return worst;
+}
+
+}  // namespace hof::mechanics

@@ -1,0 +1,28 @@
+#pragma once
+/// @file
+/// Stage 3 of an implicit or static step: the solution of A·x = b (A as the assembly stage
+/// left it) by conjugate gradients or a sparse LDLᵀ.
+
+#include <Eigen/Core>
+
+#include "hof/mechanics/mechanical_model.h"
+#include "hof/mechanics/mechanical_state.h"
+
+namespace hof::mechanics::detail {
+
+/// Whether the CG product uses the single-precision copy of A (which the assembly then fills).
+inline bool uses_single_precision(const MechanicalModel& model) {
+  return model.linear.kind == LinearSolverKind::kConjugateGradient && model.linear.mixed_precision;
+}
+
+/// Solves A·x = b with the model's linear solver (x starts from zero, or from the last
+/// solution with a warm start). b's fixed entries must be zero. Fills
+/// state.stats.linear_iterations and linear_residual. Returns false when the solve broke down
+/// (non-finite values, a failed factorisation).
+bool solve_system(const MechanicalModel& model, MechanicalState& state, const Eigen::VectorXd& b, Eigen::VectorXd& x);
+
+/// Sets up the solver scratch that depends on the pattern (CSC map, LDLᵀ symbolic analysis,
+/// the CG's exchange between `threads` threads).
+void prepare_linear_solver(const MechanicalModel& model, MechanicalState& state, int threads);
+
+}  // namespace hof::mechanics::detail
