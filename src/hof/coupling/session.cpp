@@ -17,6 +17,15 @@ namespace hof::coupling {
 
 namespace {
 
+// The FEM-reaction coupling's patch: the surface within this radius of the contact (or twice the
+// contact triangle's longest edge, when larger), at most this many nodes.
+constexpr double kFemReactionPatchRadius_m = 0.01;
+constexpr std::size_t kFemReactionPatchCapacity = 4096;
+
+// The FEM-reaction coupling needs one simulation step per haptic tick.
+bool fem_reaction_step_fits(double dt_s, double rate_hz) { return std::abs(dt_s * rate_hz - 1.0) < 1e-6; }
+
+
 using Clock = std::chrono::steady_clock;
 
 double seconds_between(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
@@ -56,6 +65,9 @@ struct Session::BodyRuntime {
   bool inside_since_start{false};
   std::size_t layer{0};  // haptic layer
   std::size_t part{0};   // part of the layer's snapshot
+  // FEM-reaction coupling: the nodes of the contact's neighbourhood (reserved: no allocation).
+  std::vector<std::int32_t> patch_nodes;
+  std::vector<double> patch_weights;
 };
 
 struct Session::LayerRuntime {
@@ -108,6 +120,12 @@ Session::Session(std::vector<SessionBody> bodies, std::unique_ptr<haptics::Devic
     bodies_.push_back(std::move(r));
   }
   due_.reserve(bodies_.size());
+  if (config.coupling == ContactCoupling::kFemReaction) {
+    for (BodyRuntime& r : bodies_) {
+      r.patch_nodes.reserve(kFemReactionPatchCapacity);
+      r.patch_weights.reserve(kFemReactionPatchCapacity);
+    }
+  }
   step_ok_.reserve(bodies_.size());
   // A world of rigid shapes (or of force effects only) still steps, to publish and report.
   dt_ = std::isfinite(dt) ? dt : 0.01;
@@ -196,6 +214,16 @@ Expected<std::unique_ptr<Session>> Session::make(std::vector<SessionBody> bodies
                       fmt::format("session: haptic rate must be in [100, 20000] Hz, got {}", config.haptics.rate_hz));
   }
   if (auto ok = haptics::validate_effects(config.effects); !ok) return std::unexpected(ok.error());
+  if (config.coupling == ContactCoupling::kFemReaction) {
+    for (const SessionBody& body : bodies) {
+      if (body.deformable() && !fem_reaction_step_fits(body.model->dt_s, config.haptics.rate_hz)) {
+        return make_error(ErrorCode::kInvalidArgument,
+                          fmt::format("session: coupling fem-reaction steps the simulation once per haptic tick: body '{}' has dt "
+                                      "{:g} s, the haptic period is {:g} s (set dt to it, or use another coupling)",
+                                      body.name, body.model->dt_s, 1.0 / config.haptics.rate_hz));
+      }
+    }
+  }
   auto session = std::unique_ptr<Session>(new Session(std::move(bodies), std::move(device), config));
   session->publish(0.0);
   return session;
@@ -254,6 +282,13 @@ Expected<void> same_mesh(const std::string& body, const mechanics::ModelConfig& 
 
 Expected<void> Session::submit(const Command& submitted) {
   Command command = submitted;
+  if (const auto* set = std::get_if<command::SetParameter>(&command);
+      set && config_.coupling == ContactCoupling::kFemReaction && set->component.empty() && set->parameter == "dt" &&
+      !fem_reaction_step_fits(set->value, config_.haptics.rate_hz)) {
+    return make_error(ErrorCode::kInvalidArgument,
+                      fmt::format("body '{}': dt {:g} s: coupling fem-reaction needs dt equal to the haptic period, {:g} s", set->body,
+                                  set->value, 1.0 / config_.haptics.rate_hz));
+  }
   if (auto* device = std::get_if<command::SetDevice>(&command); device && !device->opened) {
     // Opened here, on the caller's thread (a network device may wait for its first packet).
     auto opened = haptics::open_device(device->spec);
@@ -539,7 +574,7 @@ void Session::take_contacts(SessionReport& report) {
       const auto b = static_cast<std::size_t>(rest.parts[static_cast<std::size_t>(part)].body);
       if (c.tool.active && c.tool.body == static_cast<std::int32_t>(b)) continue;  // the tool's (above)
       BodyRuntime& r = bodies_[b];
-      r.reaction_sum -= layer.force;  // the tissue feels the opposite of what the hand feels
+      r.reaction_sum -= layer.load;  // the tissue feels the opposite of what the tool pushes with
       ++r.contact_ticks;
       r.last_triangle = layer.triangle - rest.parts[static_cast<std::size_t>(part)].first_triangle;
       r.last_barycentric = layer.barycentric;
@@ -673,8 +708,8 @@ void Session::publish(double clock_s) {
     slot.sequence = layer.surfaces.published() + 1;
     slot.local.valid = false;
     const bool touched_here = last_body_ >= 0 && bodies_[static_cast<std::size_t>(last_body_)].layer == l;
-    if (config_.coupling == ContactCoupling::kCompliance && touched_here && contact_ticks_since_publish_ > 0 &&
-        bodies_[static_cast<std::size_t>(last_body_)].body.deformable()) {
+    const bool fem_felt = config_.coupling == ContactCoupling::kCompliance || config_.coupling == ContactCoupling::kFemReaction;
+    if (fem_felt && touched_here && contact_ticks_since_publish_ > 0 && bodies_[static_cast<std::size_t>(last_body_)].body.deformable()) {
       // The contact point's compliance at the current state (Saupin, Duriez & Cotin 2008).
       BodyRuntime& r = bodies_[static_cast<std::size_t>(last_body_)];
       const std::int32_t local = last_triangle_ - layer.rest.parts[r.part].first_triangle;
@@ -685,11 +720,48 @@ void Session::publish(double clock_s) {
       std::array<double, SurfaceMapping::kMaxPointWeights> weights{};
       const std::size_t count = r.body.mapping.point_weights(vertices, bary, nodes, weights);
       Mat3 compliance;
-      if (mechanics::compute_point_compliance(*r.body.model, r.state, std::span(nodes.data(), count),
+      if (config_.coupling == ContactCoupling::kFemReaction) {
+        // This step's reaction of the tissue at the contact, felt at the next tick: the elastic
+        // force summed over the nodes near the contact point. A node the tool does not load
+        // is in equilibrium (its elastic force is zero) once the tissue has settled, so the
+        // sum is then minus the load, wherever in the patch it was applied; while the contact
+        // slides from triangle to triangle the last steps' loads stay in the sum, which keeps
+        // the force from jumping at every triangle edge.
+        const Vec3 point = r.surface_positions[static_cast<std::size_t>(tri[0])] * bary[0] +
+                           r.surface_positions[static_cast<std::size_t>(tri[1])] * bary[1] +
+                           r.surface_positions[static_cast<std::size_t>(tri[2])] * bary[2];
+        double longest = 0.0;
+        for (int k = 0; k < 3; ++k) {
+          longest = std::max(longest, (r.surface_positions[static_cast<std::size_t>(tri[k])] -
+                                       r.surface_positions[static_cast<std::size_t>(tri[(k + 1) % 3])]).norm());
+        }
+        const double radius = std::max(kFemReactionPatchRadius_m, 2.0 * longest);
+        r.patch_nodes.clear();
+        for (std::size_t v = 0; v < r.surface_positions.size() && r.patch_nodes.size() + SurfaceMapping::kMaxNodesPerVertex <= r.patch_nodes.capacity(); ++v) {
+          if ((r.surface_positions[v] - point).squaredNorm() > radius * radius) continue;
+          const std::array<std::int32_t, 1> vertex{static_cast<std::int32_t>(v)};
+          const std::array<double, 1> one{1.0};
+          std::array<std::int32_t, SurfaceMapping::kMaxNodesPerVertex> vertex_nodes{};
+          std::array<double, SurfaceMapping::kMaxNodesPerVertex> vertex_weights{};
+          const std::size_t n = r.body.mapping.point_weights(vertex, one, vertex_nodes, vertex_weights);
+          for (std::size_t k = 0; k < n; ++k) {
+            // A held node's elastic force is the support's reaction, not the tool's.
+            if (!r.body.model->fixed_dof_mask[3 * static_cast<std::size_t>(vertex_nodes[k])]) r.patch_nodes.push_back(vertex_nodes[k]);
+          }
+        }
+        for (std::size_t k = 0; k < count; ++k) r.patch_nodes.push_back(nodes[k]);  // the triangle's own, always
+        r.patch_weights.assign(r.patch_nodes.size(), 1.0);
+        slot.local.valid = true;
+        slot.local.direct = true;
+        slot.local.triangle = last_triangle_;
+        slot.local.barycentric = last_barycentric_;
+        slot.local.reaction = mechanics::point_elastic_force(*r.body.model, r.state, r.patch_nodes, r.patch_weights);
+      } else if (mechanics::compute_point_compliance(*r.body.model, r.state, std::span(nodes.data(), count),
                                               std::span(weights.data(), count), compliance)) {
         const Eigen::FullPivLU<Mat3> lu(compliance);
         if (lu.isInvertible()) {
           slot.local.valid = true;
+          slot.local.direct = false;
           slot.local.triangle = last_triangle_;
           slot.local.barycentric = last_barycentric_;
           slot.local.compliance = compliance;

@@ -17,7 +17,9 @@
 ///  - `kClosestVertex`: all of it on the contact triangle's vertex nearest the contact (the
 ///    thesis);
 ///  - `kBarycentric`: spread over the contact triangle's three vertices by the contact
-///    point's barycentric weights.
+///    point's barycentric weights;
+///  - `kCompliance`, `kFemReaction`: barycentric, and the felt force comes from the FEM (see
+///    ContactCoupling).
 /// Bodies do not collide with each other (yet): each feels only the proxy.
 
 #include <atomic>
@@ -49,6 +51,14 @@ enum class ContactCoupling : std::uint8_t {
   /// barycentric forces, and with every step the contact point's 3x3 compliance from the
   /// FEM state goes to the haptic loop, which renders the tissue's own reaction at 1 kHz
   kCompliance,
+  /// The haptic rate (issue 17): the simulation steps once per haptic tick (each deformable
+  /// body's dt must equal the haptic period), the tissue takes each tick's contact force as
+  /// `kBarycentric` does, and what the hand feels at the next tick is the FEM's own reaction
+  /// of that step: the elastic force of the tissue at the contact point (the force fields'
+  /// forces on the nodes that carry it), not a rendering spring. The felt stiffness is then the
+  /// tissue's (E, ν, the organ's shape), whatever the surface material's stiffness, which only
+  /// sets how firmly the tool drags the contact point.
+  kFemReaction,
 };
 
 struct SessionConfig {

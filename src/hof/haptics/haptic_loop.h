@@ -80,6 +80,10 @@ struct HapticContact {
     std::int32_t triangle{-1};        ///< in this layer's snapshot
     Vec3 barycentric{Vec3::Zero()};
     Vec3 force{Vec3::Zero()};         ///< this layer's share of the force sent to the device, world, N
+    /// The force whose opposite the tissue takes: `force`, except with the FEM-reaction
+    /// coupling, where it is the renderer's spring (ContactState::coupling_force), as safety
+    /// scales what is sent.
+    Vec3 load{Vec3::Zero()};
   };
   /// The tool's state this tick; its force is its share of what was sent (as the layers').
   ToolState tool;

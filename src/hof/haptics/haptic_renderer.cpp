@@ -71,6 +71,7 @@ const ContactState& HapticRenderer::update(const Vec3& device_position, const Ve
   }
   active_ = material_at(surface, contact_.triangle);
   compute_force(device_position, device_velocity);
+  contact_.coupling_force = contact_.force;
   apply_local_model(device_position, surface);
   return contact_;
 }
@@ -80,14 +81,22 @@ void HapticRenderer::apply_local_model(const Vec3& device, const SurfaceSnapshot
   const LocalContactModel& local = surface.local;
   if (!local.valid || !contact_.in_contact || active_.kind == SurfaceKind::kZeroForce) return;
   if (local.triangle < 0 || static_cast<std::size_t>(local.triangle) >= surface.triangles.size()) return;
+  if (local.direct) {
+    // The FEM's own reaction. A frictionless contact only pushes: a tissue still pulling
+    // inward (the tool withdrawn faster than it relaxes) lets the tool go.
+    const bool pushes = local.reaction.dot(contact_.normal) > 0.0;
+    contact_.force = pushes && local.reaction.allFinite() ? local.reaction : Vec3::Zero();
+    return;
+  }
   const Vec3 free_point = surface.point(local.triangle, local.barycentric) - local.compliance * local.applied_force;
   const Vec3 indentation = free_point - device;
   if (!(indentation.dot(surface.face_normal(local.triangle)) > 0.0)) {
     contact_.force.setZero();
+    contact_.coupling_force.setZero();
     return;
   }
   const Vec3 force = local.stiffness * indentation;
-  if (force.allFinite()) contact_.force = force;
+  if (force.allFinite()) contact_.force = contact_.coupling_force = force;
 }
 
 void HapticRenderer::update_penalty(const Vec3& device, const SurfaceSnapshot& surface) {

@@ -52,6 +52,10 @@ struct ContactState {
   Vec3 proxy{Vec3::Zero()};           ///< proxy position (sphere centre for Ruspini), world, m
   Vec3 force{Vec3::Zero()};           ///< force on the device, world, N (before safety)
   double penetration_m{0.0};          ///< |proxy − device| along the normal
+  /// The force on the device as the tissue takes it (the tissue feels its opposite): the same
+  /// as `force`, except with the FEM-reaction coupling, where `force` is the tissue's own
+  /// reaction and this is the renderer's spring that drags the contact point along.
+  Vec3 coupling_force{Vec3::Zero()};
 };
 
 class HapticRenderer {

@@ -24,6 +24,10 @@ struct LocalContactModel {
   Mat3 compliance{Mat3::Zero()};         ///< C, m/N
   Mat3 stiffness{Mat3::Zero()};          ///< K = C⁻¹, N/m
   Vec3 applied_force{Vec3::Zero()};      ///< force the simulation applied there (on the tissue), N
+  /// FEM-reaction coupling: `reaction` (the tissue's elastic force at the contact after the
+  /// last step, N) is felt as it is while in contact; the compliance fields are unused.
+  bool direct{false};
+  Vec3 reaction{Vec3::Zero()};
 };
 
 /// One body's share of a snapshot that holds every touchable surface of the world: its

@@ -18,6 +18,8 @@ struct Slot {
   bool integer{false};
   const char* unit{""};
   bool hi_open{false};
+  int* integer_target{nullptr};  // integer parameters: where the value goes (value points at a scratch copy)
+  bool* flag_target{nullptr};    // on/off parameters (0 or 1)
 };
 
 // Finds the slot of (component, parameter) in a (mutable) config; nullopt-like Slot when absent.
@@ -66,13 +68,21 @@ Expected<Slot> find_slot(ModelConfig& c, std::string_view component, std::string
   if (c.ode.name == component) {
     if (parameter == "rayleighStiffness") return Slot{&c.ode.rayleigh_stiffness, 0.0, inf, false, false, ""};
     if (parameter == "rayleighMass") return Slot{&c.ode.rayleigh_mass, 0.0, inf, false, false, "1/s"};
+    if (parameter == "matrixReuseSteps") {
+      scratch = static_cast<double>(c.ode.matrix_reuse_steps);
+      return Slot{&scratch, 1.0, 1000.0, false, true, "", false, &c.ode.matrix_reuse_steps};
+    }
     return no_parameter("ODE solver");
   }
   if (c.linear.name == component) {
     if (parameter == "iterations") {
       integer_storage = c.linear.iterations;
       scratch = static_cast<double>(integer_storage);
-      return Slot{&scratch, 1.0, 100000.0, false, true, ""};
+      return Slot{&scratch, 1.0, 100000.0, false, true, "", false, &c.linear.iterations};
+    }
+    if (parameter == "warmStart") {
+      scratch = c.linear.warm_start ? 1.0 : 0.0;
+      return Slot{&scratch, 0.0, 1.0, false, true, "", false, nullptr, &c.linear.warm_start};
     }
     if (parameter == "tolerance") return Slot{&c.linear.tolerance, 0.0, inf, false, false, ""};
     if (parameter == "threshold") return Slot{&c.linear.threshold, 0.0, inf, false, false, ""};
@@ -119,7 +129,8 @@ Expected<void> set_parameter(ModelConfig& config, std::string_view component, st
                       config.name);
   }
   *slot->value = value;
-  if (slot->integer) trial.linear.iterations = static_cast<int>(value);
+  if (slot->integer_target) *slot->integer_target = static_cast<int>(value);
+  if (slot->flag_target) *slot->flag_target = value != 0.0;
   config = std::move(trial);
   return {};
 }
@@ -152,9 +163,11 @@ std::vector<std::string> parameter_names(const ModelConfig& c) {
   }
   names.push_back(c.ode.name + "/rayleighStiffness");
   names.push_back(c.ode.name + "/rayleighMass");
+  names.push_back(c.ode.name + "/matrixReuseSteps");
   names.push_back(c.linear.name + "/iterations");
   names.push_back(c.linear.name + "/tolerance");
   names.push_back(c.linear.name + "/threshold");
+  names.push_back(c.linear.name + "/warmStart");
   names.push_back(c.mass.name + "/totalMass");
   names.push_back(c.mass.name + "/massDensity");
   // The model's own (component ""): "/dt", ...

@@ -47,6 +47,7 @@ const char* coupling_name(coupling::ContactCoupling c) {
     case coupling::ContactCoupling::kClosestVertex: return "closest-vertex";
     case coupling::ContactCoupling::kBarycentric: return "barycentric";
     case coupling::ContactCoupling::kCompliance: return "compliance";
+    case coupling::ContactCoupling::kFemReaction: return "fem-reaction";
   }
   return "barycentric";
 }
@@ -630,7 +631,8 @@ Expected<HofProject> parse_project(const std::string& text, const std::filesyste
     if (coupling == "barycentric") p.coupling = coupling::ContactCoupling::kBarycentric;
     else if (coupling == "closest-vertex") p.coupling = coupling::ContactCoupling::kClosestVertex;
     else if (coupling == "compliance") p.coupling = coupling::ContactCoupling::kCompliance;
-    else r.fail(h, fmt::format("unknown coupling \"{}\" (barycentric, closest-vertex, compliance)", coupling));
+    else if (coupling == "fem-reaction") p.coupling = coupling::ContactCoupling::kFemReaction;
+    else r.fail(h, fmt::format("unknown coupling \"{}\" (barycentric, closest-vertex, compliance, fem-reaction)", coupling));
     if (const pugi::xml_node c = h.child("calibration")) {
       if (const pugi::xml_attribute a = c.attribute("positionCalibration")) {
         std::istringstream values(a.value());
