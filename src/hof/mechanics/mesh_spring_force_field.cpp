@@ -78,7 +78,7 @@ constexpr std::size_t kRecord = 12;
 
 // The gathers read records scattered over several megabytes at 40k tetrahedra: fetch them
 // this many entries ahead.
-constexpr std::int32_t kPrefetchAhead = 12;
+constexpr std::int32_t kSpringPrefetchAhead = 12;
 
 // f[n] += Σ ± force on the spring's first node, nodes [first, last).
 void gather_spring_forces(const double* __restrict records, const std::int32_t* __restrict starts,
@@ -88,7 +88,7 @@ void gather_spring_forces(const double* __restrict records, const std::int32_t* 
   for (std::size_t n = first; n < last; ++n) {
     simd::Lanes sum = simd::splat(0.0);
     for (std::int32_t at = starts[n]; at < starts[n + 1]; ++at) {
-      if (at + kPrefetchAhead < end) __builtin_prefetch(records + kRecord * static_cast<std::size_t>(entries[at + kPrefetchAhead] >> 1));
+      if (at + kSpringPrefetchAhead < end) __builtin_prefetch(records + kRecord * static_cast<std::size_t>(entries[at + kSpringPrefetchAhead] >> 1));
       const std::int32_t entry = entries[at];
       const simd::Lanes force_on_first = simd::load(records + kRecord * static_cast<std::size_t>(entry >> 1));
       if (entry & 1) sum -= force_on_first;
@@ -125,8 +125,8 @@ void fill_spring_diagonal(const double* __restrict records, const std::int32_t* 
     simd::Lanes a0 = simd::splat(0.0), a1 = a0, a2 = a0;
     double t = 0.0;
     for (std::int32_t at = starts[n]; at < starts[n + 1]; ++at) {
-      if (at + kPrefetchAhead < end) {
-        const double* ahead = records + kRecord * static_cast<std::size_t>(entries[at + kPrefetchAhead] >> 1);
+      if (at + kSpringPrefetchAhead < end) {
+        const double* ahead = records + kRecord * static_cast<std::size_t>(entries[at + kSpringPrefetchAhead] >> 1);
         __builtin_prefetch(ahead + 4);
         __builtin_prefetch(ahead + 11);
       }

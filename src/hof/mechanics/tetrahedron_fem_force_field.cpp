@@ -39,7 +39,7 @@ constexpr std::size_t kArrayPadding = 4;
 // f[n] += Σ of the vectors at 3·entry over node n's entries (lanes 0–2), nodes [first, last).
 // The records read by the gathers are scattered over arrays of several megabytes at 40k
 // tetrahedra: fetch them this many entries ahead.
-constexpr std::int32_t kPrefetchAhead = 12;
+constexpr std::int32_t kTetPrefetchAhead = 12;
 
 void gather_corner_vectors(const double* __restrict vectors, const std::int32_t* __restrict starts,
                            const std::int32_t* __restrict entries, std::size_t first, std::size_t last,
@@ -48,7 +48,7 @@ void gather_corner_vectors(const double* __restrict vectors, const std::int32_t*
   for (std::size_t n = first; n < last; ++n) {
     simd::Lanes sum = simd::splat(0.0);
     for (std::int32_t k = starts[n]; k < starts[n + 1]; ++k) {
-      if (k + kPrefetchAhead < end) __builtin_prefetch(vectors + kCornerStride * static_cast<std::size_t>(entries[k + kPrefetchAhead]));
+      if (k + kTetPrefetchAhead < end) __builtin_prefetch(vectors + kCornerStride * static_cast<std::size_t>(entries[k + kTetPrefetchAhead]));
       sum += simd::load(vectors + kCornerStride * static_cast<std::size_t>(entries[k]));
     }
     f[3 * n] += sum[0];
@@ -446,7 +446,7 @@ void fill_diagonal_blocks(const double* __restrict c, const std::int32_t* __rest
   for (std::size_t n = first; n < last; ++n) {
     Lanes a0 = simd::splat(0.0), a1 = a0, a2 = a0;
     for (std::int32_t at = starts[n]; at < starts[n + 1]; ++at) {
-      if (at + kPrefetchAhead < end) __builtin_prefetch(c + kCornerStride * static_cast<std::size_t>(entries[at + kPrefetchAhead]));
+      if (at + kTetPrefetchAhead < end) __builtin_prefetch(c + kCornerStride * static_cast<std::size_t>(entries[at + kTetPrefetchAhead]));
       const double* pi = c + kCornerStride * static_cast<std::size_t>(entries[at]);
       const Lanes ci = simd::load(pi);
       a0 += ci * simd::broadcast(pi);
@@ -468,9 +468,9 @@ void fill_edge_blocks(const double* __restrict c, const Edge* __restrict edges,
     const Edge& edge = edges[index];
     Lanes a0 = simd::splat(0.0), a1 = a0, a2 = a0;
     for (std::int32_t t = edge.first; t < edge.last; ++t) {
-      if (t + kPrefetchAhead < end) {
+      if (t + kTetPrefetchAhead < end) {
         // Both corners' records are in the same element's 96 bytes: two lines at most.
-        const double* ahead = c + kCornerStride * static_cast<std::size_t>(terms[t + kPrefetchAhead][0] & ~3);
+        const double* ahead = c + kCornerStride * static_cast<std::size_t>(terms[t + kTetPrefetchAhead][0] & ~3);
         __builtin_prefetch(ahead);
         __builtin_prefetch(ahead + 8);
       }
