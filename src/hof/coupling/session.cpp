@@ -25,7 +25,6 @@ constexpr std::size_t kFemReactionPatchCapacity = 4096;
 // The FEM-reaction coupling needs one simulation step per haptic tick.
 bool fem_reaction_step_fits(double dt_s, double rate_hz) { return std::abs(dt_s * rate_hz - 1.0) < 1e-6; }
 
-
 using Clock = std::chrono::steady_clock;
 
 double seconds_between(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }

@@ -54,8 +54,9 @@ enum class ContactCoupling : std::uint8_t {
   /// The haptic rate (issue 17): the simulation steps once per haptic tick (each deformable
   /// body's dt must equal the haptic period), the tissue takes each tick's contact force as
   /// `kBarycentric` does, and what the hand feels at the next tick is the FEM's own reaction
-  /// of that step: the elastic force of the tissue at the contact point (the force fields'
-  /// forces on the nodes that carry it), not a rendering spring. The felt stiffness is then the
+  /// of that step: the tissue's elastic force summed over the nodes within 1 cm of the contact
+  /// point (held nodes left out), not a rendering spring; it costs one more force evaluation
+  /// per step. The felt stiffness is then the
   /// tissue's (E, ν, the organ's shape), whatever the surface material's stiffness, which only
   /// sets how firmly the tool drags the contact point.
   kFemReaction,

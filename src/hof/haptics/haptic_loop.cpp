@@ -319,10 +319,9 @@ void HapticLoop::tick_impl(double time_s, double period_s, bool overrun) {
     layer.triangle = contacts[l].triangle;
     layer.barycentric = contacts[l].barycentric;
     layer.force = scale * layer_forces[l];
-    // A tool's share (layer_forces as the tool left them) is the tissue's too; only a local
-    // model that replaced the renderer's force (the FEM reaction) loads the tissue otherwise.
-    const bool replaced = contacts[l].in_contact && contacts[l].coupling_force != contacts[l].force;
-    layer.load = replaced && !tool_ ? scale * contacts[l].coupling_force : layer.force;
+    // What the contact pushes the tissue with (the renderer's, equal to the force felt except
+    // with the FEM reaction); with a tool, the layer's share as the tool left it.
+    layer.load = tool_ ? layer.force : scale * contacts[l].coupling_force;
   }
   c.tool = tool_state;
   c.tool.force = scale * tool_force;
