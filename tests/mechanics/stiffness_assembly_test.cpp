@@ -99,6 +99,54 @@ TEST(StiffnessAssembly, MeshSpringTargetsAgree) {
   expect_targets_agree(**field, deformed(box));
 }
 
+// A patch's force summed from the elements that touch it alone (the FEM-reaction coupling's
+// path) equals the whole pass's entries summed over the same nodes, for every rotation method
+// and with velocities that load the springs' dampers. A patch both inside the box and on its
+// surface, listing a node twice (it must count once).
+void expect_patch_sum_agrees(const ForceField& field, const Eigen::VectorXd& x) {
+  const Eigen::Index n = x.size() / 3;
+  Eigen::VectorXd v(x.size());
+  for (Eigen::Index i = 0; i < v.size(); ++i) v[i] = 0.01 * std::sin(0.7 * static_cast<double>(i));
+  ForceFieldState state = field.make_state();
+  Eigen::VectorXd f = Eigen::VectorXd::Zero(x.size());
+  field.add_force(x, v, state, f);
+  const std::vector<std::int32_t> patch{0, 5, 6, 17, 5, static_cast<std::int32_t>(n - 1)};
+  std::vector<std::uint8_t> in_set(static_cast<std::size_t>(n), 0);
+  Vec3 expected = Vec3::Zero();
+  for (const std::int32_t node : patch) {
+    if (in_set[static_cast<std::size_t>(node)] == 0) expected += f.segment<3>(3 * static_cast<Eigen::Index>(node));
+    in_set[static_cast<std::size_t>(node)] = 1;
+  }
+  ASSERT_GT(expected.norm(), 0.0);
+  std::vector<std::int32_t> scratch;
+  Vec3 total = Vec3::Zero();
+  ASSERT_TRUE(field.add_force_sum_on(x, v, patch, in_set, scratch, total));
+  EXPECT_LT((total - expected).norm(), 1e-12 * f.norm()) << total.transpose() << " vs " << expected.transpose();
+  // Every node marked: the internal forces cancel, the sum is that of the whole pass.
+  std::fill(in_set.begin(), in_set.end(), std::uint8_t{1});
+  std::vector<std::int32_t> all(static_cast<std::size_t>(n));
+  for (std::size_t i = 0; i < all.size(); ++i) all[i] = static_cast<std::int32_t>(i);
+  total.setZero();
+  ASSERT_TRUE(field.add_force_sum_on(x, v, all, in_set, scratch, total));
+  Vec3 whole = Vec3::Zero();
+  for (Eigen::Index i = 0; i < n; ++i) whole += f.segment<3>(3 * i);
+  EXPECT_LT((total - whole).norm(), 1e-10 * f.norm());
+}
+
+TEST(PatchForceSum, AgreesWithTheWholePass) {
+  const auto box = testing::box_mesh(3, 2, 2, Vec3(0.03, 0.02, 0.02));
+  const Eigen::VectorXd x = deformed(box);
+  for (const FemMethod method : {FemMethod::kSmall, FemMethod::kLarge, FemMethod::kPolar}) {
+    SCOPED_TRACE(static_cast<int>(method));
+    auto fem = TetrahedronFemForceField::make(box.nodes, box.tets, {30000.0, 0.45, method, {}, {}}, "tissue");
+    ASSERT_TRUE(fem.has_value()) << fem.error().to_string();
+    expect_patch_sum_agrees(**fem, x);
+  }
+  auto springs = MeshSpringForceField::make(box.nodes, box.tets, {}, {5000.0, 25.0}, "tissue");
+  ASSERT_TRUE(springs.has_value()) << springs.error().to_string();
+  expect_patch_sum_agrees(**springs, x);
+}
+
 TEST(BlockSparseMatrix, CompleteFromUpperMirrorsAndSumsRows) {
   auto m = BlockSparseMatrix::from_pairs(4, {{0, 1}, {1, 2}, {0, 3}, {2, 3}});
   m.prepare_single_precision();

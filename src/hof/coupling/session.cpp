@@ -123,6 +123,12 @@ Session::Session(std::vector<SessionBody> bodies, std::unique_ptr<haptics::Devic
     for (BodyRuntime& r : bodies_) {
       r.patch_nodes.reserve(kFemReactionPatchCapacity);
       r.patch_weights.reserve(kFemReactionPatchCapacity);
+      if (r.body.deformable()) {
+        // point_elastic_force's scratch: the elements touching a full patch (a node has a few
+        // tens), sized here so that no step allocates.
+        r.state.work.node_marks.assign(r.body.model->node_count(), 0);
+        r.state.work.element_scratch.reserve(32 * kFemReactionPatchCapacity);
+      }
     }
   }
   step_ok_.reserve(bodies_.size());

@@ -35,6 +35,15 @@ Expected<std::unique_ptr<ConstantForceField>> ConstantForceField::make(std::size
   return field;
 }
 
+bool ConstantForceField::add_force_sum_on(const Eigen::VectorXd&, const Eigen::VectorXd&, std::span<const std::int32_t>,
+                                          std::span<const std::uint8_t> in_set, std::vector<std::int32_t>&,
+                                          Vec3& total) const {
+  for (std::size_t k = 0; k < indices_.size(); ++k) {
+    if (in_set[static_cast<std::size_t>(indices_[k])] != 0) total += forces_[k];
+  }
+  return true;
+}
+
 void ConstantForceField::add_force(const Eigen::VectorXd&, const Eigen::VectorXd&, ForceFieldState&,
                                    Eigen::VectorXd& f) const {
   for (std::size_t k = 0; k < indices_.size(); ++k) f.segment<3>(3 * static_cast<Eigen::Index>(indices_[k])) += forces_[k];

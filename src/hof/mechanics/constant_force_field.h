@@ -26,6 +26,9 @@ class ConstantForceField final : public ForceField {
   [[nodiscard]] std::string_view type_name() const override { return "ConstantForceField"; }
   void collect_couplings(std::vector<std::pair<std::int32_t, std::int32_t>>&) const override {}
   void bind(const BlockSparseMatrix&) override {}
+  bool add_force_sum_on(const Eigen::VectorXd& x, const Eigen::VectorXd& v, std::span<const std::int32_t> nodes,
+                        std::span<const std::uint8_t> in_set, std::vector<std::int32_t>& scratch,
+                        Vec3& total) const override;
   void add_force(const Eigen::VectorXd& x, const Eigen::VectorXd& v, ForceFieldState& state,
                  Eigen::VectorXd& f) const override;
   void add_stiffness(const ForceFieldState&, double, BlockSparseMatrix&) const override {}

@@ -24,17 +24,35 @@ void compute_forces(const MechanicalModel& model, MechanicalState& state, const 
 
 Vec3 point_elastic_force(const MechanicalModel& model, MechanicalState& state, std::span<const std::int32_t> nodes,
                          std::span<const double> weights) {
-  Eigen::VectorXd& f = state.work.k1x;
-  f.setZero();
-  for (std::size_t k = 0; k < model.force_fields.size(); ++k) {
-    model.force_fields[k]->add_force(state.x, state.v, state.field_states[k], f);
+  SolverWorkspace& w = state.work;
+  if (w.node_marks.size() != model.node_count()) w.node_marks.assign(model.node_count(), 0);
+  // A node listed twice counts once: the marks are a set.
+  for (std::size_t i = 0; i < nodes.size(); ++i) {
+    if (weights[i] > 1e-12) w.node_marks[static_cast<std::size_t>(nodes[i])] = 1;
   }
   Vec3 total = Vec3::Zero();
-  for (std::size_t i = 0; i < nodes.size(); ++i) {
-    bool seen = false;  // a node listed twice counts once
-    for (std::size_t j = 0; j < i; ++j) seen = seen || nodes[j] == nodes[i];
-    if (!seen && weights[i] > 1e-12) total += f.segment<3>(3 * static_cast<Eigen::Index>(nodes[i]));
+  bool local = true;
+  for (const auto& field : model.force_fields) {
+    if (!field->add_force_sum_on(state.x, state.v, nodes, w.node_marks, w.element_scratch, total)) {
+      local = false;
+      break;
+    }
   }
+  if (!local) {
+    // A field that can only be evaluated whole: the whole pass, then the marked entries.
+    Eigen::VectorXd& f = w.k1x;
+    f.setZero();
+    for (std::size_t k = 0; k < model.force_fields.size(); ++k) {
+      model.force_fields[k]->add_force(state.x, state.v, state.field_states[k], f);
+    }
+    total.setZero();
+    for (const std::int32_t n : nodes) {
+      if (w.node_marks[static_cast<std::size_t>(n)] == 0) continue;
+      total += f.segment<3>(3 * static_cast<Eigen::Index>(n));
+      w.node_marks[static_cast<std::size_t>(n)] = 0;
+    }
+  }
+  for (const std::int32_t n : nodes) w.node_marks[static_cast<std::size_t>(n)] = 0;
   return total;
 }
 

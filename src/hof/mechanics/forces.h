@@ -20,7 +20,9 @@ void compute_forces(const MechanicalModel& model, MechanicalState& state, const 
 
 /// The elastic force the body exerts at a point (N): the force fields' forces (no gravity, no
 /// external input) summed over the nodes that carry the point (`weights` > 0). For a body
-/// held still by a load at that point, it is minus that load. Scratch only; no allocation.
+/// held still by a load at that point, it is minus that load. Evaluates only the elements that
+/// touch those nodes when every force field can (ForceField::add_force_sum_on), else the whole
+/// fields. Scratch in the state's workspace: it allocates only on first use or for a larger patch.
 Vec3 point_elastic_force(const MechanicalModel& model, MechanicalState& state, std::span<const std::int32_t> nodes,
                          std::span<const double> weights);
 

@@ -66,6 +66,10 @@ struct SolverWorkspace {
   std::int64_t system_assembled_step{-1};
   double system_mass_coeff{0.0}, system_stiffness_coeff{0.0};
   std::vector<Eigen::Matrix3d> block_jacobi;       // (N) inverse diagonal blocks
+  // point_elastic_force: the set of a patch's nodes (one flag per node, cleared after each
+  // use) and the elements touching them.
+  std::vector<std::uint8_t> node_marks;
+  std::vector<std::int32_t> element_scratch;
   // Sparse direct solver: CSC copy of `system` and the value map from block storage.
   // Sparse direct solver on the fill-reducing (AMD) permutation P A Pᵀ, lower triangle,
   // computed once: each step copies values and refactors without allocating.

@@ -227,6 +227,32 @@ void MeshSpringForceField::spring_groups(const SpringGroup* __restrict groups, s
   }
 }
 
+// The springs touching the set, each once, with the spring pass's law.
+bool MeshSpringForceField::add_force_sum_on(const Eigen::VectorXd& x, const Eigen::VectorXd& v,
+                                            std::span<const std::int32_t> nodes, std::span<const std::uint8_t> in_set,
+                                            std::vector<std::int32_t>& scratch, Vec3& total) const {
+  scratch.clear();
+  for (const std::int32_t n : nodes) {
+    for (const std::int32_t entry : incidence_.of(static_cast<std::size_t>(n))) scratch.push_back(entry >> 1);
+  }
+  std::sort(scratch.begin(), scratch.end());
+  scratch.erase(std::unique(scratch.begin(), scratch.end()), scratch.end());
+  for (const std::int32_t index : scratch) {
+    const Spring& spring = springs_[static_cast<std::size_t>(index)];
+    const auto first = static_cast<Eigen::Index>(spring.nodes[0]);
+    const auto second = static_cast<Eigen::Index>(spring.nodes[1]);
+    const Vec3 d = x.segment<3>(3 * second) - x.segment<3>(3 * first);
+    const double length = d.norm();
+    if (!(length > 0.0)) continue;  // a collapsed spring has no direction (and no force)
+    const Vec3 u = d / length;
+    const double tension = config_.stiffness_n_per_m * (length - spring.rest_length) +
+                           config_.damping_n_s_per_m * (v.segment<3>(3 * second) - v.segment<3>(3 * first)).dot(u);
+    if (in_set[static_cast<std::size_t>(first)] != 0) total += tension * u;
+    if (in_set[static_cast<std::size_t>(second)] != 0) total -= tension * u;
+  }
+  return true;
+}
+
 void MeshSpringForceField::add_force(const Eigen::VectorXd& x, const Eigen::VectorXd& v, ForceFieldState& state,
                                      Eigen::VectorXd& f) const {
   const double* xs = x.data();

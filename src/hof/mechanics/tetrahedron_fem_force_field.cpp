@@ -382,6 +382,35 @@ void TetrahedronFemForceField::element_pass_general(const Eigen::VectorXd& x, Fo
       /*min_parallel=*/256);
 }
 
+// The elements touching the set, each once, evaluated as element_pass_general does (any
+// rotation method: `large` takes the same QR frame as the SIMD pass, so the sums agree to
+// round-off), their corners' forces summed where the corner is in the set.
+bool TetrahedronFemForceField::add_force_sum_on(const Eigen::VectorXd& x, const Eigen::VectorXd& /*v*/,
+                                                std::span<const std::int32_t> nodes, std::span<const std::uint8_t> in_set,
+                                                std::vector<std::int32_t>& scratch, Vec3& total) const {
+  scratch.clear();
+  for (const std::int32_t n : nodes) {
+    for (const std::int32_t entry : incidence_.of(static_cast<std::size_t>(n))) scratch.push_back(entry >> 2);
+  }
+  std::sort(scratch.begin(), scratch.end());
+  scratch.erase(std::unique(scratch.begin(), scratch.end()), scratch.end());
+  const double lambda = lame_.lambda;
+  const double mu = lame_.mu;
+  for (const std::int32_t index : scratch) {
+    const Element& e = elements_[static_cast<std::size_t>(index)];
+    const Mat3 deformation = deformation_gradient(e, x);
+    const Mat3 r = rotation(e, deformation, x);
+    const Mat3 unrotated = r.transpose() * deformation;
+    const Mat3 strain = 0.5 * (unrotated + unrotated.transpose()) - Mat3::Identity();
+    const Mat3 stress = lambda * strain.trace() * Mat3::Identity() + 2.0 * mu * strain;
+    const Mat3 force_map = -e.volume * (r * stress);
+    for (int i = 0; i < 4; ++i) {
+      if (in_set[static_cast<std::size_t>(e.nodes[i])] != 0) total += force_map * e.gradients[i];
+    }
+  }
+  return true;
+}
+
 void TetrahedronFemForceField::add_force(const Eigen::VectorXd& x, const Eigen::VectorXd& /*v*/,
                                          ForceFieldState& state, Eigen::VectorXd& f) const {
   if (config_.method == FemMethod::kLarge) element_pass_large(x, state);

@@ -60,6 +60,9 @@ class TetrahedronFemForceField final : public ForceField {
   [[nodiscard]] ForceFieldState make_state() const override;
   void collect_couplings(std::vector<std::pair<std::int32_t, std::int32_t>>& pairs) const override;
   void bind(const BlockSparseMatrix& pattern) override;
+  bool add_force_sum_on(const Eigen::VectorXd& x, const Eigen::VectorXd& v, std::span<const std::int32_t> nodes,
+                        std::span<const std::uint8_t> in_set, std::vector<std::int32_t>& scratch,
+                        Vec3& total) const override;
   void add_force(const Eigen::VectorXd& x, const Eigen::VectorXd& v, ForceFieldState& state,
                  Eigen::VectorXd& f) const override;
   void add_stiffness(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const override;
