@@ -2449,6 +2449,11 @@ int Gui::run(std::vector<ScriptAction> script, const std::string& script_name) {
       break;
     }
   }
+  if (options_.result) {
+    options_.result->frames = frames;
+    options_.result->wall_s = seconds_between(started, Clock::now());
+    if (session_) options_.result->session = session_->stop_realtime();
+  }
   if (scripted && !options_.quiet) {
     const double wall = seconds_between(started, Clock::now());
     std::printf("hof gui: %llu frames in %.2f s (%.1f frames/s); last second: %.0f frames/s, %.0f simulation steps/s, haptic %.0f Hz, "

@@ -6,12 +6,21 @@
 /// steps the simulation and never holds a lock that the haptic loop could wait on.
 
 #include <filesystem>
+#include <cstdint>
 #include <optional>
 #include <string>
 
+#include "hof/coupling/session.h"
 #include "hof/haptics/cpu_keep_awake.h"
 
 namespace hof::app {
+
+/// What a run of the window did, for `hof bench` (the framework with the window open).
+struct GuiRunResult {
+  std::uint64_t frames{0};
+  double wall_s{0.0};                              ///< from the window's first frame to its last
+  std::optional<coupling::SessionReport> session;  ///< the world's session, stopped at the end
+};
 
 struct GuiOptions {
   std::optional<std::filesystem::path> file;    ///< project, SOFA or X3D scene
@@ -21,6 +30,7 @@ struct GuiOptions {
   bool quiet{false};
   /// Keep the CPUs from halting so the haptic thread wakes on time (cpu_keep_awake.h).
   haptics::KeepAwake keep_awake{haptics::KeepAwake::automatic};
+  GuiRunResult* result{nullptr};  ///< filled when the run ends, if given
 };
 
 /// Runs the window until it is closed (or the script ends). Returns the exit status: 0, or 1
