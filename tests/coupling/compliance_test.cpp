@@ -63,14 +63,8 @@ TEST(ComplianceCoupling, FeltForceMatchesTheStaticFemReactionWithinTenPercent) {
   ASSERT_TRUE(model);
   auto mapping = SurfaceMapping::by_index(liver.nodes, b.surface.vertices, b.surface_to_volume);
   ASSERT_TRUE(mapping);
-  haptics::MotionConfig motion;
-  motion.kind = haptics::MotionKind::kPoke;
-  motion.start_m = top + Vec3(0, 0, 0.004);
-  motion.direction = Vec3(0, 0, -1);
-  motion.approach_m = 0.004;
-  motion.depth_m = 0.004;
-  motion.speed_m_per_s = 0.004;  // slow: 1 mm per 0.25 s
-  motion.hold_s = 0.5;
+  // slow: 1 mm per 0.25 s
+  const haptics::MotionConfig motion = haptics::MotionConfig::poke(top + Vec3(0, 0, 0.004), Vec3(0, 0, -1), 0.004, 0.004, 0.004, 0.5);
   auto scripted = haptics::ScriptedMotion::make(motion);
   ASSERT_TRUE(scripted);
   haptics::DeviceSpec spec;

@@ -53,14 +53,7 @@ Press make_press(const mesh::Mesh& liver, ContactCoupling coupling, double dt_s 
   EXPECT_TRUE(model) << model.error().to_string();
   auto mapping = SurfaceMapping::by_index(liver.nodes, p.boundary.surface.vertices, p.boundary.surface_to_volume);
   EXPECT_TRUE(mapping);
-  haptics::MotionConfig motion;
-  motion.kind = haptics::MotionKind::kPoke;
-  motion.start_m = p.top + Vec3(0, 0, 0.003);
-  motion.direction = Vec3(0, 0, -1);
-  motion.approach_m = 0.003;
-  motion.depth_m = 0.005;
-  motion.speed_m_per_s = 0.02;
-  motion.hold_s = 0.6;
+  const haptics::MotionConfig motion = haptics::MotionConfig::poke(p.top + Vec3(0, 0, 0.003), Vec3(0, 0, -1), 0.003, 0.005, 0.02, 0.6);
   auto scripted = haptics::ScriptedMotion::make(motion);
   EXPECT_TRUE(scripted);
   haptics::DeviceSpec spec;

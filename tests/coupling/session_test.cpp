@@ -32,14 +32,8 @@ PokeRun poke(ContactCoupling coupling, haptics::RendererKind renderer, double se
   EXPECT_TRUE(mapping);
   SessionBody body{"liver", std::move(*model), b.surface, std::move(*mapping), {}, {}};
 
-  haptics::MotionConfig motion;  // straight down onto the right lobe's top, 1.5 cm deep
-  motion.kind = haptics::MotionKind::kPoke;
-  motion.start_m = Vec3(0.03, 0.0, 0.09);
-  motion.direction = Vec3(0, 0, -1);
-  motion.approach_m = 0.04;
-  motion.depth_m = 0.015;
-  motion.speed_m_per_s = 0.05;
-  motion.hold_s = 0.2;
+  // straight down onto the right lobe's top, 1.5 cm deep
+  const haptics::MotionConfig motion = haptics::MotionConfig::poke(Vec3(0.03, 0.0, 0.09), Vec3(0, 0, -1), 0.04, 0.015, 0.05, 0.2);
   auto scripted = haptics::ScriptedMotion::make(motion);
   EXPECT_TRUE(scripted);
   haptics::DeviceSpec spec;

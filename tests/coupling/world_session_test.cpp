@@ -27,14 +27,7 @@ mesh::TriMesh box(const Vec3& lo, const Vec3& hi) { return hof::testing::box_sur
 
 std::unique_ptr<haptics::ScriptedDevice> poke_device(const Vec3& start, const Vec3& direction, double approach, double depth,
                                                       double speed, double hold, const haptics::DeviceSpec& spec = {}) {
-  haptics::MotionConfig motion;
-  motion.kind = haptics::MotionKind::kPoke;
-  motion.start_m = start;
-  motion.direction = direction;
-  motion.approach_m = approach;
-  motion.depth_m = depth;
-  motion.speed_m_per_s = speed;
-  motion.hold_s = hold;
+  const haptics::MotionConfig motion = haptics::MotionConfig::poke(start, direction, approach, depth, speed, hold);
   auto scripted = haptics::ScriptedMotion::make(motion);
   EXPECT_TRUE(scripted) << scripted.error().to_string();
   return std::make_unique<haptics::ScriptedDevice>(*scripted, spec);

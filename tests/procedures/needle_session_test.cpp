@@ -29,14 +29,7 @@ mesh::TriMesh box(const Vec3& lo, const Vec3& hi) { return hof::testing::box_sur
 // `speed`, hold, withdraw to the start at the same speed.
 std::unique_ptr<haptics::ScriptedDevice> insertion(const Vec3& start, double approach, double depth, double speed, double hold,
                                                     const haptics::DeviceSpec& spec = {}) {
-  haptics::MotionConfig motion;
-  motion.kind = haptics::MotionKind::kPoke;
-  motion.start_m = start;
-  motion.direction = Vec3(0, 0, -1);
-  motion.approach_m = approach;
-  motion.depth_m = depth;
-  motion.speed_m_per_s = speed;
-  motion.hold_s = hold;
+  const haptics::MotionConfig motion = haptics::MotionConfig::poke(start, Vec3(0, 0, -1), approach, depth, speed, hold);
   auto scripted = haptics::ScriptedMotion::make(motion);
   EXPECT_TRUE(scripted) << scripted.error().to_string();
   return std::make_unique<haptics::ScriptedDevice>(*scripted, spec);
@@ -252,14 +245,9 @@ TEST(NeedleInsertion, TheAxisFollowsTheMotionOrTheNormalAndTheLateralSpringHolds
     // A point proxy on the flat face: the entry is where the path crosses it, the normal the
     // face's own (no shading from the box's edges).
     config.haptics.renderer.kind = haptics::RendererKind::kGodObject;
-    haptics::MotionConfig motion;
-    motion.kind = haptics::MotionKind::kPoke;
-    motion.start_m = Vec3(-0.006, 0.0, 0.02);
-    motion.direction = Vec3(0.3, 0.0, -1.0);
-    motion.approach_m = 0.02 * Vec3(0.3, 0.0, -1.0).norm();  // to z = 0
-    motion.depth_m = 0.03;
-    motion.speed_m_per_s = 0.01;
-    motion.hold_s = 0.2;
+    const Vec3 direction(0.3, 0.0, -1.0);
+    const haptics::MotionConfig motion =
+        haptics::MotionConfig::poke(Vec3(-0.006, 0.0, 0.02), direction, 0.02 * direction.norm() /* to z = 0 */, 0.03, 0.01, 0.2);
     auto session = Session::make(std::move(bodies), std::make_unique<haptics::ScriptedDevice>(*haptics::ScriptedMotion::make(motion)), config);
     EXPECT_TRUE(session);
     haptics::HapticSample deepest;

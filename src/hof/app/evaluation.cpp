@@ -261,6 +261,32 @@ void set_solver(ModelConfig& c, Solver s, double dt_s) {
   }
 }
 
+// The haptic-rate CG: few warm-started iterations, the matrix assembled every few steps.
+void use_haptic_rate_cg(ModelConfig& c) {
+  c.linear.iterations = kHapticRateCgIterations;
+  c.linear.warm_start = true;
+  c.ode.matrix_reuse_steps = kHapticRateMatrixReuseSteps;
+}
+
+// The physiological co-rotational liver with implicit Euler + CG at dt: most of the matrix
+// past the thesis' own figures. Gravity off where the organ is pressed (carried by the tissue
+// around it, as in the example scenes).
+struct CorotationalSetup {
+  double dt_s;
+  int iterations{25};
+  bool haptic_rate_cg{false};
+  bool gravity{true};
+};
+
+ModelConfig corotational_config(const Body& b, const CorotationalSetup& s) {
+  ModelConfig config = body_config(b, Field::kLarge, Settings::kPhysiological);
+  set_solver(config, Solver::kImplicitCg, s.dt_s);
+  config.linear.iterations = s.iterations;
+  if (s.haptic_rate_cg) use_haptic_rate_cg(config);
+  if (!s.gravity) config.gravity_m_per_s2 = Vec3::Zero();
+  return config;
+}
+
 // ---------------------------------------------------------------------------------------
 // Measuring a cell.
 
@@ -448,15 +474,7 @@ std::size_t pressed_vertex(const Body& b, const mesh::BoundarySurface& boundary)
 
 // The press of the framework cells: from 1 cm above the point, 8 mm deep at 2 cm/s, held.
 haptics::MotionConfig framework_press(const Vec3& top) {
-  haptics::MotionConfig motion;
-  motion.kind = haptics::MotionKind::kPoke;
-  motion.start_m = top + Vec3(0, 0, 0.01);
-  motion.direction = Vec3(0, 0, -1);
-  motion.approach_m = 0.01;
-  motion.depth_m = 0.008;
-  motion.speed_m_per_s = 0.02;
-  motion.hold_s = 10.0;
-  return motion;
+  return haptics::MotionConfig::poke(top + Vec3(0, 0, 0.01), Vec3(0, 0, -1), 0.01, 0.008, 0.02, 10.0);
 }
 
 coupling::SessionConfig framework_session_config(coupling::ContactCoupling mode) {
@@ -688,9 +706,7 @@ void time_coupling(const Body& b, const CouplingReference& ref, coupling::Contac
   ModelConfig config = coupling_press_config(b);
   if (mode == coupling::ContactCoupling::kFemReaction) {
     config.dt_s = 0.001;
-    config.linear.iterations = kHapticRateCgIterations;
-    config.linear.warm_start = true;
-    config.ode.matrix_reuse_steps = kHapticRateMatrixReuseSteps;
+    use_haptic_rate_cg(config);
   }
   auto model = build_model(config);
   auto mapping = coupling::SurfaceMapping::by_index(b.nodes, boundary.surface.vertices, boundary.surface_to_volume);
@@ -699,14 +715,8 @@ void time_coupling(const Body& b, const CouplingReference& ref, coupling::Contac
     cell.failure = !model ? model.error().to_string() : mapping.error().to_string();
     return;
   }
-  haptics::MotionConfig motion;
-  motion.kind = haptics::MotionKind::kPoke;
-  motion.start_m = ref.top + Vec3(0, 0, 0.004);
-  motion.direction = Vec3(0, 0, -1);
-  motion.approach_m = 0.004;
-  motion.depth_m = 0.004;
-  motion.speed_m_per_s = 0.004;
-  motion.hold_s = 1.0;  // the run ends 0.6 s into it
+  // Held 1 s: the run ends 0.6 s into the hold.
+  const haptics::MotionConfig motion = haptics::MotionConfig::poke(ref.top + Vec3(0, 0, 0.004), Vec3(0, 0, -1), 0.004, 0.004, 0.004, 1.0);
   auto scripted = haptics::ScriptedMotion::make(motion);
   if (!scripted) {
     cell.stable = false;
@@ -778,6 +788,22 @@ struct PlannedCell {
 };
 
 std::string dt_label(double dt) { return fmt::format("dt{:g}", dt); }
+
+// A cell's description for a corotational_config set-up.
+Cell corotational_cell(std::string section, std::string name, const std::string& mesh, const CorotationalSetup& s) {
+  Cell c;
+  c.section = std::move(section);
+  c.name = std::move(name);
+  c.mesh = mesh;
+  c.field = field_name(Field::kLarge);
+  c.settings = settings_name(Settings::kPhysiological);
+  c.solver = solver_name(Solver::kImplicitCg);
+  c.dt_s = s.dt_s;
+  c.iterations = s.haptic_rate_cg ? kHapticRateCgIterations : s.iterations;
+  c.warm_start = s.haptic_rate_cg;
+  c.matrix_reuse = s.haptic_rate_cg ? kHapticRateMatrixReuseSteps : 1;
+  return c;
+}
 
 std::vector<PlannedCell> plan(bool quick, Bodies& bodies, const std::filesystem::path& out) {
   const Budget budget = budget_for(quick);
@@ -863,21 +889,13 @@ std::vector<PlannedCell> plan(bool quick, Bodies& bodies, const std::filesystem:
   // Threads (the thesis' OpenMP test, l. 1242): one core against two, co-rotational FEM.
   for (const std::string& m : livers) {
     for (int threads : {1, 2}) {
-      Cell c;
-      c.section = "threads";
-      c.name = fmt::format("threads/{}/corotational-fem/threads{}", m, threads);
-      c.mesh = m;
-      c.field = field_name(Field::kLarge);
-      c.settings = settings_name(Settings::kPhysiological);
-      c.solver = solver_name(Solver::kImplicitCg);
-      c.dt_s = 0.02;
-      c.iterations = 25;
+      const CorotationalSetup setup{0.02};
+      Cell c = corotational_cell("threads", fmt::format("threads/{}/corotational-fem/threads{}", m, threads), m, setup);
       c.threads = threads;
-      cells.push_back({c, [with_body, m, threads, budget](Cell& cell) {
+      cells.push_back({c, [with_body, m, setup, threads, budget](Cell& cell) {
                          const Body* b = with_body(m, cell);
                          if (!b) return;
-                         ModelConfig config = body_config(*b, Field::kLarge, Settings::kPhysiological);
-                         set_solver(config, Solver::kImplicitCg, 0.02);
+                         ModelConfig config = corotational_config(*b, setup);
                          config.threads = threads;
                          time_cell(config, budget, cell);
                        }});
@@ -940,27 +958,14 @@ std::vector<PlannedCell> plan(bool quick, Bodies& bodies, const std::filesystem:
   for (const std::string& m : rate_meshes) {
     for (bool warm : {false, true}) {
       for (int threads : {1, 2}) {
-        const int k = warm ? kHapticRateCgIterations : 25;
-        Cell c;
-        c.section = "haptic_rate";
-        c.name = fmt::format("haptic_rate/{}/cg{}{}/threads{}", m, k, warm ? "-warm" : "", threads);
-        c.matrix_reuse = warm ? kHapticRateMatrixReuseSteps : 1;
-        c.mesh = m;
-        c.field = field_name(Field::kLarge);
-        c.settings = settings_name(Settings::kPhysiological);
-        c.solver = solver_name(Solver::kImplicitCg);
-        c.dt_s = 0.001;
-        c.iterations = k;
-        c.warm_start = warm;
+        const CorotationalSetup setup{0.001, 25, warm};
+        Cell c = corotational_cell("haptic_rate", "", m, setup);
+        c.name = fmt::format("haptic_rate/{}/cg{}{}/threads{}", m, c.iterations, warm ? "-warm" : "", threads);
         c.threads = threads;
-        cells.push_back({c, [with_body, m, k, warm, threads, budget](Cell& cell) {
+        cells.push_back({c, [with_body, m, setup, threads, budget](Cell& cell) {
                            const Body* b = with_body(m, cell);
                            if (!b) return;
-                           ModelConfig config = body_config(*b, Field::kLarge, Settings::kPhysiological);
-                           set_solver(config, Solver::kImplicitCg, 0.001);
-                           config.linear.iterations = k;
-                           config.linear.warm_start = warm;
-                           if (warm) config.ode.matrix_reuse_steps = kHapticRateMatrixReuseSteps;
+                           ModelConfig config = corotational_config(*b, setup);
                            config.threads = threads;
                            time_cell(config, budget, cell);
                            // The error does not depend on the thread count: measured once.
@@ -974,59 +979,29 @@ std::vector<PlannedCell> plan(bool quick, Bodies& bodies, const std::filesystem:
   const double framework_s = quick ? 0.6 : 4.0;
   for (const std::string& m : quick ? std::vector<std::string>{"simple"} : std::vector<std::string>{"simple", "medium", "fine"}) {
     for (bool haptic_rate : {false, true}) {
-      Cell c;
-      c.section = "framework";
-      c.name = fmt::format("framework/{}/{}", m, haptic_rate ? "haptic-rate-fem-reaction" : "dt10ms-barycentric");
-      c.mesh = m;
-      c.field = field_name(Field::kLarge);
-      c.settings = settings_name(Settings::kPhysiological);
-      c.solver = solver_name(Solver::kImplicitCg);
-      c.dt_s = haptic_rate ? 0.001 : 0.01;
-      c.iterations = haptic_rate ? kHapticRateCgIterations : 25;
-      c.warm_start = haptic_rate;
-      c.matrix_reuse = haptic_rate ? kHapticRateMatrixReuseSteps : 1;
+      const CorotationalSetup setup{haptic_rate ? 0.001 : 0.01, 25, haptic_rate, false};
+      Cell c = corotational_cell("framework", fmt::format("framework/{}/{}", m, haptic_rate ? "haptic-rate-fem-reaction" : "dt10ms-barycentric"),
+                                 m, setup);
       c.renderer = haptic_rate ? "ruspini, fem-reaction" : "ruspini, barycentric";
-      cells.push_back({c, [with_body, m, haptic_rate, framework_s](Cell& cell) {
+      cells.push_back({c, [with_body, m, setup, haptic_rate, framework_s](Cell& cell) {
                          const Body* b = with_body(m, cell);
                          if (!b) return;
-                         ModelConfig config = body_config(*b, Field::kLarge, Settings::kPhysiological);
-                         set_solver(config, Solver::kImplicitCg, haptic_rate ? 0.001 : 0.01);
-                         config.gravity_m_per_s2 = Vec3::Zero();  // the organ carried by the tissue around it
-                         if (haptic_rate) {
-                           config.linear.iterations = kHapticRateCgIterations;
-                           config.linear.warm_start = true;
-                           config.ode.matrix_reuse_steps = kHapticRateMatrixReuseSteps;
-                         }
-                         time_framework(*b, config, haptic_rate ? coupling::ContactCoupling::kFemReaction : coupling::ContactCoupling::kBarycentric,
-                                        framework_s, cell);
+                         time_framework(*b, corotational_config(*b, setup),
+                                        haptic_rate ? coupling::ContactCoupling::kFemReaction : coupling::ContactCoupling::kBarycentric, framework_s,
+                                        cell);
                        }});
     }
   }
   // ... and with the window open, at the haptic rate on the mesh of the real-time goal.
   {
     const std::string m = quick ? "simple" : "medium";
-    Cell c;
-    c.section = "framework";
-    c.name = fmt::format("framework/{}/haptic-rate-fem-reaction/window", m);
-    c.mesh = m;
-    c.field = field_name(Field::kLarge);
-    c.settings = settings_name(Settings::kPhysiological);
-    c.solver = solver_name(Solver::kImplicitCg);
-    c.dt_s = 0.001;
-    c.iterations = kHapticRateCgIterations;
-    c.warm_start = true;
-    c.matrix_reuse = kHapticRateMatrixReuseSteps;
+    const CorotationalSetup setup{0.001, 25, true, false};
+    Cell c = corotational_cell("framework", fmt::format("framework/{}/haptic-rate-fem-reaction/window", m), m, setup);
     c.renderer = "ruspini, fem-reaction, window";
-    cells.push_back({c, [with_body, m, framework_s, out](Cell& cell) {
+    cells.push_back({c, [with_body, m, setup, framework_s, out](Cell& cell) {
                        const Body* b = with_body(m, cell);
                        if (!b) return;
-                       ModelConfig config = body_config(*b, Field::kLarge, Settings::kPhysiological);
-                       set_solver(config, Solver::kImplicitCg, 0.001);
-                       config.gravity_m_per_s2 = Vec3::Zero();
-                       config.linear.iterations = kHapticRateCgIterations;
-                       config.linear.warm_start = true;
-                       config.ode.matrix_reuse_steps = kHapticRateMatrixReuseSteps;
-                       time_framework_window(*b, config, out, framework_s, cell);
+                       time_framework_window(*b, corotational_config(*b, setup), out, framework_s, cell);
                      }});
   }
 
@@ -1035,23 +1010,13 @@ std::vector<PlannedCell> plan(bool quick, Bodies& bodies, const std::filesystem:
     const std::string m = quick ? "simple" : "medium";
     const double seconds = quick ? 0.2 : 2.0;
     for (int count : {1, 2}) {
-      Cell c;
-      c.section = "bodies";
-      c.name = fmt::format("bodies/{}/livers{}", m, count);
-      c.mesh = m;
-      c.field = field_name(Field::kLarge);
-      c.settings = settings_name(Settings::kPhysiological);
-      c.solver = solver_name(Solver::kImplicitCg);
-      c.dt_s = 0.01;
-      c.iterations = 25;
+      const CorotationalSetup setup{0.01, 25, false, false};
+      Cell c = corotational_cell("bodies", fmt::format("bodies/{}/livers{}", m, count), m, setup);
       c.bodies = count;
-      cells.push_back({c, [with_body, m, count, seconds](Cell& cell) {
+      cells.push_back({c, [with_body, m, setup, count, seconds](Cell& cell) {
                          const Body* b = with_body(m, cell);
                          if (!b) return;
-                         ModelConfig config = body_config(*b, Field::kLarge, Settings::kPhysiological);
-                         set_solver(config, Solver::kImplicitCg, 0.01);
-                         config.gravity_m_per_s2 = Vec3::Zero();
-                         time_bodies(*b, config, count, seconds, cell);
+                         time_bodies(*b, corotational_config(*b, setup), count, seconds, cell);
                        }});
     }
   }
@@ -1065,18 +1030,10 @@ std::vector<PlannedCell> plan(bool quick, Bodies& bodies, const std::filesystem:
                                std::pair{coupling::ContactCoupling::kBarycentric, "barycentric"},
                                std::pair{coupling::ContactCoupling::kCompliance, "compliance"},
                                std::pair{coupling::ContactCoupling::kFemReaction, "fem-reaction"}}) {
-      Cell c;
-      c.section = "coupling";
-      c.name = fmt::format("coupling/{}/{}", m, label);
-      c.mesh = m;
-      c.field = field_name(Field::kLarge);
-      c.settings = settings_name(Settings::kPhysiological);
-      c.solver = solver_name(Solver::kImplicitCg);
+      // Described as time_coupling sets it up (coupling_press_config).
       const bool haptic_rate = mode == coupling::ContactCoupling::kFemReaction;
-      c.dt_s = haptic_rate ? 0.001 : 0.02;
-      c.iterations = haptic_rate ? kHapticRateCgIterations : 100;
-      c.warm_start = haptic_rate;
-      c.matrix_reuse = haptic_rate ? kHapticRateMatrixReuseSteps : 1;
+      Cell c = corotational_cell("coupling", fmt::format("coupling/{}/{}", m, label), m,
+                                 CorotationalSetup{haptic_rate ? 0.001 : 0.02, 100, haptic_rate, false});
       c.renderer = fmt::format("god-object, {}", label);
       cells.push_back({c, [with_body, m, mode, reference](Cell& cell) {
                          const Body* b = with_body(m, cell);

@@ -353,10 +353,19 @@ void TetrahedronFemForceField::element_pass_large(const Eigen::VectorXd& x, Forc
       /*min_parallel=*/64);
 }
 
+// Linear law in the element's unrotated frame: ε = sym(RᵀF) − I, σ = λ tr(ε) I + 2μ ε; the
+// nodal forces are f_i = −V R σ b_i, returned as the map −V R σ (and R).
+Mat3 TetrahedronFemForceField::element_force_map(const Element& e, const Eigen::VectorXd& x, Mat3& r) const {
+  const Mat3 deformation = deformation_gradient(e, x);
+  r = rotation(e, deformation, x);
+  const Mat3 unrotated = r.transpose() * deformation;
+  const Mat3 strain = 0.5 * (unrotated + unrotated.transpose()) - Mat3::Identity();
+  const Mat3 stress = lame_.lambda * strain.trace() * Mat3::Identity() + 2.0 * lame_.mu * strain;
+  return -e.volume * (r * stress);
+}
+
 // Any rotation (small: R = I; polar), one element at a time, same outputs.
 void TetrahedronFemForceField::element_pass_general(const Eigen::VectorXd& x, ForceFieldState& state) const {
-  const double lambda = lame_.lambda;
-  const double mu = lame_.mu;
   double* stiffness_vectors = state.element_scalars.data();
   double* corner_forces = stiffness_vectors + kElementStride * simd::kLanes * groups_.size() + kArrayPadding;
   parallel_chunks(
@@ -364,14 +373,8 @@ void TetrahedronFemForceField::element_pass_general(const Eigen::VectorXd& x, Fo
       [&](std::size_t begin, std::size_t end) {
         for (std::size_t index = begin; index < end; ++index) {
           const Element& e = elements_[index];
-          const Mat3 deformation = deformation_gradient(e, x);
-          const Mat3 r = rotation(e, deformation, x);
-          // Linear law in the element's unrotated frame: ε = sym(RᵀF) − I,
-          // σ = λ tr(ε) I + 2μ ε; nodal forces f_i = −V R σ b_i.
-          const Mat3 unrotated = r.transpose() * deformation;
-          const Mat3 strain = 0.5 * (unrotated + unrotated.transpose()) - Mat3::Identity();
-          const Mat3 stress = lambda * strain.trace() * Mat3::Identity() + 2.0 * mu * strain;
-          const Mat3 force_map = -e.volume * (r * stress);
+          Mat3 r;
+          const Mat3 force_map = element_force_map(e, x, r);
           const double root_volume = std::sqrt(e.volume);
           for (int i = 0; i < 4; ++i) {
             Eigen::Map<Vec3>(corner_forces + kElementStride * index + kCornerStride * i) = force_map * e.gradients[i];
@@ -394,16 +397,10 @@ bool TetrahedronFemForceField::add_force_sum_on(const Eigen::VectorXd& x, const 
   }
   std::sort(scratch.begin(), scratch.end());
   scratch.erase(std::unique(scratch.begin(), scratch.end()), scratch.end());
-  const double lambda = lame_.lambda;
-  const double mu = lame_.mu;
   for (const std::int32_t index : scratch) {
     const Element& e = elements_[static_cast<std::size_t>(index)];
-    const Mat3 deformation = deformation_gradient(e, x);
-    const Mat3 r = rotation(e, deformation, x);
-    const Mat3 unrotated = r.transpose() * deformation;
-    const Mat3 strain = 0.5 * (unrotated + unrotated.transpose()) - Mat3::Identity();
-    const Mat3 stress = lambda * strain.trace() * Mat3::Identity() + 2.0 * mu * strain;
-    const Mat3 force_map = -e.volume * (r * stress);
+    Mat3 r;
+    const Mat3 force_map = element_force_map(e, x, r);
     for (int i = 0; i < 4; ++i) {
       if (in_set[static_cast<std::size_t>(e.nodes[i])] != 0) total += force_map * e.gradients[i];
     }

@@ -101,6 +101,8 @@ class TetrahedronFemForceField final : public ForceField {
   TetrahedronFemForceField() = default;
   // Rotation of element e at positions x (identity for `small`).
   Mat3 rotation(const Element& e, const Mat3& deformation_gradient, const Eigen::VectorXd& x) const;
+  // The element's nodal-force map −V R σ at x (f_i = map · b_i), and its rotation R.
+  Mat3 element_force_map(const Element& e, const Eigen::VectorXd& x, Mat3& r) const;
   // Per-element pass: corner forces and rotated scaled gradients into `state`.
   void element_pass_large(const Eigen::VectorXd& x, ForceFieldState& state) const;
   // Groups [begin, end) of the `large` pass (plain pointers keep the loop in registers).

@@ -67,6 +67,20 @@ struct MotionConfig {
   double period_s{2.0};
   /// Number of cycles; 0 = forever.
   std::uint32_t repeat{1};
+
+  /// A poke: from `start` along `direction`, `approach` to the surface, then `depth` past it at
+  /// `speed`, held for `hold` seconds, and back.
+  static MotionConfig poke(const Vec3& start, const Vec3& direction, double approach, double depth, double speed, double hold) {
+    MotionConfig m;
+    m.kind = MotionKind::kPoke;
+    m.start_m = start;
+    m.direction = direction;
+    m.approach_m = approach;
+    m.depth_m = depth;
+    m.speed_m_per_s = speed;
+    m.hold_s = hold;
+    return m;
+  }
 };
 
 /// Two unit vectors (u, w) spanning the plane normal to the unit vector `n`, with u × w = n.
