@@ -67,6 +67,38 @@ struct Session::BodyRuntime {
   // FEM-reaction coupling: the nodes of the contact's neighbourhood (reserved: no allocation).
   std::vector<std::int32_t> patch_nodes;
   std::vector<double> patch_weights;
+
+  // This step's reaction of the tissue at a contact on triangle `tri` (barycentric `bary`,
+  // carried by `triangle_nodes`), felt at the next tick: the elastic force summed over the
+  // free nodes near the contact point. A node the tool does not load is in equilibrium (its
+  // elastic force is zero) once the tissue has settled, so the sum is then minus the load,
+  // wherever in the patch it was applied; while the contact slides from triangle to triangle
+  // the last steps' loads stay in the sum, which keeps the force from jumping at every edge.
+  Vec3 fem_reaction(const mesh::Tri& tri, const std::array<double, 3>& bary, std::span<const std::int32_t> triangle_nodes) {
+    const auto at = [&](int k) -> const Vec3& { return surface_positions[static_cast<std::size_t>(tri[k])]; };
+    const Vec3 point = at(0) * bary[0] + at(1) * bary[1] + at(2) * bary[2];
+    double longest = 0.0;
+    for (int k = 0; k < 3; ++k) longest = std::max(longest, (at(k) - at((k + 1) % 3)).norm());
+    const double radius = std::max(kFemReactionPatchRadius_m, 2.0 * longest);
+    // Room is kept for the triangle's own nodes, appended last.
+    const std::size_t room = patch_nodes.capacity() - triangle_nodes.size();
+    patch_nodes.clear();
+    for (std::size_t v = 0; v < surface_positions.size() && patch_nodes.size() + SurfaceMapping::kMaxNodesPerVertex <= room; ++v) {
+      if ((surface_positions[v] - point).squaredNorm() > radius * radius) continue;
+      const std::array<std::int32_t, 1> vertex{static_cast<std::int32_t>(v)};
+      const std::array<double, 1> one{1.0};
+      std::array<std::int32_t, SurfaceMapping::kMaxNodesPerVertex> vertex_nodes{};
+      std::array<double, SurfaceMapping::kMaxNodesPerVertex> vertex_weights{};
+      const std::size_t n = body.mapping.point_weights(vertex, one, vertex_nodes, vertex_weights);
+      for (std::size_t k = 0; k < n; ++k) {
+        // A held node's elastic force is the support's reaction, not the tool's.
+        if (!body.model->fixed_dof_mask[3 * static_cast<std::size_t>(vertex_nodes[k])]) patch_nodes.push_back(vertex_nodes[k]);
+      }
+    }
+    patch_nodes.insert(patch_nodes.end(), triangle_nodes.begin(), triangle_nodes.end());  // always
+    patch_weights.assign(patch_nodes.size(), 1.0);
+    return mechanics::point_elastic_force(*body.model, state, patch_nodes, patch_weights);
+  }
 };
 
 struct Session::LayerRuntime {
@@ -726,41 +758,11 @@ void Session::publish(double clock_s) {
       const std::size_t count = r.body.mapping.point_weights(vertices, bary, nodes, weights);
       Mat3 compliance;
       if (config_.coupling == ContactCoupling::kFemReaction) {
-        // This step's reaction of the tissue at the contact, felt at the next tick: the elastic
-        // force summed over the nodes near the contact point. A node the tool does not load
-        // is in equilibrium (its elastic force is zero) once the tissue has settled, so the
-        // sum is then minus the load, wherever in the patch it was applied; while the contact
-        // slides from triangle to triangle the last steps' loads stay in the sum, which keeps
-        // the force from jumping at every triangle edge.
-        const Vec3 point = r.surface_positions[static_cast<std::size_t>(tri[0])] * bary[0] +
-                           r.surface_positions[static_cast<std::size_t>(tri[1])] * bary[1] +
-                           r.surface_positions[static_cast<std::size_t>(tri[2])] * bary[2];
-        double longest = 0.0;
-        for (int k = 0; k < 3; ++k) {
-          longest = std::max(longest, (r.surface_positions[static_cast<std::size_t>(tri[k])] -
-                                       r.surface_positions[static_cast<std::size_t>(tri[(k + 1) % 3])]).norm());
-        }
-        const double radius = std::max(kFemReactionPatchRadius_m, 2.0 * longest);
-        r.patch_nodes.clear();
-        for (std::size_t v = 0; v < r.surface_positions.size() && r.patch_nodes.size() + SurfaceMapping::kMaxNodesPerVertex <= r.patch_nodes.capacity(); ++v) {
-          if ((r.surface_positions[v] - point).squaredNorm() > radius * radius) continue;
-          const std::array<std::int32_t, 1> vertex{static_cast<std::int32_t>(v)};
-          const std::array<double, 1> one{1.0};
-          std::array<std::int32_t, SurfaceMapping::kMaxNodesPerVertex> vertex_nodes{};
-          std::array<double, SurfaceMapping::kMaxNodesPerVertex> vertex_weights{};
-          const std::size_t n = r.body.mapping.point_weights(vertex, one, vertex_nodes, vertex_weights);
-          for (std::size_t k = 0; k < n; ++k) {
-            // A held node's elastic force is the support's reaction, not the tool's.
-            if (!r.body.model->fixed_dof_mask[3 * static_cast<std::size_t>(vertex_nodes[k])]) r.patch_nodes.push_back(vertex_nodes[k]);
-          }
-        }
-        for (std::size_t k = 0; k < count; ++k) r.patch_nodes.push_back(nodes[k]);  // the triangle's own, always
-        r.patch_weights.assign(r.patch_nodes.size(), 1.0);
         slot.local.valid = true;
         slot.local.direct = true;
         slot.local.triangle = last_triangle_;
         slot.local.barycentric = last_barycentric_;
-        slot.local.reaction = mechanics::point_elastic_force(*r.body.model, r.state, r.patch_nodes, r.patch_weights);
+        slot.local.reaction = r.fem_reaction(tri, bary, std::span(nodes.data(), count));
       } else if (mechanics::compute_point_compliance(*r.body.model, r.state, std::span(nodes.data(), count),
                                               std::span(weights.data(), count), compliance)) {
         const Eigen::FullPivLU<Mat3> lu(compliance);

@@ -55,8 +55,8 @@ enum class ContactCoupling : std::uint8_t {
   /// body's dt must equal the haptic period), the tissue takes each tick's contact force as
   /// `kBarycentric` does, and what the hand feels at the next tick is the FEM's own reaction
   /// of that step: the tissue's elastic force summed over the nodes within 1 cm of the contact
-  /// point (held nodes left out), not a rendering spring; it costs one more force evaluation
-  /// per step. The felt stiffness is then the
+  /// point (held nodes left out), not a rendering spring, evaluated from the elements that
+  /// touch those nodes (mechanics::point_elastic_force). The felt stiffness is then the
   /// tissue's (E, ν, the organ's shape), whatever the surface material's stiffness, which only
   /// sets how firmly the tool drags the contact point.
   kFemReaction,
