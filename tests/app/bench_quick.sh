@@ -13,7 +13,8 @@ out="$work/report"
 "$hof" bench --quick --out "$out" >"$work/stdout.txt" 2>"$work/stderr.txt" || fail "hof bench --quick: exit status $? ($(tail -3 "$work/stderr.txt"))"
 for f in results.json results.csv report.md plots.gp fig29_meshes.png fig29_meshes.svg fig30_force_fields_thesis.png \
          fig30_force_fields_physiological.png fig31_solvers_dt0.002.png fig31_solvers_dt0.02.png \
-         fig32_static-cg_cg_iterations.png fig33_implicit-cg_cg_iterations.png renderers.png threads.png haptic_rate.png haptic_rate.svg; do
+         fig32_static-cg_cg_iterations.png fig33_implicit-cg_cg_iterations.png renderers.png threads.png haptic_rate.png haptic_rate.svg \
+         fig34_framework.png coupling.png coupling.svg; do
   [ -s "$out/$f" ] || fail "$f missing or empty"
 done
 grep -q "^## Goals" "$work/stdout.txt" || fail "the tables were not printed"

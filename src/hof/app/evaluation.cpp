@@ -1597,6 +1597,48 @@ std::vector<detail::Plot> write_plot_data(const std::filesystem::path& dir, cons
                                                kHapticRateCgIterations)});
     }
   }
+  // Figure 34: the whole framework's rates in the thesis' three states, against real time.
+  {
+    std::ofstream d(dir / "fig34_framework.dat");
+    d << "setup untouched deforming contact real_time\n";
+    int rows = 0;
+    for (const Cell& c : cells) {
+      if (c.section != "framework" || !c.measured) continue;
+      const bool window = c.name.ends_with("/window");
+      d << fmt::format("\"{} {}{}\" {} {} {} {}\n", c.mesh, c.dt_s < 0.005 ? "1ms" : "10ms", window ? " window" : "", dat_value(c.rate_untouched),
+                       dat_value(c.rate_deforming), dat_value(c.rate_contact), dat_value(1.0 / c.dt_s));
+      ++rows;
+    }
+    if (rows) {
+      plots.push_back({"fig34_framework",
+                       histogram + "set ylabel 'simulation steps/s of wall time'\nset key outside right\nset xtics rotate by -25\nset yrange [10:*]\n"
+                                   "set title 'Figure 34: the whole framework in real time (scripted press; mesh, dt, window)'\n"
+                                   "plot 'fig34_framework.dat' using 2:xtic(1) title 'untouched', '' using 3 title 'deforming', '' "
+                                   "using 4 title 'in contact', '' using ($0):5 with points pt 6 ps 2 lw 2 lc rgb 'black' title "
+                                   "'real time (1/dt)'\n"});
+    }
+  }
+  // The coupling schemes' felt force against the static FEM reaction.
+  {
+    std::ofstream d(dir / "coupling.dat");
+    d << "scheme press_error_percent held_error_percent\n";
+    int rows = 0;
+    std::string mesh_name;
+    for (const Cell& c : cells) {
+      if (c.section != "coupling" || !std::isfinite(c.force_error)) continue;
+      d << fmt::format("{} {} {}\n", c.name.substr(c.name.rfind('/') + 1), dat_value(100.0 * c.force_error),
+                       dat_value(100.0 * c.force_error_settled));
+      mesh_name = c.mesh;
+      ++rows;
+    }
+    if (rows) {
+      plots.push_back({"coupling",
+                       histogram + "set ylabel '|felt - static FEM reaction| / |reaction| (%)'\nset key outside right\nset yrange [0.5:*]\nset xtics rotate by -25\n" +
+                           fmt::format("set title 'Coupling schemes on the {} liver: the force felt against the static FEM reaction'\n", mesh_name) +
+                           "plot 'coupling.dat' using 2:xtic(1) title 'largest, during the press', '' using 3 title "
+                                   "'held at 4 mm'\n"});
+    }
+  }
   return plots;
 }
 
