@@ -265,7 +265,7 @@ void set_solver(ModelConfig& c, Solver s, double dt_s) {
 void use_haptic_rate_cg(ModelConfig& c) {
   c.linear.iterations = kHapticRateCgIterations;
   c.linear.warm_start = true;
-  c.ode.matrix_reuse_steps = kHapticRateMatrixReuseSteps;
+  c.ode.matrix_reuse_steps = haptic_rate_matrix_reuse_steps(c.positions.size());
 }
 
 // The physiological co-rotational liver with implicit Euler + CG at dt: most of the matrix
@@ -307,6 +307,7 @@ bool checked_step(const MechanicalModel& model, MechanicalState& state, const Ei
 }
 
 void time_cell(const ModelConfig& config, const Budget& budget, Cell& cell) {
+  cell.matrix_reuse = config.ode.matrix_reuse_steps;  // as the model runs (it depends on the mesh)
   auto model = build_model(config);
   if (!model) {
     cell.stable = false;
@@ -492,6 +493,7 @@ void fill_framework_cell(const coupling::SessionReport& report, Cell& cell);
 // simulation each on its own thread, a scripted hand pressing the liver's top from 1 cm above
 // (contact after about 0.5 s, then held). Its rates, and the haptic period's p50/p99/max.
 void time_framework(const Body& b, const ModelConfig& config, coupling::ContactCoupling mode, double seconds, Cell& cell) {
+  cell.matrix_reuse = config.ode.matrix_reuse_steps;  // as the model runs (it depends on the mesh)
   const mesh::BoundarySurface boundary = mesh::extract_boundary(b.nodes, b.tets);
   auto model = build_model(config);
   auto mapping = coupling::SurfaceMapping::by_index(b.nodes, boundary.surface.vertices, boundary.surface_to_volume);
@@ -538,6 +540,7 @@ void fill_framework_cell(const coupling::SessionReport& report, Cell& cell) {
 // naming the scripted hand as its device) into DIR/window and opened by `hof gui` in this
 // process, which draws it for `seconds` and stops. Needs a display (Xvfb will do).
 void time_framework_window(const Body& b, const ModelConfig& config, const std::filesystem::path& dir, double seconds, Cell& cell) {
+  cell.matrix_reuse = config.ode.matrix_reuse_steps;  // as the model runs (it depends on the mesh)
   const char* display = std::getenv("DISPLAY");
   if (!display || !*display) {
     cell.failure = "no display: run `xvfb-run -a hof bench` (or from a desktop) to measure the window";
@@ -606,6 +609,7 @@ void time_framework_window(const Body& b, const ModelConfig& config, const std::
 // the first pressed, in virtual time so that the rate is the machine's, not the clock's. The
 // bodies of a world step in parallel, each with its own threads.
 void time_bodies(const Body& b, const ModelConfig& config, int count, double seconds, Cell& cell) {
+  cell.matrix_reuse = config.ode.matrix_reuse_steps;  // as the model runs (it depends on the mesh)
   const mesh::BoundarySurface boundary = mesh::extract_boundary(b.nodes, b.tets);
   std::vector<coupling::SessionBody> bodies;
   for (int i = 0; i < count; ++i) {
@@ -708,6 +712,7 @@ void time_coupling(const Body& b, const CouplingReference& ref, coupling::Contac
     config.dt_s = 0.001;
     use_haptic_rate_cg(config);
   }
+  cell.matrix_reuse = config.ode.matrix_reuse_steps;
   auto model = build_model(config);
   auto mapping = coupling::SurfaceMapping::by_index(b.nodes, boundary.surface.vertices, boundary.surface_to_volume);
   if (!model || !mapping) {
@@ -801,7 +806,7 @@ Cell corotational_cell(std::string section, std::string name, const std::string&
   c.dt_s = s.dt_s;
   c.iterations = s.haptic_rate_cg ? kHapticRateCgIterations : s.iterations;
   c.warm_start = s.haptic_rate_cg;
-  c.matrix_reuse = s.haptic_rate_cg ? kHapticRateMatrixReuseSteps : 1;
+  // matrix_reuse: set when the cell runs, from the model (haptic_rate_matrix_reuse_steps).
   return c;
 }
 
@@ -1297,7 +1302,9 @@ std::string tables(const std::vector<Cell>& cells, const std::vector<Ratio>& rat
            "step error vs LDLT | split forces / assembly / solve (us) |\n|---|---|---:|---|---:|---|\n";
     for (const Cell* c : h) {
       out += fmt::format("| {} | {}{} | {} | {} | {} | {} / {} / {} |\n", c->mesh, c->iterations,
-                         c->warm_start ? fmt::format(" warm-started, matrix every {} steps", c->matrix_reuse) : std::string(" from zero"),
+                         !c->warm_start ? std::string(" from zero")
+                         : c->matrix_reuse > 1 ? fmt::format(" warm-started, matrix every {} steps", c->matrix_reuse)
+                                               : std::string(" warm-started, matrix every step"),
                          c->threads, rate_text(*c), number(c->step_error, "{:.3g}"), number(c->forces_us, "{:.0f}"),
                          number(c->assembly_us, "{:.0f}"), number(c->solve_us, "{:.0f}"));
     }
