@@ -272,7 +272,7 @@ TEST(WorldSession, EffectOnlyWorldRendersEachEffectsOwnFormulaAtEveryTick) {
 
 // ---- The command seam.
 
-std::unique_ptr<Session> springs_liver_session(std::unique_ptr<haptics::Device> device) {
+std::unique_ptr<Session> springs_liver_session(std::unique_ptr<haptics::Device> device, int simulation_threads = 0) {
   const mesh::Mesh liver = *mesh::generate_liver(mesh::LiverResolution::kSimple);
   const mesh::BoundarySurface b = mesh::extract_boundary(liver.nodes, liver.tets);
   mechanics::ModelConfig c = testing::resting_liver_config(liver);
@@ -287,6 +287,7 @@ std::unique_ptr<Session> springs_liver_session(std::unique_ptr<haptics::Device> 
                    *SurfaceMapping::by_index(liver.nodes, b.surface.vertices, b.surface_to_volume), {}, c};
   SessionConfig config;
   config.haptics.realtime_priority = false;
+  config.simulation_threads = simulation_threads;
   auto session = Session::make(std::move(body), std::move(device), config);
   EXPECT_TRUE(session) << session.error().to_string();
   return std::move(*session);
@@ -459,6 +460,24 @@ TEST(CommandSeam, CommandsDuringARealTimeRunAreAppliedBetweenSteps) {
   EXPECT_GT(report.simulation_steps, 0);
   // Every tick's sample reached the supervisor (none lost between the threads).
   EXPECT_EQ(samples, static_cast<std::int64_t>(session->haptic_loop().ticks()));
+}
+
+TEST(RealTimeSession, TheSimulationRunsOnTheThreadsAskedForAndEveryCoreButOneByDefault) {
+  // Automatic: every core but one (the haptic loop's and the window's), at least one.
+  const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  for (int asked : {1, 2, 0}) {
+    haptics::MotionConfig hold;
+    hold.kind = haptics::MotionKind::kHold;
+    hold.start_m = Vec3(0.03, 0.0, 0.09);
+    hold.hold_s = std::numeric_limits<double>::infinity();
+    auto session = springs_liver_session(std::make_unique<haptics::ScriptedDevice>(*haptics::ScriptedMotion::make(hold)),
+                                         asked);
+    session->start_realtime();
+    while (session->haptic_loop().ticks() < 50) std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    const SessionReport report = session->stop_realtime({});
+    EXPECT_GT(report.simulation_steps, 0);
+    EXPECT_EQ(report.simulation_threads, asked > 0 ? asked : std::max(1, cores - 1)) << "asked " << asked;
+  }
 }
 
 TEST(CommandSeam, AnotherDeviceIsSwitchedToWithItsOwnForceLimit) {

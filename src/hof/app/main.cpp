@@ -95,6 +95,10 @@ void add_run_commands(CLI::App& app, int& status) {
                       "virtual machine; docs/reliability.md)")
       ->transform(CLI::CheckedTransformer(keep_awake_modes, CLI::ignore_case))
       ->default_str("auto");
+  run_cmd->add_option("--sim-threads", run.simulation_threads,
+                      "Real time: the simulation's threads (0 = automatic: every core but one, left to the haptic loop)")
+      ->check(CLI::Range(0, 256))
+      ->capture_default_str();
   run_cmd->callback([&, seconds_opt, steps_opt] {
     if (seconds_opt->count()) run.seconds = seconds;
     if (steps_opt->count()) run.steps = steps;
@@ -142,6 +146,10 @@ void add_run_commands(CLI::App& app, int& status) {
                       "auto|on|off: keep the CPUs from halting so the haptic thread wakes on time (auto: on a virtual machine)")
       ->transform(CLI::CheckedTransformer(keep_awake_modes, CLI::ignore_case))
       ->default_str("auto");
+  gui_cmd->add_option("--sim-threads", gui.simulation_threads,
+                      "The simulation's threads (0 = automatic: every core but one, left to the haptic loop and the window)")
+      ->check(CLI::Range(0, 256))
+      ->capture_default_str();
   gui_cmd->callback([&] {
     if (!gui_file.empty()) gui.file = gui_file;
     if (!gui_script.empty()) gui.script = gui_script;

@@ -318,6 +318,7 @@ int run_session(const RunOptions& options) {
   }
   coupling::SessionConfig config = world->config;
   config.haptics.realtime_priority = !options.deterministic;
+  config.simulation_threads = options.simulation_threads;
   // The limit the safety filter holds: the device's, or the project's when lower.
   const double device_max = (*device)->spec().max_force_n;
   const double max_force = config.haptics.safety.max_force_n > 0.0 ? std::min(device_max, config.haptics.safety.max_force_n) : device_max;
@@ -491,7 +492,8 @@ int run_session(const RunOptions& options) {
   // Peak resident memory of the process (getrusage reports KiB on Linux): a soak compares it
   // with the memory early in the run.
   if (rusage usage{}; ::getrusage(RUSAGE_SELF, &usage) == 0) summary["peak_rss_bytes"] = static_cast<std::int64_t>(usage.ru_maxrss) * 1024;
-  summary["simulation"] = {{"steps", report.simulation_steps}, {"dt_s", session.dt()}, {"steps_per_s", report.simulation_steps_per_s}};
+  summary["simulation"] = {{"steps", report.simulation_steps}, {"dt_s", session.dt()}, {"steps_per_s", report.simulation_steps_per_s},
+                           {"threads", options.deterministic ? 1 : report.simulation_threads}};
   summary["graphics_equivalent_fps"] = {
       {"untouched", report.rate_untouched}, {"deforming", report.rate_deforming}, {"in_contact", report.rate_in_contact}};
   summary["max_force_n"] = report.max_force_n;
@@ -611,8 +613,13 @@ int run_session(const RunOptions& options) {
     std::printf("  haptic      %lld ticks, %.0f Hz, period p50 %.1f us, p99 %.1f us, max %.1f us, %llu overruns\n",
                 static_cast<long long>(report.haptic_ticks), periods.rate_hz(), 1e6 * periods.quantile_s(0.5),
                 1e6 * periods.quantile_s(0.99), 1e6 * periods.max_s(), static_cast<unsigned long long>(periods.overruns()));
-    std::printf("  simulation  %lld steps, %.0f steps/s\n", static_cast<long long>(report.simulation_steps),
-                report.simulation_steps_per_s);
+    if (options.deterministic) {
+      std::printf("  simulation  %lld steps, %.0f steps/s\n", static_cast<long long>(report.simulation_steps),
+                  report.simulation_steps_per_s);
+    } else {
+      std::printf("  simulation  %lld steps, %.0f steps/s on %d thread%s\n", static_cast<long long>(report.simulation_steps),
+                  report.simulation_steps_per_s, report.simulation_threads, report.simulation_threads == 1 ? "" : "s");
+    }
     std::printf("  contact     %.3f s, max force %.3f N, fall-through events %lld\n", report.contact_time_s, report.max_force_n,
                 static_cast<long long>(report.fall_through_events));
     for (const coupling::BodyReport& b : report.bodies) {

@@ -23,6 +23,8 @@ struct RunOptions {
   bool quiet{false};
   /// Real time: keep the CPUs from halting (auto: on a virtual machine; cpu_keep_awake.h).
   haptics::KeepAwake keep_awake{haptics::KeepAwake::automatic};
+  /// Real time: the simulation's threads (0: automatic, every core but one).
+  int simulation_threads{0};
 };
 
 int run_session(const RunOptions& options);

@@ -134,13 +134,22 @@ double AabbTree::fit_boxes(const TriangleMeshView& mesh) {
       Vec3 lo = Vec3::Constant(kInf);
       Vec3 hi = Vec3::Constant(-kInf);
       for (std::int32_t i = node.first; i < node.first + node.count; ++i) {
-        for (int c = 0; c < 3; ++c) {
+        const Vec3& a = corner(mesh, triangle_order_[i], 0);
+        const Vec3& b = corner(mesh, triangle_order_[i], 1);
+        const Vec3& c = corner(mesh, triangle_order_[i], 2);
+        // One finiteness test per triangle (the refit runs after every simulation step):
+        // the sum of the corners is finite only when every coordinate is.
+        if ((a + b + c).allFinite()) {
+          lo = lo.cwiseMin(a).cwiseMin(b).cwiseMin(c);
+          hi = hi.cwiseMax(a).cwiseMax(b).cwiseMax(c);
+          continue;
+        }
+        for (const Vec3* p : {&a, &b, &c}) {
           // A non-finite vertex makes its triangle degenerate (never hit): leave it out
           // rather than let a NaN box hide the other triangles.
-          const Vec3& p = corner(mesh, triangle_order_[i], c);
-          if (!p.allFinite()) continue;
-          lo = lo.cwiseMin(p);
-          hi = hi.cwiseMax(p);
+          if (!p->allFinite()) continue;
+          lo = lo.cwiseMin(*p);
+          hi = hi.cwiseMax(*p);
         }
       }
       if (lo.allFinite() && hi.allFinite()) {  // else the box stays empty (lo > hi)

@@ -71,6 +71,9 @@ struct SessionConfig {
   /// per-step hook that gives its reaction to the tissue. Null: the stylus is a point/sphere.
   std::shared_ptr<haptics::Tool> tool;
   std::shared_ptr<ToolTissueCoupling> tool_coupling;
+  /// Threads of the simulation in real time (0: automatic, every core but one, which the
+  /// haptic loop and the window share). Virtual-time runs step on the caller's thread.
+  int simulation_threads{0};
 };
 
 /// A body of the world: deformable (a model, and the touchable surface that follows it
@@ -110,6 +113,7 @@ struct SessionReport {
   std::int64_t simulation_steps{0};
   double wall_s{0.0};
   double simulation_steps_per_s{0.0};        ///< achieved (wall clock)
+  int simulation_threads{1};                 ///< threads the simulation ran on (real time)
   /// Simulation steps per second of wall time in the thesis' three states (the rate a
   /// graphics loop showing each new shape could reach): untouched and at rest, deforming
   /// without contact, in contact.
@@ -281,6 +285,8 @@ class Session {
   void publish_settings();
   void count_fall_through(SessionReport& report);
   void finish_report(SessionReport& report, const StateTimer& timer, double wall_s) const;
+  void simulation_loop();
+  [[nodiscard]] int simulation_threads() const;
   void simulation_thread(double dt);
   void begin_run();
 

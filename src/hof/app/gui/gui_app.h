@@ -30,6 +30,9 @@ struct GuiOptions {
   bool quiet{false};
   /// Keep the CPUs from halting so the haptic thread wakes on time (cpu_keep_awake.h).
   haptics::KeepAwake keep_awake{haptics::KeepAwake::automatic};
+  /// The simulation's threads (0: automatic, every core but one, left to the haptic loop and
+  /// the window).
+  int simulation_threads{0};
   GuiRunResult* result{nullptr};  ///< filled when the run ends, if given
 };
 
