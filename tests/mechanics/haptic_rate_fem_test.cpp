@@ -209,5 +209,30 @@ TEST(HapticRateFem, WarmStartAndMatrixReuseAreParameters) {
   EXPECT_FALSE(c.linear.warm_start);
 }
 
+// A real-time session sets its bodies' threads when it starts (one on two cores) and back when
+// it stops, between steps, with a reused matrix and a warm start in flight: the steps must not
+// notice. Two threads and one, switched every few steps, against one throughout, bit for bit.
+TEST(HapticRateFem, ChangingTheThreadsBetweenStepsChangesNoResult) {
+  ModelConfig c = haptic_rate_config(medium_liver());
+  c.threads = 0;
+  c.linear.iterations = kHapticRateCgIterations;
+  c.linear.warm_start = true;
+  c.ode.matrix_reuse_steps = kHapticRateMatrixReuseSteps;
+  Solver fixed = make_solver(c);
+  Solver switched = make_solver(c);
+  set_threads(fixed.model, fixed.state, 1);
+  const std::vector<std::int32_t> patch = pressed_patch(medium_liver());
+  for (int k = 0; k < 12; ++k) {
+    if (k % 3 == 0) set_threads(switched.model, switched.state, k % 2 == 0 ? 2 : 1);
+    for (Solver* s : {&fixed, &switched}) {
+      s->state.external_force.setZero();
+      for (std::int32_t i : patch) s->state.external_force[3 * i + 2] = -0.5 / static_cast<double>(patch.size());
+      ASSERT_TRUE(step(s->model, s->state));
+    }
+    ASSERT_EQ(fixed.state.x, switched.state.x) << "step " << k;
+    ASSERT_EQ(fixed.state.v, switched.state.v) << "step " << k;
+  }
+}
+
 }  // namespace
 }  // namespace hof::mechanics

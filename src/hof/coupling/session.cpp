@@ -1,6 +1,5 @@
 #include "hof/coupling/session.h"
 
-#include <tbb/global_control.h>
 #include <tbb/task_arena.h>
 
 #include <fmt/format.h>
@@ -73,6 +72,7 @@ struct Session::BodyRuntime {
   // FEM-reaction coupling: the nodes of the contact's neighbourhood (reserved: no allocation).
   std::vector<std::int32_t> patch_nodes;
   std::vector<double> patch_weights;
+  int threads{0};  // the threads its state's arena was set to (0: the model's own setting)
 
   // This step's reaction of the tissue at a contact on triangle `tri` (barycentric `bary`,
   // carried by `triangle_nodes`), felt at the next tick: the elastic force summed over the
@@ -489,6 +489,8 @@ void Session::apply_commands(SessionReport& report) {
         r.body.model.emplace(std::move(*model));
         r.body.config = std::move(config);
         r.state = std::move(state);
+        r.threads = 0;
+        fit_threads(r);
         r.next_step_s = time_s_ + r.body.model->dt_s;
         report.applied_commands.push_back(fmt::format("step {}: {}", at, what));
         std::lock_guard lock(commands_mutex_);
@@ -509,6 +511,8 @@ void Session::apply_commands(SessionReport& report) {
         r.body.model.emplace(std::move(*model->built));
         r.body.config = model->config;
         r.state = std::move(state);
+        r.threads = 0;
+        fit_threads(r);
         r.next_step_s = time_s_ + r.body.model->dt_s;
         report.applied_commands.push_back(fmt::format("step {}: {} has a new model", at, model->body));
         std::lock_guard lock(commands_mutex_);
@@ -538,6 +542,8 @@ void Session::apply_commands(SessionReport& report) {
       for (BodyRuntime& r : bodies_) {
         if (!r.body.deformable()) continue;
         r.state = mechanics::make_state(*r.body.model);
+        r.threads = 0;
+        fit_threads(r);
         r.reaction_sum.setZero();
         r.contact_ticks = 0;
       }
@@ -928,6 +934,16 @@ SessionReport Session::run_virtual(double seconds, const std::function<void(cons
   return report;
 }
 
+void Session::fit_threads(BodyRuntime& r) const {
+  // (A fresh state from make_state runs on the model's own setting: r.threads is then 0.)
+  if (!r.body.deformable()) return;
+  // A model that names its threads (`threads` in the scene) keeps them.
+  const int wanted = r.body.model->threads > 0 ? r.body.model->threads : step_threads_;
+  if (wanted == r.threads) return;
+  mechanics::set_threads(*r.body.model, r.state, wanted);
+  r.threads = wanted;
+}
+
 void Session::begin_run() {
   // Each run reports on itself: per-body figures start again, as the session's do.
   for (BodyRuntime& r : bodies_) {
@@ -940,19 +956,10 @@ void Session::begin_run() {
 }
 
 void Session::simulation_thread(double) {
-  // The simulation's own threads. TBB's workers spin in sched_yield between the many short
-  // parallel loops of a step; on a machine whose other cores carry the haptic loop (and the
-  // window) that spinning takes their time, and the haptic thread's wake-ups land on the
-  // simulation's core. With one thread the process-wide limit keeps every worker asleep
-  // (measured on the 2-core VM, medium liver, dt 1 ms: 644 → 773 steps/s, haptic p99 1.00 ms).
-  const int threads = simulation_threads();
-  tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
-  tbb::task_arena arena(threads, 1);
-  arena.execute([this] {
-    // As the loops of a step see it (the report says what the simulation really ran on).
-    rt_report_.simulation_threads = tbb::this_task_arena::max_concurrency();
-    simulation_loop();
-  });
+  // Each body steps in its own arena of simulation_threads() (start_realtime set them); this
+  // one runs several bodies' steps side by side.
+  tbb::task_arena arena(simulation_threads());
+  arena.execute([this] { simulation_loop(); });
 }
 
 int Session::simulation_threads() const {
@@ -988,6 +995,14 @@ void Session::start_realtime() {
   rt_timer_ = std::make_unique<StateTimer>();
   stop_sim_.store(false);
   sim_finished_.store(false);
+  // The simulation's threads: every core but one by default. On 2 cores that is one, and the
+  // step then never wakes TBB's workers, which spin in sched_yield between a step's many short
+  // loops and so took time from the haptic thread's core and delayed its wake-ups (the medium
+  // liver at dt 1 ms, 2-core VM: haptic max period 5–10 ms with 2 threads, under 2 ms with 1;
+  // the simulation's rate the same).
+  step_threads_ = simulation_threads();
+  rt_report_.simulation_threads = step_threads_;
+  for (BodyRuntime& r : bodies_) fit_threads(r);
   rt_start_ = Clock::now();
   loop_->start();
   sim_thread_ = std::thread([this] { simulation_thread(dt_); });
@@ -1011,6 +1026,9 @@ SessionReport Session::stop_realtime(const std::function<void(const haptics::Hap
   while (loop_->contacts().pop(c)) {
   }
   rt_report_.haptic_ticks = static_cast<std::int64_t>(loop_->ticks());
+  // Virtual-time runs step on the caller's thread with every core again.
+  step_threads_ = 0;
+  for (BodyRuntime& r : bodies_) fit_threads(r);
   finish_report(rt_report_, *rt_timer_, seconds_between(rt_start_, Clock::now()));
   return rt_report_;
 }

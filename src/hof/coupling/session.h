@@ -286,6 +286,7 @@ class Session {
   void count_fall_through(SessionReport& report);
   void finish_report(SessionReport& report, const StateTimer& timer, double wall_s) const;
   void simulation_loop();
+  void fit_threads(BodyRuntime& r) const;
   [[nodiscard]] int simulation_threads() const;
   void simulation_thread(double dt);
   void begin_run();
@@ -335,6 +336,7 @@ class Session {
   std::atomic<bool> paced_{true};
   std::atomic<std::uint64_t> steps_taken_{0};
   SessionReport rt_report_;
+  int step_threads_{0};  // the bodies' threads while in real time (0: their own setting)
   std::unique_ptr<StateTimer> rt_timer_;
   std::chrono::steady_clock::time_point rt_start_;
 };

@@ -97,6 +97,10 @@ void prepare_cg_exchange(const MechanicalModel& model, SolverWorkspace& w, int t
 
 }  // namespace
 
+void prepare_cg_threads(const MechanicalModel& model, MechanicalState& state, int threads) {
+  if (model.needs_matrix) prepare_cg_exchange(model, state.work, threads);
+}
+
 void prepare_linear_solver(const MechanicalModel& model, MechanicalState& state, int threads) {
   SolverWorkspace& w = state.work;
   if (model.needs_matrix) {

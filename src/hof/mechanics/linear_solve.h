@@ -25,4 +25,8 @@ bool solve_system(const MechanicalModel& model, MechanicalState& state, const Ei
 /// the CG's exchange between `threads` threads).
 void prepare_linear_solver(const MechanicalModel& model, MechanicalState& state, int threads);
 
+/// Re-plans the CG's exchange for `threads` threads: the pattern and the matrix's values are
+/// kept (a reused matrix stays valid). Between steps; it allocates.
+void prepare_cg_threads(const MechanicalModel& model, MechanicalState& state, int threads);
+
 }  // namespace hof::mechanics::detail

@@ -362,6 +362,12 @@ MechanicalState make_state(const MechanicalModel& model) {
   return s;
 }
 
+void set_threads(const MechanicalModel& model, MechanicalState& state, int threads) {
+  const int wanted = threads > 0 ? threads : model.threads > 0 ? model.threads : int{tbb::task_arena::automatic};
+  state.arena = std::make_unique<tbb::task_arena>(wanted);
+  detail::prepare_cg_threads(model, state, state.arena->max_concurrency());
+}
+
 void reset(const MechanicalModel& model, MechanicalState& state) {
   for (std::size_t i = 0; i < model.node_count(); ++i) {
     state.x.segment<3>(3 * static_cast<Eigen::Index>(i)) = model.rest_positions[i];

@@ -105,6 +105,11 @@ struct MechanicalState {
 /// A state at rest for `model`, with all scratch sized.
 [[nodiscard]] MechanicalState make_state(const MechanicalModel& model);
 
+/// Runs the state's steps on `threads` threads (0: the model's own setting, every core when
+/// that is unset too). Results do not depend on it (the loops' chunks are fixed). Between
+/// steps; it allocates.
+void set_threads(const MechanicalModel& model, MechanicalState& state, int threads);
+
 /// Back to rest: positions to rest, velocities and forces to zero, time to 0, divergence
 /// cleared. Keeps the scratch (no allocation).
 void reset(const MechanicalModel& model, MechanicalState& state);
