@@ -6,6 +6,7 @@
 #
 #   scripts/soak.sh [SECONDS] [PROJECT] [OUT]     (defaults: 600, the fine liver, out/soak)
 #   SOAK_GUI=1 scripts/soak.sh ...                (the window under Xvfb instead of hof run)
+#   SOAK_ARGS="--sim-threads 2" scripts/soak.sh   (more options for hof run / hof gui)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds=${1:-600}
@@ -19,10 +20,10 @@ device="scripted:palpate,start=0.0;0;0.09,direction=0;0;-1,approach=0.04,depth=0
 
 if [ "${SOAK_GUI:-0}" = 1 ]; then
   printf 'wait %s\nscreenshot %s/gui-end.png\nquit\n' "$seconds" "$out" >"$out/script.txt"
-  xvfb-run -a -s "-screen 0 1280x720x24" "$hof" gui "$project" --device "$device" --size 1280x720 --script "$out/script.txt" \
+  xvfb-run -a -s "-screen 0 1280x720x24" "$hof" gui "$project" --device "$device" --size 1280x720 --script "$out/script.txt" ${SOAK_ARGS:-} \
     >"$out/run.log" 2>&1 &
 else
-  "$hof" run "$project" --device "$device" --seconds "$seconds" --telemetry-rate 100 --quiet --out "$out" \
+  "$hof" run "$project" --device "$device" --seconds "$seconds" --telemetry-rate 100 --quiet --out "$out" ${SOAK_ARGS:-} \
     >"$out/run.log" 2>&1 &
 fi
 pid=$!
