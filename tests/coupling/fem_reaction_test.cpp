@@ -35,7 +35,7 @@ struct Press {
   Vec3 top;
 };
 
-Press make_press(const mesh::Mesh& liver, ContactCoupling coupling, double dt_s = 1e-3) {
+Press make_press(const mesh::Mesh& liver, ContactCoupling coupling, double dt_s = 1e-3, double depth_m = 0.005) {
   Press p;
   p.boundary = mesh::extract_boundary(liver.nodes, liver.tets);
   std::int32_t best = -1;
@@ -53,7 +53,7 @@ Press make_press(const mesh::Mesh& liver, ContactCoupling coupling, double dt_s 
   EXPECT_TRUE(model) << model.error().to_string();
   auto mapping = SurfaceMapping::by_index(liver.nodes, p.boundary.surface.vertices, p.boundary.surface_to_volume);
   EXPECT_TRUE(mapping);
-  const haptics::MotionConfig motion = haptics::MotionConfig::poke(p.top + Vec3(0, 0, 0.003), Vec3(0, 0, -1), 0.003, 0.005, 0.02, 0.6);
+  const haptics::MotionConfig motion = haptics::MotionConfig::poke(p.top + Vec3(0, 0, 0.003), Vec3(0, 0, -1), 0.003, depth_m, 0.02, 0.6);
   auto scripted = haptics::ScriptedMotion::make(motion);
   EXPECT_TRUE(scripted);
   haptics::DeviceSpec spec;
@@ -184,6 +184,34 @@ TEST(FemReactionCoupling, NeedsOneSimulationStepPerHapticTick) {
   auto refused = press.session->submit(command::SetParameter{"liver", "", "dt", 0.005});
   ASSERT_FALSE(refused);
   EXPECT_NE(refused.error().message.find("fem-reaction"), std::string::npos) << refused.error().message;
+}
+
+// The god-object (a point proxy) in the dent it presses, 12 mm deep into the soft liver. The
+// dent's walls move between ticks; a proxy that slid along one wall ended up a fraction of a
+// millimetre behind the next, the sweep toward the device never crossed that front face, and
+// the proxy fell through to the device. It must stay on the surface while the hand is held in.
+TEST(GodObjectInADent, StaysInContactAndNeverFallsThroughWhilePressedDeep) {
+  const mesh::Mesh liver = *mesh::generate_liver(mesh::LiverResolution::kMedium);
+  for (const ContactCoupling coupling : {ContactCoupling::kBarycentric, ContactCoupling::kFemReaction}) {
+    Press p = make_press(liver, coupling, 1e-3, 0.010);
+    ASSERT_TRUE(p.session);
+    bool touched = false;
+    int lost = 0;
+    double deepest = 0.0;
+    const SessionReport report = p.session->run_virtual(1.4, [&](const haptics::HapticSample& s) {
+      const double depth = p.top.z() - s.device.z();
+      if (s.contact) touched = true;
+      // From 1 mm in to the end of the hold (the press takes 0.75 s, the hold 0.6 s).
+      if (touched && depth > 0.001 && s.time_s < 1.35) {
+        deepest = std::max(deepest, depth);
+        if (!s.contact) ++lost;
+      }
+    });
+    ASSERT_FALSE(report.diverged) << report.divergence;
+    EXPECT_GT(deepest, 0.0099);
+    EXPECT_EQ(lost, 0) << "ticks out of contact while pressed in";
+    EXPECT_EQ(report.fall_through_events, 0);
+  }
 }
 
 }  // namespace

@@ -271,3 +271,12 @@ bool sweep_sphere_triangle(const Vec3& a, const Vec3& d, double radius, const Ve
 }
 
 }  // namespace hof::collision::detail
+
+namespace hof::collision {
+
+double point_triangle_distance_squared(const Vec3& p, const Vec3& p0, const Vec3& p1, const Vec3& p2) {
+  Vec3 barycentric;
+  return (detail::closest_point_on_triangle(p, p0, p1, p2, barycentric) - p).squaredNorm();
+}
+
+}  // namespace hof::collision

@@ -119,3 +119,11 @@ struct SlabSegment {
 }
 
 }  // namespace hof::collision::detail
+
+namespace hof::collision {
+
+/// Squared distance from `p` to the triangle (p0, p1, p2) (its closest point: Ericson §5.1.5);
+/// NaN for a degenerate triangle.
+[[nodiscard]] double point_triangle_distance_squared(const Vec3& p, const Vec3& p0, const Vec3& p1, const Vec3& p2);
+
+}  // namespace hof::collision

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "hof/collision/triangle_queries.h"
 #include "hof/mechanics/model_parameters.h"
 #include "hof/mechanics/step.h"
 #include "hof/mesh/surface_check.h"
@@ -46,6 +47,25 @@ bool inside_part(const haptics::SurfacePart& part, const std::vector<mesh::Tri>&
                                                   static_cast<float>(la * lb * lc + a.dot(b) * lc + b.dot(c) * la + c.dot(a) * lb)));
   }
   return total / (4.0 * std::numbers::pi) > 0.5;
+}
+
+// How far inside a body the proxy must be to have fallen through it. A point proxy (the
+// god-object) rides on the surface, and the surface of the step just taken may have passed it
+// by the distance it moved in one step (tens of micrometres) before the next tick puts it back
+// in front: grazing, not falling through. A proxy that fell through goes to the device,
+// millimetres inside.
+constexpr double kFallThroughDepth_m = 5e-4;
+
+// Whether p is farther than `depth` from every triangle of the part (called only for a point
+// inside, which is rare: the loop over the triangles then costs nothing on average).
+bool deeper_than(const haptics::SurfacePart& part, const std::vector<mesh::Tri>& triangles, const std::vector<Vec3>& x,
+                 const Vec3& p, double depth) {
+  const double depth2 = depth * depth;
+  for (std::int32_t t = part.first_triangle; t < part.first_triangle + part.triangle_count; ++t) {
+    const mesh::Tri& tri = triangles[static_cast<std::size_t>(t)];
+    if (collision::point_triangle_distance_squared(p, x[tri[0]], x[tri[1]], x[tri[2]]) <= depth2) return false;
+  }
+  return true;
 }
 
 }  // namespace
@@ -653,7 +673,8 @@ void Session::count_fall_through(SessionReport& report) {
     const LayerRuntime& layer = *layers_[r.layer];
     const haptics::SurfacePart& part = layer.rest.parts[r.part];
     if (!part.closed) continue;  // an open sheet has no inside
-    const bool inside = inside_part(part, layer.rest.triangles, layer.positions, layer.proxy);
+    const bool inside = inside_part(part, layer.rest.triangles, layer.positions, layer.proxy) &&
+                        deeper_than(part, layer.rest.triangles, layer.positions, layer.proxy, kFallThroughDepth_m);
     if (first && inside) {
       // A probe that starts inside a body has not fallen through it: it is reported as such.
       r.report.probe_started_inside = true;

@@ -125,6 +125,32 @@ void HapticRenderer::carry_with_surface(const SurfaceSnapshot& surface) {
   if (carried.allFinite()) proxy_ = carried;
 }
 
+void HapticRenderer::push_out_of_surface(const SurfaceSnapshot& surface) {
+  // A deforming surface can leave the proxy behind a face: the walls of the dent it makes move
+  // between ticks, and a proxy that slid along one wall may end up behind the next. The sweep
+  // toward the device starts there, never crosses that front face, and the proxy falls
+  // through (seen at 4 mm into the medium liver with the god-object, where a point load's
+  // dent has steep walls). So before moving, a proxy whose centre is up to 3 mm behind its
+  // nearest face is put back in front of it, a few faces at most. The side is judged by the
+  // interpolated vertex normal at the nearest point, which, unlike one face's normal, does
+  // not take the space above a convex edge for the inside. A sphere's centre in front of the
+  // surface but nearer than its radius is left alone: that is what sliding over an edge looks
+  // like, and the sweep resolves it.
+  if (config_.touchable_face == collision::TouchableFace::kFrontAndBack) return;  // no inside
+  const double side = config_.touchable_face == collision::TouchableFace::kBack ? -1.0 : 1.0;
+  constexpr double kReach = 3e-3;  // deeper than this is not a slip: leave it to the sweep
+  for (int attempt = 0; attempt < 3; ++attempt) {
+    const collision::ClosestPoint near =
+        surface.tree.closest_point(surface.view(), proxy_, radius_ + kReach, collision::TouchableFace::kFrontAndBack);
+    if (near.triangle < 0) return;
+    const Vec3 n = side * surface.shaded_normal(near.triangle, near.barycentric);
+    if (!n.allFinite() || (proxy_ - near.point).dot(n) >= 0.0) return;
+    const Vec3 pushed = near.point + (radius_ + kSkin) * n;
+    if (!pushed.allFinite()) return;
+    proxy_ = pushed;
+  }
+}
+
 void HapticRenderer::anchor_to_surface(const SurfaceSnapshot& surface) {
   const double reach = std::max(config_.ride_distance_m, radius_ + 10.0 * kSkin);
   const collision::ClosestPoint near =
@@ -230,8 +256,10 @@ void HapticRenderer::apply_friction(const Vec3& device, const Vec3& frictionless
 void HapticRenderer::update_proxy(const Vec3& device, const SurfaceSnapshot& surface, bool surface_changed, double dt) {
   const bool was_in_contact = contact_.in_contact;
   const Vec3 previous_normal = contact_.normal;
-  // 1. Ride with the surface: the proxy keeps its place relative to the triangle it was on.
+  // 1. Ride with the surface: the proxy keeps its place relative to the triangle it was on,
+  //    and stays in front of the faces around it.
   if (surface_changed) carry_with_surface(surface);
+  if (was_in_contact) push_out_of_surface(surface);
   contact_.proxy = proxy_;
 
   // 2. Move toward the device through free space, sliding along the contact planes.

@@ -107,6 +107,7 @@ class HapticRenderer {
   // up to three contact planes. Fills planes_/plane_count_ and the last contact.
   void constrained_motion(const Vec3& goal, const SurfaceSnapshot& surface);
   void carry_with_surface(const SurfaceSnapshot& surface);
+  void push_out_of_surface(const SurfaceSnapshot& surface);
   void anchor_to_surface(const SurfaceSnapshot& surface);
   void apply_friction(const Vec3& device, const Vec3& frictionless, const SurfaceSnapshot& surface, double dt);
   void compute_force(const Vec3& device, const Vec3& device_velocity);
