@@ -1023,7 +1023,11 @@ void Session::start_realtime() {
   // the simulation's rate the same).
   step_threads_ = simulation_threads();
   rt_report_.simulation_threads = step_threads_;
-  for (BodyRuntime& r : bodies_) fit_threads(r);
+  for (BodyRuntime& r : bodies_) {
+    fit_threads(r);
+    // What the bodies' steps will really run on (a model with threads of its own keeps them).
+    if (r.body.deformable()) rt_report_.simulation_threads = r.state.arena->max_concurrency();
+  }
   rt_start_ = Clock::now();
   loop_->start();
   sim_thread_ = std::thread([this] { simulation_thread(dt_); });

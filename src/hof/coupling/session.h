@@ -113,7 +113,7 @@ struct SessionReport {
   std::int64_t simulation_steps{0};
   double wall_s{0.0};
   double simulation_steps_per_s{0.0};        ///< achieved (wall clock)
-  int simulation_threads{1};                 ///< threads the simulation ran on (real time)
+  int simulation_threads{1};                 ///< threads a body's steps ran on (real time; the last body's)
   /// Simulation steps per second of wall time in the thesis' three states (the rate a
   /// graphics loop showing each new shape could reach): untouched and at rest, deforming
   /// without contact, in contact.
