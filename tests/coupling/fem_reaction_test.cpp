@@ -17,15 +17,14 @@
 namespace hof::coupling {
 namespace {
 
-// The haptic-rate settings: dt = the haptic period, warm-started CG, matrix reused.
+// The haptic-rate settings: dt = the haptic period, few warm-started two-level CG iterations,
+// matrix reused.
 mechanics::ModelConfig haptic_rate_config(const mesh::Mesh& liver) {
   mechanics::ModelConfig c = testing::resting_liver_config(liver);
   c.ode.rayleigh_mass = 0.1;
   c.ode.rayleigh_stiffness = 0.1;
   c.dt_s = 1e-3;
-  c.linear.iterations = mechanics::kHapticRateCgIterations;
-  c.linear.warm_start = true;
-  c.ode.matrix_reuse_steps = mechanics::kHapticRateMatrixReuseSteps;
+  mechanics::use_haptic_rate_solver(c.linear, c.ode, c.positions.size());
   return c;
 }
 

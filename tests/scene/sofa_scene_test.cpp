@@ -273,6 +273,29 @@ TEST_F(SofaSceneFiles, LinksLoaderTransformAndSolvers) {
   EXPECT_TRUE(mechanics::build_model(c).has_value());
 }
 
+// HoF's extensions of CGLinearSolver: the two-level preconditioner and its refresh, read
+// with the same checks as SOFA's own attributes.
+TEST_F(SofaSceneFiles, TheCgsTwoLevelPreconditionerIsReadAndABadRefreshNamed) {
+  auto scene = [](const std::string& cg) {
+    return "<Node name=\"root\">\n  <EulerImplicitSolver/>\n  " + cg +
+           "\n  <MeshGmshLoader name=\"l\" filename=\"tet.msh\"/>\n  <MechanicalObject src=\"@l\"/>\n</Node>\n";
+  };
+  auto s = read_sofa_scene(write("on.scn", scene("<CGLinearSolver name=\"cg\" coarseCorrection=\"true\" coarseRefreshSteps=\"40\"/>")));
+  ASSERT_TRUE(s.has_value()) << s.error().to_string();
+  EXPECT_TRUE(s->models.at(0).config.linear.coarse_correction);
+  EXPECT_EQ(s->models.at(0).config.linear.coarse_refresh_steps, 40);
+  auto plain = read_sofa_scene(write("off.scn", scene("<CGLinearSolver name=\"cg\"/>")));
+  ASSERT_TRUE(plain.has_value()) << plain.error().to_string();
+  EXPECT_FALSE(plain->models.at(0).config.linear.coarse_correction);  // SOFA's CG is unpreconditioned
+  for (const char* bad : {"coarseRefreshSteps=\"0\"", "coarseRefreshSteps=\"2.5\"", "coarseCorrection=\"maybe\""}) {
+    const Error e = read_error(scene(std::string("<CGLinearSolver name=\"cg\" ") + bad + "/>"));
+    EXPECT_EQ(e.line, 3) << bad;
+    EXPECT_NE(e.message.find("CGLinearSolver 'cg'"), std::string::npos) << e.message;
+    const std::string attribute(bad, std::string_view(bad).find('='));
+    EXPECT_NE(e.message.find(attribute), std::string::npos) << e.message;
+  }
+}
+
 TEST_F(SofaSceneFiles, APlaceholderPositionTakesTheTopologysNodes) {
   // SOFA resizes a MechanicalObject to its node's topology: position="0 0 0" is a placeholder.
   auto s = read_sofa_scene(write("scene.scn",

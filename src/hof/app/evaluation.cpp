@@ -66,6 +66,7 @@ struct Cell {
   double dt_s{kNaN};
   int iterations{0};
   bool warm_start{false};
+  bool coarse_correction{false};  // the CG's two-level preconditioner
   int matrix_reuse{1};  // implicit Euler: steps one assembled matrix serves
   int threads{0};
   std::size_t nodes{0}, elements{0}, triangles{0};
@@ -262,11 +263,10 @@ void set_solver(ModelConfig& c, Solver s, double dt_s) {
 }
 
 // The haptic-rate CG: few warm-started iterations, the matrix assembled every few steps.
-void use_haptic_rate_cg(ModelConfig& c) {
-  c.linear.iterations = kHapticRateCgIterations;
-  c.linear.warm_start = true;
-  c.ode.matrix_reuse_steps = haptic_rate_matrix_reuse_steps(c.positions.size());
-}
+// The haptic-rate cells' name: warm-started two-level CG (use_haptic_rate_solver).
+constexpr const char* kHapticRateCell = "two-level-warm";
+
+void use_haptic_rate_cg(ModelConfig& c) { use_haptic_rate_solver(c.linear, c.ode, c.positions.size()); }
 
 // The physiological co-rotational liver with implicit Euler + CG at dt: most of the matrix
 // past the thesis' own figures. Gravity off where the organ is pressed (carried by the tissue
@@ -308,6 +308,7 @@ bool checked_step(const MechanicalModel& model, MechanicalState& state, const Ei
 
 void time_cell(const ModelConfig& config, const Budget& budget, Cell& cell) {
   cell.matrix_reuse = config.ode.matrix_reuse_steps;  // as the model runs (it depends on the mesh)
+  if (config.linear.warm_start) cell.iterations = config.linear.iterations;  // the haptic-rate CG's depend on the mesh too
   auto model = build_model(config);
   if (!model) {
     cell.stable = false;
@@ -367,6 +368,9 @@ void time_cell(const ModelConfig& config, const Budget& budget, Cell& cell) {
 double step_error(const ModelConfig& config, const Budget& budget) {
   ModelConfig exact_config = config;
   exact_config.linear.kind = LinearSolverKind::kSparseLdlt;
+  // The exact side assembles every step: it is stepped once per sample, so a reused matrix
+  // would be one from the previous sample's state.
+  exact_config.ode.matrix_reuse_steps = 1;
   auto model = build_model(config);
   auto exact = build_model(exact_config);
   if (!model || !exact) return kNaN;
@@ -564,13 +568,14 @@ void time_framework_window(const Body& b, const ModelConfig& config, const std::
       "<?xml version=\"1.0\"?>\n<!-- Written by hof bench: the framework cell with the window open. -->\n"
       "<Node name=\"root\" dt=\"{}\" gravity=\"0 0 0\">\n  <Node name=\"Liver\">\n"
       "    <EulerImplicitSolver name=\"solver\" rayleighStiffness=\"{}\" rayleighMass=\"{}\"/>\n"
-      "    <CGLinearSolver name=\"cg\" iterations=\"{}\" tolerance=\"1e-12\" threshold=\"1e-12\" warmStart=\"{}\"/>\n"
+      "    <CGLinearSolver name=\"cg\" iterations=\"{}\" tolerance=\"1e-12\" threshold=\"1e-12\" warmStart=\"{}\" "
+      "coarseCorrection=\"{}\"/>\n"
       "    <MeshGmshLoader name=\"loader\" filename=\"liver.msh\"/>\n    <MeshTopology name=\"topology\" src=\"@loader\"/>\n"
       "    <MechanicalObject name=\"dofs\" src=\"@loader\"/>\n    <DiagonalMass name=\"mass\" massDensity=\"{}\"/>\n"
       "    <TetrahedronFEMForceField name=\"FEM\" youngModulus=\"{}\" poissonRatio=\"{}\" method=\"large\"/>\n"
       "    <FixedProjectiveConstraint name=\"base\" indices=\"{}\"/>\n  </Node>\n</Node>\n",
       config.dt_s, config.ode.rayleigh_stiffness, config.ode.rayleigh_mass, config.linear.iterations,
-      config.linear.warm_start ? "true" : "false", config.mass.mass_density_kg_per_m3, fem.young_modulus_pa, fem.poisson_ratio, fixed);
+      config.linear.warm_start ? "true" : "false", config.linear.coarse_correction ? "true" : "false", config.mass.mass_density_kg_per_m3, fem.young_modulus_pa, fem.poisson_ratio, fixed);
   const mesh::BoundarySurface boundary = mesh::extract_boundary(b.nodes, b.tets);
   const haptics::MotionConfig press = framework_press(boundary.surface.vertices[pressed_vertex(b, boundary)]);
   const std::string device = fmt::format("scripted:poke,start={};{};{},direction=0;0;-1,approach={},depth={},speed={},hold={}", press.start_m.x(),
@@ -806,7 +811,8 @@ Cell corotational_cell(std::string section, std::string name, const std::string&
   c.dt_s = s.dt_s;
   c.iterations = s.haptic_rate_cg ? kHapticRateCgIterations : s.iterations;
   c.warm_start = s.haptic_rate_cg;
-  // matrix_reuse: set when the cell runs, from the model (haptic_rate_matrix_reuse_steps).
+  c.coarse_correction = s.haptic_rate_cg;
+  // iterations (haptic-rate CG) and matrix_reuse: set when the cell runs, from the model.
   return c;
 }
 
@@ -965,7 +971,7 @@ std::vector<PlannedCell> plan(bool quick, Bodies& bodies, const std::filesystem:
       for (int threads : {1, 2}) {
         const CorotationalSetup setup{0.001, 25, warm};
         Cell c = corotational_cell("haptic_rate", "", m, setup);
-        c.name = fmt::format("haptic_rate/{}/cg{}{}/threads{}", m, c.iterations, warm ? "-warm" : "", threads);
+        c.name = fmt::format("haptic_rate/{}/{}/threads{}", m, warm ? std::string(kHapticRateCell) : fmt::format("cg{}", c.iterations), threads);
         c.threads = threads;
         cells.push_back({c, [with_body, m, setup, threads, budget](Cell& cell) {
                            const Body* b = with_body(m, cell);
@@ -1100,7 +1106,7 @@ struct Goal {
 
 std::vector<Goal> goals(const std::vector<Cell>& cells, const std::vector<Ratio>& ratios) {
   std::vector<Goal> out;
-  const std::string warm = fmt::format("cg{}-warm", kHapticRateCgIterations);
+  const std::string warm = kHapticRateCell;
   auto rate = [&](const std::string& m, int threads) {
     const Cell* c = find(cells, fmt::format("haptic_rate/{}/{}/threads{}", m, warm, threads));
     return c && c->measured && c->stable ? c->median : kNaN;
@@ -1165,6 +1171,7 @@ nlohmann::json cell_json(const Cell& c) {
           {"dt_s", num(c.dt_s)},
           {"cg_iterations", c.iterations},
           {"warm_start", c.warm_start},
+          {"coarse_correction", c.coarse_correction},
           {"matrix_reuse_steps", c.matrix_reuse},
           {"threads", c.threads},
           {"nodes", c.nodes},
@@ -1303,8 +1310,8 @@ std::string tables(const std::vector<Cell>& cells, const std::vector<Ratio>& rat
     for (const Cell* c : h) {
       out += fmt::format("| {} | {}{} | {} | {} | {} | {} / {} / {} |\n", c->mesh, c->iterations,
                          !c->warm_start ? std::string(" from zero")
-                         : c->matrix_reuse > 1 ? fmt::format(" warm-started, matrix every {} steps", c->matrix_reuse)
-                                               : std::string(" warm-started, matrix every step"),
+                         : fmt::format(" warm-started{}, matrix every {}", c->coarse_correction ? ", two-level" : "",
+                                       c->matrix_reuse > 1 ? fmt::format("{} steps", c->matrix_reuse) : std::string("step")),
                          c->threads, rate_text(*c), number(c->step_error, "{:.3g}"), number(c->forces_us, "{:.0f}"),
                          number(c->assembly_us, "{:.0f}"), number(c->solve_us, "{:.0f}"));
     }
@@ -1581,7 +1588,7 @@ std::vector<detail::Plot> write_plot_data(const std::filesystem::path& dir, cons
     for (const char* m : {"simple", "medium", "fine"}) {
       std::string line = m;
       bool any = false;
-      for (const std::string& cg : {std::string("cg25"), fmt::format("cg{}-warm", kHapticRateCgIterations)}) {
+      for (const std::string& cg : {std::string("cg25"), std::string(kHapticRateCell)}) {
         for (int t : {1, 2}) {
           const Cell* c = find(cells, fmt::format("haptic_rate/{}/{}/threads{}", m, cg, t));
           any = any || c;
@@ -1598,8 +1605,8 @@ std::vector<detail::Plot> write_plot_data(const std::filesystem::path& dir, cons
                        histogram + fmt::format("set ylabel 'steps/s (median)'\nset key outside right\nset title 'Co-rotational FEM at dt 1 ms "
                                                "(5 kPa liver): the haptic rate is 1000 steps/s'\n"
                                                "plot 'haptic_rate.dat' using 2:xtic(1) title 'CG 25 from zero, 1 thread', '' using 3 title "
-                                               "'CG 25 from zero, 2 threads', '' using 4 title 'CG {0} warm, 1 thread', '' using 5 title "
-                                               "'CG {0} warm, 2 threads', '' using ($0+0.2):6 with points pt 6 ps 2 lw 2 lc rgb 'black' "
+                                               "'CG 25 from zero, 2 threads', '' using 4 title 'two-level CG {0} warm, 1 thread', '' using 5 title "
+                                               "'two-level CG {0} warm, 2 threads', '' using ($0+0.2):6 with points pt 6 ps 2 lw 2 lc rgb 'black' "
                                                "title 'goal, 2 threads', 1000 with lines dt 2 lc rgb 'red' title '1 kHz'\n",
                                                kHapticRateCgIterations)});
     }

@@ -46,6 +46,7 @@ bool assemble_single_only(const MechanicalModel& model, MechanicalState& state, 
 void assemble_system(const MechanicalModel& model, MechanicalState& state, double mass_coeff, double stiffness_coeff,
                      AssemblyTarget target) {
   state.work.system_assembled_step = -1;  // the caller says whether this is implicit Euler's own A
+  ++state.work.system_assemblies;
   if (target == AssemblyTarget::kSolver && uses_single_precision(model) &&
       assemble_single_only(model, state, mass_coeff, stiffness_coeff)) {
     return;

@@ -8,6 +8,7 @@
 #include <cstring>
 
 #include "hof/mechanics/cg_kernels.h"
+#include "hof/mechanics/coarse_correction.h"
 #include "hof/mechanics/parallel.h"
 #include "hof/mechanics/vector_kernels.h"
 
@@ -106,6 +107,9 @@ void prepare_linear_solver(const MechanicalModel& model, MechanicalState& state,
   if (model.needs_matrix) {
     w.system.prepare_single_precision();
     prepare_cg_exchange(model, w, threads);
+    if (model.linear.kind == LinearSolverKind::kConjugateGradient && model.linear.coarse_correction) {
+      prepare_coarse_space(model, w.coarse, cg_chunks(model.node_count()).count);
+    }
   }
   if (model.linear.kind != LinearSolverKind::kSparseLdlt || !model.needs_matrix) return;
   // CSC copy of the block matrix. Each triplet carries its block-storage index + 1 as its
@@ -195,9 +199,21 @@ bool solve_cg(const MechanicalModel& model, MechanicalState& state, const Eigen:
   SolverWorkspace& w = state.work;
   const LinearSolverConfig& cfg = model.linear;
   const BlockSparseMatrix& a = w.system;
-  const bool precondition = cfg.block_jacobi;
-  const bool single = cfg.mixed_precision;
   const std::size_t nodes = model.node_count();
+  // The two-level preconditioner's coarse matrix, formed again every few steps.
+  CoarseSpace& coarse = w.coarse;
+  if (cfg.coarse_correction && coarse.aggregates > 0 &&
+      (coarse.built_step < 0 || state.steps < coarse.built_step || state.steps - coarse.built_step >= cfg.coarse_refresh_steps)) {
+    build_coarse_space(model, state);
+  }
+  const bool two_level = cfg.coarse_correction && coarse.usable;
+  const bool precondition = cfg.block_jacobi || two_level;
+  // The two-level preconditioner's fine part is plain Jacobi, taken once per assembled matrix
+  // (a 3x3 block inverse per node costs more than the whole coarse solve).
+  double* diagonal_inverse = w.diag_inv.data();
+  const bool fresh_diagonal = two_level && w.diag_inv_assembly != w.system_assemblies;
+  w.diag_inv_assembly = w.system_assemblies;
+  const bool single = cfg.mixed_precision;
   const CgChunks split = cg_chunks(nodes);
   const std::size_t chunks = split.count;
   if (w.partials.size() < 3 * chunks) w.partials.resize(3 * chunks);  // sized by make_state
@@ -237,6 +253,25 @@ bool solve_cg(const MechanicalModel& model, MechanicalState& state, const Eigen:
     for (std::size_t n = d0 / 3; n < d1 / 3; ++n) {
       Eigen::Map<Eigen::Vector3d>(zs + 3 * n) = jacobi[n] * Eigen::Map<const Eigen::Vector3d>(rs + 3 * n);
     }
+  };
+  // The two-level preconditioner needs all of Pᵀr before any of z: each chunk adds its nodes'
+  // share into its own partial (restrict), the partials are added in chunk order and the
+  // coarse system solved on this thread (solve_coarse), then a second pass makes
+  // z = D⁻¹r + P y (finish_two_level).
+  const std::size_t coarse_size = two_level ? static_cast<std::size_t>(coarse.solution.size()) : 0;
+  auto restrict_chunk = [&](std::size_t c, std::size_t d0, std::size_t d1) {
+    double* partial = coarse.partials.data() + c * coarse_size;
+    std::fill(partial, partial + coarse_size, 0.0);
+    restrict_to_coarse(model, coarse, rs, d0 / 3, d1 / 3, partial);
+  };
+  auto solve_coarse = [&] {
+    double* y = coarse.solution.data();
+    std::fill(y, y + coarse_size, 0.0);
+    for (std::size_t c = 0; c < chunks; ++c) {
+      const double* partial = coarse.partials.data() + c * coarse_size;
+      for (std::size_t k = 0; k < coarse_size; ++k) y[k] += partial[k];
+    }
+    coarse.factor.solveInPlace(coarse.solution);
   };
   // Between threads, each pass B reads the boundary entries of z that other threads wrote in
   // pass A. Read where they lie, those entries are scattered over a few hundred cache lines,
@@ -282,7 +317,19 @@ bool solve_cg(const MechanicalModel& model, MechanicalState& state, const Eigen:
       rs[d] = warm ? bs[d] - aps[d] : bs[d];
     }
     const double bb = dot_range(bs, bs, d0, d1);
-    if (precondition) {
+    if (two_level) {
+      if (fresh_diagonal) {
+        for (std::size_t n = d0 / 3; n < d1 / 3; ++n) {
+          const std::int64_t slot = a.diagonal_slot(static_cast<std::int32_t>(n));
+          for (int q = 0; q < 3; ++q) {
+            const double entry = single ? static_cast<double>(a.single_block(slot)[BlockSparseMatrix::kSingleColumnStride * q + q])
+                                        : a.block(slot)(q, q);
+            diagonal_inverse[3 * n + static_cast<std::size_t>(q)] = 1.0 / entry;
+          }
+        }
+      }
+      restrict_chunk(c, d0, d1);
+    } else if (precondition) {
       for (std::size_t n = d0 / 3; n < d1 / 3; ++n) {
         const std::int64_t slot = a.diagonal_slot(static_cast<std::int32_t>(n));
         if (single) {
@@ -298,12 +345,25 @@ bool solve_cg(const MechanicalModel& model, MechanicalState& state, const Eigen:
       }
       apply_preconditioner(d0, d1);
     }
+    part0[c] = bb;
+    part2[c] = warm ? dot_range(rs, rs, d0, d1) : bb;
+    if (two_level) return;  // z after the coarse solve
     if (single) BlockSparseMatrix::round_to_single(zs, z_single, d0 / 3, d1 / 3);
     publish(c);
-    part0[c] = bb;
     part1[c] = dot_range(rs, zs, d0, d1);
-    part2[c] = warm ? dot_range(rs, rs, d0, d1) : bb;
   });
+  // z = D⁻¹r + P y and rᵀz, for the two-level preconditioner.
+  auto finish_two_level = [&](double* rz_parts) {
+    solve_coarse();
+    over_chunks([&](std::size_t c, std::size_t d0, std::size_t d1) {
+      for (std::size_t d = d0; d < d1; ++d) zs[d] = diagonal_inverse[d] * rs[d];
+      prolong_from_coarse(model, coarse, coarse.solution.data(), d0 / 3, d1 / 3, zs);
+      if (single) BlockSparseMatrix::round_to_single(zs, z_single, d0 / 3, d1 / 3);
+      publish(c);
+      rz_parts[c] = dot_range(rs, zs, d0, d1);
+    });
+  };
+  if (two_level) finish_two_level(part1);
   const double b_norm2 = sum(part0);
   double rho = sum(part1);
   state.stats.linear_iterations = 0;
@@ -339,6 +399,11 @@ bool solve_cg(const MechanicalModel& model, MechanicalState& state, const Eigen:
       const double rr = cg_update_solution(xs, rs, ps, aps, alpha, single && !precondition ? z_single : nullptr,
                                            d0 / 3, d1 / 3);
       double rz = rr;
+      if (two_level) {
+        restrict_chunk(c, d0, d1);
+        part1[c] = rr;
+        return;  // z after the coarse solve
+      }
       if (precondition) {
         apply_preconditioner(d0, d1);
         rz = dot_range(rs, zs, d0, d1);
@@ -348,6 +413,7 @@ bool solve_cg(const MechanicalModel& model, MechanicalState& state, const Eigen:
       part1[c] = rr;
       part2[c] = rz;
     });
+    if (two_level) finish_two_level(part2);
     r_norm2 = sum(part1);
     const double rho_next = sum(part2);
     // The next direction is needed only if another iteration follows.

@@ -382,6 +382,7 @@ void reset(const MechanicalModel& model, MechanicalState& state) {
   // As a fresh state: no warm-start guess, no assembled matrix to reuse.
   state.work.cg_previous.setZero();
   state.work.system_assembled_step = -1;
+  state.work.coarse.built_step = -1;
   for (std::size_t k = 0; k < model.force_fields.size(); ++k) {
     ForceFieldState fresh = model.force_fields[k]->make_state();
     state.field_states[k] = std::move(fresh);

@@ -121,25 +121,46 @@ struct LinearSolverConfig {
   /// to the next when the motion is smooth: the iterations then refine an answer that is
   /// nearly right instead of building one from nothing. One extra product per step.
   bool warm_start{false};
+  /// CG with a two-level preconditioner: block Jacobi plus an exact solve on the rigid
+  /// motions of a few dozen pieces of the body (coarse_correction.h). It removes the smooth
+  /// errors that plain CG leaves at the haptic period; each iteration costs about a third
+  /// more. A HoF extension (SOFA's CGLinearSolver is unpreconditioned); off by default.
+  bool coarse_correction{false};
+  /// Steps one coarse matrix serves before it is formed again from the current matrix and
+  /// shape (a stale one only slows the convergence).
+  int coarse_refresh_steps{100};
 };
 
-/// CG iterations of the haptic-rate mode: warm-started, they solve a 1 ms step of the medium
-/// liver (co-rotational FEM, 5 kPa) at least as accurately as SOFA's default of 25 iterations
-/// from zero, measured against an exact LDLᵀ solve of the same step
-/// (tests/mechanics/haptic_rate_fem_test.cpp; the error of both in `hof bench`).
-inline constexpr int kHapticRateCgIterations = 10;
-/// Steps one assembled matrix serves in the haptic-rate mode (OdeSolverConfig::matrix_reuse_steps).
-inline constexpr int kHapticRateMatrixReuseSteps = 2;
-/// Below this many nodes the haptic-rate mode assembles the matrix every step: ten warm
-/// iterations all but solve so small a system, and the reused matrix's one-step lag becomes
-/// the larger error (`hof bench`, simple liver, 201 nodes: 0.011 assembled every step, 0.114
-/// every second step, against 0.025 for 25 cold iterations; medium, 2,623 nodes: 0.27 and
-/// 0.30 against 0.37, the reuse buying 15% of the rate).
-inline constexpr std::size_t kHapticRateMatrixReuseMinNodes = 1000;
+/// CG iterations of the haptic-rate mode: warm-started, with the two-level preconditioner
+/// (coarse_correction.h), two iterations solve a 1 ms step of the medium liver (co-rotational
+/// FEM, 5 kPa) three times more accurately than SOFA's default of 25 plain iterations from
+/// zero, measured against an exact LDLᵀ solve of the same step
+/// (tests/mechanics/haptic_rate_fem_test.cpp, a press: 0.13 against 0.41; `hof bench`: 0.12
+/// against 0.37).
+inline constexpr int kHapticRateCgIterations = 2;
+/// Below this many nodes the haptic-rate mode makes one iteration more: 25 plain iterations
+/// all but solve so small a system (the simple liver, 201 nodes: 0.028), two-level ones
+/// need three to do better (0.021; two leave 0.060), and an iteration costs little there.
+inline constexpr std::size_t kHapticRateSmallBodyNodes = 1000;
 
-/// The haptic-rate mode's matrix reuse for a body of `node_count` nodes.
-[[nodiscard]] constexpr int haptic_rate_matrix_reuse_steps(std::size_t node_count) {
-  return node_count >= kHapticRateMatrixReuseMinNodes ? kHapticRateMatrixReuseSteps : 1;
+/// The haptic-rate mode's CG iterations for a body of `node_count` nodes.
+[[nodiscard]] constexpr int haptic_rate_cg_iterations(std::size_t node_count) {
+  return node_count < kHapticRateSmallBodyNodes ? kHapticRateCgIterations + 1 : kHapticRateCgIterations;
+}
+
+/// The haptic-rate mode's solver settings for a body of `node_count` nodes: few warm-started
+/// CG iterations with the two-level preconditioner, the matrix assembled every step. Why not
+/// reuse the matrix (matrixReuseSteps > 1): once the solve is this accurate, the reused
+/// matrix's lag is the larger error. Implicit Euler's right-hand side holds the damping term
+/// −h (h + r_K) K v; with K a few steps old its error is proportional to the velocity rather
+/// than to the (much smaller) change of velocity: the press test's error grows from 0.13 to
+/// 0.44 with the matrix of every second step and to 0.72 with every third, whatever the
+/// iterations.
+inline void use_haptic_rate_solver(LinearSolverConfig& linear, OdeSolverConfig& ode, std::size_t node_count) {
+  linear.iterations = haptic_rate_cg_iterations(node_count);
+  linear.warm_start = true;
+  linear.coarse_correction = true;
+  ode.matrix_reuse_steps = 1;
 }
 
 struct ModelConfig {

@@ -4,6 +4,7 @@
 /// forces, the coupling input, per-field element data, solver scratch (sized once, so a step
 /// never allocates), and the divergence report.
 
+#include <Eigen/Cholesky>
 #include <Eigen/Core>
 #include <Eigen/SparseCholesky>
 #include <tbb/task_arena.h>
@@ -45,9 +46,26 @@ class PreorderedLdlt : public Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>,
   void refactor(const Eigen::SparseMatrix<double>& upper) { factorize_preordered<true>(upper); }
 };
 
+/// The coarse space of the CG's two-level preconditioner (coarse_correction.h): sized when
+/// the state is made, formed and factored every few steps.
+struct CoarseSpace {
+  std::int32_t aggregates{0};             // 0: no coarse space
+  std::vector<std::int32_t> aggregate;    // (N) aggregate of each node
+  std::vector<Eigen::Vector3d> arm;       // (N) node minus its aggregate's centre, over the aggregate's size
+  std::vector<Eigen::Vector3d> centre;    // (aggregates) scratch for the centres
+  std::vector<double> size;               // (aggregates) half the largest extent of each aggregate
+  std::vector<std::int32_t> members;      // (aggregates) scratch for the node counts
+  Eigen::MatrixXd matrix;                 // (6G × 6G) Pᵀ A P
+  Eigen::LLT<Eigen::MatrixXd> factor;     // its Cholesky factor
+  Eigen::VectorXd solution;               // (6G) Pᵀ r, then the coarse solution
+  std::vector<double> partials;           // (CG chunks × 6G) each chunk's Pᵀ r, added in chunk order
+  std::int64_t built_step{-1};            // the step whose matrix and positions formed it (−1: none)
+  bool usable{false};                     // the last factorisation succeeded
+};
+
 /// Solver scratch, sized by make_state().
 struct SolverWorkspace {
-  Eigen::VectorXd b, dv, r, p, z, ap, az, diag_inv;  // CG and implicit Euler (3N)
+  Eigen::VectorXd b, dv, r, p, z, ap, az, diag_inv;  // CG and implicit Euler (3N); diag_inv: 1 / A's diagonal (two-level CG)
   Eigen::VectorXd cg_previous;                     // (3N) the last CG solution: a warm start's guess
   Eigen::VectorXd x_saved, v_saved;               // last good state, restored on divergence
   Eigen::VectorXd k1x, k1v, k2x, k2v, k3x, k3v, k4x, k4v, xt, vt;  // RK4
@@ -64,8 +82,11 @@ struct SolverWorkspace {
   // The step at which implicit Euler assembled `system` for itself with these coefficients
   // (−1: it holds something else, e.g. the compliance's K): what matrix reuse may reuse.
   std::int64_t system_assembled_step{-1};
+  std::uint64_t system_assemblies{0};              // counts assemble_system's fills of `system`
+  std::uint64_t diag_inv_assembly{0};              // the fill diag_inv was taken from (0: none)
   double system_mass_coeff{0.0}, system_stiffness_coeff{0.0};
   std::vector<Eigen::Matrix3d> block_jacobi;       // (N) inverse diagonal blocks
+  CoarseSpace coarse;                              // the CG's two-level preconditioner, when on
   // point_elastic_force: the set of a patch's nodes (one flag per node, cleared after each
   // use) and the elements touching them.
   std::vector<std::uint8_t> node_marks;

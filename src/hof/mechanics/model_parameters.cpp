@@ -84,6 +84,14 @@ Expected<Slot> find_slot(ModelConfig& c, std::string_view component, std::string
       scratch = c.linear.warm_start ? 1.0 : 0.0;
       return Slot{&scratch, 0.0, 1.0, false, true, "", false, nullptr, &c.linear.warm_start};
     }
+    if (parameter == "coarseCorrection") {
+      scratch = c.linear.coarse_correction ? 1.0 : 0.0;
+      return Slot{&scratch, 0.0, 1.0, false, true, "", false, nullptr, &c.linear.coarse_correction};
+    }
+    if (parameter == "coarseRefreshSteps") {
+      scratch = static_cast<double>(c.linear.coarse_refresh_steps);
+      return Slot{&scratch, 1.0, 100000.0, false, true, "", false, &c.linear.coarse_refresh_steps};
+    }
     if (parameter == "tolerance") return Slot{&c.linear.tolerance, 0.0, inf, false, false, ""};
     if (parameter == "threshold") return Slot{&c.linear.threshold, 0.0, inf, false, false, ""};
     return no_parameter("linear solver");
@@ -168,6 +176,8 @@ std::vector<std::string> parameter_names(const ModelConfig& c) {
   names.push_back(c.linear.name + "/tolerance");
   names.push_back(c.linear.name + "/threshold");
   names.push_back(c.linear.name + "/warmStart");
+  names.push_back(c.linear.name + "/coarseCorrection");
+  names.push_back(c.linear.name + "/coarseRefreshSteps");
   names.push_back(c.mass.name + "/totalMass");
   names.push_back(c.mass.name + "/massDensity");
   // The model's own (component ""): "/dt", ...

@@ -311,6 +311,15 @@ Expected<void> Reader::apply_linear(Component& c, ModelConfig& m) {
   auto warm = boolean(c, "warmStart");
   if (!warm) return std::unexpected(warm.error());
   m.linear.warm_start = warm->value_or(false);
+  // HoF extensions: the two-level preconditioner (mechanics/coarse_correction.h).
+  auto coarse = boolean(c, "coarseCorrection");
+  if (!coarse) return std::unexpected(coarse.error());
+  m.linear.coarse_correction = coarse->value_or(false);
+  auto refresh = number(c, "coarseRefreshSteps");
+  if (!refresh) return std::unexpected(refresh.error());
+  if (*refresh && (**refresh < 1 || **refresh != std::floor(**refresh)))
+    return fail(c, fmt::format("attribute coarseRefreshSteps: {} is not a positive integer", **refresh), ErrorCode::kInvalidArgument);
+  m.linear.coarse_refresh_steps = static_cast<int>(refresh->value_or(100.0));
   return {};
 }
 
