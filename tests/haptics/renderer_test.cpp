@@ -199,6 +199,43 @@ TEST(FallThrough, PenaltyFallsThroughAThinPlateWhereProxiesDoNot) {
   }
 }
 
+// The window's snapshot is copied from the haptic loop's rather than computed again: the copy
+// must be what update_snapshot gives for the same positions (normals, and a tree that finds
+// the same hits), and a snapshot left at rest must not be.
+TEST(SnapshotCopy, ACopiedSnapshotIsTheUpdatedOne) {
+  const mesh::TriMesh rest = sphere_surface(Vec3::Zero(), 0.05, 12, 24);
+  SurfaceSnapshot haptic = make_snapshot(rest);
+  SurfaceSnapshot computed = make_snapshot(rest);
+  SurfaceSnapshot copied = make_snapshot(rest);
+  std::vector<Vec3> moved(rest.vertices.size()), velocities(rest.vertices.size());
+  for (std::size_t i = 0; i < moved.size(); ++i) {
+    const Vec3& p = rest.vertices[i];
+    moved[i] = Vec3(1.5 * p.x(), p.y(), 0.6 * p.z()) + Vec3(0.01, 0.0, 0.0);  // squashed and moved
+    velocities[i] = Vec3(0.0, 0.0, p.z());
+  }
+  update_snapshot(haptic, moved, velocities, 0.25);
+  update_snapshot(computed, moved, velocities, 0.25);
+  copy_snapshot_geometry(copied, haptic);
+  EXPECT_EQ(copied.vertices, computed.vertices);
+  EXPECT_EQ(copied.velocities, computed.velocities);
+  EXPECT_EQ(copied.vertex_normals, computed.vertex_normals);
+  EXPECT_EQ(copied.time_s, 0.25);
+  int hits = 0;
+  for (int k = 0; k < 64; ++k) {
+    const double a = 0.1 * k;
+    const Vec3 from(0.2 * std::cos(a), 0.2 * std::sin(a), 0.03 * std::sin(3 * a));
+    // From outside to the moved sphere's centre: every segment hits it.
+    const collision::SweepHit c = copied.tree.first_hit_segment(copied.view(), from, Vec3(0.01, 0, 0));
+    const collision::SweepHit e = computed.tree.first_hit_segment(computed.view(), from, Vec3(0.01, 0, 0));
+    ASSERT_EQ(c.triangle, e.triangle) << k;
+    hits += c.triangle >= 0;
+    EXPECT_NEAR((c.point - e.point).norm(), 0.0, 1e-12) << k;
+  }
+  EXPECT_EQ(hits, 64);
+  const SurfaceSnapshot at_rest = make_snapshot(rest);
+  EXPECT_NE(at_rest.vertex_normals, copied.vertex_normals);
+}
+
 TEST(MovingSurface, PulsingSphereNeverSwallowsTheProxy) {
   const mesh::TriMesh rest = sphere_surface(Vec3::Zero(), 1.0, 16, 32);  // unit sphere, scaled below
   SurfaceSnapshot s = make_snapshot(rest);

@@ -814,13 +814,16 @@ void Session::publish(double clock_s) {
         }
       }
     }
-    layer.surfaces.publish();
     if (graphics_wanted_.load(std::memory_order_acquire)) {
+      // The same shape for the window: copied from the haptic loop's snapshot (before that is
+      // published, while only this thread reads it), not computed a second time (the tree's
+      // refit and the normals, about a tenth of a medium liver's step).
       haptics::SurfaceSnapshot& shown = layer.graphics.write_slot();
-      haptics::update_snapshot(shown, layer.positions, layer.velocities, clock_s);
+      haptics::copy_snapshot_geometry(shown, slot);
       shown.sequence = layer.graphics.published() + 1;
       layer.graphics.publish();
     }
+    layer.surfaces.publish();
   }
   if (states_wanted_.load(std::memory_order_acquire)) {
     std::vector<std::vector<double>>& slot = graphics_states_.write_slot();

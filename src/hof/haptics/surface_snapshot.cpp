@@ -94,4 +94,14 @@ void update_snapshot(SurfaceSnapshot& s, std::span<const Vec3> positions, std::s
   s.refit_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
+void copy_snapshot_geometry(SurfaceSnapshot& to, const SurfaceSnapshot& from) {
+  to.vertices.assign(from.vertices.begin(), from.vertices.end());
+  to.velocities.assign(from.velocities.begin(), from.velocities.end());
+  to.vertex_normals.assign(from.vertex_normals.begin(), from.vertex_normals.end());
+  to.tree = from.tree;
+  to.time_s = from.time_s;
+  to.refit_s = 0.0;  // nothing refitted here
+  ++to.sequence;
+}
+
 }  // namespace hof::haptics

@@ -100,4 +100,10 @@ struct SurfaceSnapshot {
 void update_snapshot(SurfaceSnapshot& snapshot, std::span<const Vec3> positions, std::span<const Vec3> velocities,
                      double time_s);
 
+/// `to` takes `from`'s positions, velocities, normals, tree and time (the same topology): what
+/// update_snapshot would compute from the same positions, at the cost of a copy. For a second
+/// reader of the same shape (the window's snapshot beside the haptic loop's). No allocation
+/// once sized.
+void copy_snapshot_geometry(SurfaceSnapshot& to, const SurfaceSnapshot& from);
+
 }  // namespace hof::haptics
