@@ -1398,7 +1398,7 @@ std::string dat_value(double v) { return std::isfinite(v) && v > 0.0 ? fmt::form
 std::vector<detail::Plot> write_plot_data(const std::filesystem::path& dir, const std::vector<Cell>& cells, const std::vector<Ratio>& ratios) {
   std::vector<detail::Plot> plots;
   const std::string histogram =
-      "set datafile missing '?'\nset style data histograms\nset style histogram cluster gap 1\nset style fill solid 0.8 border -1\n"
+      "set datafile missing '?'\nset datafile columnheaders\nset style data histograms\nset style histogram cluster gap 1\nset style fill solid 0.8 border -1\n"
       "set boxwidth 0.9\nset logscale y\nset key top left\n";
   // Figure 29.
   {
@@ -1452,7 +1452,7 @@ std::vector<detail::Plot> write_plot_data(const std::filesystem::path& dir, cons
         << (r.mesh == "medium" && r.settings == "thesis" ? "2" : "?") << "\n";
     }
     plots.push_back({"fig30_springs_vs_fem",
-                     "set datafile missing '?'\nset style data histograms\nset style histogram cluster gap 1\nset style fill solid 0.8 border -1\n"
+                     "set datafile missing '?'\nset datafile columnheaders\nset style data histograms\nset style histogram cluster gap 1\nset style fill solid 0.8 border -1\n"
                      "set yrange [0:*]\nset ylabel 'springs faster by (x)'\nset title 'Mesh springs against co-rotational FEM (mesh/settings)'\n"
                      "plot 'fig30_springs_vs_fem.dat' using 2:xtic(1) title 'force field own cost (forces + assembly)', "
                      "'' using 3 title 'whole step (steps/s)', '' using ($0):4 with points pt 7 ps 2 lc rgb 'black' title 'thesis (SOFA, Liver Medium)'\n"});
@@ -1605,8 +1605,8 @@ std::vector<detail::Plot> write_plot_data(const std::filesystem::path& dir, cons
                        histogram + fmt::format("set ylabel 'steps/s (median)'\nset key outside right\nset title 'Co-rotational FEM at dt 1 ms "
                                                "(5 kPa liver): the haptic rate is 1000 steps/s'\n"
                                                "plot 'haptic_rate.dat' using 2:xtic(1) title 'CG 25 from zero, 1 thread', '' using 3 title "
-                                               "'CG 25 from zero, 2 threads', '' using 4 title 'haptic-rate CG (two-level, warm), 1 thread', '' using 5 title "
-                                               "'haptic-rate CG (two-level, warm), 2 threads', '' using ($0+0.2):6 with points pt 6 ps 2 lw 2 lc rgb 'black' "
+                                               "'CG 25 from zero, 2 threads', '' using 4 title 'two-level CG warm, 1 thread', '' using 5 title "
+                                               "'two-level CG warm, 2 threads', '' using ($0+0.3):6 with points pt 6 ps 2 lw 2 lc rgb 'black' "
                                                "title 'goal, 2 threads', 1000 with lines dt 2 lc rgb 'red' title '1 kHz'\n")});
     }
   }
