@@ -12,36 +12,12 @@
 #include "hof/mechanics/model_parameters.h"
 #include "hof/mechanics/step.h"
 #include "hof/mesh/liver_generator.h"
+#include "physiological_liver.h"
 
 namespace hof::mechanics {
 namespace {
 
-// Physiological co-rotational liver held at its lowest nodes, implicit Euler at the haptic
-// period with SOFA's Rayleigh damping (as tests/mechanics/haptic_rate_fem_test.cpp).
-ModelConfig liver_config(const mesh::Mesh& liver) {
-  ModelConfig c;
-  c.positions = liver.nodes;
-  c.tets = liver.tets;
-  c.mass.kind = MassKind::kDiagonal;
-  c.mass.mass_density_kg_per_m3 = 1060.0;
-  c.gravity_m_per_s2 = Vec3(0, 0, -9.81);
-  ForceFieldConfig fem;
-  fem.name = "FEM";
-  fem.tetrahedron_fem = TetrahedronFemConfig{5000.0, 0.45, FemMethod::kLarge, {}, {}};
-  c.force_fields.push_back(fem);
-  const double lowest = std::ranges::min(liver.nodes, {}, [](const Vec3& p) { return p.z(); }).z();
-  FixedConstraintConfig fixed;
-  for (std::size_t i = 0; i < liver.nodes.size(); ++i) {
-    if (liver.nodes[i].z() < lowest + 0.004) fixed.indices.push_back(static_cast<std::int32_t>(i));
-  }
-  c.fixed.push_back(fixed);
-  c.ode.kind = OdeSolverKind::kEulerImplicit;
-  c.ode.rayleigh_mass = 0.1;
-  c.ode.rayleigh_stiffness = 0.1;
-  c.dt_s = 1e-3;
-  c.threads = 1;
-  return c;
-}
+using testing::physiological_liver_config;
 
 // A downward load on the nodes within 1 cm of the top.
 void press(const mesh::Mesh& liver, MechanicalState& state, double force_n) {
@@ -77,7 +53,7 @@ TEST(CoarseCorrection, AggregatesCoverEveryNodeAndEachHoldsEnoughForItsRigidMoti
   tet.tets = {{0, 1, 2, 3}};
   for (const mesh::Mesh& body : {*mesh::generate_liver(mesh::LiverResolution::kSimple),
                                  *mesh::generate_liver(mesh::LiverResolution::kMedium), tet}) {
-    ModelConfig c = liver_config(body);
+    ModelConfig c = physiological_liver_config(body);
     c.linear.coarse_correction = true;
     const Solver s = make_solver(c);
     const CoarseSpace& coarse = s.state.work.coarse;
@@ -100,7 +76,7 @@ TEST(CoarseCorrection, AggregatesCoverEveryNodeAndEachHoldsEnoughForItsRigidMoti
 // (never refreshed) while the liver is pressed out of that shape.
 TEST(CoarseCorrection, TwoLevelCgConvergesToTheExactSolveEvenWithAStaleCoarseMatrix) {
   static const mesh::Mesh simple = *mesh::generate_liver(mesh::LiverResolution::kSimple);
-  ModelConfig base = liver_config(simple);
+  ModelConfig base = physiological_liver_config(simple);
   base.linear.mixed_precision = false;
   base.linear.iterations = 2000;
   base.linear.tolerance = 1e-24;
@@ -132,14 +108,14 @@ TEST(CoarseCorrection, TwoLevelCgConvergesToTheExactSolveEvenWithAStaleCoarseMat
 // smooth, long-wavelength part of the error).
 TEST(CoarseCorrection, FourTwoLevelIterationsSolveAPressedStepFarBetterThanFourJacobiOnes) {
   static const mesh::Mesh liver = *mesh::generate_liver(mesh::LiverResolution::kCoarse);
-  ModelConfig exact_config = liver_config(liver);
+  ModelConfig exact_config = physiological_liver_config(liver);
   exact_config.linear.kind = LinearSolverKind::kSparseLdlt;
   Solver exact = make_solver(exact_config);
   for (int n = 0; n < 30; ++n) {
     press(liver, exact.state, 2.0);
     ASSERT_TRUE(step(exact.model, exact.state));
   }
-  ModelConfig jacobi_config = liver_config(liver);
+  ModelConfig jacobi_config = physiological_liver_config(liver);
   jacobi_config.linear.iterations = 4;
   jacobi_config.linear.tolerance = jacobi_config.linear.threshold = 1e-30;
   jacobi_config.linear.block_jacobi = true;
@@ -172,7 +148,7 @@ TEST(CoarseCorrection, HeldAndTinyBodiesStillStep) {
   tet.nodes = {Vec3(0, 0, 0), Vec3(0.01, 0, 0), Vec3(0, 0.01, 0), Vec3(0, 0, 0.01)};
   tet.tets = {{0, 1, 2, 3}};
   for (const std::vector<std::int32_t>& held : {std::vector<std::int32_t>{0, 1, 2}, std::vector<std::int32_t>{0, 1, 2, 3}}) {
-    ModelConfig c = liver_config(tet);
+    ModelConfig c = physiological_liver_config(tet);
     c.fixed.front().indices = held;
     c.linear.coarse_correction = true;
     c.linear.iterations = 3;
@@ -186,7 +162,7 @@ TEST(CoarseCorrection, HeldAndTinyBodiesStillStep) {
 
 // Parameters like any other: named, range-checked, unchanged on a refusal.
 TEST(CoarseCorrection, TheTwoLevelPreconditionerAndItsRefreshAreParameters) {
-  ModelConfig c = liver_config(*mesh::generate_liver(mesh::LiverResolution::kSimple));
+  ModelConfig c = physiological_liver_config(*mesh::generate_liver(mesh::LiverResolution::kSimple));
   ASSERT_TRUE(set_parameter(c, c.linear.name, "coarseCorrection", 1.0));
   ASSERT_TRUE(set_parameter(c, c.linear.name, "coarseRefreshSteps", 50.0));
   EXPECT_TRUE(c.linear.coarse_correction);

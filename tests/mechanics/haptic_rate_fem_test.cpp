@@ -13,6 +13,7 @@
 #include "hof/mechanics/model_parameters.h"
 #include "hof/mechanics/step.h"
 #include "hof/mesh/liver_generator.h"
+#include "physiological_liver.h"
 
 namespace hof::mechanics {
 namespace {
@@ -22,33 +23,9 @@ const mesh::Mesh& medium_liver() {
   return liver;
 }
 
-// Physiological liver (literature.md §6: E ≈ 5 kPa, ν ≈ 0.45, 1060 kg/m³), held at its
-// lowest nodes, co-rotational FEM, implicit Euler at the haptic period.
-ModelConfig haptic_rate_config(const mesh::Mesh& liver) {
-  ModelConfig c;
-  c.name = "liver";
-  c.positions = liver.nodes;
-  c.tets = liver.tets;
-  c.mass.kind = MassKind::kDiagonal;
-  c.mass.mass_density_kg_per_m3 = 1060.0;
-  c.gravity_m_per_s2 = Vec3(0, 0, -9.81);
-  ForceFieldConfig fem;
-  fem.name = "FEM";
-  fem.tetrahedron_fem = TetrahedronFemConfig{5000.0, 0.45, FemMethod::kLarge, {}, {}};
-  c.force_fields.push_back(fem);
-  const double lowest = std::ranges::min(liver.nodes, {}, [](const Vec3& p) { return p.z(); }).z();
-  FixedConstraintConfig fixed;
-  for (std::size_t i = 0; i < liver.nodes.size(); ++i) {
-    if (liver.nodes[i].z() < lowest + 0.004) fixed.indices.push_back(static_cast<std::int32_t>(i));
-  }
-  c.fixed.push_back(fixed);
-  c.ode.kind = OdeSolverKind::kEulerImplicit;
-  c.ode.rayleigh_mass = 0.1;
-  c.ode.rayleigh_stiffness = 0.1;
-  c.dt_s = 1e-3;
-  c.threads = 1;
-  return c;
-}
+// Physiological liver, held at its lowest nodes, co-rotational FEM, implicit Euler at the
+// haptic period.
+ModelConfig haptic_rate_config(const mesh::Mesh& liver) { return testing::physiological_liver_config(liver); }
 
 // Nodes within 1 cm of the top of the liver, a fingertip's patch; on a mesh too coarse for
 // that, the four nearest the top.

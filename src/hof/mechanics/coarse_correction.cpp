@@ -1,10 +1,10 @@
 #include "hof/mechanics/coarse_correction.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <map>
-#include <array>
 
 #include "hof/mechanics/linear_solve.h"
 
@@ -21,7 +21,6 @@ constexpr std::int32_t kMaxAggregates = 40;
 // An aggregate with fewer nodes than this joins its nearest larger neighbour.
 constexpr std::int32_t kMinNodesPerAggregate = 8;
 
-using Coarse6 = Eigen::Matrix<double, 6, 6>;
 using Rows3x6 = Eigen::Matrix<double, 3, 6>;
 
 // Node i's rows of P: [I | −[arm]×], the translations and rotations of its aggregate, with
