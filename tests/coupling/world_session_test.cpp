@@ -2,6 +2,7 @@
 // command seam — in virtual time (lock-step, deterministic) and in real time (two threads).
 
 #include <array>
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -10,6 +11,7 @@
 #include <numbers>
 #include <thread>
 
+#include "hof/core/cpu_affinity.h"
 #include "hof/coupling/session.h"
 #include "hof/haptics/device_backends/scripted_device.h"
 #include "hof/mechanics/model_parameters.h"
@@ -272,7 +274,8 @@ TEST(WorldSession, EffectOnlyWorldRendersEachEffectsOwnFormulaAtEveryTick) {
 
 // ---- The command seam.
 
-std::unique_ptr<Session> springs_liver_session(std::unique_ptr<haptics::Device> device, int simulation_threads = 0) {
+std::unique_ptr<Session> springs_liver_session(std::unique_ptr<haptics::Device> device, int simulation_threads = 0,
+                                               bool pin_threads = true) {
   const mesh::Mesh liver = *mesh::generate_liver(mesh::LiverResolution::kSimple);
   const mesh::BoundarySurface b = mesh::extract_boundary(liver.nodes, liver.tets);
   mechanics::ModelConfig c = testing::resting_liver_config(liver);
@@ -288,6 +291,7 @@ std::unique_ptr<Session> springs_liver_session(std::unique_ptr<haptics::Device> 
   SessionConfig config;
   config.haptics.realtime_priority = false;
   config.simulation_threads = simulation_threads;
+  config.pin_threads = pin_threads;
   auto session = Session::make(std::move(body), std::move(device), config);
   EXPECT_TRUE(session) << session.error().to_string();
   return std::move(*session);
@@ -463,8 +467,9 @@ TEST(CommandSeam, CommandsDuringARealTimeRunAreAppliedBetweenSteps) {
 }
 
 TEST(RealTimeSession, TheSimulationRunsOnTheThreadsAskedForAndEveryCoreButOneByDefault) {
-  // Automatic: every core but one (the haptic loop's and the window's), at least one.
-  const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  // Automatic: every core the process may use but one (the haptic loop's and the window's),
+  // at least one.
+  const int cores = static_cast<int>(allowed_cpus().size());
   for (int asked : {1, 2, 0}) {
     haptics::MotionConfig hold;
     hold.kind = haptics::MotionKind::kHold;
@@ -477,6 +482,78 @@ TEST(RealTimeSession, TheSimulationRunsOnTheThreadsAskedForAndEveryCoreButOneByD
     const SessionReport report = session->stop_realtime({});
     EXPECT_GT(report.simulation_steps, 0);
     EXPECT_EQ(report.simulation_threads, asked > 0 ? asked : std::max(1, cores - 1)) << "asked " << asked;
+  }
+}
+
+TEST(RealTimeSession, TheHapticLoopAndTheSnapshotsRunOnACpuOfTheirOwn) {
+  const std::vector<int> cpus = allowed_cpus();
+  for (const bool pin : {true, false}) {
+    haptics::MotionConfig hold;
+    hold.kind = haptics::MotionKind::kHold;
+    hold.start_m = Vec3(0.03, 0.0, 0.09);
+    hold.hold_s = std::numeric_limits<double>::infinity();
+    auto session = springs_liver_session(std::make_unique<haptics::ScriptedDevice>(*haptics::ScriptedMotion::make(hold)), 0,
+                                         pin);
+    session->start_realtime();
+    while (session->haptic_loop().ticks() < 50) std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    const SessionReport report = session->stop_realtime({});
+    EXPECT_GT(report.simulation_steps, 0);
+    if (!pin) {
+      EXPECT_EQ(report.cpu_placement, "not pinned (asked)");
+      EXPECT_FALSE(session->haptic_loop().pinned());
+    } else if (cpus.size() >= 2) {
+      // The last CPU the process may use carries the haptic loop; the simulation has the rest.
+      EXPECT_NE(report.cpu_placement.find(fmt::format("haptics on CPU {}", cpus.back())), std::string::npos)
+          << report.cpu_placement;
+      EXPECT_EQ(report.cpu_placement.find(fmt::format("simulation on CPU {}", cpus.back())), std::string::npos);
+      EXPECT_TRUE(session->haptic_loop().pinned());
+    } else {
+      EXPECT_EQ(report.cpu_placement, "not pinned");  // one CPU: the threads must share it
+    }
+  }
+}
+
+TEST(RealTimeSession, TheLastShapeOfARunIsPublishedAndEveryShapeInOrder) {
+  // A press that moves the liver while the simulation stages its shapes for the publisher
+  // thread: when the run stops, the shape a reader gets is the final state's, whatever the
+  // timing; and the snapshots a reader saw came in increasing order.
+  auto session = springs_liver_session(poke_device(Vec3(0.03, 0, 0.055), Vec3(0, 0, -1), 0.005, 0.01, 0.05, 5.0));
+  TripleBuffer<haptics::SurfaceSnapshot>& shown = session->graphics_surfaces();
+  session->start_realtime();
+  std::uint64_t last_sequence = 0;
+  double last_time = -1.0;
+  bool first = true;
+  while (session->haptic_loop().ticks() < 1000) {
+    if (shown.acquire()) {
+      if (!first) {
+        EXPECT_GT(shown.read().sequence, last_sequence);
+      }
+      first = false;
+      EXPECT_GE(shown.read().time_s, last_time);
+      last_sequence = shown.read().sequence;
+      last_time = shown.read().time_s;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  const SessionReport report = session->stop_realtime({});
+  ASSERT_GT(report.simulation_steps, 0);
+  shown.acquire();  // (false when the reader above already had the last one)
+  const Eigen::VectorXd& x = session->state().x;
+  std::vector<Vec3> expected(session->body().surface.vertices.size());
+  session->body().mapping.apply({x.data(), static_cast<std::size_t>(x.size())}, expected);
+  const haptics::SurfaceSnapshot& last = shown.read();
+  ASSERT_EQ(last.vertices.size(), expected.size());
+  double moved = 0.0;
+  for (std::size_t v = 0; v < expected.size(); ++v) {
+    ASSERT_EQ(last.vertices[v], expected[v]) << "vertex " << v;
+    moved = std::max(moved, (expected[v] - session->body().surface.vertices[v]).norm());
+  }
+  EXPECT_GT(moved, 1e-4) << "the press must have moved the surface";
+  // Its bound tree was refitted to it: every triangle lies in the root box.
+  const std::vector<std::pair<Vec3, Vec3>> root = last.tree.boxes(0);
+  ASSERT_EQ(root.size(), 1u);
+  for (const Vec3& p : last.vertices) {
+    EXPECT_TRUE((p.array() >= root[0].first.array()).all() && (p.array() <= root[0].second.array()).all()) << p.transpose();
   }
 }
 

@@ -95,6 +95,11 @@ void add_run_commands(CLI::App& app, int& status) {
                       "virtual machine; docs/reliability.md)")
       ->transform(CLI::CheckedTransformer(keep_awake_modes, CLI::ignore_case))
       ->default_str("auto");
+  static const std::map<std::string, bool> on_off{{"on", true}, {"off", false}};
+  run_cmd->add_option("--pin-threads", run.pin_threads,
+                      "on|off: real time, the haptic loop on the last CPU, the simulation on the others (docs/performance.md)")
+      ->transform(CLI::CheckedTransformer(on_off, CLI::ignore_case))
+      ->default_str("on");
   run_cmd->add_option("--sim-threads", run.simulation_threads,
                       "Real time: the simulation's threads (0 = automatic: every core but one, left to the haptic loop)")
       ->check(CLI::Range(0, 256))
@@ -146,6 +151,10 @@ void add_run_commands(CLI::App& app, int& status) {
                       "auto|on|off: keep the CPUs from halting so the haptic thread wakes on time (auto: on a virtual machine)")
       ->transform(CLI::CheckedTransformer(keep_awake_modes, CLI::ignore_case))
       ->default_str("auto");
+  gui_cmd->add_option("--pin-threads", gui.pin_threads,
+                      "on|off: the haptic loop on the last CPU, the simulation on the others")
+      ->transform(CLI::CheckedTransformer(on_off, CLI::ignore_case))
+      ->default_str("on");
   gui_cmd->add_option("--sim-threads", gui.simulation_threads,
                       "The simulation's threads (0 = automatic: every core but one, left to the haptic loop and the window)")
       ->check(CLI::Range(0, 256))

@@ -319,6 +319,7 @@ int run_session(const RunOptions& options) {
   coupling::SessionConfig config = world->config;
   config.haptics.realtime_priority = !options.deterministic;
   config.simulation_threads = options.simulation_threads;
+  config.pin_threads = options.pin_threads;
   // The limit the safety filter holds: the device's, or the project's when lower.
   const double device_max = (*device)->spec().max_force_n;
   const double max_force = config.haptics.safety.max_force_n > 0.0 ? std::min(device_max, config.haptics.safety.max_force_n) : device_max;
@@ -485,7 +486,8 @@ int run_session(const RunOptions& options) {
                        {"scheduling", scheduling_name(session.haptic_loop().scheduling())},
                        {"memory_locked", memory_locked},
                        {"cpus_kept_awake", keep_awake ? keep_awake->spinners() : 0},
-                       {"keep_awake", keep_awake ? keep_awake->reason() : "off (virtual time)"}};
+                       {"keep_awake", keep_awake ? keep_awake->reason() : "off (virtual time)"},
+                       {"cpu_placement", options.deterministic ? "not pinned (virtual time)" : report.cpu_placement}};
   if (const std::optional<double> steal_after = host_cpu_steal_s(); steal_before && steal_after) {
     summary["host_cpu_steal_s"] = *steal_after - *steal_before;
   }
@@ -617,8 +619,9 @@ int run_session(const RunOptions& options) {
       std::printf("  simulation  %lld steps, %.0f steps/s\n", static_cast<long long>(report.simulation_steps),
                   report.simulation_steps_per_s);
     } else {
-      std::printf("  simulation  %lld steps, %.0f steps/s on %d thread%s\n", static_cast<long long>(report.simulation_steps),
-                  report.simulation_steps_per_s, report.simulation_threads, report.simulation_threads == 1 ? "" : "s");
+      std::printf("  simulation  %lld steps, %.0f steps/s on %d thread%s (%s)\n", static_cast<long long>(report.simulation_steps),
+                  report.simulation_steps_per_s, report.simulation_threads, report.simulation_threads == 1 ? "" : "s",
+                  report.cpu_placement.c_str());
     }
     std::printf("  contact     %.3f s, max force %.3f N, fall-through events %lld\n", report.contact_time_s, report.max_force_n,
                 static_cast<long long>(report.fall_through_events));

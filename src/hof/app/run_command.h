@@ -25,6 +25,8 @@ struct RunOptions {
   haptics::KeepAwake keep_awake{haptics::KeepAwake::automatic};
   /// Real time: the simulation's threads (0: automatic, every core but one).
   int simulation_threads{0};
+  /// Real time: the haptic loop on a CPU of its own, the simulation on the others.
+  bool pin_threads{true};
 };
 
 int run_session(const RunOptions& options);

@@ -30,6 +30,16 @@ bool fem_reaction_step_fits(double dt_s, double rate_hz) { return std::abs(dt_s 
 
 using Clock = std::chrono::steady_clock;
 
+// How often the publisher thread looks for a shape staged by the simulation.
+constexpr std::chrono::microseconds kPublisherPoll{100};
+
+// Real time: how far the simulation may fall behind the clock and still catch up (steps
+// without sleeping until it is back); farther behind, it gives the time up and goes on from
+// now. A step's cost varies by a tenth from step to step: without catching up, every step
+// slower than dt would be lost for good while a faster one waits, and the simulation would
+// keep real time only if its slowest steps did.
+constexpr double kMaxCatchUp_s = 0.02;
+
 double seconds_between(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
 
 // Generalised winding number of a closed surface part at p (Van Oosterom & Strackee 1983):
@@ -760,6 +770,13 @@ bool Session::advance_bodies(SessionReport& report) {
 }
 
 void Session::publish(double clock_s) {
+  // The shape is staged here, on the simulation's thread (the mapping to the surface, the
+  // contact's local model: they read the state); the snapshot itself (normals, the tree's
+  // refit, about a tenth of a medium liver's step) is made by the publisher thread in real
+  // time, on the core the haptic loop leaves idle, and here in virtual time (the same result).
+  PublishJob& job = publisher_.joinable() ? publish_jobs_->write_slot() : inline_job_;
+  job.clock_s = clock_s;
+  job.layers.resize(layers_.size());
   for (std::size_t l = 0; l < layers_.size(); ++l) {
     LayerRuntime& layer = *layers_[l];
     for (const std::size_t i : layer.bodies) {
@@ -771,59 +788,20 @@ void Session::publish(double clock_s) {
       std::copy(r.surface_positions.begin(), r.surface_positions.end(), layer.positions.begin() + part.first_vertex);
       std::copy(r.surface_velocities.begin(), r.surface_velocities.end(), layer.velocities.begin() + part.first_vertex);
     }
-    haptics::SurfaceSnapshot& slot = layer.surfaces.write_slot();
-    haptics::update_snapshot(slot, layer.positions, layer.velocities, clock_s);
-    // update_snapshot counts the publishes of its own slot (one in three): the buffer's count
-    // makes the sequence a reader sees (a sample's snapshot_sequence) increase with every one.
-    slot.sequence = layer.surfaces.published() + 1;
-    slot.local.valid = false;
-    const bool touched_here = last_body_ >= 0 && bodies_[static_cast<std::size_t>(last_body_)].layer == l;
-    const bool fem_felt = config_.coupling == ContactCoupling::kCompliance || config_.coupling == ContactCoupling::kFemReaction;
-    if (fem_felt && touched_here && contact_ticks_since_publish_ > 0 && bodies_[static_cast<std::size_t>(last_body_)].body.deformable()) {
-      // The contact point's compliance at the current state (Saupin, Duriez & Cotin 2008).
-      BodyRuntime& r = bodies_[static_cast<std::size_t>(last_body_)];
-      const std::int32_t local = last_triangle_ - layer.rest.parts[r.part].first_triangle;
-      const mesh::Tri& tri = r.body.surface.triangles[static_cast<std::size_t>(local)];
-      const std::array<std::int32_t, 3> vertices{tri[0], tri[1], tri[2]};
-      const std::array<double, 3> bary{last_barycentric_[0], last_barycentric_[1], last_barycentric_[2]};
-      std::array<std::int32_t, SurfaceMapping::kMaxPointWeights> nodes{};
-      std::array<double, SurfaceMapping::kMaxPointWeights> weights{};
-      const std::size_t count = r.body.mapping.point_weights(vertices, bary, nodes, weights);
-      Mat3 compliance;
-      if (config_.coupling == ContactCoupling::kFemReaction) {
-        slot.local.valid = true;
-        slot.local.direct = true;
-        slot.local.triangle = last_triangle_;
-        slot.local.barycentric = last_barycentric_;
-        slot.local.reaction = r.fem_reaction(tri, bary, std::span(nodes.data(), count));
-      } else if (mechanics::compute_point_compliance(*r.body.model, r.state, std::span(nodes.data(), count),
-                                              std::span(weights.data(), count), compliance)) {
-        const Eigen::FullPivLU<Mat3> lu(compliance);
-        if (lu.isInvertible()) {
-          slot.local.valid = true;
-          slot.local.direct = false;
-          slot.local.triangle = last_triangle_;
-          slot.local.barycentric = last_barycentric_;
-          slot.local.compliance = compliance;
-          slot.local.stiffness = lu.inverse();
-          // The load that holds the tissue in its current shape at that point (minus its
-          // elastic force), rather than the force last applied: the local model then stays
-          // consistent with the simulated shape even while the simulation is still settling.
-          slot.local.applied_force = -mechanics::point_elastic_force(*r.body.model, r.state, std::span(nodes.data(), count),
-                                                                     std::span(weights.data(), count));
-        }
-      }
+    LayerJob& staged = job.layers[l];
+    staged.local = local_contact_model(l);
+    if (publisher_.joinable()) {
+      // Sized when the publisher started: the copy reuses the slot's storage.
+      staged.positions.assign(layer.positions.begin(), layer.positions.end());
+      staged.velocities.assign(layer.velocities.begin(), layer.velocities.end());
     }
-    if (graphics_wanted_.load(std::memory_order_acquire)) {
-      // The same shape for the window: copied from the haptic loop's snapshot (before that is
-      // published, while only this thread reads it), not computed a second time (the tree's
-      // refit and the normals, about a tenth of a medium liver's step).
-      haptics::SurfaceSnapshot& shown = layer.graphics.write_slot();
-      haptics::copy_snapshot_geometry(shown, slot);
-      shown.sequence = layer.graphics.published() + 1;
-      layer.graphics.publish();
+  }
+  if (publisher_.joinable()) {
+    publish_jobs_->publish();
+  } else {
+    for (std::size_t l = 0; l < layers_.size(); ++l) {
+      make_snapshot_of(l, layers_[l]->positions, layers_[l]->velocities, job.layers[l].local, clock_s);
     }
-    layer.surfaces.publish();
   }
   if (states_wanted_.load(std::memory_order_acquire)) {
     std::vector<std::vector<double>>& slot = graphics_states_.write_slot();
@@ -839,6 +817,111 @@ void Session::publish(double clock_s) {
     graphics_states_.publish();
   }
   contact_ticks_since_publish_ = 0;
+}
+
+haptics::LocalContactModel Session::local_contact_model(std::size_t l) {
+  haptics::LocalContactModel local;
+  const LayerRuntime& layer = *layers_[l];
+  const bool touched_here = last_body_ >= 0 && bodies_[static_cast<std::size_t>(last_body_)].layer == l;
+  const bool fem_felt = config_.coupling == ContactCoupling::kCompliance || config_.coupling == ContactCoupling::kFemReaction;
+  if (!fem_felt || !touched_here || contact_ticks_since_publish_ == 0 || !bodies_[static_cast<std::size_t>(last_body_)].body.deformable()) {
+    return local;
+  }
+  // The contact point's compliance at the current state (Saupin, Duriez & Cotin 2008).
+  BodyRuntime& r = bodies_[static_cast<std::size_t>(last_body_)];
+  const std::int32_t triangle = last_triangle_ - layer.rest.parts[r.part].first_triangle;
+  const mesh::Tri& tri = r.body.surface.triangles[static_cast<std::size_t>(triangle)];
+  const std::array<std::int32_t, 3> vertices{tri[0], tri[1], tri[2]};
+  const std::array<double, 3> bary{last_barycentric_[0], last_barycentric_[1], last_barycentric_[2]};
+  std::array<std::int32_t, SurfaceMapping::kMaxPointWeights> nodes{};
+  std::array<double, SurfaceMapping::kMaxPointWeights> weights{};
+  const std::size_t count = r.body.mapping.point_weights(vertices, bary, nodes, weights);
+  Mat3 compliance;
+  if (config_.coupling == ContactCoupling::kFemReaction) {
+    local.valid = true;
+    local.direct = true;
+    local.triangle = last_triangle_;
+    local.barycentric = last_barycentric_;
+    local.reaction = r.fem_reaction(tri, bary, std::span(nodes.data(), count));
+  } else if (mechanics::compute_point_compliance(*r.body.model, r.state, std::span(nodes.data(), count),
+                                                 std::span(weights.data(), count), compliance)) {
+    const Eigen::FullPivLU<Mat3> lu(compliance);
+    if (lu.isInvertible()) {
+      local.valid = true;
+      local.direct = false;
+      local.triangle = last_triangle_;
+      local.barycentric = last_barycentric_;
+      local.compliance = compliance;
+      local.stiffness = lu.inverse();
+      // The load that holds the tissue in its current shape at that point (minus its elastic
+      // force), rather than the force last applied: the local model then stays consistent with
+      // the simulated shape even while the simulation is still settling.
+      local.applied_force = -mechanics::point_elastic_force(*r.body.model, r.state, std::span(nodes.data(), count),
+                                                            std::span(weights.data(), count));
+    }
+  }
+  return local;
+}
+
+void Session::make_snapshot_of(std::size_t l, std::span<const Vec3> positions, std::span<const Vec3> velocities,
+                               const haptics::LocalContactModel& local, double clock_s) {
+  LayerRuntime& layer = *layers_[l];
+  haptics::SurfaceSnapshot& slot = layer.surfaces.write_slot();
+  haptics::update_snapshot(slot, positions, velocities, clock_s);
+  // update_snapshot counts the publishes of its own slot (one in three): the buffer's count
+  // makes the sequence a reader sees (a sample's snapshot_sequence) increase with every one.
+  slot.sequence = layer.surfaces.published() + 1;
+  slot.local = local;
+  if (graphics_wanted_.load(std::memory_order_acquire)) {
+    // The same shape for the window: copied from the haptic loop's snapshot (before that is
+    // published, while only this thread reads it), not computed a second time.
+    haptics::SurfaceSnapshot& shown = layer.graphics.write_slot();
+    haptics::copy_snapshot_geometry(shown, slot);
+    shown.sequence = layer.graphics.published() + 1;
+    layer.graphics.publish();
+  }
+  layer.surfaces.publish();
+}
+
+void Session::publisher_loop() {
+  for (;;) {
+    const bool stopping = stop_publisher_.load(std::memory_order_acquire);
+    // The latest shape only: one staged while the last was being made replaces the older.
+    if (publish_jobs_->acquire()) {
+      const PublishJob& job = publish_jobs_->read();
+      for (std::size_t l = 0; l < job.layers.size(); ++l) {
+        make_snapshot_of(l, job.layers[l].positions, job.layers[l].velocities, job.layers[l].local, job.clock_s);
+      }
+    } else if (stopping) {
+      break;  // the last shape staged is made
+    } else {
+      // Polled, not woken: waking a sleeping thread on another CPU from the simulation's
+      // step (a futex wake: an interrupt between CPUs, a trap to the hypervisor on a virtual
+      // machine) cost the step a few hundredths of its time; this costs the haptic CPU a
+      // timer wake-up every poll and a shape at most one poll of latency.
+      std::this_thread::sleep_for(kPublisherPoll);
+    }
+  }
+}
+
+void Session::start_publisher() {
+  PublishJob sized;
+  for (const auto& layer : layers_) sized.layers.push_back(LayerJob{layer->positions, layer->velocities, {}});
+  publish_jobs_ = std::make_unique<TripleBuffer<PublishJob>>(sized);
+  stop_publisher_.store(false, std::memory_order_release);
+  publisher_ = std::thread([this] {
+    // Beside the haptic loop, which sleeps most of each millisecond: off the simulation's CPUs.
+    if (cpu_plan_.pinned()) pin_current_thread(std::array<int, 1>{cpu_plan_.haptic});
+    publisher_loop();
+  });
+}
+
+void Session::stop_publisher() {
+  if (!publisher_.joinable()) return;
+  // The last shape staged is made before the thread ends (it runs the loop once more).
+  stop_publisher_.store(true, std::memory_order_release);
+  publisher_.join();
+  publish_jobs_.reset();
 }
 
 bool Session::step_world(SessionReport& report, StateTimer& timer, double clock_s) {
@@ -980,6 +1063,8 @@ void Session::begin_run() {
 }
 
 void Session::simulation_thread(double) {
+  // (A body's steps on several threads: its workers are placed by the system.)
+  if (cpu_plan_.pinned()) pin_current_thread(cpu_plan_.simulation);
   // Each body steps in its own arena of simulation_threads() (start_realtime set them); this
   // one runs several bodies' steps side by side.
   tbb::task_arena arena(simulation_threads());
@@ -988,9 +1073,11 @@ void Session::simulation_thread(double) {
 
 int Session::simulation_threads() const {
   if (config_.simulation_threads > 0) return config_.simulation_threads;
-  // Automatic: every core but one, which the haptic loop (and the window) share.
-  const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
-  return static_cast<int>(std::max(1u, cores - 1));
+  // Automatic: every core the process may use but one, which the haptic loop (and the
+  // window) share.
+  const std::size_t allowed = allowed_cpus().size();
+  const std::size_t cores = allowed > 0 ? allowed : std::max(1u, std::thread::hardware_concurrency());
+  return static_cast<int>(std::max<std::size_t>(1, cores - 1));
 }
 
 void Session::simulation_loop() {
@@ -999,13 +1086,14 @@ void Session::simulation_loop() {
   while (!stop_sim_.load(std::memory_order_acquire)) {
     if (!step_world(rt_report_, *rt_timer_, seconds_between(rt_start_, Clock::now()))) break;
     next += std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(dt_));
+    const auto now = Clock::now();
     if (!paced_.load(std::memory_order_relaxed)) {
-      next = Clock::now();
+      next = now;
       std::this_thread::yield();
-    } else if (next > Clock::now()) {
+    } else if (next > now) {
       std::this_thread::sleep_until(next);
-    } else {
-      next = Clock::now();
+    } else if (seconds_between(next, now) > kMaxCatchUp_s) {
+      next = now;  // too far behind to catch up (kMaxCatchUp_s)
     }
   }
   sim_finished_.store(true, std::memory_order_release);
@@ -1032,6 +1120,10 @@ void Session::start_realtime() {
     if (r.body.deformable()) rt_report_.simulation_threads = r.state.arena->max_concurrency();
   }
   rt_start_ = Clock::now();
+  cpu_plan_ = config_.pin_threads ? plan_cpus(allowed_cpus()) : CpuPlan{};
+  rt_report_.cpu_placement = config_.pin_threads ? cpu_plan_.describe() : "not pinned (asked)";
+  loop_->set_cpu(cpu_plan_.haptic);
+  start_publisher();
   loop_->start();
   sim_thread_ = std::thread([this] { simulation_thread(dt_); });
 }
@@ -1047,6 +1139,7 @@ SessionReport Session::stop_realtime(const std::function<void(const haptics::Hap
   if (!sim_thread_.joinable()) return rt_report_;
   stop_sim_.store(true, std::memory_order_release);
   sim_thread_.join();
+  stop_publisher();
   loop_->stop();
   poll(on_sample);
   // Contacts of the ticks after the last step are not applied.

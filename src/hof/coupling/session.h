@@ -34,6 +34,7 @@
 #include <variant>
 #include <vector>
 
+#include "hof/core/cpu_affinity.h"
 #include "hof/core/error.h"
 #include "hof/core/progress.h"
 #include "hof/coupling/surface_mapping.h"
@@ -74,6 +75,9 @@ struct SessionConfig {
   /// Threads of the simulation in real time (0: automatic, every core but one, which the
   /// haptic loop and the window share). Virtual-time runs step on the caller's thread.
   int simulation_threads{0};
+  /// Real time: the haptic loop and the snapshot publisher on the last CPU the process may
+  /// use, the simulation on the others (with two or more; core/cpu_affinity.h says why).
+  bool pin_threads{true};
 };
 
 /// A body of the world: deformable (a model, and the touchable surface that follows it
@@ -114,6 +118,7 @@ struct SessionReport {
   double wall_s{0.0};
   double simulation_steps_per_s{0.0};        ///< achieved (wall clock)
   int simulation_threads{1};                 ///< threads a body's steps ran on (real time; the last body's)
+  std::string cpu_placement{"not pinned"};   ///< real time: which CPUs the threads were kept on
   /// Simulation steps per second of wall time in the thesis' three states (the rate a
   /// graphics loop showing each new shape could reach): untouched and at rest, deforming
   /// without contact, in contact.
@@ -282,6 +287,20 @@ class Session {
   void apply_commands(SessionReport& report);
   bool advance_bodies(SessionReport& report);
   void publish(double time_s);
+  struct LayerJob {  // a layer's shape after a step, staged for its snapshot
+    std::vector<Vec3> positions, velocities;
+    haptics::LocalContactModel local;
+  };
+  struct PublishJob {
+    double clock_s{0.0};
+    std::vector<LayerJob> layers;
+  };
+  [[nodiscard]] haptics::LocalContactModel local_contact_model(std::size_t layer);
+  void make_snapshot_of(std::size_t layer, std::span<const Vec3> positions, std::span<const Vec3> velocities,
+                        const haptics::LocalContactModel& local, double clock_s);
+  void publisher_loop();
+  void start_publisher();
+  void stop_publisher();
   void publish_settings();
   void count_fall_through(SessionReport& report);
   void finish_report(SessionReport& report, const StateTimer& timer, double wall_s) const;
@@ -331,6 +350,12 @@ class Session {
   int single_steps_{0};
   // Real time.
   std::thread sim_thread_;
+  // The publisher thread (real time): makes the snapshots of the shapes the simulation stages.
+  std::thread publisher_;
+  CpuPlan cpu_plan_;  // real time: where the threads run
+  std::unique_ptr<TripleBuffer<PublishJob>> publish_jobs_;
+  PublishJob inline_job_;  // virtual time: staged and made on the caller's thread
+  std::atomic<bool> stop_publisher_{false};
   std::atomic<bool> stop_sim_{false};
   std::atomic<bool> sim_finished_{false};
   std::atomic<bool> paced_{true};

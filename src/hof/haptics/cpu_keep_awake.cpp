@@ -4,8 +4,11 @@
 #include <sched.h>
 
 #include <algorithm>
+#include <array>
 #include <fstream>
 #include <string>
+
+#include "hof/core/cpu_affinity.h"
 
 namespace hof::haptics {
 
@@ -25,10 +28,15 @@ CpuKeepAwake::CpuKeepAwake(KeepAwake mode) {
     return;
   }
   reason_ = mode == KeepAwake::on ? "on (asked)" : "on (virtual machine)";
-  const unsigned cpus = std::max(1u, std::thread::hardware_concurrency());
+  // One spinner on each CPU the process may use (left to themselves, two could share one CPU
+  // and leave another to halt).
+  std::vector<int> allowed = allowed_cpus();
+  const auto cpus = static_cast<unsigned>(allowed.empty() ? std::max(1u, std::thread::hardware_concurrency()) : allowed.size());
   threads_.reserve(cpus);
   for (unsigned i = 0; i < cpus; ++i) {
-    threads_.emplace_back([this] {
+    const int cpu = allowed.empty() ? -1 : allowed[i];
+    threads_.emplace_back([this, cpu] {
+      if (cpu >= 0) pin_current_thread(std::array<int, 1>{cpu});
       sched_param param{};
       param.sched_priority = 0;
       const bool idle = pthread_setschedparam(pthread_self(), SCHED_IDLE, &param) == 0;

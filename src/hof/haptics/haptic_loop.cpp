@@ -12,6 +12,8 @@
 #include <cmath>
 #include <limits>
 
+#include "hof/core/cpu_affinity.h"
+
 namespace hof::haptics {
 
 namespace {
@@ -349,6 +351,10 @@ void HapticLoop::stop() {
 }
 
 void HapticLoop::run_thread() {
+  if (config_.cpu >= 0) {
+    const std::array<int, 1> cpu{config_.cpu};
+    pinned_.store(pin_current_thread(cpu), std::memory_order_release);
+  }
   if (config_.realtime_priority) {
     // A 1 kHz loop must not wait behind the simulation; ask for real-time scheduling and
     // carry on without it where that is not permitted.

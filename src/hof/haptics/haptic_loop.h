@@ -47,6 +47,7 @@ struct HapticLoopConfig {
   SafetyConfig safety;
   Calibration calibration;
   bool realtime_priority{true};  ///< ask for SCHED_FIFO (ignored when not permitted)
+  int cpu{-1};                   ///< run the real-time thread on this CPU only (-1: anywhere; cpu_affinity.h)
   std::size_t telemetry_capacity{1 << 16};
 };
 
@@ -152,6 +153,10 @@ class HapticLoop {
 
   /// Real-time mode: starts the thread; time counts from the call.
   void start();
+  /// The CPU the next start() runs the thread on (-1: anywhere). Not while running.
+  void set_cpu(int cpu) { config_.cpu = cpu; }
+  /// Whether the running thread got the CPU it was given.
+  [[nodiscard]] bool pinned() const { return pinned_.load(std::memory_order_acquire); }
   /// Stops the thread (joins), then sends a zero force. Idempotent.
   void stop();
   [[nodiscard]] bool running() const { return running_.load(std::memory_order_acquire); }
@@ -218,6 +223,7 @@ class HapticLoop {
   std::atomic<bool> simulation_failed_{false};
   std::atomic<std::uint64_t> ticks_{0};
   std::atomic<int> scheduling_{static_cast<int>(Scheduling::not_started)};
+  std::atomic<bool> pinned_{false};
   std::thread thread_;
   Eigen::Matrix3d world_to_device_{Eigen::Matrix3d::Identity()};
   double world_scale_{1.0};       // world units per metre of device travel

@@ -578,6 +578,7 @@ Expected<void> Gui::open(const std::filesystem::path& file, const scene::HofProj
   coupling::SessionConfig config = world->config;
   config.haptics.realtime_priority = true;
   config.simulation_threads = options_.simulation_threads;
+  config.pin_threads = options_.pin_threads;
   // The builder fitted the probe's workspace to the world. The mouse reaches anywhere, so a
   // world in metres keeps the file's own calibration (a recording then replays with
   // `hof run FILE --device replay:REC.csv` just as it was made); a SOFA scene, which has no

@@ -33,6 +33,8 @@ struct GuiOptions {
   /// The simulation's threads (0: automatic, every core but one, left to the haptic loop and
   /// the window).
   int simulation_threads{0};
+  /// The haptic loop on a CPU of its own, the simulation on the others.
+  bool pin_threads{true};
   GuiRunResult* result{nullptr};  ///< filled when the run ends, if given
 };
 
