@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <tuple>
 
+#include "hof/mechanics/assembly.h"
 #include "hof/mechanics/model_parameters.h"
 #include "hof/mechanics/step.h"
 #include "hof/mesh/liver_generator.h"
@@ -45,6 +46,49 @@ Solver make_solver(const ModelConfig& c) {
 
 double relative_error(const Eigen::VectorXd& v0, const Eigen::VectorXd& v, const Eigen::VectorXd& v_exact) {
   return (v - v_exact).norm() / std::max((v_exact - v0).norm(), 1e-300);
+}
+
+TEST(SystemAssembly, TheSinglePrecisionCopyHoldsHeldNodesAsTheDoubleMatrixDoes) {
+  // Nodes held on every axis (cleared a whole node at a time) and nodes held on one axis only
+  // (a PartialFixedConstraint): the single-precision system the CG reads must be the double
+  // one rounded, with exact identity rows and columns for every held degree of freedom.
+  const mesh::Mesh liver = *mesh::generate_liver(mesh::LiverResolution::kSimple);
+  ModelConfig c = physiological_liver_config(liver);
+  FixedConstraintConfig sliding;
+  sliding.directions = {false, false, true};
+  for (std::int32_t i = 0; i < static_cast<std::int32_t>(liver.nodes.size()); i += 7) sliding.indices.push_back(i);
+  c.fixed.push_back(sliding);
+  c.linear.mixed_precision = true;
+  Solver s = make_solver(c);
+  ASSERT_GT(s.model.fixed_dofs.size(), 3u);
+  press(liver, s.state, 2.0);
+  for (int k = 0; k < 5; ++k) ASSERT_TRUE(step(s.model, s.state));  // a deformed, rotated shape
+  detail::assemble_system(s.model, s.state, 1.1, 2e-6, detail::AssemblyTarget::kSolver);
+  BlockSparseMatrix& a = s.state.work.system;
+  const Eigen::Index n = 3 * static_cast<Eigen::Index>(a.block_rows());
+  Eigen::MatrixXd single = Eigen::MatrixXd::Zero(n, n);
+  for (std::int32_t r = 0; r < a.block_rows(); ++r) {
+    for (std::int64_t slot = a.row_start()[r]; slot < a.row_start()[r + 1]; ++slot) {
+      for (int i = 0; i < 3; ++i) {
+        for (int q = 0; q < 3; ++q) {
+          single(3 * r + i, 3 * a.columns()[slot] + q) = a.single_block(slot)[BlockSparseMatrix::kSingleColumnStride * q + i];
+        }
+      }
+    }
+  }
+  detail::assemble_system(s.model, s.state, 1.1, 2e-6, detail::AssemblyTarget::kDouble);
+  const Eigen::MatrixXd exact = a.to_dense();
+  EXPECT_LT((single - exact).norm(), 1e-6 * exact.norm());
+  std::size_t partly_held = 0;
+  for (const std::int32_t d : s.model.fixed_dofs) {
+    for (Eigen::Index j = 0; j < n; ++j) {
+      const double expected = j == d ? 1.0 : 0.0;
+      ASSERT_EQ(single(d, j), expected) << "dof " << d << " column " << j;
+      ASSERT_EQ(single(j, d), expected) << "dof " << d << " row " << j;
+    }
+    if (!s.model.fixed_dof_mask[static_cast<std::size_t>(d - d % 3)]) ++partly_held;
+  }
+  EXPECT_GT(partly_held, 0u) << "some nodes must be held on z only";
 }
 
 TEST(CoarseCorrection, AggregatesCoverEveryNodeAndEachHoldsEnoughForItsRigidMotions) {

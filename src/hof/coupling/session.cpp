@@ -31,7 +31,7 @@ bool fem_reaction_step_fits(double dt_s, double rate_hz) { return std::abs(dt_s 
 using Clock = std::chrono::steady_clock;
 
 // How often the publisher thread looks for a shape staged by the simulation.
-constexpr std::chrono::microseconds kPublisherPoll{100};
+constexpr std::chrono::microseconds kPublisherPoll{200};
 
 // Real time: how far the simulation may fall behind the clock and still catch up (steps
 // without sleeping until it is back); farther behind, it gives the time up and goes on from

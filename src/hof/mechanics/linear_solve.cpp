@@ -393,12 +393,20 @@ bool solve_cg(const MechanicalModel& model, MechanicalState& state, const Eigen:
     if (iteration == 0) first_curvature = std::abs(curvature);
     if (!(std::abs(curvature) > cfg.threshold * first_curvature) || !(first_curvature > 0.0)) break;
     const double alpha = rho / curvature;
+    // The last iteration's z would serve only a next direction: it is not made (with the
+    // two-level preconditioner that is a coarse solve and two passes over the nodes).
+    const bool last = iteration + 1 >= cfg.iterations;
     // Pass A: x += αp, r −= αAp, z = M⁻¹r; rᵀr and rᵀz.
     over_chunks([&](std::size_t c, std::size_t d0, std::size_t d1) {
       // Without a preconditioner z is r: the update rounds it for the product as it goes.
-      const double rr = cg_update_solution(xs, rs, ps, aps, alpha, single && !precondition ? z_single : nullptr,
+      const double rr = cg_update_solution(xs, rs, ps, aps, alpha, single && !precondition && !last ? z_single : nullptr,
                                            d0 / 3, d1 / 3);
       double rz = rr;
+      if (last) {
+        part1[c] = rr;
+        part2[c] = rz;
+        return;
+      }
       if (two_level) {
         restrict_chunk(c, d0, d1);
         part1[c] = rr;
@@ -413,7 +421,7 @@ bool solve_cg(const MechanicalModel& model, MechanicalState& state, const Eigen:
       part1[c] = rr;
       part2[c] = rz;
     });
-    if (two_level) finish_two_level(part2);
+    if (two_level && !last) finish_two_level(part2);
     r_norm2 = sum(part1);
     const double rho_next = sum(part2);
     // The next direction is needed only if another iteration follows.
