@@ -8,11 +8,15 @@
 #include <string>
 #include <thread>
 
+#include "hof/core/cpu_affinity.h"
+
 namespace hof::haptics {
 namespace {
 
 TEST(CpuKeepAwake, OnStartsOneIdleClassSpinnerPerCpuAndStopsThemAll) {
-  const unsigned cpus = std::max(1u, std::thread::hardware_concurrency());
+  // One per CPU the process may use (taskset, a container's CPU set), each held to its CPU.
+  const std::size_t allowed = allowed_cpus().size();
+  const auto cpus = static_cast<unsigned>(allowed > 0 ? allowed : std::max(1u, std::thread::hardware_concurrency()));
   {
     const CpuKeepAwake awake(KeepAwake::on);
     // SCHED_IDLE needs no privilege: every spinner must have taken it, none spins at normal
