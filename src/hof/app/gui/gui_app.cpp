@@ -31,6 +31,7 @@
 
 #include "hof/app/gui/gui_app.h"
 #include "hof/app/gui/gui_script.h"
+#include "hof/core/cpu_affinity.h"
 #include "hof/core/file_write.h"
 #include "hof/coupling/session.h"
 #include "hof/haptics/device_backends/mouse_device.h"
@@ -2488,8 +2489,15 @@ int run_gui(const GuiOptions& options) {
   // Before the window: its threads, and the session's, start with the CPUs kept awake.
   const haptics::CpuKeepAwake keep_awake(options.keep_awake);
   Gui gui(options);
-  if (auto ok = gui.create_window(); !ok) {
-    std::fprintf(stderr, "hof gui: %s\n", ok.error().to_string().c_str());
+  // The window's renderer threads (Mesa's llvmpipe starts them with the context, where there
+  // is no GPU) are made on the CPU the haptic loop will have: the simulation keeps its CPUs.
+  const std::vector<int> cpus = allowed_cpus();
+  const CpuPlan plan = options.pin_threads ? plan_cpus(cpus) : CpuPlan{};
+  if (plan.pinned()) pin_current_thread(std::array<int, 1>{plan.haptic});
+  auto window = gui.create_window();
+  if (plan.pinned()) pin_current_thread(cpus);  // this thread itself goes where it likes
+  if (!window) {
+    std::fprintf(stderr, "hof gui: %s\n", window.error().to_string().c_str());
     return 1;
   }
   if (options.file) {
