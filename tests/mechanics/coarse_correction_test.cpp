@@ -18,7 +18,10 @@
 namespace hof::mechanics {
 namespace {
 
+using testing::make_solver;
 using testing::physiological_liver_config;
+using testing::Solver;
+using testing::step_error;
 
 // A downward load on the nodes within 1 cm of the top.
 void press(const mesh::Mesh& liver, MechanicalState& state, double force_n) {
@@ -29,23 +32,6 @@ void press(const mesh::Mesh& liver, MechanicalState& state, double force_n) {
   }
   state.external_force.setZero();
   for (std::int32_t i : patch) state.external_force[3 * i + 2] = -force_n / static_cast<double>(patch.size());
-}
-
-struct Solver {
-  MechanicalModel model;
-  MechanicalState state;
-};
-
-Solver make_solver(const ModelConfig& c) {
-  auto model = build_model(c);
-  EXPECT_TRUE(model) << model.error().to_string();
-  Solver s{std::move(*model), {}};
-  s.state = make_state(s.model);
-  return s;
-}
-
-double relative_error(const Eigen::VectorXd& v0, const Eigen::VectorXd& v, const Eigen::VectorXd& v_exact) {
-  return (v - v_exact).norm() / std::max((v_exact - v0).norm(), 1e-300);
 }
 
 TEST(SystemAssembly, TheSinglePrecisionCopyHoldsHeldNodesAsTheDoubleMatrixDoes) {
@@ -139,7 +125,7 @@ TEST(CoarseCorrection, TwoLevelCgConvergesToTheExactSolveEvenWithAStaleCoarseMat
     ASSERT_TRUE(step(two_level.model, two_level.state));
     ASSERT_TRUE(two_level.state.work.coarse.usable);
     EXPECT_EQ(two_level.state.work.coarse.built_step, 0);
-    EXPECT_LT(relative_error(v0, two_level.state.v, exact.state.v), 1e-6) << "step " << n;
+    EXPECT_LT(step_error(v0, two_level.state.v, exact.state.v), 1e-6) << "step " << n;
     two_level.state.x = exact.state.x;
     two_level.state.v = exact.state.v;
   }
@@ -177,8 +163,8 @@ TEST(CoarseCorrection, FourTwoLevelIterationsSolveAPressedStepFarBetterThanFourJ
     EXPECT_EQ(s->state.stats.linear_iterations, 4);
   }
   ASSERT_TRUE(step(exact.model, exact.state));
-  const double jacobi_error = relative_error(v0, jacobi.state.v, exact.state.v);
-  const double two_level_error = relative_error(v0, two_level.state.v, exact.state.v);
+  const double jacobi_error = step_error(v0, jacobi.state.v, exact.state.v);
+  const double two_level_error = step_error(v0, two_level.state.v, exact.state.v);
   std::printf("%zu nodes, 4 iterations from zero: block Jacobi %.3e, two-level %.3e\n", liver.nodes.size(), jacobi_error,
               two_level_error);
   EXPECT_GT(jacobi_error, 0.1);  // the step is not trivial for CG

@@ -18,6 +18,10 @@
 namespace hof::mechanics {
 namespace {
 
+using testing::make_solver;
+using testing::Solver;
+using testing::step_error;
+
 const mesh::Mesh& medium_liver() {
   static const mesh::Mesh liver = *mesh::generate_liver(mesh::LiverResolution::kMedium);
   return liver;
@@ -38,24 +42,6 @@ std::vector<std::int32_t> pressed_patch(const mesh::Mesh& liver) {
   while (within < patch.size() && (liver.nodes[static_cast<std::size_t>(patch[within])] - top).norm() < 0.01) ++within;
   patch.resize(std::max<std::size_t>(within, 4));
   return patch;
-}
-
-struct Solver {
-  MechanicalModel model;
-  MechanicalState state;
-};
-
-Solver make_solver(ModelConfig c) {
-  auto model = build_model(c);
-  EXPECT_TRUE(model) << model.error().to_string();
-  Solver s{std::move(*model), {}};
-  s.state = make_state(s.model);
-  return s;
-}
-
-// Relative error of a step's velocity change against the exact one.
-double step_error(const Eigen::VectorXd& v0, const Eigen::VectorXd& v, const Eigen::VectorXd& v_exact) {
-  return (v - v_exact).norm() / std::max((v_exact - v0).norm(), 1e-300);
 }
 
 void expect_haptic_rate_cg_at_least_as_good_as_cold_cg(const mesh::Mesh& liver) {

@@ -1,11 +1,15 @@
 #pragma once
 // The physiological liver of the haptic-rate tests (literature.md §6: E ≈ 5 kPa, ν ≈ 0.45,
 // 1060 kg/m³), co-rotational FEM, held at its lowest nodes, implicit Euler at the haptic
-// period with SOFA's Rayleigh damping, one thread.
+// period with SOFA's Rayleigh damping, one thread; a model with its state, and the error of a
+// step against an exact one.
+
+#include <gtest/gtest.h>
 
 #include <algorithm>
 
 #include "hof/mechanics/mechanical_model.h"
+#include "hof/mechanics/mechanical_state.h"
 #include "hof/mesh/mesh.h"
 
 namespace hof::mechanics::testing {
@@ -34,6 +38,24 @@ inline ModelConfig physiological_liver_config(const mesh::Mesh& liver) {
   c.dt_s = 1e-3;
   c.threads = 1;
   return c;
+}
+
+struct Solver {
+  MechanicalModel model;
+  MechanicalState state;
+};
+
+inline Solver make_solver(const ModelConfig& c) {
+  auto model = build_model(c);
+  EXPECT_TRUE(model) << model.error().to_string();
+  Solver s{std::move(*model), {}};
+  s.state = make_state(s.model);
+  return s;
+}
+
+// Relative error of a step's velocity change (from v0 to v) against the exact one (v_exact).
+inline double step_error(const Eigen::VectorXd& v0, const Eigen::VectorXd& v, const Eigen::VectorXd& v_exact) {
+  return (v - v_exact).norm() / std::max((v_exact - v0).norm(), 1e-300);
 }
 
 }  // namespace hof::mechanics::testing
