@@ -81,6 +81,31 @@ TEST(WorldSession, RigidShapeHoldsThePressAtStiffnessTimesPenetration) {
   EXPECT_GT(run.report.bodies[0].contact_time_s, 0.2);
 }
 
+// A penalty renderer pushes only within its reach (5 cm): a device driven deeper into a large
+// body than that is no longer pushed back, its proxy is inside, and the run must say so.
+TEST(WorldSession, AProxyDeepInsideABodyIsCountedAsFallingThroughAndAStartInsideIsNot) {
+  const auto run = [](const Vec3& start, double depth) {
+    std::vector<SessionBody> bodies(1);
+    bodies[0].name = "block";
+    bodies[0].surface = box(Vec3(-0.1, -0.2, -0.1), Vec3(0.1, 0.0, 0.1));
+    SessionConfig config = god_object_config();
+    config.haptics.renderer.kind = haptics::RendererKind::kPenalty;
+    auto session = Session::make(std::move(bodies), poke_device(start, Vec3(0, -1, 0), 0.0, depth, 0.1, 0.3), config);
+    EXPECT_TRUE(session) << session.error().to_string();
+    return (*session)->run_virtual(2.0, {});
+  };
+  const SessionReport through = run(Vec3(0, 0.01, 0), 0.09);  // 8 cm deep: beyond the renderer's reach
+  EXPECT_GT(through.fall_through_events, 0);
+  EXPECT_EQ(through.bodies[0].fall_through_events, through.fall_through_events);
+  EXPECT_FALSE(through.bodies[0].probe_started_inside);
+  const SessionReport grazing = run(Vec3(0, 0.01, 0), 0.012);  // 2 mm deep: pushed back, not through
+  EXPECT_EQ(grazing.fall_through_events, 0);
+  EXPECT_GT(grazing.contact_time_s, 0.1);
+  const SessionReport started = run(Vec3(0, -0.1, 0), 0.01);  // starts 10 cm inside and stays there
+  EXPECT_TRUE(started.bodies[0].probe_started_inside);
+  EXPECT_EQ(started.fall_through_events, 0);
+}
+
 TEST(WorldSession, RigidShapePushedAtTheDeviceLimitStaysPutAndTheForceIsClamped) {
   const RigidRun run = press_rigid_box(0.03, 0.02);  // 3 cm: 45 N requested
   int clamped = 0;

@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
 
+#include <Eigen/Geometry>
 #include <Eigen/LU>
 #include <array>
 #include <chrono>
@@ -144,6 +145,8 @@ struct Session::LayerRuntime {
   TripleBuffer<haptics::SurfaceSnapshot> graphics;  // to a reader (the window)
   std::vector<Vec3> positions, velocities;   // the layer's vertices now
   Vec3 proxy{Vec3::Zero()};                  // this layer's proxy at the last tick
+  std::int32_t proxy_triangle{-1};           // the triangle it touched at that tick (-1: none)
+  bool proxy_outside_box{false};             // outside the box of `positions` (fall-through test)
 };
 
 struct Session::StateTimer {
@@ -627,7 +630,10 @@ void Session::take_contacts(SessionReport& report) {
     ++report.haptic_ticks;
     last_tick_valid_ = c.valid;
     if (c.valid) {
-      for (std::size_t l = 0; l < layers_.size(); ++l) layers_[l]->proxy = c.layers[l].proxy;
+      for (std::size_t l = 0; l < layers_.size(); ++l) {
+        layers_[l]->proxy = c.layers[l].proxy;
+        layers_[l]->proxy_triangle = l < c.layer_count && c.layers[l].contact ? c.layers[l].triangle : -1;
+      }
       last_proxy_valid_ = true;
     }
     const double force = c.force.norm();
@@ -678,11 +684,35 @@ void Session::count_fall_through(SessionReport& report) {
   if (!last_proxy_valid_ || !last_tick_valid_) return;
   const bool first = !first_reading_seen_;
   first_reading_seen_ = true;
+  // A proxy outside a layer's bounding box is inside none of its bodies: one pass of minima
+  // and maxima instead of the winding number's arctangent per triangle.
+  for (auto& layer : layers_) {
+    Eigen::AlignedBox3d box;
+    for (const Vec3& v : layer->positions) box.extend(v);
+    layer->proxy_outside_box = !box.contains(layer->proxy);
+  }
   for (std::size_t i = 0; i < bodies_.size(); ++i) {
     BodyRuntime& r = bodies_[i];
     const LayerRuntime& layer = *layers_[r.layer];
     const haptics::SurfacePart& part = layer.rest.parts[r.part];
     if (!part.closed) continue;  // an open sheet has no inside
+    if (layer.proxy_outside_box) {
+      r.inside_since_start = false;
+      continue;
+    }
+    // A proxy touching a triangle of the part is on its surface, not deep inside: the winding
+    // number (a pass over every triangle, a hundredth of a step) is not needed then, and the
+    // answer is the same (deeper_than below would find this triangle near).
+    const std::int32_t touched = layer.proxy_triangle;
+    if (touched >= part.first_triangle && touched < part.first_triangle + part.triangle_count) {
+      const mesh::Tri& tri = layer.rest.triangles[static_cast<std::size_t>(touched)];
+      const auto& x = layer.positions;
+      if (collision::point_triangle_distance_squared(layer.proxy, x[tri[0]], x[tri[1]], x[tri[2]]) <=
+          kFallThroughDepth_m * kFallThroughDepth_m) {
+        r.inside_since_start = false;
+        continue;
+      }
+    }
     const bool inside = inside_part(part, layer.rest.triangles, layer.positions, layer.proxy) &&
                         deeper_than(part, layer.rest.triangles, layer.positions, layer.proxy, kFallThroughDepth_m);
     if (first && inside) {
