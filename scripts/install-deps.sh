@@ -9,6 +9,7 @@ packages=(
   libfmt-dev nlohmann-json3-dev libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev libtbb-dev
   gnuplot-nox xvfb xauth libgl1-mesa-dri libspnav-dev libsodium-dev
   clang-16 libclang-rt-16-dev
+  pybind11-dev python3-dev python3-numpy python3-pytest python3-matplotlib python3-scipy
 )
 
 missing=()

@@ -356,6 +356,18 @@ Expected<void> same_mesh(const std::string& body, const mechanics::ModelConfig& 
 
 }  // namespace
 
+Expected<double> Session::parameter(std::string_view body, std::string_view component, std::string_view parameter) const {
+  std::lock_guard lock(commands_mutex_);
+  for (std::size_t i = 0; i < bodies_.size(); ++i) {
+    if (bodies_[i].body.name != body) continue;
+    if (!has_mechanics_[i]) return make_error(ErrorCode::kInvalidArgument, fmt::format("body '{}' has no mechanics (a rigid shape)", body));
+    return mechanics::get_parameter(validated_configs_[i], component, parameter);
+  }
+  std::string names;
+  for (const BodyRuntime& r : bodies_) names += (names.empty() ? "" : ", ") + r.body.name;
+  return make_error(ErrorCode::kInvalidArgument, fmt::format("no body '{}' (the bodies: {})", body, names));
+}
+
 Expected<void> Session::submit(const Command& submitted) {
   Command command = submitted;
   if (const auto* set = std::get_if<command::SetParameter>(&command);
@@ -468,9 +480,15 @@ Expected<void> Session::submit(const Command& submitted) {
   return {};
 }
 
-std::vector<ParameterChange> Session::parameter_changes() const {
+std::vector<ParameterChange> Session::parameter_changes(bool with_queued) const {
   std::lock_guard lock(commands_mutex_);
-  return changes_;
+  std::vector<ParameterChange> changes = changes_;
+  if (with_queued) {
+    for (const Command& c : pending_) {
+      if (const auto* set = std::get_if<command::SetParameter>(&c)) changes.push_back({set->body, set->component, set->parameter, set->value});
+    }
+  }
+  return changes;
 }
 
 std::vector<std::pair<std::string, haptics::SurfaceMaterial>> Session::material_changes() const {
@@ -1023,7 +1041,7 @@ SessionReport Session::run_virtual(double seconds, const std::function<void(cons
   std::int64_t tick = 0;
   const auto total_ticks = static_cast<std::int64_t>(std::ceil(seconds / tick_period - 1e-6));
   std::int64_t steps = 0;
-  while (tick < total_ticks) {
+  while (tick < total_ticks && !stop_requested_.load(std::memory_order_relaxed)) {
     // N haptic ticks per simulation step (dt may change through a command).
     const auto ticks_per_step = std::max<std::int64_t>(1, std::llround(dt_ / tick_period));
     for (std::int64_t k = 0; k < ticks_per_step; ++k, ++tick) {
@@ -1090,6 +1108,7 @@ void Session::begin_run() {
   }
   first_reading_seen_ = false;
   contact_ticks_this_step_ = 0;
+  stop_requested_.store(false, std::memory_order_relaxed);
 }
 
 void Session::simulation_thread(double) {
@@ -1191,7 +1210,7 @@ SessionReport Session::run_realtime(double seconds, const std::function<void(con
   std::int64_t polls = 0;
   for (;;) {
     const double elapsed = seconds_between(start, Clock::now());
-    if (elapsed >= seconds || sim_finished_.load(std::memory_order_acquire)) break;
+    if (elapsed >= seconds || sim_finished_.load(std::memory_order_acquire) || stop_requested_.load(std::memory_order_relaxed)) break;
     poll(on_sample);
     if (progress && ++polls % 16 == 0) progress("haptic session (real time)", std::min(1.0, elapsed / seconds));
     std::this_thread::sleep_for(std::chrono::milliseconds(5));

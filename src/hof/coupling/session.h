@@ -241,8 +241,16 @@ class Session {
   /// The command seam: validates `command` now (a clear error, nothing changed, when it is
   /// wrong) and queues it; the simulation applies it before its next step. Any thread.
   Expected<void> submit(const Command& command);
-  /// Parameters changed through submit() so far, in order (to save with the project).
-  [[nodiscard]] std::vector<ParameterChange> parameter_changes() const;
+  /// A parameter's value as the commands accepted so far leave it (applied, or queued for the
+  /// next step). Errors: no such body, a body without mechanics, no such parameter.
+  [[nodiscard]] Expected<double> parameter(std::string_view body, std::string_view component, std::string_view parameter) const;
+  /// Asks a run in progress (run_virtual, run_realtime) to end after the current step; the
+  /// run returns its report as far as it went. Any thread (a Ctrl-C handler, a supervisor).
+  /// The next run clears it.
+  void request_stop() { stop_requested_.store(true, std::memory_order_relaxed); }
+  /// Parameters changed through submit() so far, in order (to save with the project): those
+  /// the simulation has applied, and with `with_queued` those accepted for the next step too.
+  [[nodiscard]] std::vector<ParameterChange> parameter_changes(bool with_queued = false) const;
   /// Surface materials set through submit() so far, by body name, in order.
   [[nodiscard]] std::vector<std::pair<std::string, haptics::SurfaceMaterial>> material_changes() const;
 
@@ -265,6 +273,8 @@ class Session {
   /// Latest node positions of every body (3N flat; empty for a rigid body), for a reader
   /// thread (the window's stress colours). Published with every step from the first call on.
   TripleBuffer<std::vector<std::vector<double>>>& graphics_states();
+  /// Simulated time of the world so far, s (read it when no run is going on).
+  [[nodiscard]] double simulated_time() const { return time_s_; }
   /// The world simulation step dt (the smallest body dt), s.
   [[nodiscard]] double dt() const { return dt_.load(std::memory_order_relaxed); }
   /// The calibration in force (the configuration's, or the last SetCalibration submitted).
@@ -359,6 +369,7 @@ class Session {
   std::atomic<bool> stop_sim_{false};
   std::atomic<bool> sim_finished_{false};
   std::atomic<bool> paced_{true};
+  std::atomic<bool> stop_requested_{false};
   std::atomic<std::uint64_t> steps_taken_{0};
   SessionReport rt_report_;
   int step_threads_{0};  // the bodies' threads while in real time (0: their own setting)

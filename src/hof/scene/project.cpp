@@ -5,6 +5,7 @@
 
 #include "hof/core/text.h"
 
+#include "hof/scene/sofa_scene_edit.h"
 #include "hof/scene/x3d_scene.h"
 
 #include <fmt/format.h>
@@ -772,6 +773,20 @@ Expected<void> write_project(const HofProject& project, const std::filesystem::p
 
 std::filesystem::path scene_file(const HofProject& project, const std::filesystem::path& project_file) {
   return project.mechanics_inline.empty() ? project_file.parent_path() / project.mechanics_scene : project_file;
+}
+
+HofProject moved_project(const HofProject& project, const std::filesystem::path& from, const std::filesystem::path& to) {
+  HofProject out = project;
+  std::error_code ec;
+  const std::filesystem::path folder = std::filesystem::absolute(to, ec).parent_path();
+  if (out.mechanics_inline.empty() && !out.mechanics_scene.empty()) {
+    const std::filesystem::path scene = std::filesystem::absolute(scene_file(project, from), ec);
+    out.mechanics_scene = std::filesystem::relative(scene, folder, ec);
+    if (ec || out.mechanics_scene.empty()) out.mechanics_scene = scene;
+  } else if (!out.mechanics_inline.empty()) {
+    out.mechanics_inline = reanchor_scene_files(out.mechanics_inline, std::filesystem::absolute(from, ec).parent_path(), folder);
+  }
+  return out;
 }
 
 coupling::SessionConfig session_config(const HofProject& p) {

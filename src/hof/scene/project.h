@@ -146,6 +146,12 @@ struct HofProject {
 /// The SOFA scene file of a project: the project file itself when the scene is inline.
 [[nodiscard]] std::filesystem::path scene_file(const HofProject& project, const std::filesystem::path& project_file);
 
+/// `project` (read from `from`) as it is to be written at `to`: its scene's path (or, for an
+/// inline scene, the files that scene names) re-anchored, since they are relative to the
+/// project file.
+[[nodiscard]] HofProject moved_project(const HofProject& project, const std::filesystem::path& from,
+                                       const std::filesystem::path& to);
+
 /// The haptic-loop configuration a project describes.
 [[nodiscard]] coupling::SessionConfig session_config(const HofProject& project);
 

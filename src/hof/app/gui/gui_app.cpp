@@ -1164,19 +1164,7 @@ Expected<void> Gui::save(const std::filesystem::path& path) {
 }
 
 scene::HofProject Gui::project_for(const std::filesystem::path& path) const {
-  scene::HofProject out = project_;
-  // The scene path is relative to the project: re-anchor it where the project goes.
-  std::error_code ec;
-  if (out.mechanics_inline.empty() && !out.mechanics_scene.empty()) {
-    const std::filesystem::path scene = std::filesystem::absolute(scene::scene_file(project_, file_), ec);
-    const std::filesystem::path folder = std::filesystem::absolute(path, ec).parent_path();
-    out.mechanics_scene = std::filesystem::relative(scene, folder, ec);
-    if (ec || out.mechanics_scene.empty()) out.mechanics_scene = scene;
-  } else if (!out.mechanics_inline.empty()) {
-    // An inline scene's files are relative to the project too.
-    out.mechanics_inline = scene::reanchor_scene_files(out.mechanics_inline, std::filesystem::absolute(file_, ec).parent_path(),
-                                                       std::filesystem::absolute(path, ec).parent_path());
-  }
+  scene::HofProject out = scene::moved_project(project_, file_, path);
   if (session_) scene::record_parameters(out, session_->parameter_changes());  // as <set> elements
   // And those submitted but not applied yet (a save right after a change, the simulation busy).
   scene::record_parameters(out, submitted_changes_);
