@@ -229,3 +229,95 @@ def test_a_sofa_scene_from_the_sofa_project_loads_and_runs(anchors):
     report, telemetry = world.run()
     assert report["default_probe"] and report["contact_time_s"] > 0.5
     assert math.isfinite(telemetry["force_x"].sum())
+
+
+def test_the_windows_settings_go_through_the_same_seam_and_are_saved(examples, tmp_path):
+    world = hof.load(examples / "liver-palpation-simple.hof")
+    world.set("haptics/surface", "stiffness", 0.4)
+    world.set("haptics", "renderer", "GodObjectRenderer")
+    world.set("haptics/safety", "maxForce", 1.5)
+    report, telemetry = world.run(2.0)
+    assert report["commands"] == ["step 0: surface of Liver", "step 0: renderer", "step 0: force limit 1.5 N"]
+    force = np.sqrt(telemetry["force_x"] ** 2 + telemetry["force_y"] ** 2 + telemetry["force_z"] ** 2)
+    assert force.max() <= 1.5 + 1e-12 and report["max_force_n"] == pytest.approx(1.5)
+    with pytest.raises(ValueError, match="stiffness=\"soft\" is not a number"):
+        world.set("haptics/surface", "stiffness", "soft")
+    with pytest.raises(ValueError, match="has no attribute 'nope'"):
+        world.set("haptics/surface", "nope", 1)
+    with pytest.raises(TypeError, match="a mechanics parameter is a number"):
+        world.set("Liver/springs", "stiffness", "stiff")
+    with pytest.warns(UserWarning, match="takes effect when the project is loaded again"):
+        world.set("haptics", "hapticRate", 2000)
+    world.save(tmp_path / "tuned.hof")
+    text = (tmp_path / "tuned.hof").read_text()
+    assert 'renderer="GodObjectRenderer"' in text and 'hapticRate="2000"' in text and 'maxForce="1.5"' in text
+    assert 'stiffness="0.4"' in text
+    again = hof.load(tmp_path / "tuned.hof")  # its scene found from the new folder
+    assert again.bodies == ["Liver"]
+
+
+def cube_mesh(size=0.04, cells=3):
+    """A cube of tetrahedra (six per cell), nodes on a grid, z up."""
+    n = cells + 1
+    grid = np.array([[i, j, k] for k in range(n) for j in range(n) for i in range(n)], dtype=float) * size / cells
+    index = lambda i, j, k: i + n * (j + n * k)
+    tets = []
+    for i in range(cells):
+        for j in range(cells):
+            for k in range(cells):
+                c = [index(i + a, j + b, k + d) for d in (0, 1) for b in (0, 1) for a in (0, 1)]
+                # Six tetrahedra around the cell's diagonal 0-7 (Kuhn triangulation), positively oriented.
+                for p in ((0, 1, 3, 7), (0, 3, 2, 7), (0, 2, 6, 7), (0, 6, 4, 7), (0, 4, 5, 7), (0, 5, 1, 7)):
+                    tets.append([c[q] for q in p])
+    return grid, np.array(tets, dtype=np.int32)
+
+
+def test_a_world_from_arrays_is_built_like_a_files_world_and_can_be_saved(tmp_path):
+    nodes, tets = cube_mesh()
+    held = nodes[:, 2] == 0.0
+    body = hof.Body.from_arrays(nodes, tets, material={"young_modulus": 3000.0, "density": 1000.0}, fixed=held, name="Cube")
+    world = hof.build([body], folder=tmp_path / "cube")
+    assert world.bodies == ["Cube"] and world.get("Cube/FEM", "youngModulus") == 3000.0
+    np.testing.assert_array_equal(world.rest_positions(), nodes)
+    np.testing.assert_array_equal(world.tets(), tets)
+    assert world.masses().sum() == pytest.approx(1000.0 * 0.04 ** 3, rel=1e-9)
+    np.testing.assert_array_equal(world.fixed_nodes(), np.flatnonzero(held))
+    report, telemetry = world.run(1.6)  # the default probe presses the cube, and holds
+    assert report["contact_time_s"] > 0.3 and report["fall_through_events"] == 0
+    moved = np.linalg.norm(world.positions() - nodes, axis=1)
+    assert moved.max() > 1e-4 and moved[held].max() == 0.0
+    world.save(tmp_path / "cube.hof")
+    assert hof.load(tmp_path / "cube.hof").bodies == ["Cube"]
+
+
+def test_a_liver_mesh_becomes_a_body_of_the_world():
+    liver = hof.mesh.generate_liver("simple")
+    base = liver.nodes[:, 2] < liver.nodes[:, 2].min() + 0.01
+    world = hof.build([hof.Body.from_mesh(liver, {"model": "neohookean"}, fixed=base, name="Liver")])
+    report, _ = world.run(2.0)
+    assert report["bodies"][0]["nodes"] == len(liver.nodes) and report["max_force_n"] > 0.0
+
+
+def test_bodies_from_bad_arrays_or_settings_are_refused_by_name():
+    nodes, tets = cube_mesh(cells=1)
+    with pytest.raises(ValueError, match="integer node indices"):
+        hof.Body.from_arrays(nodes, tets.astype(float))
+    with pytest.raises(ValueError, match=r"\(n, 3\)"):
+        hof.Body.from_arrays(nodes[:, :2], tets)
+    with pytest.raises(IndexError, match="names node 99"):
+        hof.Body.from_arrays(nodes, np.array([[0, 1, 2, 99]], dtype=np.int32))
+    with pytest.raises(ValueError, match="unknown material key"):
+        hof.Body.from_arrays(nodes, tets, material={"stiffness": 1})
+    with pytest.raises(ValueError, match="unknown model"):
+        hof.Body.from_arrays(nodes, tets, material={"model": "jelly"})
+    with pytest.raises(IndexError, match="out of range"):
+        hof.Body.from_arrays(nodes, tets, fixed=[0, 8])
+    with pytest.raises(ValueError, match="one entry per node"):
+        hof.Body.from_arrays(nodes, tets, fixed=np.ones(3, dtype=bool))
+    with pytest.raises(ValueError, match="no tetrahedra"):
+        hof.Body.from_arrays(nodes, np.zeros((0, 4), dtype=np.int32))
+    with pytest.raises(ValueError, match="youngModulus"):
+        hof.build([hof.Body.from_arrays(nodes, tets, material={"young_modulus": -1.0})])
+    with pytest.raises(ValueError, match="same name"):
+        body = hof.Body.from_arrays(nodes, tets)
+        hof.build([body, body])

@@ -478,9 +478,45 @@ class PyWorld {
     if (slash == std::string::npos) return {target, ""};
     return {target.substr(0, slash), target.substr(slash + 1)};
   }
-  void set(const std::string& target, const std::string& parameter, double value) {
+  static bool project_setting(const std::string& target) {
+    return target == "haptics" || target.starts_with("haptics/") || target == "graphics" || target.starts_with("graphics/");
+  }
+  void set(const std::string& target, const std::string& parameter, const py::object& value) {
+    if (project_setting(target)) return set_project(target, parameter, value);
+    if (!py::isinstance<py::float_>(value) && !py::isinstance<py::int_>(value)) {
+      throw py::type_error(fmt::format("{} {}: a mechanics parameter is a number, got {}", target, parameter,
+                                       py::repr(value).cast<std::string>()));
+    }
     const auto [body, component] = split_target(target);
-    ok_or_raise(session_->submit(coupling::command::SetParameter{body, component, parameter, value}));
+    ok_or_raise(session_->submit(coupling::command::SetParameter{body, component, parameter, value.cast<double>()}));
+  }
+  // A setting of the project file (the window's panels): checked as when the file is read,
+  // carried to the session by the commands the window sends, kept for save().
+  void set_project(const std::string& element, const std::string& attribute, const py::object& value) {
+    std::string text;
+    if (py::isinstance<py::bool_>(value)) text = value.cast<bool>() ? "true" : "false";
+    else if (py::isinstance<py::str>(value)) text = value.cast<std::string>();
+    else if (py::isinstance<py::float_>(value) || py::isinstance<py::int_>(value)) text = py::repr(value).cast<std::string>();
+    else throw py::type_error(fmt::format("{}@{}: a setting is a number, a bool or a string", element, attribute));
+    if (element == "haptics" && attribute == "device") {
+      switch_device(py::str(text), true);
+      world_->project.device = text;
+      return;
+    }
+    scene::HofProject next = world_->project;
+    if (auto ok = scene::set_project_attribute(next, world_->file, element, attribute, text); !ok) {
+      Error e = ok.error();
+      e.code = ErrorCode::kInvalidArgument;  // a value the caller gave, not a file that does not parse
+      raise(e);
+    }
+    const auto commands = scene::live_commands(next, element, attribute, body_names());
+    for (const coupling::Command& c : commands.value_or(std::vector<coupling::Command>{})) ok_or_raise(session_->submit(c));
+    world_->project = std::move(next);
+    if (!commands) {
+      PyErr_WarnEx(PyExc_UserWarning,
+                   fmt::format("{}@{} is saved with the project; it takes effect when the project is loaded again", element, attribute).c_str(),
+                   1);
+    }
   }
   double get(const std::string& target, const std::string& parameter) const {
     const auto [body, component] = split_target(target);
@@ -712,8 +748,10 @@ PYBIND11_MODULE(_hof, module) {
       .def("normals", &PyWorld::normals, py::arg("body") = 0, "(v, 3) unit vertex normals of the surface as it is now.")
       .def("contact", &PyWorld::contact, "The last haptic tick's contact as a dict (None before any run).")
       .def("set", &PyWorld::set, py::arg("target"), py::arg("parameter"), py::arg("value"),
-           "Sets a parameter through the command seam, e.g. set('Liver/FEM', 'youngModulus', 8000); applied before the "
-           "next step. Checked now: a bad value raises ValueError with the command line's message.")
+           "Sets a parameter through the command seam, e.g. set('Liver/FEM', 'youngModulus', 8000), or a setting of the "
+           "project by the file's names, e.g. set('haptics/surface', 'stiffness', 0.4), set('haptics', 'renderer', "
+           "'GodObjectRenderer'); applied before the next step. Checked now: a bad value raises ValueError with the "
+           "command line's message.")
       .def("get", &PyWorld::get, py::arg("target"), py::arg("parameter"), "A parameter's value as the accepted commands leave it.")
       .def("parameters", &PyWorld::parameters, py::arg("body") = 0, "Every 'Body/component/parameter' set() takes for a body.")
       .def("set_force_limit", &PyWorld::set_force_limit, py::arg("newtons"), "A force limit below the device's (0: the device's).")

@@ -929,20 +929,7 @@ Expected<void> Gui::apply_set(const std::string& element, const std::string& att
   scene::HofProject next = project_;
   if (auto ok = scene::set_project_attribute(next, file_, element, attribute, value); !ok) return ok;
   const coupling::SessionConfig config = scene::session_config(next);
-  if (element == "haptics/surface") {
-    for (const BodyView& b : bodies_) {
-      const bool own = std::any_of(next.bodies.begin(), next.bodies.end(), [&](const auto& s) { return s.name == b.name && s.surface; }) ||
-                       std::any_of(next.obstacles.begin(), next.obstacles.end(), [&](const auto& o) { return o.name == b.name && o.surface; });
-      if (own) continue;
-      if (auto ok = session_->submit(coupling::command::SetMaterial{b.name, next.surface}); !ok) return ok;
-    }
-  } else if (element == "haptics" &&
-             (attribute == "renderer" || attribute == "proxyRadius" || attribute == "forceShading" || attribute == "touchableFace")) {
-    haptics::RendererConfig r = config.haptics.renderer;
-    if (auto ok = session_->submit(coupling::command::SetRenderer{r}); !ok) return ok;
-  } else if (element.starts_with("haptics/effects")) {
-    if (auto ok = session_->submit(coupling::command::SetEffects{config.effects}); !ok) return ok;
-  } else if (element == "haptics/calibration") {
+  if (element == "haptics/calibration") {
     const haptics::Calibration calibration = config.haptics.calibration;
     if (!calibration_pending_) pending_calibration_ = calibration_;  // in force until the loop has the new one
     if (auto ok = session_->submit(coupling::command::SetCalibration{calibration}); !ok) return ok;
@@ -952,8 +939,6 @@ Expected<void> Gui::apply_set(const std::string& element, const std::string& att
     // old one would put the stylus elsewhere for a few ticks).
     calibrations_submitted_ += 1;
     calibration_pending_ = true;
-  } else if (element == "haptics/safety" && attribute == "maxForce") {
-    if (auto ok = session_->submit(coupling::command::SetForceLimit{next.safety.max_force_n}); !ok) return ok;
   } else if (element == "haptics" && attribute == "device") {
     // Opened here so that the window keeps a handle on a mouse stylus.
     const std::string spec = next.device == "auto" ? std::string("mouse") : next.device;
@@ -972,10 +957,14 @@ Expected<void> Gui::apply_set(const std::string& element, const std::string& att
       return make_error(ErrorCode::kInvalidArgument, fmt::format("'{}': no needle is mounted (script: needle on)", name));
     }
     if (auto ok = needle_->configure(*next.needle); !ok) return ok;
-  } else if (element == "graphics" || element.starts_with("graphics/") || element == "haptics/stylus") {
-    // Drawn by this window only.
   } else {
-    report(fmt::format("'{}' is saved; it takes effect when the project is reopened", name), false);
+    std::vector<std::string> names;
+    for (const BodyView& b : bodies_) names.push_back(b.name);
+    const auto commands = scene::live_commands(next, element, attribute, names);
+    if (!commands) report(fmt::format("'{}' is saved; it takes effect when the project is reopened", name), false);
+    for (const coupling::Command& c : commands.value_or(std::vector<coupling::Command>{})) {
+      if (auto ok = session_->submit(c); !ok) return ok;
+    }
   }
   project_ = std::move(next);
   if (recording_) recording_->events.push_back(fmt::format("{:.3f}: set {} {}", recording_->seconds(), name, value));
