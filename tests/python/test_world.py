@@ -321,3 +321,17 @@ def test_bodies_from_bad_arrays_or_settings_are_refused_by_name():
     with pytest.raises(ValueError, match="same name"):
         body = hof.Body.from_arrays(nodes, tets)
         hof.build([body, body])
+
+
+def test_a_recorded_trajectory_replays_as_the_device(examples, tmp_path):
+    world = hof.load(examples / "liver-palpation-simple.hof")  # its calibration is the identity
+    _, recorded = world.run(1.5)
+    trajectory = tmp_path / "hand.csv"
+    rows = zip(recorded["t"], recorded["device_x"], recorded["device_y"], recorded["device_z"])
+    trajectory.write_text("t,x,y,z\n" + "".join(f"{t!r},{x!r},{y!r},{z!r}\n" for t, x, y, z in rows))
+    again = hof.load(examples / "liver-palpation-simple.hof", device=f"replay:{trajectory}")
+    report, replayed = again.run(1.5)
+    assert again.device.startswith("replay:")
+    for axis in "xyz":
+        np.testing.assert_allclose(replayed[f"device_{axis}"], recorded[f"device_{axis}"], atol=1e-12)
+    assert report["contact_time_s"] > 0.2
