@@ -203,7 +203,10 @@ int run_session(const RunOptions& options) {
   }
   if (!options.quiet) recording.print(report, options.deterministic, options.out);
   recording.print_warnings(report, options.deterministic, options.quiet);
-  return report.diverged ? 2 : report_status;
+  if (report.diverged) return 2;
+  // The device failed: the run ended early (its report is written).
+  if (!report.device_failure.empty()) return 4;
+  return report_status;
 }
 
 int run_check(const CheckOptions& options) {

@@ -207,6 +207,7 @@ const char* scheduling_name(haptics::HapticLoop::Scheduling s) {
     case haptics::HapticLoop::Scheduling::realtime: return "SCHED_FIFO";
     case haptics::HapticLoop::Scheduling::refused: return "refused (normal priority: run as root or grant CAP_SYS_NICE / rtprio)";
     case haptics::HapticLoop::Scheduling::not_requested: return "not requested (virtual time)";
+    case haptics::HapticLoop::Scheduling::device_servo: return "the device's servo loop";
     case haptics::HapticLoop::Scheduling::not_started: break;
   }
   return "not started";
@@ -428,6 +429,7 @@ std::string RunRecording::summary_json(const coupling::SessionReport& report, co
   summary["fall_through_events"] = report.fall_through_events;
   summary["diverged"] = report.diverged;
   if (report.diverged) summary["divergence"] = json_safe(report.divergence);
+  if (!report.device_failure.empty()) summary["device_failure"] = json_safe(report.device_failure);
   summary["safety"] = {{"clamped_ticks", report.safety.clamped},
                        {"rate_limited_ticks", report.safety.rate_limited},
                        {"non_finite_ticks", report.safety.non_finite},
@@ -570,6 +572,7 @@ void RunRecording::print(const coupling::SessionReport& report, bool determinist
                 fmt::format("{:.4g}, {:.4g}, {:.4g}", stiffest->first_contact.x(), stiffest->first_contact.y(), stiffest->first_contact.z()).c_str());
   }
   if (report.diverged) std::printf("  DIVERGED    %s\n", report.divergence.c_str());
+  if (!report.device_failure.empty()) std::printf("  DEVICE      failed, the run ended: %s\n", json_safe(report.device_failure).c_str());
   if (out) std::printf("  report      %s (telemetry.csv, summary.json, .vtu per deformable body, plots)\n", out->c_str());
 }
 

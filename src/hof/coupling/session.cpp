@@ -1050,7 +1050,15 @@ SessionReport Session::run_virtual(double seconds, const std::function<void(cons
         if (on_sample) on_sample(sample);
       }
     }
-    if (!step_world(report, timer, static_cast<double>(virtual_ticks_ + tick) * tick_period)) {
+    const bool stepped = step_world(report, timer, static_cast<double>(virtual_ticks_ + tick) * tick_period);
+    // A device that has failed (unplugged, its SDK in error) gives no reading: the force fades
+    // as for a divergence, and the run ends, saying why.
+    const bool device_failed = loop_->device().health() == haptics::DeviceHealth::kFailed;
+    if (device_failed && report.device_failure.empty()) {
+      const std::string why = loop_->device().failure();
+      report.device_failure = why.empty() ? std::string("the device stopped working") : why;
+    }
+    if (!stepped || device_failed) {
       // The simulation has stopped (diverged): as the haptic thread does in real time, the
       // loop goes on ticking without it until the safety filter has faded the force to zero,
       // so that the run leaves the device at rest rather than holding the last force. The
@@ -1208,14 +1216,30 @@ SessionReport Session::run_realtime(double seconds, const std::function<void(con
   start_realtime();
   const auto start = Clock::now();
   std::int64_t polls = 0;
+  std::optional<double> device_failed_at;
+  std::string device_failure;
   for (;;) {
     const double elapsed = seconds_between(start, Clock::now());
     if (elapsed >= seconds || sim_finished_.load(std::memory_order_acquire) || stop_requested_.load(std::memory_order_relaxed)) break;
+    // A device that has failed: the haptic loop fades its force out (it gives no reading);
+    // once that has had its time, the run ends, saying why.
+    if (loop_->device().health() == haptics::DeviceHealth::kFailed) {
+      if (!device_failed_at) device_failed_at = elapsed;
+      const haptics::SafetyConfig& safety = config_.haptics.safety;
+      const haptics::DeviceSpec& spec = loop_->device().spec();
+      const double fade_s = safety.fade_out_s + (spec.max_force_rate_n_per_s > 0.0 ? spec.max_force_n / spec.max_force_rate_n_per_s : 0.0);
+      if (elapsed - *device_failed_at > fade_s + 0.01) {
+        const std::string why = loop_->device().failure();
+        device_failure = why.empty() ? std::string("the device stopped working") : why;
+        break;
+      }
+    }
     poll(on_sample);
     if (progress && ++polls % 16 == 0) progress("haptic session (real time)", std::min(1.0, elapsed / seconds));
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
   SessionReport report = stop_realtime(on_sample);
+  report.device_failure = device_failure;
   if (progress) progress("haptic session (real time)", 1.0);
   return report;
 }

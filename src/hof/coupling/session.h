@@ -129,6 +129,9 @@ struct SessionReport {
   std::int64_t clamped_contact_ticks{0};    ///< contact ticks whose force was clamped by safety
   bool diverged{false};
   std::string divergence;
+  /// Why the run ended early because the device failed (unplugged, its SDK in error); empty
+  /// when it did not. Its force was faded to zero first.
+  std::string device_failure;
   double max_displacement_m{0.0};
   std::vector<BodyReport> bodies;
   std::vector<std::string> applied_commands;  ///< "step N: what", in order

@@ -71,6 +71,9 @@ class Device {
   virtual void write_force(const Vec3& force_n, const Vec3& torque_n_m) = 0;
 
   [[nodiscard]] virtual DeviceHealth health() const = 0;
+  /// Why health() is kFailed, in a sentence (empty otherwise). Any thread, once health() has
+  /// said kFailed.
+  [[nodiscard]] virtual std::string failure() const { return {}; }
 
   /// How long a finite motion lasts (a script, a recording played once), s; 0 for a live
   /// device or a motion that repeats forever. A run without a given length plays it whole.
@@ -78,6 +81,15 @@ class Device {
 
   /// Stops background threads and sends a zero force. Idempotent; the destructor calls it.
   virtual void close() {}
+
+  /// A device whose own servo loop is to be the haptic loop's clock (OpenHaptics' scheduler
+  /// calls back once per servo frame). start_servo() arranges for `tick(context)` to be called
+  /// on the device's servo thread once per frame, read() and write_force() being valid inside
+  /// it, and returns true: the haptic loop then starts no thread of its own. stop_servo()
+  /// returns after the last call. The default: no servo loop (false).
+  using ServoTick = void (*)(void* context);
+  virtual bool start_servo(ServoTick /*tick*/, void* /*context*/) { return false; }
+  virtual void stop_servo() {}
 };
 
 /// Opens a device from a spec string:
@@ -87,6 +99,8 @@ class Device {
 ///   udp:[HOST:]PORT[,timeout=S]                  datagram bridge (docs/device-protocol.md)
 ///   spacemouse[,scale=M]                         3Dconnexion SpaceMouse via spacenavd (input only)
 ///   mouse                                        the window's cursor (hof gui; input only)
+///   dhd[,index=N][,library=PATH]                 a Force Dimension device (libdhd, loaded at run time)
+///   openhaptics[,device=NAME][,library=PATH]     a 3D Systems Touch / Phantom (OpenHaptics' libHD)
 /// Every backend also takes model=virtual|falcon|omni|touch (device_spec_for_model(); for
 /// udp, a hello packet received within hello_wait=S overrides it). Keys and motions are listed
 /// in docs/device-protocol.md ("Spec strings").

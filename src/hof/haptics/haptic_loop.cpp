@@ -340,12 +340,26 @@ void HapticLoop::start() {
   // delay): a caller that starts its own clock just before (the session's simulation, whose
   // snapshots carry its time) then shares this origin, and snapshot ages are not read short.
   origin_s_ = monotonic_seconds();
+  last_start_s_ = next_due_s_ = origin_s_;
+  first_realtime_tick_ = true;
+  // A device with a servo loop of its own (OpenHaptics' scheduler) is the clock: one tick per
+  // servo frame, on its thread.
+  Device* device = binding_.load(std::memory_order_acquire)->device;
+  if (device->start_servo(&HapticLoop::servo_tick, this)) {
+    servo_device_ = device;
+    scheduling_.store(static_cast<int>(Scheduling::device_servo), std::memory_order_release);
+    return;
+  }
   thread_ = std::thread([this] { run_thread(); });
 }
 
 void HapticLoop::stop() {
   stop_requested_.store(true, std::memory_order_release);
   if (thread_.joinable()) thread_.join();
+  if (servo_device_) {
+    servo_device_->stop_servo();  // returns after its last call
+    servo_device_ = nullptr;
+  }
   running_.store(false, std::memory_order_release);
   binding_.load()->device->write_force(Vec3::Zero(), Vec3::Zero());
 }
@@ -365,27 +379,27 @@ void HapticLoop::run_thread() {
   } else {
     scheduling_.store(static_cast<int>(Scheduling::not_requested), std::memory_order_release);
   }
-  const double period = 1.0 / config_.rate_hz;
-  const double origin = origin_s_;
-  double next = origin;
-  double last_start = origin;
-  bool first = true;
   while (!stop_requested_.load(std::memory_order_acquire)) {
-    const double now = monotonic_seconds();
-    const double measured = first ? period : now - last_start;
-    const bool overrun = !first && now > next + period;  // started a whole period late
-    last_start = now;
-    first = false;
-    tick_impl(now - origin, measured, overrun);
-    next += period;
-    if (next < now) next = now;  // after a stall, do not try to catch up in a burst
+    realtime_tick();
     // Sleep, then spin the last stretch: a sleeping thread wakes up to ~100 µs late on a
     // loaded machine (the window and the simulation share the cores), which would spread the
     // period; the spin costs a sixth of a core (as HAPI's and CHAI3D's busy haptic loops, less).
-    sleep_until(next - kSpinTail_s);
-    while (monotonic_seconds() < next && !stop_requested_.load(std::memory_order_relaxed)) cpu_relax();
+    sleep_until(next_due_s_ - kSpinTail_s);
+    while (monotonic_seconds() < next_due_s_ && !stop_requested_.load(std::memory_order_relaxed)) cpu_relax();
   }
   running_.store(false, std::memory_order_release);
+}
+
+void HapticLoop::realtime_tick() {
+  const double period = 1.0 / config_.rate_hz;
+  const double now = monotonic_seconds();
+  const double measured = first_realtime_tick_ ? period : now - last_start_s_;
+  const bool overrun = !first_realtime_tick_ && now > next_due_s_ + period;  // started a whole period late
+  last_start_s_ = now;
+  first_realtime_tick_ = false;
+  tick_impl(now - origin_s_, measured, overrun);
+  next_due_s_ += period;
+  if (next_due_s_ < now) next_due_s_ = now;  // after a stall, do not try to catch up in a burst
 }
 
 }  // namespace hof::haptics

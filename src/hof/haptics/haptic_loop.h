@@ -151,7 +151,8 @@ class HapticLoop {
   void set_tool(Tool* tool) { tool_ = tool; }
   [[nodiscard]] Tool* tool() const { return tool_; }
 
-  /// Real-time mode: starts the thread; time counts from the call.
+  /// Real-time mode: starts the thread (or, for a device with a servo loop of its own, lets
+  /// that loop call the ticks); time counts from the call.
   void start();
   /// The CPU the next start() runs the thread on (-1: anywhere). Not while running.
   void set_cpu(int cpu) { config_.cpu = cpu; }
@@ -188,11 +189,16 @@ class HapticLoop {
 
   /// What the real-time thread got when it asked for SCHED_FIFO (a report says it: without it,
   /// deadline misses on a loaded machine are expected, not a defect).
-  enum class Scheduling : int { not_started, not_requested, realtime, refused };
+  /// `device_servo`: the device's own servo loop calls the ticks (Device::start_servo).
+  enum class Scheduling : int { not_started, not_requested, realtime, refused, device_servo };
   [[nodiscard]] Scheduling scheduling() const { return static_cast<Scheduling>(scheduling_.load(std::memory_order_acquire)); }
 
  private:
   void run_thread();
+  /// One real-time tick: its time and period from the monotonic clock (the thread's loop, or
+  /// the device's servo callback).
+  void realtime_tick();
+  static void servo_tick(void* loop) { static_cast<HapticLoop*>(loop)->realtime_tick(); }
   void tick_impl(double time_s, double period_s, bool overrun);
   void take_settings();
   /// The calibration the tick uses (and what follows from it: the force rotation, the scale).
@@ -230,6 +236,11 @@ class HapticLoop {
   Tool* tool_{nullptr};
   double last_time_s_{-1.0};
   double origin_s_{0.0};  // real-time mode: CLOCK_MONOTONIC at start(), s
+  // Real-time ticks: the last one's start and when the next is due (s, monotonic).
+  double last_start_s_{0.0};
+  double next_due_s_{0.0};
+  bool first_realtime_tick_{true};
+  Device* servo_device_{nullptr};  // the device whose servo loop ticks, while it does
   bool proxy_initialised_{false};
   // The readings' recent positions (device frame), to tell a glitch from a motion.
   Vec3 last_reading_position_{Vec3::Zero()};

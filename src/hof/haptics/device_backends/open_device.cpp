@@ -20,7 +20,9 @@
 
 #include "hof/core/text.h"
 #include "hof/haptics/device.h"
+#include "hof/haptics/device_backends/dhd_device.h"
 #include "hof/haptics/device_backends/mouse_device.h"
+#include "hof/haptics/device_backends/openhaptics_device.h"
 #include "hof/haptics/device_backends/replay_device.h"
 #include "hof/haptics/device_backends/scripted_device.h"
 #include "hof/haptics/device_backends/spacemouse_device.h"
@@ -437,6 +439,55 @@ Expected<std::unique_ptr<Device>> open_mouse(const SpecParser& p) {
   return std::unique_ptr<Device>(std::make_unique<MouseDevice>(spec));
 }
 
+Expected<std::unique_ptr<Device>> open_dhd(const SpecParser& p) {
+  static constexpr std::string_view kKeys[] = {"index", "library", "model"};
+  if (p.has_argument()) return p.fail(fmt::format("dhd takes no argument (got '{}'; index=N chooses a device)", p.argument()));
+  DhdConfig config;
+  for (const Option& o : p.options()) {
+    Expected<void> r;
+    if (o.key == "index") {
+      auto v = p.number(o);
+      if (!v) return std::unexpected(v.error());
+      if (*v < 0.0 || *v > 127.0 || *v != std::floor(*v)) return p.fail(fmt::format("index={}: a device number from 0", o.value));
+      config.index = static_cast<int>(*v);
+    } else if (o.key == "library") {
+      config.library = std::string(o.value);
+    } else if (o.key == "model") {
+      if (auto known = device_spec_for_model(o.value); !known) return p.wrap(known.error());
+      config.model = std::string(o.value);
+    } else {
+      r = p.unknown_key(o, "dhd", kKeys);
+    }
+    if (!r) return std::unexpected(r.error());
+  }
+  auto device = open_dhd_device(config);
+  if (!device) return p.wrap(device.error());
+  return device;
+}
+
+Expected<std::unique_ptr<Device>> open_openhaptics(const SpecParser& p) {
+  static constexpr std::string_view kKeys[] = {"device", "library", "model"};
+  if (p.has_argument()) return p.fail(fmt::format("openhaptics takes no argument (got '{}'; device=NAME chooses one)", p.argument()));
+  OpenHapticsConfig config;
+  for (const Option& o : p.options()) {
+    Expected<void> r;
+    if (o.key == "device") {
+      config.device = std::string(o.value);
+    } else if (o.key == "library") {
+      config.library = std::string(o.value);
+    } else if (o.key == "model") {
+      if (auto known = device_spec_for_model(o.value); !known) return p.wrap(known.error());
+      config.model = std::string(o.value);
+    } else {
+      r = p.unknown_key(o, "openhaptics", kKeys);
+    }
+    if (!r) return std::unexpected(r.error());
+  }
+  auto device = open_openhaptics_device(config);
+  if (!device) return p.wrap(device.error());
+  return device;
+}
+
 }  // namespace
 
 Expected<std::unique_ptr<Device>> open_device(std::string_view spec) {
@@ -449,8 +500,11 @@ Expected<std::unique_ptr<Device>> open_device(std::string_view spec) {
   if (backend == "udp") return open_udp(p);
   if (backend == "spacemouse") return open_spacemouse(p);
   if (backend == "mouse") return open_mouse(p);
-  if (backend.empty()) return p.fail("empty backend (known: replay, scripted, virtual-hand, udp, spacemouse, mouse)");
-  return p.fail(fmt::format("unknown backend '{}' (known: replay, scripted, virtual-hand, udp, spacemouse, mouse)", backend));
+  if (backend == "dhd") return open_dhd(p);
+  if (backend == "openhaptics") return open_openhaptics(p);
+  constexpr std::string_view kKnown = "replay, scripted, virtual-hand, udp, spacemouse, mouse, dhd, openhaptics";
+  if (backend.empty()) return p.fail(fmt::format("empty backend (known: {})", kKnown));
+  return p.fail(fmt::format("unknown backend '{}' (known: {})", backend, kKnown));
 }
 
 }  // namespace hof::haptics
