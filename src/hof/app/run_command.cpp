@@ -45,9 +45,6 @@ namespace {
 
 using detail::fail;
 
-// Text as UTF-8 (a Latin-1 name's bytes become U+FFFD), so that the terminal never refuses a name.
-std::string json_safe(std::string_view text) { return valid_utf8(text); }
-
 
 
 // Ticks whose period exceeded `limit_s` (a missed haptic deadline), from the 1 µs histogram.
@@ -223,10 +220,10 @@ int run_check(const CheckOptions& options) {
       touchable += b.surface.triangles.empty() ? 0 : 1;
       if (b.deformable()) {
         const std::string elements = b.model->element_summary();
-        std::printf("  model '%s': %zu nodes, %s, %zu surface triangles (deformable, dt %g s)\n", json_safe(b.name).c_str(),
+        std::printf("  model '%s': %zu nodes, %s, %zu surface triangles (deformable, dt %g s)\n", valid_utf8(b.name).c_str(),
                     b.model->node_count(), elements.c_str(), b.surface.triangles.size(), b.model->dt_s);
       } else {
-        std::printf("  shape '%s': %zu triangles (rigid, fixed)\n", json_safe(b.name).c_str(), b.surface.triangles.size());
+        std::printf("  shape '%s': %zu triangles (rigid, fixed)\n", valid_utf8(b.name).c_str(), b.surface.triangles.size());
       }
     }
     std::printf("  %zu touchable, %zu spring / %zu viscosity / %zu constant force effects\n", touchable,
@@ -244,15 +241,15 @@ int run_check(const CheckOptions& options) {
       for (std::size_t i = 0; i < sets.size(); ++i) {
         const procedures::TissueNeedleParameters& t = sets[i];
         if (!t.pierceable) {
-          std::printf("  needle: '%s' is not entered (a wall for the needle)\n", json_safe(names[i]).c_str());
+          std::printf("  needle: '%s' is not entered (a wall for the needle)\n", valid_utf8(names[i]).c_str());
           continue;
         }
         std::printf("  needle: enters '%s': %s model, capsule %g m, puncture force %g N, relaxation %g s\n",
-                    json_safe(names[i]).c_str(), std::string(procedures::model_name(t.model)).c_str(), t.capsule_m,
+                    valid_utf8(names[i]).c_str(), std::string(procedures::model_name(t.model)).c_str(), t.capsule_m,
                     t.puncture_force_n, t.relaxation_time_s);
       }
     }
-    for (const auto& d : world->defaults) std::printf("default: %s\n", json_safe(d).c_str());
+    for (const auto& d : world->defaults) std::printf("default: %s\n", valid_utf8(d).c_str());
     // The components not simulated are named once, in the warnings below; those that need no
     // counterpart (plugins, display, the default loops) are counted.
     if (!world->ignored.empty()) {
@@ -262,7 +259,7 @@ int run_check(const CheckOptions& options) {
       for (const auto& [kind, n] : kinds) list += fmt::format("{}{}{}", list.empty() ? "" : ", ", kind, n > 1 ? fmt::format(" x{}", n) : "");
       std::printf("  not needed in HoF: %zu component(s): %s\n", world->ignored.size(), list.c_str());
     }
-    for (const auto& w : world->warnings) std::printf("warning: %s\n", json_safe(w).c_str());
+    for (const auto& w : world->warnings) std::printf("warning: %s\n", valid_utf8(w).c_str());
     if (auto device = haptics::open_device(world->device); !device) {
       std::printf("%s\n", device.error().to_string().c_str());
       ++problems;

@@ -36,6 +36,21 @@ class SharedLibrary {
     return reinterpret_cast<Function*>(*address);
   }
 
+  /// Sets `slot` to the function `symbol` (the error names the library file and the symbol).
+  template <class Function>
+  Expected<void> bind(const char* symbol, Function*& slot) const {
+    auto f = function<Function>(symbol);
+    if (!f) return std::unexpected(f.error());
+    slot = *f;
+    return {};
+  }
+  /// Sets `slot` to the function `symbol`, or null when the library has none (an optional one).
+  template <class Function>
+  void bind_optional(const char* symbol, Function*& slot) const {
+    auto f = function<Function>(symbol);
+    slot = f ? *f : nullptr;
+  }
+
   /// The file that was opened (as the loader resolved it).
   [[nodiscard]] const std::string& path() const { return path_; }
 

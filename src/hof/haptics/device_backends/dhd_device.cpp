@@ -30,7 +30,7 @@ using GetButtonMask = unsigned int(char);
 using GetMaxForce = double(char);
 using ErrorGetLastStr = const char*();
 
-constexpr std::string_view kInstall =
+constexpr std::string_view kDhdInstall =
     "Install Force Dimension's SDK (https://www.forcedimension.com/software/sdk) and put its lib/ folder on "
     "LD_LIBRARY_PATH, or give the file: --device dhd,library=/path/to/libdhd.so (docs/devices.md)";
 
@@ -133,20 +133,6 @@ class DhdDevice final : public Device {
   bool closed_{false};
 };
 
-template <class F>
-Expected<void> bind(const SharedLibrary& library, const char* name, F*& slot) {
-  auto f = library.function<F>(name);
-  if (!f) return std::unexpected(f.error());
-  slot = *f;
-  return {};
-}
-
-template <class F>
-void bind_optional(const SharedLibrary& library, const char* name, F*& slot) {
-  auto f = library.function<F>(name);
-  slot = f ? *f : nullptr;
-}
-
 std::string last_error(const DhdDevice::Api& api) {
   const char* why = api.error_string();
   return why && *why ? why : "no reason given";
@@ -186,20 +172,20 @@ Expected<std::unique_ptr<Device>> open_dhd_device(const DhdConfig& config) {
   } else {
     names = {"libdhd.so", "libdhd.so.3"};
   }
-  auto library = SharedLibrary::open(names, "the Force Dimension SDK (libdhd)", kInstall);
+  auto library = SharedLibrary::open(names, "the Force Dimension SDK (libdhd)", kDhdInstall);
   if (!library) return std::unexpected(library.error());
   DhdDevice::Api api{std::move(*library)};
   const SharedLibrary& lib = api.library;
-  for (auto bound : {bind(lib, "dhdGetDeviceCount", api.get_device_count), bind(lib, "dhdOpenID", api.open_id),
-                     bind(lib, "dhdClose", api.close), bind(lib, "dhdGetSystemType", api.get_system_type),
-                     bind(lib, "dhdEnableForce", api.enable_force), bind(lib, "dhdGetPosition", api.get_position),
-                     bind(lib, "dhdSetForce", api.set_force), bind(lib, "dhdErrorGetLastStr", api.error_string)}) {
+  for (auto bound : {lib.bind("dhdGetDeviceCount", api.get_device_count), lib.bind("dhdOpenID", api.open_id),
+                     lib.bind("dhdClose", api.close), lib.bind("dhdGetSystemType", api.get_system_type),
+                     lib.bind("dhdEnableForce", api.enable_force), lib.bind("dhdGetPosition", api.get_position),
+                     lib.bind("dhdSetForce", api.set_force), lib.bind("dhdErrorGetLastStr", api.error_string)}) {
     if (!bound) return std::unexpected(bound.error());
   }
-  bind_optional(lib, "dhdGetSystemName", api.get_system_name);
-  bind_optional(lib, "dhdGetLinearVelocity", api.get_linear_velocity);
-  bind_optional(lib, "dhdGetButtonMask", api.get_button_mask);
-  bind_optional(lib, "dhdGetMaxForce", api.get_max_force);
+  lib.bind_optional("dhdGetSystemName", api.get_system_name);
+  lib.bind_optional("dhdGetLinearVelocity", api.get_linear_velocity);
+  lib.bind_optional("dhdGetButtonMask", api.get_button_mask);
+  lib.bind_optional("dhdGetMaxForce", api.get_max_force);
 
   const int count = api.get_device_count();
   if (count <= 0) {

@@ -54,7 +54,7 @@ constexpr double kMetresPerMillimetre = 1e-3;
 // The window of the continuous-force mean, s.
 constexpr double kContinuousForceWindow_s = 1.0;
 
-constexpr std::string_view kInstall =
+constexpr std::string_view kHdInstall =
     "Install OpenHaptics for Linux and the device's driver (3D Systems' Touch Device Driver) and put libHD.so on "
     "LD_LIBRARY_PATH, or give the file: --device openhaptics,library=/path/to/libHD.so (docs/devices.md)";
 
@@ -228,14 +228,6 @@ class OpenHapticsDevice final : public Device {
   std::array<char, 512> failure_{};
 };
 
-template <class F>
-Expected<void> bind(const SharedLibrary& library, const char* name, F*& slot) {
-  auto f = library.function<F>(name);
-  if (!f) return std::unexpected(f.error());
-  slot = *f;
-  return {};
-}
-
 // Runs `body` once on the scheduler's thread and waits for it (hdScheduleSynchronous): state
 // calls such as the calibration check are made there.
 template <class Body>
@@ -259,21 +251,21 @@ Expected<std::unique_ptr<Device>> open_openhaptics_device(const OpenHapticsConfi
   } else {
     names = {"libHD.so", "libHD.so.3.4", "libHD.so.3.0"};
   }
-  auto library = SharedLibrary::open(names, "OpenHaptics (libHD)", kInstall);
+  auto library = SharedLibrary::open(names, "OpenHaptics (libHD)", kHdInstall);
   if (!library) return std::unexpected(library.error());
   Api api{std::move(*library)};
   const SharedLibrary& lib = api.library;
-  for (auto bound : {bind(lib, "hdInitDevice", api.init_device), bind(lib, "hdDisableDevice", api.disable_device),
-                     bind(lib, "hdBeginFrame", api.begin_frame), bind(lib, "hdEndFrame", api.end_frame),
-                     bind(lib, "hdGetError", api.get_error), bind(lib, "hdGetErrorString", api.get_error_string),
-                     bind(lib, "hdEnable", api.enable), bind(lib, "hdGetDoublev", api.get_doublev),
-                     bind(lib, "hdGetIntegerv", api.get_integerv), bind(lib, "hdSetDoublev", api.set_doublev),
-                     bind(lib, "hdGetString", api.get_string), bind(lib, "hdStartScheduler", api.start_scheduler),
-                     bind(lib, "hdStopScheduler", api.stop_scheduler),
-                     bind(lib, "hdScheduleAsynchronous", api.schedule_asynchronous),
-                     bind(lib, "hdScheduleSynchronous", api.schedule_synchronous), bind(lib, "hdUnschedule", api.unschedule),
-                     bind(lib, "hdCheckCalibration", api.check_calibration),
-                     bind(lib, "hdUpdateCalibration", api.update_calibration)}) {
+  for (auto bound : {lib.bind("hdInitDevice", api.init_device), lib.bind("hdDisableDevice", api.disable_device),
+                     lib.bind("hdBeginFrame", api.begin_frame), lib.bind("hdEndFrame", api.end_frame),
+                     lib.bind("hdGetError", api.get_error), lib.bind("hdGetErrorString", api.get_error_string),
+                     lib.bind("hdEnable", api.enable), lib.bind("hdGetDoublev", api.get_doublev),
+                     lib.bind("hdGetIntegerv", api.get_integerv), lib.bind("hdSetDoublev", api.set_doublev),
+                     lib.bind("hdGetString", api.get_string), lib.bind("hdStartScheduler", api.start_scheduler),
+                     lib.bind("hdStopScheduler", api.stop_scheduler),
+                     lib.bind("hdScheduleAsynchronous", api.schedule_asynchronous),
+                     lib.bind("hdScheduleSynchronous", api.schedule_synchronous), lib.bind("hdUnschedule", api.unschedule),
+                     lib.bind("hdCheckCalibration", api.check_calibration),
+                     lib.bind("hdUpdateCalibration", api.update_calibration)}) {
     if (!bound) return std::unexpected(bound.error());
   }
   const std::string name = config.device.empty() ? std::string("the default device") : "'" + config.device + "'";
