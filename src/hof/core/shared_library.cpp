@@ -35,8 +35,11 @@ Expected<SharedLibrary> SharedLibrary::open(std::span<const std::string> names, 
       if (::dlinfo(handle, RTLD_DI_LINKMAP, &map) == 0 && map && map->l_name && *map->l_name) path = map->l_name;
       return SharedLibrary(handle, std::move(path));
     }
-    const char* reason = ::dlerror();
-    tried += (tried.empty() ? "" : "; ") + name + ": " + (reason ? reason : "not found");
+    // dlerror() starts with the name it was given: said once.
+    const char* raw = ::dlerror();  // (a second call would return null)
+    std::string reason = raw ? raw : "";
+    if (reason.starts_with(name + ": ")) reason.erase(0, name.size() + 2);
+    tried += (tried.empty() ? "" : "; ") + name + " (" + (reason.empty() ? std::string("not found") : reason) + ")";
   }
   return make_error(ErrorCode::kIo, std::string(what) + " is not installed or not found (tried " + tried + "; searched " +
                                         search_path() + "). " + std::string(install));

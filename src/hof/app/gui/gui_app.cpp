@@ -942,6 +942,12 @@ Expected<void> Gui::apply_set(const std::string& element, const std::string& att
   } else if (element == "haptics" && attribute == "device") {
     // Opened here so that the window keeps a handle on a mouse stylus.
     const std::string spec = next.device == "auto" ? std::string("mouse") : next.device;
+    if (spec.starts_with("openhaptics")) {
+      // Its servo loop must be the haptic loop's clock from the start.
+      return make_error(ErrorCode::kUnsupported, fmt::format("'{}': an OpenHaptics device drives the haptic loop from its own servo "
+                                                             "loop: open the window with it (hof gui FILE --device {})",
+                                                             name, spec));
+    }
     auto opened = haptics::open_device(spec);
     if (!opened) return std::unexpected(opened.error());
     std::shared_ptr<haptics::Device> device(std::move(*opened));
@@ -1815,9 +1821,13 @@ void Gui::draw_haptics_panel() {
   }
   static std::array<char, 256> spec{};
   ImGui::SetNextItemWidth(220);
-  ImGui::InputTextWithHint("##spec", "udp:5005, spacemouse, mouse", spec.data(), spec.size());
+  ImGui::InputTextWithHint("##spec", "dhd, udp:5005, spacemouse, mouse", spec.data(), spec.size());
   ImGui::SameLine();
   if (ImGui::Button("Connect") && spec[0] != '\0') set("haptics", "device", spec.data());
+  // The vendors' SDKs, loaded when asked for (docs/devices.md): a clear message when absent.
+  if (ImGui::Button("Force Dimension")) set("haptics", "device", "dhd");
+  ImGui::SameLine();
+  if (ImGui::Button("Mouse")) set("haptics", "device", "mouse");
   int renderer = static_cast<int>(project_.renderer);
   const char* renderers[] = {"PenaltyRenderer", "GodObjectRenderer", "RuspiniRenderer"};
   ImGui::SetNextItemWidth(200);
