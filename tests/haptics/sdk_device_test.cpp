@@ -207,6 +207,32 @@ TEST(SdkDevices, AForceDimensionDeviceGivingNaNFadesTheForceAndEndsTheRun) {
   expect_the_run_ends_on_a_fault(2, "not a number");
 }
 
+// A device whose SDK call stalls (200 ms in one read, on the haptic thread): the loop goes
+// on after it, the stall is in the period statistics, and the force never passes the limit.
+TEST(SdkDevices, AForceDimensionDeviceThatStallsIsWaitedForAndTheRunGoesOn) {
+  Dhd dhd;
+  dhd.reset(1, 33, 5.0);
+  dhd.hand(0.0, 0.0, 0.01, 0, 0, 0);
+  auto device = open_device(kDhdSpec);
+  ASSERT_TRUE(device) << device.error().to_string();
+  auto session = coupling::Session::make(box_world(), std::move(*device), press_config());
+  ASSERT_TRUE(session) << session.error().to_string();
+  dhd.fault(3, dhd.reads() + 300, 200);
+  (*session)->start_realtime();
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  dhd.hand(0.0, 0.0, -0.02, 0, 0, 0);
+  std::this_thread::sleep_for(std::chrono::milliseconds(700));
+  const coupling::SessionReport report = (*session)->stop_realtime();
+  EXPECT_GE(report.haptic_periods.max_s(), 0.2);
+  EXPECT_GE(report.haptic_periods.overruns(), 1u);
+  EXPECT_TRUE(report.device_failure.empty());
+  double max = 0.0, last[3]{};
+  int non_finite = 0;
+  EXPECT_GT(dhd.forces(&max, &non_finite, last), 100);  // ticks went on after the stall
+  EXPECT_EQ(non_finite, 0);
+  EXPECT_LE(max, 5.0 + 1e-12);
+}
+
 TEST(SdkDevices, TheTickThroughAnSdkDeviceAllocatesNothing) {
   HOF_SKIP_UNLESS_COUNTING_ALLOCATIONS();
   Dhd dhd;

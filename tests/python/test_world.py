@@ -335,3 +335,11 @@ def test_a_recorded_trajectory_replays_as_the_device(examples, tmp_path):
     for axis in "xyz":
         np.testing.assert_allclose(replayed[f"device_{axis}"], recorded[f"device_{axis}"], atol=1e-12)
     assert report["contact_time_s"] > 0.2
+
+
+def test_the_telemetry_becomes_a_pandas_frame_where_pandas_is_installed(examples):
+    pandas = pytest.importorskip("pandas")
+    _, telemetry = hof.load(examples / "liver-palpation-simple.hof").run(0.5)
+    frame = hof.telemetry_frame(telemetry)
+    assert isinstance(frame, pandas.DataFrame) and list(frame.columns) == list(telemetry)
+    assert len(frame) == len(telemetry["t"])
