@@ -1,11 +1,23 @@
+include(GNUInstallDirs)
+
 # hof_module(NAME SOURCES ... DEPENDS ...): one static library per module of the design,
-# `hof_<name>` with alias `hof::<name>`, include root at src/ so headers read <hof/<name>/x.h>.
+# `hof_<name>` with alias `hof::<name>` (installed and exported as `HoF::<name>`), include root
+# at src/ so headers read <hof/<name>/x.h>. Its public headers are installed with it; those
+# under detail/ stay private.
 function(hof_module name)
   cmake_parse_arguments(ARG "" "" "SOURCES;DEPENDS;PRIVATE_DEPENDS" ${ARGN})
   add_library(hof_${name} STATIC ${ARG_SOURCES})
   add_library(hof::${name} ALIAS hof_${name})
-  target_include_directories(hof_${name} PUBLIC ${PROJECT_SOURCE_DIR}/src)
-  target_link_libraries(hof_${name} PUBLIC ${ARG_DEPENDS} PRIVATE hof_warnings ${ARG_PRIVATE_DEPENDS})
+  target_include_directories(hof_${name} PUBLIC
+    $<BUILD_INTERFACE:${PROJECT_SOURCE_DIR}/src>
+    $<BUILD_INTERFACE:${PROJECT_BINARY_DIR}/include>
+    $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}>)
+  target_link_libraries(hof_${name} PUBLIC ${ARG_DEPENDS} PRIVATE $<BUILD_INTERFACE:hof_warnings> ${ARG_PRIVATE_DEPENDS})
+  set_target_properties(hof_${name} PROPERTIES EXPORT_NAME ${name})
+  install(TARGETS hof_${name} EXPORT HoFTargets ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR} COMPONENT development)
+  install(DIRECTORY ${CMAKE_CURRENT_SOURCE_DIR}/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/hof/${name} COMPONENT development
+    FILES_MATCHING PATTERN "*.h" PATTERN "detail" EXCLUDE)
+  set_property(GLOBAL APPEND PROPERTY HOF_MODULES ${name})
 endfunction()
 
 # hof_test(NAME SOURCES ... DEPENDS ...): a GoogleTest executable registered with CTest.

@@ -48,9 +48,9 @@ cmake --build --preset asan
 # the medium liver (compliance coupling, the haptic-rate CG), the allocation count over every model): --all runs them, CI does not.
 slow='^(cli\.run_examples|ComplianceCoupling\.|TumourPalpation\.|NoAllocation\.|HapticRateFem\.WarmStartedCg)'
 if [[ $mode == all ]]; then
-  ctest --preset asan -E '^GuiWindow\.'
+  ctest --preset asan -E '^GuiWindow\.|^install\.'
 else
-  ctest --preset asan -E "^GuiWindow\.|$slow"
+  ctest --preset asan -E "^GuiWindow\.|^install\.|$slow"
 fi
 HOF_FUZZ_BUILD=build/asan scripts/fuzz.sh "${HOF_FUZZ_SECONDS:-$([[ $mode == all ]] && echo 60 || echo 3)}"
 
@@ -61,5 +61,5 @@ cmake --build --preset tsan --target "${tsan_tests[@]}"
 # One CPU for oneTBB (it sizes its pool from the affinity mask): its workers synchronise in an
 # uninstrumented library, which TSan would misread; HoF's own threads still interleave.
 export TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1
-taskset -c 0 ctest --preset tsan -E '^cli\.|_NOT_BUILT'
+taskset -c 0 ctest --preset tsan -E '^cli\.|^install\.|_NOT_BUILT'
 stage "all passes green$([[ $mode == all ]] || echo ' (the slow sanitizer tests and long fuzzing: scripts/test.sh --all)')"

@@ -3,12 +3,14 @@
 
 #include <CLI/CLI.hpp>
 #include <cstdio>
+#include <string>
 
 #include "hof/app/mesh_commands.h"
 #include "hof/app/bench_command.h"
 #include "hof/app/evaluation.h"
 #include "hof/app/gui/gui_app.h"
 #include "hof/app/run_command.h"
+#include "hof/core/version.h"
 #include "hof/haptics/device_backends/udp_auth.h"
 
 namespace {
@@ -202,7 +204,7 @@ void add_run_commands(CLI::App& app, int& status) {
 int main(int argc, char** argv) {
   CLI::App app{"HoF - Haptics Open Framework: touch deformable soft-tissue models"};
   app.require_subcommand(1);
-  app.set_version_flag("--version", "hof 0.1.0");
+  app.set_version_flag("--version", std::string("hof ") + HOF_VERSION_STRING);
   int status = 0;
   add_mesh_commands(app, status);
   add_run_commands(app, status);
