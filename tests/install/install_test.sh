@@ -99,6 +99,12 @@ deb)
   done
   dpkg-deb -x "$deb" "$work/root"
   "$work/root/usr/bin/hof" --version | grep -q "^hof " || fail "hof --version from the package"
+  # The Python module from the package, when it was built: imported by Debian's python3.
+  if [[ -d $work/root/usr/lib/python3/dist-packages/hof ]]; then
+    grep -q "python3-numpy" <<<"$depends" || fail "the Python module is packaged but python3-numpy is not a dependency"
+    PYTHONPATH=$work/root/usr/lib/python3/dist-packages /usr/bin/python3 -c \
+      "import hof; m = hof.mesh.generate_liver('simple'); assert len(m.tets) > 0" || fail "the packaged Python module"
+  fi
   echo "deb: $(basename "$deb"): Depends: $depends"
   ;;
 *) fail "unknown test $what" ;;
