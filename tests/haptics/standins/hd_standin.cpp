@@ -13,6 +13,14 @@
 #include <thread>
 #include <vector>
 
+// The HD API's error record, at global scope under its own name as in hdDefines.h (HoF calls
+// hdGetError through a pointer whose type names this struct).
+struct HDErrorInfo {
+  unsigned int errorCode;
+  int internalErrorCode;
+  unsigned int hHD;
+};
+
 namespace {
 
 using HHD = unsigned int;
@@ -20,11 +28,6 @@ using HDenum = unsigned int;
 using HDCallbackCode = unsigned int;
 using HDSchedulerHandle = unsigned long;
 using HDSchedulerCallback = HDCallbackCode (*)(void*);
-struct HDErrorInfo {
-  unsigned int error_code;
-  int internal_error_code;
-  HHD device;
-};
 
 struct Scheduled {
   HDSchedulerCallback callback;

@@ -12,6 +12,16 @@
 
 #include "hof/core/shared_library.h"
 
+// hdGetError() returns this C struct by value (hdDefines.h). Declared with the HD API's own
+// name at global scope: a call through a function pointer is checked (UBSan's function
+// sanitizer) against the callee's type, so the struct must be the same named type as the
+// library's, not one of our namespace.
+struct HDErrorInfo {
+  unsigned int errorCode;
+  int internalErrorCode;
+  unsigned int hHD;
+};
+
 namespace hof::haptics {
 
 namespace {
@@ -22,11 +32,6 @@ using HHD = unsigned int;
 using HDenum = unsigned int;
 using HDCallbackCode = unsigned int;
 using HDSchedulerHandle = unsigned long;
-struct HDErrorInfo {
-  unsigned int error_code;
-  int internal_error_code;
-  HHD device;
-};
 using HDSchedulerCallback = HDCallbackCode (*)(void*);
 
 constexpr HHD kInvalidHandle = 0xFFFFFFFFu;
@@ -82,9 +87,9 @@ struct Api {
   // The pending error as a sentence ("" when none): the HD API keeps a stack of them.
   [[nodiscard]] std::string error() const {
     const HDErrorInfo e = get_error();
-    if (e.error_code == kSuccess) return {};
-    const char* text = get_error_string ? get_error_string(e.error_code) : nullptr;
-    return fmt::format("{} (HD error 0x{:x}, internal {})", text && *text ? text : "unknown error", e.error_code, e.internal_error_code);
+    if (e.errorCode == kSuccess) return {};
+    const char* text = get_error_string ? get_error_string(e.errorCode) : nullptr;
+    return fmt::format("{} (HD error 0x{:x}, internal {})", text && *text ? text : "unknown error", e.errorCode, e.internalErrorCode);
   }
 };
 
@@ -188,7 +193,7 @@ class OpenHapticsDevice final : public Device {
     self.in_frame_ = false;
     self.api_.end_frame(self.handle_);
     const HDErrorInfo e = self.api_.get_error();
-    if (e.error_code != kSuccess) self.fail_code(e);
+    if (e.errorCode != kSuccess) self.fail_code(e);
     self.in_callback_.store(false, std::memory_order_release);
     return kCallbackContinue;
   }
@@ -201,10 +206,10 @@ class OpenHapticsDevice final : public Device {
   }
   void fail_code(const HDErrorInfo& e) {
     if (failed_.load(std::memory_order_relaxed)) return;
-    const char* text = api_.get_error_string ? api_.get_error_string(e.error_code) : nullptr;
+    const char* text = api_.get_error_string ? api_.get_error_string(e.errorCode) : nullptr;
     const auto end = fmt::format_to_n(failure_.data(), failure_.size() - 1,
                                       "{}: {} (HD error 0x{:x}, internal {}) - unplugged, or its driver stopped?", spec_.model,
-                                      text && *text ? text : "device error", e.error_code, e.internal_error_code);
+                                      text && *text ? text : "device error", e.errorCode, e.internalErrorCode);
     *end.out = '\0';
     failed_.store(true, std::memory_order_release);
   }
