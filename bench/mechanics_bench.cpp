@@ -1,4 +1,5 @@
-// Mechanics step time: every force field × ODE solver on the four standard livers, SOFA's
+// Mechanics step time: every force field × ODE solver on the four standard livers, implicit
+// Euler with the sparse direct solver (CHOLMOD) on three of them, SOFA's
 // liver demo with its own settings, and hexahedral FEM on sparse grids of the medium liver. Run: build/release/bin/hof_bench_mechanics
 // (filter with --benchmark_filter=REGEX; threads with HOF_THREADS, default all cores).
 //
@@ -18,6 +19,7 @@
 #include <map>
 #include <string>
 
+#include "hof/mechanics/linear_solve.h"
 #include "hof/mechanics/step.h"
 #include "hof/mesh/boundary.h"
 #include "hof/mesh/hex_grid.h"
@@ -231,6 +233,23 @@ void BM_HapticRateLiver(benchmark::State& bench, mesh::LiverResolution r, int it
   run_steps(bench, c);
 }
 
+// Implicit Euler with the sparse direct solver (issue 35): solve_us is the factorisation of
+// the step's A = (1 + hα)M + h(h + β)K and the solve with it (h = dt, α/β Rayleigh), the
+// pattern analysed once when the state was made.
+void BM_LiverDirect(benchmark::State& bench, mesh::LiverResolution r) {
+  ModelConfig c = liver_config(liver(r), Field::kLarge, OdeSolverKind::kEulerImplicit);
+  c.linear.kind = LinearSolverKind::kSparseLdlt;
+  run_steps(bench, c);
+  // The factor's size and cost, from the symbolic analysis alone.
+  auto model = build_model(c);
+  if (!model) return;
+  const detail::DirectSolverInfo info = detail::direct_solver_info(make_state(*model));
+  bench.counters["L_nonzeros"] = info.factor_nonzeros;
+  bench.counters["factor_Mflop"] = 1e-6 * info.factor_flops;
+  bench.counters["supernodal"] = info.supernodal ? 1.0 : 0.0;
+  bench.counters["ordering"] = static_cast<double>(info.ordering);
+}
+
 void register_all() {
   using R = mesh::LiverResolution;
   const std::pair<Field, const char*> fields[] = {{Field::kSprings, "MeshSprings"},
@@ -255,6 +274,10 @@ void register_all() {
       const std::string name = fmt::format("HapticRate/{}/FEMLarge/dt1ms/CG{}{}", mesh::to_string(r), iterations, warm ? "WarmTwoLevel" : "");
       benchmark::RegisterBenchmark(name.c_str(), BM_HapticRateLiver, r, iterations, warm)->Unit(benchmark::kMicrosecond)->MinTime(0.5);
     }
+  }
+  for (R r : {R::kCoarse, R::kMedium, R::kFine}) {
+    const std::string name = fmt::format("Liver/{}/FEMLarge/ImplicitLDLT", mesh::to_string(r));
+    benchmark::RegisterBenchmark(name.c_str(), BM_LiverDirect, r)->Unit(benchmark::kMillisecond)->MinTime(1.0);
   }
   benchmark::RegisterBenchmark("SofaLiverScn/FEMLarge/ImplicitCG25", BM_SofaLiverScn)->Unit(benchmark::kMicrosecond)->MinTime(0.5);
   benchmark::RegisterBenchmark("SparseGridLiver/medium/n24x16x10/HexFEMLarge/ImplicitCG25", BM_SparseGridLiver,

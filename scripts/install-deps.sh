@@ -6,9 +6,13 @@ set -euo pipefail
 packages=(
   build-essential cmake ninja-build pkg-config git
   libeigen3-dev libtet1.5-dev libpugixml-dev libglfw3-dev libimgui-dev libepoxy-dev
-  libfmt-dev nlohmann-json3-dev libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev libtbb-dev
+  libfmt-dev nlohmann-json3-dev libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev libtbb-dev libsuitesparse-dev
   gnuplot-nox xvfb xauth libgl1-mesa-dri libspnav-dev libsodium-dev
   clang-16 libclang-rt-16-dev
+  # The BLAS that CHOLMOD's supernodal factorisation runs on (Debian's alternatives select it
+  # for libblas.so.3; with the reference BLAS the direct solver is 5× slower): serial, so that
+  # it starts no threads beside TBB's. docs/performance.md, "The sparse direct solver".
+  libopenblas0-serial
   pybind11-dev python3-dev python3-numpy python3-pytest python3-matplotlib python3-scipy
 )
 

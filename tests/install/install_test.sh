@@ -89,7 +89,7 @@ deb)
   info=$(dpkg-deb --info "$deb")
   for field in "Package: hof" "Architecture: amd64" "Depends:"; do grep -q "$field" <<<"$info" || fail "control has no '$field'"; done
   depends=$(sed -n 's/^ Depends: //p' <<<"$info")
-  for package in libtbb12 libpugixml1v5 libglfw3 libepoxy0 libsodium23 libspnav0 libtet1.5 gnuplot-nox; do
+  for package in libtbb12 libpugixml1v5 libglfw3 libepoxy0 libsodium23 libspnav0 libtet1.5 libcholmod3 libsuitesparse-dev gnuplot-nox; do
     grep -q "$package" <<<"$depends" || fail "Depends lacks $package: $depends"
   done
   contents=$(dpkg-deb --contents "$deb")

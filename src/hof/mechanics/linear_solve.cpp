@@ -1,8 +1,9 @@
-// The LDLᵀ factorisation keeps its work vectors on the stack (no heap allocation in a step)
-// whatever the model size: the default limit would move them to the heap above 16k dofs.
-#define EIGEN_STACK_ALLOCATION_LIMIT 0
 #include "hof/mechanics/linear_solve.h"
 
+#include <cholmod.h>
+#include <dlfcn.h>
+
+#include <Eigen/SparseCore>
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -12,9 +13,121 @@
 #include "hof/mechanics/parallel.h"
 #include "hof/mechanics/vector_kernels.h"
 
+namespace hof::mechanics {
+
+// The sparse direct solver: CHOLMOD (SuiteSparse; Chen, Davis, Hager, Rajamanickam, "Algorithm
+// 887: CHOLMOD, supernodal sparse Cholesky factorization and update/downdate", ACM TOMS 35(3),
+// 2008). Its supernodal LLᵀ factors dense blocks of columns with the BLAS, where a simplicial
+// factorisation (Eigen's SimplicialLDLT, HoF's solver before issue 35) updates one column at a
+// time through the sparse pattern.
+//
+// The fill-reducing ordering P (AMD or METIS, whichever leaves the sparser factor, followed by
+// the elimination tree's postorder) is found once, when the state is made. The
+// matrix handed to CHOLMOD is already P A Pᵀ (lower triangle, compressed columns, filled from
+// block storage through a value map), and its symbolic analysis uses the natural order: so
+// each step's numeric factorisation reads the values in place, with no permuted copy.
+//
+// Debian's CHOLMOD is built with OpenMP: a few copy loops of its supernodal factorisation ask
+// for 4 threads (CHOLMOD_OMP_NUM_THREADS), whatever the model's thread setting. On 2 cores
+// beside TBB's workers each of those regions' closing barriers waits for a descheduled thread
+// (the coarse liver's step: 6.8 ms with them off, 36 ms on, docs/performance.md), the same
+// stall that made HoF's CG drop a team of threads. So the factorisation runs with the calling
+// thread's OpenMP max-active-levels at 0 (every region then runs on that thread alone), and
+// the caller's value is restored after. The two OpenMP functions are looked up at run time:
+// HoF links no OpenMP runtime itself, and with a CHOLMOD built without one there is nothing
+// to do.
+struct OpenMpLevels {
+  using Get = int (*)();
+  using Set = void (*)(int);
+  Get get{reinterpret_cast<Get>(dlsym(RTLD_DEFAULT, "omp_get_max_active_levels"))};
+  Set set{reinterpret_cast<Set>(dlsym(RTLD_DEFAULT, "omp_set_max_active_levels"))};
+};
+
+class SerialOpenMp {
+ public:
+  explicit SerialOpenMp(const OpenMpLevels& levels) : levels_(levels) {
+    if (levels_.get != nullptr && levels_.set != nullptr) {
+      saved_ = levels_.get();
+      levels_.set(0);
+    }
+  }
+  SerialOpenMp(const SerialOpenMp&) = delete;
+  SerialOpenMp& operator=(const SerialOpenMp&) = delete;
+  ~SerialOpenMp() {
+    if (levels_.get != nullptr && levels_.set != nullptr) levels_.set(saved_);
+  }
+
+ private:
+  const OpenMpLevels& levels_;
+  int saved_{0};
+};
+
+struct DirectSolver {
+  DirectSolver() { cholmod_start(&common); }
+  DirectSolver(const DirectSolver&) = delete;
+  DirectSolver& operator=(const DirectSolver&) = delete;
+  ~DirectSolver() {
+    for (cholmod_dense** dense : {&solution, &workspace_y[0], &workspace_y[1], &workspace_e[0], &workspace_e[1]}) {
+      if (*dense != nullptr) cholmod_free_dense(dense, &common);
+    }
+    for (cholmod_factor** factor : {&supernodal, &simplicial}) {
+      if (*factor != nullptr) cholmod_free_factor(factor, &common);
+    }
+    cholmod_finish(&common);
+  }
+
+  cholmod_common common{};
+  OpenMpLevels openmp;
+  Eigen::SparseMatrix<double> lower;         // lower triangle of P A Pᵀ; values refilled each step
+  std::vector<std::int64_t> lower_from_block;  // lower value k <- block value index
+  std::vector<int> permutation;              // dof i of A is dof permutation[i] of P A Pᵀ
+  cholmod_factor* supernodal{nullptr};       // supernodal LLᵀ of P A Pᵀ
+  // Simplicial LDLᵀ of the same matrix, used when LLᵀ finds A not positive definite (a
+  // static Newton step on a buckled hyperelastic body): LDLᵀ without pivoting, as before.
+  cholmod_factor* simplicial{nullptr};
+  cholmod_dense* solution{nullptr};          // (n) P x
+  cholmod_dense* workspace_y[2]{nullptr, nullptr};  // cholmod_solve2's workspace, per factor
+  cholmod_dense* workspace_e[2]{nullptr, nullptr};
+  detail::DirectOrdering ordering{detail::DirectOrdering::kNone};
+  double factor_nonzeros{0.0};
+  double factor_flops{0.0};
+  std::int64_t factorisations{0};
+  bool last_used_fallback{false};
+};
+
+void DirectSolverDeleter::operator()(DirectSolver* solver) const noexcept { delete solver; }
+
+}  // namespace hof::mechanics
+
 namespace hof::mechanics::detail {
 
 namespace {
+
+// A CHOLMOD view of a compressed-column matrix (no copy): its lower triangle, symmetric.
+cholmod_sparse view_lower(Eigen::SparseMatrix<double>& m) {
+  cholmod_sparse a{};
+  a.nrow = a.ncol = static_cast<std::size_t>(m.rows());
+  a.nzmax = static_cast<std::size_t>(m.nonZeros());
+  a.p = m.outerIndexPtr();
+  a.i = m.innerIndexPtr();
+  a.x = m.valuePtr();
+  a.stype = -1;
+  a.itype = CHOLMOD_INT;
+  a.xtype = CHOLMOD_REAL;
+  a.dtype = CHOLMOD_DOUBLE;
+  a.sorted = 1;
+  a.packed = 1;
+  return a;
+}
+
+DirectOrdering ordering_of(int cholmod_ordering) {
+  switch (cholmod_ordering) {
+    case CHOLMOD_AMD: return DirectOrdering::kAmd;
+    case CHOLMOD_METIS: return DirectOrdering::kMetis;
+    case CHOLMOD_NESDIS: return DirectOrdering::kNestedDissection;
+    default: return DirectOrdering::kOther;
+  }
+}
 
 // The conjugate-gradient solve's fixed split of the nodes: chunks of about 256 nodes, their
 // count a multiple of 8. The static split gives each thread a contiguous run of chunks, and
@@ -112,67 +225,129 @@ void prepare_linear_solver(const MechanicalModel& model, MechanicalState& state,
     }
   }
   if (model.linear.kind != LinearSolverKind::kSparseLdlt || !model.needs_matrix) return;
-  // CSC copy of the block matrix. Each triplet carries its block-storage index + 1 as its
-  // value, which gives the map from CSC storage back to block storage after compression.
+  // Compressed columns of the block matrix's lower triangle. Each triplet carries its
+  // block-storage index + 1 as its value, which gives the map from compressed storage back to
+  // block storage after compression.
   const BlockSparseMatrix& a = w.system;
+  const Eigen::Index n = 3 * static_cast<Eigen::Index>(a.block_rows());
   std::vector<Eigen::Triplet<double>> triplets;
-  triplets.reserve(static_cast<std::size_t>(a.block_count()) * 9);
-  for (std::int32_t r = 0; r < a.block_rows(); ++r) {
-    for (std::int64_t s = a.row_start()[r]; s < a.row_start()[r + 1]; ++s) {
-      const std::int32_t c = a.columns()[s];
-      for (int i = 0; i < 3; ++i) {
-        for (int j = 0; j < 3; ++j) {
-          triplets.emplace_back(3 * r + i, 3 * c + j, static_cast<double>(BlockSparseMatrix::value_index(s, i, j) + 1));
+  triplets.reserve(static_cast<std::size_t>(a.block_count()) * 9 / 2 + static_cast<std::size_t>(n));
+  auto lower_of = [&](const std::vector<int>* permutation) {
+    triplets.clear();
+    for (std::int32_t r = 0; r < a.block_rows(); ++r) {
+      for (std::int64_t s = a.row_start()[r]; s < a.row_start()[r + 1]; ++s) {
+        const std::int32_t c = a.columns()[s];
+        for (int i = 0; i < 3; ++i) {
+          for (int j = 0; j < 3; ++j) {
+            int row = 3 * r + i;
+            int col = 3 * c + j;
+            if (permutation != nullptr) {
+              row = (*permutation)[static_cast<std::size_t>(row)];
+              col = (*permutation)[static_cast<std::size_t>(col)];
+            }
+            if (row >= col) triplets.emplace_back(row, col, static_cast<double>(BlockSparseMatrix::value_index(s, i, j) + 1));
+          }
         }
       }
     }
-  }
-  const Eigen::Index n = 3 * static_cast<Eigen::Index>(a.block_rows());
-  Eigen::SparseMatrix<double> full(n, n);
-  full.setFromTriplets(triplets.begin(), triplets.end());
-  // Fill-reducing ordering once, applied here rather than inside every factorisation (where
-  // Eigen would build a permuted copy, allocating, at each step).
-  Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> p;
-  Eigen::AMDOrdering<int>()(full, p);
-  const Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> p_inverse = p.inverse();
-  w.permutation.assign(p_inverse.indices().data(), p_inverse.indices().data() + n);
-  // Upper triangle of P A Pᵀ; the values still carry the block-storage index + 1.
-  std::vector<Eigen::Triplet<double>> lower;
-  lower.reserve(static_cast<std::size_t>(full.nonZeros()) / 2 + static_cast<std::size_t>(n));
-  for (Eigen::Index col = 0; col < full.outerSize(); ++col) {
-    for (Eigen::SparseMatrix<double>::InnerIterator it(full, col); it; ++it) {
-      const int row_p = w.permutation[static_cast<std::size_t>(it.row())];
-      const int col_p = w.permutation[static_cast<std::size_t>(it.col())];
-      if (row_p <= col_p) lower.emplace_back(row_p, col_p, it.value());
+    Eigen::SparseMatrix<double> m(n, n);
+    m.setFromTriplets(triplets.begin(), triplets.end());
+    m.makeCompressed();
+    return m;
+  };
+  w.direct.reset(new DirectSolver);
+  DirectSolver& d = *w.direct;
+  cholmod_common& cc = d.common;
+  cc.print = 0;  // failures are reported by the step, never printed
+  // The ordering of A itself, with the elimination tree's postorder: AMD and METIS both tried,
+  // the one with the sparser factor kept (CHOLMOD's default tries METIS only when AMD leaves
+  // much fill; on the livers METIS's nested dissection halves the factorisation's flops:
+  // docs/performance.md). The simplicial analysis suffices to choose.
+  {
+    Eigen::SparseMatrix<double> unpermuted = lower_of(nullptr);
+    cholmod_sparse view = view_lower(unpermuted);
+    cc.supernodal = CHOLMOD_SIMPLICIAL;
+    cc.nmethods = 2;
+    cc.method[0].ordering = CHOLMOD_AMD;
+    cc.method[1].ordering = CHOLMOD_METIS;
+    cholmod_factor* ordering = cholmod_analyze(&view, &cc);
+    if (ordering == nullptr || cc.status != CHOLMOD_OK) {  // out of memory: every solve then fails
+      if (ordering != nullptr) cholmod_free_factor(&ordering, &cc);
+      w.direct.reset();
+      return;
     }
+    d.ordering = ordering_of(ordering->ordering);
+    const int* p = static_cast<const int*>(ordering->Perm);  // row p[k] of A is row k of P A Pᵀ
+    d.permutation.resize(static_cast<std::size_t>(n));
+    for (Eigen::Index k = 0; k < n; ++k) d.permutation[static_cast<std::size_t>(p[k])] = static_cast<int>(k);
+    cholmod_free_factor(&ordering, &cc);
   }
-  w.csc.resize(n, n);
-  w.csc.setFromTriplets(lower.begin(), lower.end());
-  w.csc.makeCompressed();
-  w.csc_from_block.resize(static_cast<std::size_t>(w.csc.nonZeros()));
-  for (Eigen::Index k = 0; k < w.csc.nonZeros(); ++k) {
-    w.csc_from_block[static_cast<std::size_t>(k)] = static_cast<std::int64_t>(w.csc.valuePtr()[k]) - 1;
+  d.lower = lower_of(&d.permutation);
+  d.lower_from_block.resize(static_cast<std::size_t>(d.lower.nonZeros()));
+  for (Eigen::Index k = 0; k < d.lower.nonZeros(); ++k) {
+    d.lower_from_block[static_cast<std::size_t>(k)] = static_cast<std::int64_t>(d.lower.valuePtr()[k]) - 1;
   }
-  w.ldlt = std::make_unique<PreorderedLdlt>();
-  w.ldlt->analyzePattern(w.csc);
+  // Symbolic analyses of P A Pᵀ in its own (natural, already postordered) order, kept while
+  // the pattern holds: the supernodal LLᵀ and the simplicial LDLᵀ fallback.
+  cc.nmethods = 1;
+  cc.method[0].ordering = CHOLMOD_NATURAL;
+  cc.postorder = 0;
+  cholmod_sparse view = view_lower(d.lower);
+  cc.supernodal = CHOLMOD_SUPERNODAL;
+  d.supernodal = cholmod_analyze(&view, &cc);
+  d.factor_nonzeros = cc.lnz;
+  d.factor_flops = cc.fl;
+  cc.supernodal = CHOLMOD_SIMPLICIAL;
+  d.simplicial = cholmod_analyze(&view, &cc);
+  d.solution = cholmod_allocate_dense(static_cast<std::size_t>(n), 1, static_cast<std::size_t>(n), CHOLMOD_REAL, &cc);
+  if (d.supernodal == nullptr || d.simplicial == nullptr || d.solution == nullptr) w.direct.reset();  // out of memory
+}
+
+DirectSolverInfo direct_solver_info(const MechanicalState& state) {
+  const DirectSolver* d = state.work.direct.get();
+  if (d == nullptr) return {};
+  return {true, d->supernodal != nullptr && d->supernodal->is_super != 0, d->last_used_fallback, d->factorisations,
+          d->ordering, d->factor_nonzeros, d->factor_flops};
 }
 
 namespace {
 
-bool solve_ldlt(MechanicalState& state, const Eigen::VectorXd& b, Eigen::VectorXd& x) {
+// Numeric factorisation of this step's A (supernodal LLᵀ; simplicial LDLᵀ if A is not
+// positive definite), then the solve, both on P A Pᵀ.
+bool solve_direct(MechanicalState& state, const Eigen::VectorXd& b, Eigen::VectorXd& x) {
   SolverWorkspace& w = state.work;
+  if (!w.direct) return false;  // its analysis ran out of memory
+  DirectSolver& d = *w.direct;
+  cholmod_common& cc = d.common;
   const double* block_values = w.system.values();
-  double* csc_values = w.csc.valuePtr();
-  for (std::size_t k = 0; k < w.csc_from_block.size(); ++k) csc_values[k] = block_values[w.csc_from_block[k]];
-  w.ldlt->refactor(w.csc);
-  if (w.ldlt->info() != Eigen::Success) return false;
-  // Solve P A Pᵀ (P x) = P b in place in w.z.
-  const std::size_t n = w.permutation.size();
-  for (std::size_t i = 0; i < n; ++i) w.z[w.permutation[i]] = b[static_cast<Eigen::Index>(i)];
-  w.ldlt->matrixL().solveInPlace(w.z);
-  w.z.array() /= w.ldlt->vectorD().array();
-  w.ldlt->matrixU().solveInPlace(w.z);
-  for (std::size_t i = 0; i < n; ++i) x[static_cast<Eigen::Index>(i)] = w.z[w.permutation[i]];
+  double* lower_values = d.lower.valuePtr();
+  for (std::size_t k = 0; k < d.lower_from_block.size(); ++k) lower_values[k] = block_values[d.lower_from_block[k]];
+  cholmod_sparse a = view_lower(d.lower);
+  const std::size_t n = d.permutation.size();
+  // A factor is good when it completed (minor = n: no pivot stopped it) without an error.
+  auto factor = [&](cholmod_factor* l) {
+    const SerialOpenMp serial(d.openmp);
+    ++d.factorisations;
+    return cholmod_factorize(&a, l, &cc) != 0 && cc.status == CHOLMOD_OK && l->minor == n;
+  };
+  d.last_used_fallback = !factor(d.supernodal);
+  if (d.last_used_fallback && !factor(d.simplicial)) return false;
+  cholmod_factor* l = d.last_used_fallback ? d.simplicial : d.supernodal;
+  const int which = d.last_used_fallback ? 1 : 0;
+  // Solve P A Pᵀ (P x) = P b: P b in w.z, viewed as CHOLMOD's right-hand side; the solution
+  // and solve2's workspace are kept from one solve to the next.
+  for (std::size_t i = 0; i < n; ++i) w.z[d.permutation[i]] = b[static_cast<Eigen::Index>(i)];
+  cholmod_dense rhs{};
+  rhs.nrow = rhs.nzmax = rhs.d = n;
+  rhs.ncol = 1;
+  rhs.x = w.z.data();
+  rhs.xtype = CHOLMOD_REAL;
+  rhs.dtype = CHOLMOD_DOUBLE;
+  if (cholmod_solve2(CHOLMOD_A, l, &rhs, nullptr, &d.solution, nullptr, &d.workspace_y[which], &d.workspace_e[which], &cc) == 0) {
+    return false;
+  }
+  const double* px = static_cast<const double*>(d.solution->x);
+  for (std::size_t i = 0; i < n; ++i) x[static_cast<Eigen::Index>(i)] = px[d.permutation[i]];
   state.stats.linear_iterations = 1;
   state.stats.linear_residual = 0.0;
   return x.allFinite();
@@ -438,7 +613,7 @@ bool solve_cg(const MechanicalModel& model, MechanicalState& state, const Eigen:
 }  // namespace
 
 bool solve_system(const MechanicalModel& model, MechanicalState& state, const Eigen::VectorXd& b, Eigen::VectorXd& x) {
-  if (model.linear.kind == LinearSolverKind::kSparseLdlt) return solve_ldlt(state, b, x);
+  if (model.linear.kind == LinearSolverKind::kSparseLdlt) return solve_direct(state, b, x);
   return solve_cg(model, state, b, x);
 }
 

@@ -6,7 +6,6 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
-#include <Eigen/SparseCholesky>
 #include <tbb/task_arena.h>
 #include <cstdint>
 #include <memory>
@@ -39,11 +38,11 @@ struct StepStats {
   double residual_force_n{0.0};  ///< static solver: |f| at exit
 };
 
-/// Eigen's LDLᵀ without its per-call ordering step: the matrix given is already permuted
-/// (upper triangle stored), so refactoring allocates nothing.
-class PreorderedLdlt : public Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Upper, Eigen::NaturalOrdering<int>> {
- public:
-  void refactor(const Eigen::SparseMatrix<double>& upper) { factorize_preordered<true>(upper); }
+/// The sparse direct solver's state (CHOLMOD's factors and workspace, linear_solve.cpp): kept
+/// out of this header so that HoF's headers do not need SuiteSparse's.
+struct DirectSolver;
+struct DirectSolverDeleter {
+  void operator()(DirectSolver* solver) const noexcept;
 };
 
 /// The coarse space of the CG's two-level preconditioner (coarse_correction.h): sized when
@@ -91,13 +90,9 @@ struct SolverWorkspace {
   // use) and the elements touching them.
   std::vector<std::uint8_t> node_marks;
   std::vector<std::int32_t> element_scratch;
-  // Sparse direct solver: CSC copy of `system` and the value map from block storage.
-  // Sparse direct solver on the fill-reducing (AMD) permutation P A Pᵀ, lower triangle,
-  // computed once: each step copies values and refactors without allocating.
-  Eigen::SparseMatrix<double> csc;
-  std::vector<std::int64_t> csc_from_block;        // csc value k <- block value index
-  std::vector<int> permutation;                    // dof i of A is dof permutation[i] of P A Pᵀ
-  std::unique_ptr<PreorderedLdlt> ldlt;
+  // Sparse direct solver (kSparseLdlt): the pattern's ordering and symbolic analysis, made
+  // once by make_state; each step copies values and factors numerically.
+  std::unique_ptr<DirectSolver, DirectSolverDeleter> direct;
 };
 
 struct MechanicalState {
