@@ -141,6 +141,42 @@ TEST(SparseGrid, KeepsExactlyTheCellsOfAnAlignedCube) {
   for (const Hex& hex : fitted->hexes) EXPECT_GT(hex_volume(fitted->nodes, hex), 0.0);
 }
 
+// The six faces of the box [lo, hi], two triangles each, wound counter-clockwise seen from
+// outside; `inward` reverses them (the wall of a cavity).
+TriMesh box_surface(const Vec3& lo, const Vec3& hi, bool inward) {
+  auto grid = regular_grid({2, 2, 2}, lo, hi);
+  TriMesh box = hex_boundary(grid->nodes, grid->hexes).surface;
+  if (inward) {
+    for (Tri& t : box.triangles) std::swap(t[1], t[2]);
+  }
+  return box;
+}
+
+// SOFA keeps what a flood fill from the grid's outer layer through uncrossed cells cannot
+// reach (SparseGridTopology::voxelizeTriangleMesh, propagateFrom): a cavity walled in by
+// crossed cells is inside for it, though its centre is outside the solid. Unit cells in
+// [0, 6]³; a hollow cube, outer faces at 0.5 and 5.5, cavity [1.5, 4.5]³: the surface crosses
+// the 208 cells of the shell, and the 2×2×2 cells of the cavity are walled in.
+TEST(SparseGrid, KeepsACavityWalledInByCrossedCellsAsSofa) {
+  TriMesh hollow = box_surface(Vec3::Constant(0.5), Vec3::Constant(5.5), false);
+  const TriMesh cavity = box_surface(Vec3::Constant(1.5), Vec3::Constant(4.5), true);
+  const auto offset = static_cast<NodeIndex>(hollow.vertices.size());
+  hollow.vertices.insert(hollow.vertices.end(), cavity.vertices.begin(), cavity.vertices.end());
+  for (Tri t : cavity.triangles) hollow.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+  auto grid = sparse_grid(hollow, {7, 7, 7}, std::pair<Vec3, Vec3>(Vec3::Zero(), Vec3::Constant(6)));
+  ASSERT_TRUE(grid) << grid.error().to_string();
+  ASSERT_EQ(grid->hexes.size(), 216u);
+  EXPECT_EQ(grid->nodes.size(), 343u);  // the cavity's centre node too
+  // The crossed cells first, then the eight of the cavity, inside and whole (fill 1).
+  EXPECT_EQ(std::count(grid->hex_on_surface.begin(), grid->hex_on_surface.begin() + 208, 1), 208);
+  EXPECT_EQ(std::count(grid->hex_on_surface.begin() + 208, grid->hex_on_surface.end(), 0), 8);
+  for (std::size_t h = 208; h < 216; ++h) {
+    const std::int32_t cell = grid->hex_cells[h];
+    const int i = cell % 6, j = (cell / 6) % 6, k = cell / 36;
+    EXPECT_TRUE(i >= 2 && i <= 3 && j >= 2 && j <= 3 && k >= 2 && k <= 3) << "cell " << cell;
+  }
+}
+
 TEST(SparseGrid, CoversTheBundledLiverAndDropsEmptyCells) {
   auto read = read_mesh(HOF_SOURCE_DIR "/data/models/liver-medium.obj");
   ASSERT_TRUE(read) << read.error().to_string();

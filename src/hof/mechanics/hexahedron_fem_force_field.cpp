@@ -45,6 +45,18 @@ Mat3 edge_frame(const std::array<Vec3, 8>& p) {
   return frame;
 }
 
+// The element's three averaged edges as columns: the mean of its four edges along local x,
+// along y and along z (SOFA's HexahedronFEMForceField::computeRotationPolar, whose rows they
+// are). Equal to twice the Jacobian of the trilinear map at the centre.
+Mat3 averaged_edges(const std::array<Vec3, 8>& p) {
+  const Vec3 along_x = 0.25 * ((p[1] - p[0]) + (p[2] - p[3]) + (p[5] - p[4]) + (p[6] - p[7]));
+  const Vec3 along_y = 0.25 * ((p[3] - p[0]) + (p[2] - p[1]) + (p[7] - p[4]) + (p[6] - p[5]));
+  const Vec3 along_z = 0.25 * ((p[4] - p[0]) + (p[5] - p[1]) + (p[7] - p[3]) + (p[6] - p[2]));
+  Mat3 edges = Mat3::Zero();
+  edges << along_x, along_y, along_z;
+  return edges;
+}
+
 // Rotation of the polar decomposition F = R S by Higham's scaled Newton iteration
 // X ← ½(γX + X⁻ᵀ/γ), γ = (‖X⁻¹‖_F/‖X‖_F)^½ (Higham, "Computing the polar decomposition with
 // applications", SIAM J. Sci. Stat. Comput. 7(4), 1986). An inverted or flat element
@@ -247,9 +259,7 @@ Expected<std::unique_ptr<HexahedronFemForceField>> HexahedronFemForceField::make
     // Rest data of the rotation methods.
     const Mat3 frame = edge_frame(e.rest_offsets);
     e.rest_frame_transposed = frame.transpose();
-    const Eigen::Matrix<double, 3, 8> d = mesh::hex_shape_derivatives(Vec3::Zero());
-    const Mat3 inverse_transposed = jacobian_at(rest, d).transpose().inverse();
-    for (int c = 0; c < 8; ++c) e.centre_gradients[c] = inverse_transposed * d.col(c);
+    e.rest_polar_transposed = polar_rotation(averaged_edges(e.rest_offsets)).transpose();
     field->elements_.push_back(e);
   }
 
@@ -307,10 +317,15 @@ std::array<Vec3, 8> HexahedronFemForceField::current_offsets(const Element& e, c
 }
 
 Mat3 HexahedronFemForceField::rotation(const Element& e, const std::array<Vec3, 8>& offsets) const {
+  // SOFA's polar rotation: that of the averaged edges now, relative to that at rest
+  // (HexahedronFEMForceField::initPolar and accumulateForcePolar rotate both the rest and the
+  // current corners by the polar factor of their own edge matrix). The edges are not divided
+  // by their rest lengths, so for a cell longer on one axis this is not the polar rotation of
+  // the deformation gradient: a shear along the long axis turns it less.
   const auto polar = [&] {
-    Mat3 f = Mat3::Zero();
-    for (int c = 0; c < 8; ++c) f += offsets[c] * e.centre_gradients[c].transpose();
-    return polar_rotation(f);
+    const Mat3 now = polar_rotation(averaged_edges(offsets));
+    const Mat3 relative = now * e.rest_polar_transposed;
+    return relative;
   };
   switch (config_.method) {
     case FemMethod::kSmall:

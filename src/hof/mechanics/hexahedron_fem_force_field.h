@@ -8,7 +8,10 @@
 /// f = −R K (Rᵀ x − x₀), with tangent R K Rᵀ (Nesme, Payan & Faure, "Efficient, physically
 /// plausible finite elements", Eurographics 2005 short papers). `large` takes R from the frame
 /// of the element's averaged edges along its local x and y (as SOFA's `large`), `polar` from
-/// the polar decomposition of the deformation gradient at the element's centre.
+/// the polar decomposition of the matrix of the element's three averaged edges, relative to
+/// its value at rest (as SOFA's `polar`, HexahedronFEMForceField::computeRotationPolar). The
+/// latter is the polar rotation of the deformation gradient at the centre only for a cubic
+/// cell: for a cell longer on one axis the edges are not divided by their rest lengths.
 
 #include <Eigen/Core>
 #include <array>
@@ -76,7 +79,7 @@ class HexahedronFemForceField final : public ForceField {
     double young_modulus_pa;           // the element's E: scales its stiffness
     std::array<Vec3, 8> rest_offsets;  // X_c − X̄ (rest corner minus rest centre), m
     Mat3 rest_frame_transposed;        // `large`: edge frame of the rest element, transposed
-    std::array<Vec3, 8> centre_gradients;  // `polar`: ∇N_c at the centre, 1/m
+    Mat3 rest_polar_transposed;        // `polar`: polar rotation of the rest averaged edges, transposed
   };
 
   HexahedronFemForceField() = default;

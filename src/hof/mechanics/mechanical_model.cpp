@@ -73,8 +73,12 @@ Expected<std::vector<double>> build_masses(const ModelConfig& c) {
     auto rho = density(e);
     if (!rho) return std::unexpected(rho.error());
     if (on_hexahedra) {
+      // ρV/8 of the part of the cell the body fills — or, for a SOFA scene (fill_scales_mass
+      // false), of the whole cell: SOFA's DiagonalMass::computeVertexMass lumps each
+      // hexahedron's full volume and never reads the sparse grid's mass coefficient (only
+      // HexahedronFEMForceFieldAndMass does).
       const mesh::Hex& h = c.hexahedra[e];
-      const double fill = c.element_fill.empty() ? 1.0 : c.element_fill[e];
+      const double fill = c.element_fill.empty() || !c.fill_scales_mass ? 1.0 : c.element_fill[e];
       const double eighth = fill * *rho * std::abs(mesh::hex_volume(c.positions, h)) / 8.0;
       for (mesh::NodeIndex i : h) mass[static_cast<std::size_t>(i)] += eighth;
     } else if (on_triangles) {

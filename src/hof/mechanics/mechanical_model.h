@@ -101,7 +101,7 @@ struct OdeSolverConfig {
 
 enum class LinearSolverKind : std::uint8_t {
   kConjugateGradient,  ///< SOFA CGLinearSolver
-  kSparseLdlt,         ///< sparse direct LDLᵀ (Eigen SimplicialLDLT, AMD ordering)
+  kSparseLdlt,         ///< sparse direct: CHOLMOD's supernodal LLᵀ (simplicial LDLᵀ if A is not positive definite)
 };
 
 struct LinearSolverConfig {
@@ -173,8 +173,13 @@ struct ModelConfig {
   std::vector<std::int32_t> element_regions;
   /// Empty, or per hexahedron the fraction of the cell the body fills (SOFA's sparse grid
   /// `fillWeighted`: 0.5 where the surface passes through, else 1). It scales that element's
-  /// stiffness and mass whatever the modulus and density are set to (a <set>, a region).
+  /// stiffness whatever the modulus is set to (a <set>, a region), as SOFA's
+  /// HexahedronFEMForceField scales its element matrix by the grid's stiffness coefficient.
+  /// It scales the mass too when fill_scales_mass (HoF's own bodies: the organ's mass is that
+  /// of the volume it fills); a SOFA scene clears it, as SOFA's DiagonalMass lumps every cell's
+  /// full volume.
   std::vector<double> element_fill;
+  bool fill_scales_mass{true};
   MassConfig mass;
   std::vector<ForceFieldConfig> force_fields;
   std::vector<FixedConstraintConfig> fixed;

@@ -16,30 +16,62 @@ Expected<std::unique_ptr<MeshSpringForceField>> MeshSpringForceField::make(
     const std::vector<Vec3>& rest_positions, const std::vector<mesh::Tet>& tets,
     const std::vector<mesh::Tri>& triangles, const MeshSpringConfig& config, std::string name) {
   const std::string who = fmt::format("MeshSpringForceField '{}'", name);
-  if (!(config.stiffness_n_per_m >= 0.0) || !std::isfinite(config.stiffness_n_per_m)) {
-    return make_error(ErrorCode::kInvalidArgument,
-                      fmt::format("{}: stiffness must be >= 0 N/m, got {}", who, config.stiffness_n_per_m));
+  const auto valid = [](double value) { return value >= 0.0 && std::isfinite(value); };
+  // Named as SOFA's data (stiffness, trianglesStiffness, ...).
+  const auto check_values = [&](const SpringValues& values, const char* stiffness, const char* damping) -> Expected<void> {
+    if (!valid(values.stiffness)) {
+      return make_error(ErrorCode::kInvalidArgument, fmt::format("{}: {} must be >= 0, got {}", who, stiffness, values.stiffness));
+    }
+    if (!valid(values.damping)) {
+      return make_error(ErrorCode::kInvalidArgument, fmt::format("{}: {} must be >= 0, got {}", who, damping, values.damping));
+    }
+    return {};
+  };
+  const SpringValues generic{config.stiffness_n_per_m, config.damping_n_s_per_m};
+  if (auto ok = check_values(generic, "stiffness", "damping"); !ok) return std::unexpected(ok.error());
+  if (config.triangles) {
+    if (auto ok = check_values(*config.triangles, "trianglesStiffness", "trianglesDamping"); !ok) return std::unexpected(ok.error());
   }
-  if (!(config.damping_n_s_per_m >= 0.0) || !std::isfinite(config.damping_n_s_per_m)) {
-    return make_error(ErrorCode::kInvalidArgument,
-                      fmt::format("{}: damping must be >= 0 N·s/m, got {}", who, config.damping_n_s_per_m));
+  if (config.tetrahedra) {
+    if (auto ok = check_values(*config.tetrahedra, "tetrahedraStiffness", "tetrahedraDamping"); !ok) {
+      return std::unexpected(ok.error());
+    }
   }
   if (!(config.rest_length_scale > 0.0 && config.rest_length_scale <= 2.0)) {
     return make_error(ErrorCode::kInvalidArgument,
                       fmt::format("{}: restLengthScale must be in (0, 2], got {}", who, config.rest_length_scale));
   }
-  std::vector<mesh::Edge> edges = mesh::tet_edges(tets);
-  const std::vector<mesh::Edge> surface_edges = mesh::triangle_edges(triangles);
-  edges.insert(edges.end(), surface_edges.begin(), surface_edges.end());
-  std::sort(edges.begin(), edges.end());
-  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
-  if (edges.empty()) return make_error(ErrorCode::kInvalidArgument, fmt::format("{}: the topology has no edges", who));
+  // The element kinds in SOFA's order (MeshSpringForceField::init: lines, triangles, quads,
+  // tetrahedra, cubes; HoF's models have triangles and tetrahedra). A kind whose stiffness
+  // and damping are both 0 is skipped there, so its edges take a later kind's values; an edge
+  // already given a spring keeps it (MeshSpringForceField::addSpring returns when the pair is
+  // in its set). Every kind 0: springs of no effect on all edges, as if there were none.
+  struct KindEdges {
+    std::vector<mesh::Edge> edges;
+    SpringValues values;
+  };
+  const std::array<KindEdges, 2> kinds = {KindEdges{mesh::triangle_edges(triangles), config.triangles.value_or(generic)},
+                                          KindEdges{mesh::tet_edges(tets), config.tetrahedra.value_or(generic)}};
+  const bool any_active = std::ranges::any_of(kinds, [](const KindEdges& k) {
+    return !k.edges.empty() && (k.values.stiffness != 0.0 || k.values.damping != 0.0);
+  });
+  // (edge, order of its kind): sorted by edge, the first kind first; the first of each edge kept.
+  std::vector<std::pair<mesh::Edge, std::size_t>> claimed;
+  for (std::size_t kind = 0; kind < kinds.size(); ++kind) {
+    const bool active = kinds[kind].values.stiffness != 0.0 || kinds[kind].values.damping != 0.0;
+    if (any_active && !active) continue;
+    for (const mesh::Edge& e : kinds[kind].edges) claimed.emplace_back(e, kind);
+  }
+  std::sort(claimed.begin(), claimed.end());
+  claimed.erase(std::unique(claimed.begin(), claimed.end(), [](const auto& a, const auto& b) { return a.first == b.first; }),
+                claimed.end());
+  if (claimed.empty()) return make_error(ErrorCode::kInvalidArgument, fmt::format("{}: the topology has no edges", who));
 
   auto field = std::unique_ptr<MeshSpringForceField>(new MeshSpringForceField());
   field->set_name(std::move(name));
-  field->config_ = config;
-  field->springs_.reserve(edges.size());
-  for (const mesh::Edge& e : edges) {
+  field->exact_tangent_ = config.tangent == SpringTangent::kExact;
+  field->springs_.reserve(claimed.size());
+  for (const auto& [e, kind] : claimed) {
     if (e[0] < 0 || static_cast<std::size_t>(e[1]) >= rest_positions.size()) {
       return make_error(ErrorCode::kInvalidMesh, fmt::format("{}: edge {}-{} refers to a missing node", who, e[0], e[1]));
     }
@@ -48,7 +80,15 @@ Expected<std::unique_ptr<MeshSpringForceField>> MeshSpringForceField::make(
       return make_error(ErrorCode::kInvalidMesh,
                         fmt::format("{}: nodes {} and {} coincide at rest (zero-length spring)", who, e[0], e[1]));
     }
-    field->springs_.push_back({{e[0], e[1]}, config.rest_length_scale * length, {-1, -1}});
+    // SOFA divides by the edge's length at rest (MeshSpringForceField::addSpring), not by the
+    // scaled rest length of HoF's restLengthScale.
+    const double per_length = config.rule == SpringStiffnessRule::kDividedByRestLength ? 1.0 / length : 1.0;
+    const SpringValues& values = kinds[kind].values;
+    field->springs_.push_back({{e[0], e[1]},
+                               config.rest_length_scale * length,
+                               values.stiffness * per_length,
+                               values.damping * per_length,
+                               {-1, -1}});
   }
   field->groups_.resize((field->springs_.size() + simd::kLanes - 1) / simd::kLanes);
   for (std::size_t g = 0; g < field->groups_.size(); ++g) {
@@ -58,6 +98,8 @@ Expected<std::unique_ptr<MeshSpringForceField>> MeshSpringForceField::make(
       field->groups_[g].first[lane] = spring.nodes[0];
       field->groups_[g].second[lane] = spring.nodes[1];
       field->groups_[g].rest_length[lane] = spring.rest_length;
+      field->groups_[g].stiffness[lane] = spring.stiffness;
+      field->groups_[g].damping[lane] = spring.damping;
     }
   }
   std::vector<std::array<std::int32_t, 2>> node_lists;
@@ -180,14 +222,14 @@ void MeshSpringForceField::bind(const BlockSparseMatrix& pattern) {
 }
 
 void MeshSpringForceField::spring_groups(const SpringGroup* __restrict groups, std::size_t begin, std::size_t end,
-                                         const double* __restrict xs, const double* __restrict vs, double stiffness,
-                                         double damping, double* __restrict records) {
+                                         const double* __restrict xs, const double* __restrict vs,
+                                         bool exact_tangent, double* __restrict records) {
   using simd::Lanes;
-  const Lanes k = simd::splat(stiffness);
-  const Lanes c = simd::splat(damping);
   const Lanes zero = simd::splat(0.0);
   for (std::size_t g = begin; g < end; ++g) {
     const SpringGroup& group = groups[g];
+    const Lanes k = simd::load(group.stiffness);
+    const Lanes c = simd::load(group.damping);
     Lanes d[3], dv[3];
     for (int q = 0; q < 3; ++q) {
       d[q] = Lanes{xs[3 * group.second[0] + q] - xs[3 * group.first[0] + q],
@@ -207,10 +249,12 @@ void MeshSpringForceField::spring_groups(const SpringGroup* __restrict groups, s
     const Lanes tension = k * (length - rest) + c * (dv[0] * u[0] + dv[1] * u[1] + dv[2] * u[2]);
     // −∂f_i/∂x_i = k u uᵀ + k (1 − l0/l)(I − u uᵀ). The transverse term is negative for
     // a compressed spring; it is clamped at zero so that the system matrix stays
-    // positive definite (Choi & Ko, "Stable but responsive cloth", SIGGRAPH 2002). A
-    // collapsed spring resists equally in all directions (k I).
+    // positive definite (Choi & Ko, "Stable but responsive cloth", SIGGRAPH 2002). SOFA's
+    // (exact_tangent) takes the whole tension over the length, the damper's too, unclamped
+    // (SpringForceField::computeSpringForce: tgt = forceIntensity / d). A collapsed spring
+    // resists equally in all directions (k I).
     const Lanes clamped = k * (1.0 - rest * inverse);
-    const Lanes transverse = stretched ? (clamped > zero ? clamped : zero) : k;
+    const Lanes transverse = stretched ? (exact_tangent ? tension * inverse : (clamped > zero ? clamped : zero)) : k;
     const Lanes along = k - transverse;
     Lanes force[4], weighted[4], direction[4];
     simd::transpose_xyz(tension * u[0], tension * u[1], tension * u[2], force);
@@ -245,8 +289,8 @@ bool MeshSpringForceField::add_force_sum_on(const Eigen::VectorXd& x, const Eige
     const double length = d.norm();
     if (!(length > 0.0)) continue;  // a collapsed spring has no direction (and no force)
     const Vec3 u = d / length;
-    const double tension = config_.stiffness_n_per_m * (length - spring.rest_length) +
-                           config_.damping_n_s_per_m * (v.segment<3>(3 * second) - v.segment<3>(3 * first)).dot(u);
+    const double tension = spring.stiffness * (length - spring.rest_length) +
+                           spring.damping * (v.segment<3>(3 * second) - v.segment<3>(3 * first)).dot(u);
     if (in_set[static_cast<std::size_t>(first)] != 0) total += tension * u;
     if (in_set[static_cast<std::size_t>(second)] != 0) total -= tension * u;
   }
@@ -262,7 +306,7 @@ void MeshSpringForceField::add_force(const Eigen::VectorXd& x, const Eigen::Vect
   parallel_chunks(
       groups_.size(), 64,
       [&](std::size_t begin, std::size_t end) {
-        spring_groups(groups_.data(), begin, end, xs, vs, config_.stiffness_n_per_m, config_.damping_n_s_per_m, records);
+        spring_groups(groups_.data(), begin, end, xs, vs, exact_tangent_, records);
       },
       /*min_parallel=*/256);
   // Node pass: each node gathers its springs' forces in a fixed order.
@@ -326,7 +370,7 @@ double MeshSpringForceField::potential_energy(const Eigen::VectorXd& x, const Fo
     const double stretch =
         (x.segment<3>(3 * static_cast<Eigen::Index>(s.nodes[1])) - x.segment<3>(3 * static_cast<Eigen::Index>(s.nodes[0])))
             .norm() - s.rest_length;
-    energy += 0.5 * config_.stiffness_n_per_m * stretch * stretch;
+    energy += 0.5 * s.stiffness * stretch * stretch;
   }
   return energy;
 }

@@ -240,8 +240,9 @@ Expected<HexGrid> sparse_grid(const TriMesh& surface, std::array<int, 3> n,
   }
 
   // Cells whose centre is inside: a vertical ray through each column of cell centres; a centre
-  // is inside when the surface crosses the ray above it an odd number of times. The crossings
-  // of each column are found from the triangles whose projection covers it.
+  // is inside when the surface crosses the ray above it an odd number of times (an odd total
+  // means the surface is not closed). The crossings of each column are found from the
+  // triangles whose projection covers it.
   std::vector<std::vector<double>> crossings(static_cast<std::size_t>(cells[0]) * cells[1]);
   const auto column_range = [&](double from, double to, int axis) {
     // Columns whose centre coordinate lies in [from, to].
@@ -264,6 +265,7 @@ Expected<HexGrid> sparse_grid(const TriMesh& surface, std::array<int, 3> n,
       }
     }
   }
+  std::vector<std::uint8_t> centre_inside(keep.size(), 0);
   for (int j = 0; j < cells[1]; ++j) {
     for (int i = 0; i < cells[0]; ++i) {
       std::vector<double>& zs = crossings[static_cast<std::size_t>(i) + static_cast<std::size_t>(cells[0]) * j];
@@ -277,9 +279,46 @@ Expected<HexGrid> sparse_grid(const TriMesh& surface, std::array<int, 3> n,
       for (int k = 0; k < cells[2]; ++k) {
         const double z = lo.z() + (k + 0.5) * h.z();
         const auto above = zs.end() - std::upper_bound(zs.begin(), zs.end(), z);
-        if (above % 2 == 1 && keep[cell_index(i, j, k)] == 0) keep[cell_index(i, j, k)] = kInsideCell;
+        if (above % 2 == 1) centre_inside[cell_index(i, j, k)] = 1;
       }
     }
+  }
+
+  // SOFA's rule (SparseGridTopology::voxelizeTriangleMesh): every cell starts inside; a flood
+  // fill from each cell of the grid's outer layer through face neighbours that the surface
+  // does not cross (SparseGridTopology::propagateFrom) marks the cells outside. What it cannot
+  // reach stays inside — also a pocket of outside space that crossed cells wall in (a cavity,
+  // or a concave fold a coarse grid does not resolve), which the centre test drops. The two
+  // agree on every other cell, except where the surface lies in grid planes: HoF then counts
+  // no cell as crossed (above), the fill leaks through, and the centre test keeps the cells
+  // inside. A cell is kept when either says inside.
+  std::vector<std::uint8_t> reached(keep.size(), 0);
+  std::vector<std::array<int, 3>> stack;
+  const auto visit = [&](int i, int j, int k) {
+    const std::size_t at = cell_index(i, j, k);
+    if (reached[at] != 0 || keep[at] == kSurfaceCell) return;
+    reached[at] = 1;
+    stack.push_back({i, j, k});
+  };
+  for (int k = 0; k < cells[2]; ++k) {
+    for (int j = 0; j < cells[1]; ++j) {
+      for (int i = 0; i < cells[0]; ++i) {
+        if (i == 0 || j == 0 || k == 0 || i == cells[0] - 1 || j == cells[1] - 1 || k == cells[2] - 1) visit(i, j, k);
+      }
+    }
+  }
+  while (!stack.empty()) {
+    const auto [i, j, k] = stack.back();
+    stack.pop_back();
+    if (i > 0) visit(i - 1, j, k);
+    if (i + 1 < cells[0]) visit(i + 1, j, k);
+    if (j > 0) visit(i, j - 1, k);
+    if (j + 1 < cells[1]) visit(i, j + 1, k);
+    if (k > 0) visit(i, j, k - 1);
+    if (k + 1 < cells[2]) visit(i, j, k + 1);
+  }
+  for (std::size_t at = 0; at < keep.size(); ++at) {
+    if (keep[at] == 0 && (centre_inside[at] != 0 || reached[at] == 0)) keep[at] = kInsideCell;
   }
 
   HexGrid grid;

@@ -40,7 +40,11 @@ struct HexGrid {
   std::vector<std::int32_t> hex_cells;
   /// (H) 1 where the surface passes through the cell (SOFA's BOUNDARY cell), 0 for a cell
   /// inside it (INSIDE) or of a regular grid. SOFA's `fillWeighted` (its default) gives
-  /// boundary cells half the stiffness: a per-element youngModulus of E/2 there.
+  /// boundary cells half the stiffness (SparseGridTopology::buildAsFinest sets their stiffness
+  /// coefficient to 0.5, which HexahedronFEMForceField multiplies into the element's stiffness
+  /// matrix): a per-element youngModulus of E/2 there. Their mass coefficient (also 0.5) is
+  /// read only by HexahedronFEMForceFieldAndMass; DiagonalMass, MeshMatrixMass and
+  /// UniformMass ignore it.
   std::vector<std::uint8_t> hex_on_surface;
 
   /// Size of one cell, m.
@@ -59,8 +63,13 @@ struct HexGrid {
 /// enlarged by 1% of its size on each side (as SOFA does; or `box` = (min, max) when given)
 /// is cut into (n−1)³ cells, and a cell is kept when the surface passes through it (triangle /
 /// box overlap by separating axes, Akenine-Möller, "Fast 3D triangle-box overlap testing",
-/// JGT 2001) or its centre is inside the surface (parity of the crossings of a ray). Unused
-/// nodes are dropped. The order is SOFA's, so that indices in a SOFA scene mean the same
+/// JGT 2001) or it is inside, by SOFA's rule (SparseGridTopology::voxelizeTriangleMesh): a
+/// cell is outside when a flood fill from the grid's outer layer through face neighbours the
+/// surface does not cross reaches it, inside otherwise — so a pocket of outside space walled in
+/// by crossed cells (a cavity, a fold narrower than a cell) is kept, as SOFA keeps it. A cell
+/// whose centre is inside (parity of the crossings of a ray) is kept too: the two rules differ
+/// only for a surface lying in grid planes, which HoF does not count as crossing the cells on
+/// either side. Unused nodes are dropped. The order is SOFA's, so that indices in a SOFA scene mean the same
 /// nodes: the cells the surface crosses first, then the inside ones, each in cell order; the
 /// nodes sorted by x, then y, then z.
 /// Errors: an empty surface, an index out of range, an open surface (a ray crosses it an
