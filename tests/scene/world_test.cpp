@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -218,12 +219,60 @@ TEST(World, EffectOnlyX3dSceneBuildsAWorldWithNoBody) {
   EXPECT_NE(world->device.find("scripted:circle"), std::string::npos) << world->device;
 }
 
-TEST(World, X3dWithNothingToTouchNamesWhatIsNotModelled) {
-  const auto file = write("nothing.x3d", x3d("<PythonScript url='x.py'/><Shape><Box/></Shape>"));
+// Issue 35: a scene with nothing to touch opens (H3DViewer shows it), says why once, and
+// names the real cause; one test per cause.
+std::string nothing_to_touch(const std::string& name, const std::string& body) {
+  auto world = build_world(write(name, x3d(body)));
+  EXPECT_TRUE(world) << (world ? "" : world.error().to_string());
+  if (!world) return {};
+  EXPECT_TRUE(world->bodies.empty());
+  const auto said = std::ranges::count_if(world->warnings, [](const std::string& w) { return w.find("nothing to touch") != std::string::npos; });
+  EXPECT_EQ(said, 1) << name;
+  return world->nothing_to_touch;
+}
+
+TEST(World, X3dShapesWithoutASurfaceAreASeenOnlyWorld) {
+  const auto file = write("nothing.x3d", x3d("<PythonScript url='x.py'/><Shape><Box size='0.1 0.1 0.1'/></Shape>"
+                                             "<Shape><Appearance><Material/></Appearance><Sphere radius='0.05'/></Shape>"));
   auto world = build_world(file);
+  ASSERT_TRUE(world) << world.error().to_string();
+  EXPECT_EQ(world->visuals.size(), 2u);  // shown in the window
+  EXPECT_EQ(world->nothing_to_touch,
+            "nothing to touch: 2 shapes are only seen (no haptic surface in their Appearance), and no force effect");
+}
+
+TEST(World, X3dNothingToTouchNamesEachCause) {
+  EXPECT_EQ(nothing_to_touch("one_seen.x3d", "<Shape><Box/></Shape>"),
+            "nothing to touch: 1 shape is only seen (no haptic surface in its Appearance), and no force effect");
+  EXPECT_EQ(nothing_to_touch("text.x3d", "<Shape DEF='Label'><Appearance><SmoothSurface/></Appearance><Text string='\"a\"'/></Shape>"),
+            "nothing to touch: a haptic surface on no triangles: Label (line 2, no geometry HoF draws), and no force effect");
+  EXPECT_EQ(nothing_to_touch("torque.x3d", "<RotationalSpringEffect desiredAxis='0 1 0'/>"),
+            "nothing to touch: haptic nodes HoF does not model: RotationalSpringEffect (a torque: HoF renders forces only) "
+            "(line 2); no Shape, and no force effect");
+  EXPECT_EQ(nothing_to_touch("empty.x3d", ""), "nothing to touch: no Shape, and no force effect");
+}
+
+TEST(World, X3dSettingsFragmentIsNotAScene) {
+  const fs::path falcon = write("FalconDevice.x3d", "<DeviceInfo><FalconDevice><GodObjectRenderer/></FalconDevice></DeviceInfo>");
+  auto world = build_world(falcon);
   ASSERT_FALSE(world);
-  EXPECT_NE(world.error().message.find("nothing to touch"), std::string::npos);
-  EXPECT_NE(world.error().message.find("PythonScript"), std::string::npos) << world.error().message;
+  EXPECT_EQ(world.error().file, falcon.string());
+  EXPECT_EQ(world.error().message, "not an X3D scene: its root element is <DeviceInfo> (a scene starts with <X3D> or <Scene>)");
+}
+
+TEST(World, X3dGeometryGroupAndDebugOptionsScenesAreTouchable) {
+  // Shaped as H3D's GeometryGroup.x3d and DebugOptions.x3d, which were refused with "no haptic surface".
+  auto group = build_world(write("geometry_group.x3d", x3d("<Shape><Appearance><FrictionalSurface/></Appearance>"
+                                                            "<GeometryGroup><Box size='0.1 0.01 0.1'/><Sphere radius='0.02'/>"
+                                                            "</GeometryGroup></Shape>")));
+  ASSERT_TRUE(group) << group.error().to_string();
+  ASSERT_EQ(group->bodies.size(), 1u);
+  EXPECT_TRUE(group->nothing_to_touch.empty());
+  auto debug = build_world(write("debug_options.x3d", x3d("<GlobalSettings><DebugOptions drawBound='true'/></GlobalSettings>"
+                                                           "<Shape><Extrusion scale='0.05 0.05'/><Appearance><FrictionalSurface/>"
+                                                           "</Appearance></Shape>")));
+  ASSERT_TRUE(debug) << debug.error().to_string();
+  EXPECT_EQ(debug->bodies.size(), 1u);
 }
 
 TEST(World, SofaSceneWithTwoSolvedNodesGivesTwoBodies) {

@@ -6,7 +6,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <fstream>
+#include <numbers>
 
 #include "hof/scene/x3d_scene.h"
 
@@ -65,7 +67,8 @@ TEST(X3dScene, EveryAnchorSceneLoads) {
 }
 
 TEST(X3dScene, SurfacesKindsAndValues) {
-  const X3dScene s = load(kExamples / "Surfaces.x3d");
+  X3dScene s = load(kExamples / "Surfaces.x3d");
+  std::erase_if(s.shapes, [](const X3dShape& shape) { return shape.geometry_type != "Sphere"; });  // the labels
   ASSERT_EQ(s.shapes.size(), 6u);
   for (const auto& shape : s.shapes) {
     EXPECT_TRUE(shape.touchable);
@@ -108,8 +111,9 @@ TEST(X3dScene, SurfacesKindsAndValues) {
   EXPECT_NEAR(b.center().y(), 0.08, 1e-9);
   EXPECT_NEAR(b.max().x(), -0.12, 1e-9);
 
-  EXPECT_TRUE(contains(s.unsupported, "ExternProtoDeclare"));
-  EXPECT_TRUE(contains(s.unsupported, "ProtoInstance"));
+  // The labels are instances of the ExternProto 'Text' (Prototype.x3d beside the scene).
+  EXPECT_FALSE(contains(s.unsupported, "ProtoInstance"));
+  EXPECT_TRUE(contains(s.unsupported, "Text (line"));
   EXPECT_TRUE(contains(s.unsupported, "ImageTexture 'I' (line"));
   EXPECT_EQ(s.warnings.size(), 1u);
 }
@@ -262,12 +266,14 @@ TEST(X3dScene, AnyDeviceRuspiniAndStylusNotAShape) {
   EXPECT_TRUE(s.warnings.empty());
 }
 
-TEST(X3dScene, PrototypeIsListedAsUnsupported) {
+TEST(X3dScene, PrototypeInstanceIsItsBodyWithTheFieldsSubstituted) {
   const X3dScene s = load(kExamples / "Prototype.x3d");
-  EXPECT_TRUE(s.shapes.empty());
-  EXPECT_TRUE(contains(s.unsupported, "ProtoDeclare (line 11)"));
-  EXPECT_TRUE(contains(s.unsupported, "ProtoInstance (line 37)"));
-  EXPECT_EQ(s.warnings.size(), 1u);
+  // The instance is the body's Transform (translation = the instance's offset 0 0.08 0) and
+  // its Shape, whose Text HoF does not draw.
+  ASSERT_EQ(s.shapes.size(), 1u);
+  EXPECT_FALSE(s.shapes[0].touchable);
+  EXPECT_TRUE(contains(s.unsupported, "Text (line 26)")) << s.warnings.front();
+  EXPECT_FALSE(contains(s.unsupported, "ProtoInstance"));
 }
 
 TEST(X3dScene, StylusSettingsGroupRoot) {
@@ -372,17 +378,325 @@ TEST(X3dScene, UnsupportedNodesAreListedOnce) {
     <HapticsOptions touchableFace='BACK'/></GlobalSettings>
 </Scene></X3D>)");
   const X3dScene s = load(p);
-  EXPECT_TRUE(contains(s.unsupported, "Inline url=\"other.x3d\" (line 2)"));
+  EXPECT_TRUE(contains(s.warnings, ":2: Inline: none of its urls is a file beside the scene"));
   EXPECT_TRUE(contains(s.unsupported, "PythonScript 'PS' (line 3)"));
   EXPECT_TRUE(contains(s.unsupported, "ROUTE (line 4)"));
   EXPECT_TRUE(contains(s.unsupported, "Text (line 5)"));
-  EXPECT_EQ(s.warnings.size(), 1u);
+  EXPECT_EQ(s.warnings.size(), 2u);  // the Inline not found, and the list
   ASSERT_EQ(s.shapes.size(), 1u);  // listed, not touchable, no geometry
   EXPECT_FALSE(s.shapes[0].touchable);
   ASSERT_TRUE(s.global_settings && s.global_settings->haptics);
   EXPECT_EQ(s.global_settings->haptics->touchable_face, X3dTouchableFace::kFrontAndBack);  // first wins
   EXPECT_EQ(s.global_settings->haptics->dynamic_mode, X3dDynamicMode::kAlways);
   EXPECT_FALSE(s.global_settings->haptics->use_bound_tree);
+}
+
+// ---- issue 35: grouping nodes, geometry, haptic nodes
+
+// `text` fails to read, with `needle` in the message and the file named.
+void expect_error_in(const std::string& name, const std::string& text, std::string_view needle) {
+  const auto p = write_temp(name, text);
+  const auto s = read_x3d_scene(p);
+  ASSERT_FALSE(s.has_value()) << name;
+  EXPECT_FALSE(s.error().file.empty()) << name;
+  EXPECT_GT(s.error().line, 0) << name;
+  EXPECT_NE(s.error().message.find(needle), std::string::npos) << name << ": " << s.error().to_string();
+}
+
+const std::string kTouch = "<Appearance><SmoothSurface/></Appearance>";
+
+std::string scene(const std::string& body) { return "<X3D profile='H3DAPI'><Scene>\n" + body + "\n</Scene></X3D>\n"; }
+
+std::vector<std::string> touchable_defs(const X3dScene& s) {
+  std::vector<std::string> out;
+  for (const auto& shape : s.shapes)
+    if (shape.touchable && !shape.mesh_W.triangles.empty()) out.push_back(shape.def);
+  return out;
+}
+
+// Signed volume enclosed by a closed triangle mesh: positive when its triangles face outward.
+double signed_volume(const mesh::TriMesh& m) {
+  double v = 0.0;
+  for (const auto& t : m.triangles) v += m.vertices[t[0]].dot(m.vertices[t[1]].cross(m.vertices[t[2]])) / 6.0;
+  return v;
+}
+
+Vec3 normal(const mesh::TriMesh& m, std::size_t i) {
+  const auto& t = m.triangles[i];
+  return (m.vertices[t[1]] - m.vertices[t[0]]).cross(m.vertices[t[2]] - m.vertices[t[0]]).normalized();
+}
+
+TEST(X3dScene, GroupingNodesAreLookedInto) {
+  const auto shape = [](const std::string& def) { return "<Shape DEF='" + def + "'>" + kTouch + "<Box size='0.1 0.1 0.1'/></Shape>"; };
+  const X3dScene s = load(write_temp("groups.x3d", scene(
+      "<Switch whichChoice='1'>" + shape("SwitchA") + shape("SwitchB") + "</Switch>"
+      "<Switch>" + shape("SwitchNone") + "</Switch>"
+      "<Switch whichChoice='5'>" + shape("SwitchPast") + "</Switch>"
+      "<LOD range='1'>" + shape("LodNear") + shape("LodFar") + "</LOD>"
+      "<Billboard>" + shape("InBillboard") + "</Billboard>"
+      "<Anchor url='\"x.html\"'>" + shape("InAnchor") + "</Anchor>"
+      "<Collision>" + shape("InCollision") + "<Shape DEF='CollisionProxy' containerField='proxy'>" + kTouch +
+      "<Box/></Shape></Collision>"
+      "<StaticGroup>" + shape("InStaticGroup") + "</StaticGroup>")));
+  EXPECT_EQ(touchable_defs(s), (std::vector<std::string>{"SwitchB", "LodNear", "InBillboard", "InAnchor", "InCollision",
+                                                         "InStaticGroup"}));
+  EXPECT_FALSE(contains(s.unsupported, "Switch"));
+  EXPECT_FALSE(contains(s.unsupported, "LOD"));
+}
+
+TEST(X3dScene, InlineIsReadBesideTheSceneFirstUrlFound) {
+  const fs::path dir = fs::temp_directory_path() / "hof_x3d_inline_test";
+  fs::create_directories(dir / "parts");
+  std::ofstream(dir / "parts" / "ball.x3d") << scene("<Shape DEF='Ball'>" + kTouch + "<Sphere radius='0.02'/></Shape>");
+  std::ofstream(dir / "main.x3d") << scene(
+      "<Transform translation='0.1 0 0'><Inline url='\"missing.x3d\" \"http://example.org/a.x3d\" \"parts/ball.x3d\"'/></Transform>\n"
+      "<Inline url='\"nowhere.x3d\"'/>");
+  const X3dScene s = load(dir / "main.x3d");
+  ASSERT_EQ(touchable_defs(s), std::vector<std::string>{"Ball"});
+  EXPECT_NEAR(bounds(s.shapes[0].mesh_W).center().x(), 0.1, 1e-12);
+  EXPECT_TRUE(contains(s.warnings, "main.x3d:3: Inline: none of its urls is a file beside the scene"));
+
+  // A file that includes itself through another: an error naming the chain, at the Inline.
+  std::ofstream(dir / "a.x3d") << scene("<Inline url='b.x3d'/>");
+  std::ofstream(dir / "b.x3d") << scene("\n<Inline url='a.x3d'/>");
+  const auto cycle = read_x3d_scene(dir / "a.x3d");
+  ASSERT_FALSE(cycle);
+  EXPECT_EQ(cycle.error().file, (dir / "b.x3d").string());
+  EXPECT_EQ(cycle.error().line, 3);
+  EXPECT_NE(cycle.error().message.find("a.x3d → b.x3d → a.x3d"), std::string::npos) << cycle.error().to_string();
+}
+
+TEST(X3dScene, ProtoInstanceFieldsAreSubstituted) {
+  const X3dScene s = load(write_temp("proto.x3d", scene(R"(
+<ProtoDeclare name='Block'>
+  <ProtoInterface>
+    <field name='offset' type='SFVec3f' accessType='inputOutput' value='0 0 0'/>
+    <field name='k' type='SFFloat' accessType='inputOutput' value='0.3'/>
+    <field name='look' type='SFNode' accessType='inputOutput'/>
+  </ProtoInterface>
+  <ProtoBody>
+    <Transform><IS><connect nodeField='translation' protoField='offset'/></IS>
+      <Shape DEF='Body'>
+        <Appearance><IS><connect nodeField='material' protoField='look'/></IS>
+          <SmoothSurface><IS><connect nodeField='stiffness' protoField='k'/></IS></SmoothSurface></Appearance>
+        <Box size='0.02 0.02 0.02'/>
+      </Shape>
+    </Transform>
+    <Group DEF='NotRendered'/>
+  </ProtoBody>
+</ProtoDeclare>
+<ProtoInstance name='Block'/>
+<ProtoInstance name='Block' DEF='Second'>
+  <fieldValue name='offset' value='0.5 0 0'/>
+  <fieldValue name='k' value='0.9'/>
+  <fieldValue name='look'><Material diffuseColor='1 0 0'/></fieldValue>
+</ProtoInstance>
+<Transform translation='0 1 0'><ProtoInstance USE='Second'/></Transform>)")));
+  ASSERT_EQ(s.shapes.size(), 3u);
+  EXPECT_DOUBLE_EQ(s.shapes[0].surface.stiffness, 0.3);  // the interface's default
+  EXPECT_DOUBLE_EQ(s.shapes[1].surface.stiffness, 0.9);  // the instance's value
+  EXPECT_TRUE(s.shapes[1].diffuse_color.isApprox(Vec3(1, 0, 0)));
+  EXPECT_NEAR(bounds(s.shapes[0].mesh_W).center().x(), 0.0, 1e-12);
+  EXPECT_NEAR(bounds(s.shapes[1].mesh_W).center().x(), 0.5, 1e-12);
+  EXPECT_NEAR(bounds(s.shapes[2].mesh_W).center().y(), 1.0, 1e-12);  // USE of the instance
+  EXPECT_TRUE(s.unsupported.empty()) << s.unsupported.front();
+
+  expect_error_in("recursive_proto.x3d", scene(R"(<ProtoDeclare name='R'><ProtoBody>
+<Group><ProtoInstance name='R'/></Group></ProtoBody></ProtoDeclare>
+<ProtoInstance name='R'/>)"), "PROTOs instantiated more than 16 deep");
+}
+
+TEST(X3dScene, GeometryGroupIsOneTouchableGeometry) {
+  // As H3D's GeometryGroup.x3d: a Box and an IndexedTriangleSet under one FrictionalSurface.
+  const X3dScene s = load(write_temp("geometry_group.x3d", scene(R"(
+<Shape><Appearance><Material/><FrictionalSurface/></Appearance>
+  <GeometryGroup>
+    <Box size='0.1 0.01 0.1'/>
+    <IndexedTriangleSet index='0 1 2 0 2 3' solid='false'><Coordinate point='0 0 0 1 0 0 1 1 0 0 1 0'/></IndexedTriangleSet>
+  </GeometryGroup>
+</Shape>)")));
+  ASSERT_EQ(s.shapes.size(), 1u);
+  EXPECT_TRUE(s.shapes[0].touchable);
+  EXPECT_EQ(s.shapes[0].mesh_W.triangles.size(), 12u + 2u);
+  EXPECT_EQ(s.shapes[0].mesh_W.vertices.size(), 8u + 4u);
+  EXPECT_FALSE(s.shapes[0].solid);  // a member is two-sided
+  EXPECT_TRUE(s.unsupported.empty());
+}
+
+TEST(X3dScene, ElevationGridFollowsTheSpec) {
+  const X3dScene s = load(write_temp("elevation.x3d", scene(
+      "<Shape>" + kTouch + "<ElevationGrid xDimension='3' zDimension='2' xSpacing='0.5' zSpacing='0.25' "
+      "height='0 0.1 0.2 0.3 0.4 0.5'/></Shape>")));
+  const mesh::TriMesh& m = s.shapes.at(0).mesh_W;
+  ASSERT_EQ(m.vertices.size(), 6u);
+  ASSERT_EQ(m.triangles.size(), 4u);  // (3−1)(2−1) quads
+  EXPECT_TRUE(m.vertices[5].isApprox(Vec3(1.0, 0.5, 0.25)));  // (i 2, j 1): height[2 + 1·3]
+  for (std::size_t i = 0; i < m.triangles.size(); ++i) EXPECT_GT(normal(m, i).y(), 0.0) << i;  // ccw: +y
+}
+
+TEST(X3dScene, ExtrusionDefaultIsAClosedOutwardBox) {
+  const X3dScene s = load(write_temp("extrusion.x3d", scene("<Shape>" + kTouch + "<Extrusion/></Shape>"
+      "<Shape>" + kTouch + "<Extrusion ccw='false' beginCap='false' endCap='false' scale='0.5 0.5'/></Shape>")));
+  // Default: the square ±1 swept along y from 0 to 1, capped: a 2 × 1 × 2 box.
+  const mesh::TriMesh& box = s.shapes.at(0).mesh_W;
+  EXPECT_EQ(box.triangles.size(), 8u + 2u + 2u);
+  EXPECT_NEAR(signed_volume(box), 4.0, 1e-12);
+  const auto b = bounds(box);
+  EXPECT_TRUE(b.min().isApprox(Vec3(-1, 0, -1)));
+  EXPECT_TRUE(b.max().isApprox(Vec3(1, 1, 1)));
+  // No caps, scaled by half, turned inside out by ccw FALSE.
+  const mesh::TriMesh& tube = s.shapes.at(1).mesh_W;
+  EXPECT_EQ(tube.triangles.size(), 8u);
+  EXPECT_NEAR(bounds(tube).max().x(), 0.5, 1e-12);
+  const Vec3 side = normal(tube, 0);
+  const auto& t = tube.triangles[0];
+  const Vec3 centre = (tube.vertices[t[0]] + tube.vertices[t[1]] + tube.vertices[t[2]]) / 3.0;
+  EXPECT_LT(side.dot(Vec3(centre.x(), 0, centre.z())), 0.0);  // faces the axis
+}
+
+TEST(X3dScene, ExtrusionAlongABentSpineKeepsItsSection) {
+  // A unit square section swept along a right-angle bend: every ring stays a 0.2 square
+  // perpendicular to the spine (the SCP of each point), and the tube has 3 segments.
+  const X3dScene s = load(write_temp("bent.x3d", scene("<Shape>" + kTouch +
+      "<Extrusion crossSection='0.1 0.1 0.1 -0.1 -0.1 -0.1 -0.1 0.1 0.1 0.1' spine='0 0 0 0 1 0 1 1 0 2 1 0' "
+      "beginCap='false' endCap='false'/></Shape>")));
+  const mesh::TriMesh& m = s.shapes.at(0).mesh_W;
+  ASSERT_EQ(m.vertices.size(), 4u * 5u);
+  EXPECT_EQ(m.triangles.size(), 3u * 4u * 2u);
+  // The last ring lies in the plane x = 2 (its spine direction is +x).
+  for (std::size_t k = 15; k < 20; ++k) EXPECT_NEAR(m.vertices[k].x(), 2.0, 1e-12) << k;
+  EXPECT_NEAR((m.vertices[15] - m.vertices[16]).norm(), 0.2, 1e-12);
+}
+
+TEST(X3dScene, TriangleAndQuadSetsFollowTheSpec) {
+  const std::string square_strip = "<Coordinate point='0 0 0 1 0 0 0 1 0 1 1 0 0 2 0'/>";
+  const X3dScene s = load(write_temp("sets.x3d", scene(
+      "<Shape DEF='T'>" + kTouch + "<TriangleSet><Coordinate point='0 0 0 1 0 0 0 1 0 5 5 5'/></TriangleSet></Shape>"
+      "<Shape DEF='F'>" + kTouch + "<TriangleFanSet fanCount='4 3'><Coordinate point='0 0 0 1 0 0 1 1 0 0 1 0 "
+      "2 0 0 3 0 0 3 1 0'/></TriangleFanSet></Shape>"
+      "<Shape DEF='S'>" + kTouch + "<TriangleStripSet stripCount='5'>" + square_strip + "</TriangleStripSet></Shape>"
+      "<Shape DEF='IT'>" + kTouch + "<IndexedTriangleSet index='0 1 2'>" + square_strip + "</IndexedTriangleSet></Shape>"
+      "<Shape DEF='IF'>" + kTouch + "<IndexedTriangleFanSet index='0 1 3 2 -1 2 3 4'>" + square_strip + "</IndexedTriangleFanSet></Shape>"
+      "<Shape DEF='IS'>" + kTouch + "<IndexedTriangleStripSet index='0 1 2 3 -1 2 3 4'>" + square_strip + "</IndexedTriangleStripSet></Shape>"
+      "<Shape DEF='Q'>" + kTouch + "<QuadSet><Coordinate point='0 0 0 1 0 0 1 1 0 0 1 0'/></QuadSet></Shape>"
+      "<Shape DEF='IQ'>" + kTouch + "<IndexedQuadSet index='0 1 3 2'>" + square_strip + "</IndexedQuadSet></Shape>")));
+  const std::vector<std::size_t> expected{1, 2 + 1, 3, 1, 2 + 1, 2 + 1, 2, 2};
+  ASSERT_EQ(s.shapes.size(), expected.size());
+  for (std::size_t i = 0; i < expected.size(); ++i) {
+    const mesh::TriMesh& m = s.shapes[i].mesh_W;
+    EXPECT_EQ(m.triangles.size(), expected[i]) << s.shapes[i].def;
+    // Every triangle of these planar, counter-clockwise sets faces +z (strips alternate
+    // their vertex order so that they all do).
+    for (std::size_t k = 0; k < m.triangles.size(); ++k) EXPECT_GT(normal(m, k).z(), 0.99) << s.shapes[i].def << " " << k;
+  }
+  EXPECT_TRUE(contains(s.warnings, "TriangleSet: 1 points left over (not a whole triangle): ignored"));
+}
+
+TEST(X3dScene, Disk2DAndRectangle2DAreTwoSidedPlanes) {
+  const X3dScene s = load(write_temp("planar.x3d", scene(
+      "<Shape>" + kTouch + "<Disk2D innerRadius='0.5' outerRadius='1'/></Shape>"
+      "<Shape>" + kTouch + "<Disk2D outerRadius='0.2'/></Shape>"
+      "<Shape>" + kTouch + "<Rectangle2D size='0.2 0.1'/></Shape>")));
+  ASSERT_EQ(s.shapes.size(), 3u);
+  for (const auto& shape : s.shapes) {
+    EXPECT_FALSE(shape.solid);  // 19775-1: Geometry2D nodes default to solid FALSE
+    for (std::size_t k = 0; k < shape.mesh_W.triangles.size(); ++k) EXPECT_GT(normal(shape.mesh_W, k).z(), 0.99);
+  }
+  const auto ring = bounds(s.shapes[0].mesh_W);
+  EXPECT_NEAR(ring.max().x(), 1.0, 1e-12);
+  double area = 0.0;
+  for (std::size_t k = 0; k < s.shapes[0].mesh_W.triangles.size(); ++k) {
+    const auto& t = s.shapes[0].mesh_W.triangles[k];
+    const auto& v = s.shapes[0].mesh_W.vertices;
+    area += 0.5 * (v[t[1]] - v[t[0]]).cross(v[t[2]] - v[t[0]]).norm();
+  }
+  EXPECT_NEAR(area, 0.75 * std::numbers::pi, 0.02);  // π (1 − 0.25), tessellated
+  EXPECT_EQ(s.shapes[1].mesh_W.triangles.size(), 32u);
+  EXPECT_NEAR(bounds(s.shapes[2].mesh_W).sizes().x(), 0.2, 1e-12);
+}
+
+TEST(X3dScene, HapticNodesOfTheExamples) {
+  const X3dScene s = load(write_temp("haptic_nodes.x3d", scene(R"(
+<Shape><Rectangle2D size='0.2 0.1'/>
+  <Appearance><MultiDeviceSurface><SmoothSurface stiffness='0.7'/><FrictionalSurface/></MultiDeviceSurface></Appearance></Shape>
+<Shape><Appearance><Material/></Appearance><Box size='0.1 0.1 0.1' DEF='B'/></Shape>
+<Transform translation='1 0 0'>
+  <MagneticGeometryEffect startDistance='0.03' escapeDistance='0.04' springConstant='300'><Box USE='B'/></MagneticGeometryEffect>
+</Transform>
+<PositionFunctionEffect>
+  <GeneralFunction containerField='xFunction' function='10*y' params='x,y,z'/>
+  <GeneralFunction containerField='yFunction' function='0' params='x,y,z'/>
+  <GeneralFunction containerField='zFunction' function='-2*x^2' params='x,y,z'/>
+</PositionFunctionEffect>
+<TimeFunctionEffect>
+  <GeneralFunction containerField='xFunction' function='sin(2*t)' params='t'/>
+  <GeneralFunction containerField='yFunction' function='cos(2*t)' params='t'/>
+  <GeneralFunction containerField='zFunction' function='0' params='t'/>
+</TimeFunctionEffect>
+<RotationalSpringEffect desiredAxis='0 1 0' springConstant='100'/>)")));
+  // MultiDeviceSurface: device 0, the only one HoF drives, feels the first surface.
+  ASSERT_TRUE(s.shapes.at(0).touchable);
+  EXPECT_EQ(s.shapes[0].surface_type, "SmoothSurface");
+  EXPECT_DOUBLE_EQ(s.shapes[0].surface.stiffness, 0.7);
+  haptics::ForceEffects effects = s.force_effects;
+  ASSERT_EQ(effects.magnets.size(), 1u);
+  EXPECT_EQ(effects.magnets[0].surface->triangles.size(), 12u);
+  EXPECT_NEAR(bounds(*effects.magnets[0].surface).center().x(), 1.0, 1e-12);  // under its Transform
+  ASSERT_EQ(effects.position_functions.size(), 1u);
+  ASSERT_EQ(effects.time_functions.size(), 1u);
+  EXPECT_TRUE(contains(s.unsupported, "RotationalSpringEffect (a torque: HoF renders forces only)"));
+
+  // Only the position function: F = (10 y, 0, −2 x²).
+  haptics::ForceEffects position;
+  position.position_functions = effects.position_functions;
+  EXPECT_TRUE(position.evaluate(Vec3(0.5, 0.2, 0), Vec3::Zero()).isApprox(Vec3(2.0, 0.0, -0.5)));
+  haptics::ForceEffects time;
+  time.time_functions = effects.time_functions;
+  EXPECT_TRUE(time.evaluate(Vec3::Zero(), Vec3::Zero(), 0.25).isApprox(Vec3(std::sin(0.5), std::cos(0.5), 0.0)));
+  // The magnet: 0.02 m off the box's +x face it catches (≤ 0.03) and pulls with k·d.
+  haptics::ForceEffects magnet;
+  magnet.magnets = effects.magnets;
+  EXPECT_TRUE(magnet.evaluate(Vec3(1.07, 0, 0), Vec3::Zero()).isApprox(Vec3(-300 * 0.02, 0, 0)));
+  EXPECT_TRUE(magnet.evaluate(Vec3(1.085, 0, 0), Vec3::Zero()).isApprox(Vec3(-300 * 0.035, 0, 0)));  // held till 0.04
+  EXPECT_TRUE(magnet.evaluate(Vec3(1.1, 0, 0), Vec3::Zero()).isZero());  // escaped
+  EXPECT_TRUE(magnet.evaluate(Vec3(1.085, 0, 0), Vec3::Zero()).isZero());  // not caught again until 0.03
+}
+
+TEST(X3dScene, DebugOptionsSceneHasATouchableExtrusion) {
+  // H3D's DebugOptions.x3d: its shape is an Extrusion under a FrictionalSurface.
+  const X3dScene s = load(write_temp("debug_options.x3d", scene(R"(
+<GlobalSettings><DebugOptions drawBound='true' drawHapticTriangles='true'/><HapticsOptions maxDistance='-1'/></GlobalSettings>
+<Shape>
+  <Extrusion beginCap='true' endCap='false' solid='false'
+    crossSection='0.0707 0 0.05 -0.05 0 -0.0707 -0.05 -0.05 -0.0707 0 -0.05 0.05 0 0.0707 0.05 0.05 0.0707 0'
+    scale='1 1 0.5 0.5 0.2 0.2' spine='0 0 0 0 0.1 0 0 0.35 0'/>
+  <Appearance><Material diffuseColor='0.6 1 1'/><FrictionalSurface/></Appearance>
+</Shape>)")));
+  ASSERT_EQ(s.shapes.size(), 1u);
+  EXPECT_TRUE(s.shapes[0].touchable);
+  EXPECT_EQ(s.shapes[0].geometry_type, "Extrusion");
+  EXPECT_EQ(s.shapes[0].mesh_W.triangles.size(), 2u * 8u * 2u + 6u);  // 2 segments × 8 edges, a begin cap of 8 points
+  ASSERT_TRUE(s.global_settings && s.global_settings->debug);
+}
+
+TEST(X3dScene, CoordinatesAnimatedByACoordinateInterpolatorAreDrawnAtTheFirstKey) {
+  // As H3D's CoordinateInterpolator.x3d: the Coordinate has no points of its own.
+  const X3dScene s = load(write_temp("coordinate_interpolator.x3d", scene(R"(
+<Shape><Appearance><Material/></Appearance>
+  <IndexedTriangleSet index='0 1 2 0 2 1'><Coordinate DEF='C'/></IndexedTriangleSet></Shape>
+<TimeSensor DEF='T' cycleInterval='4' loop='true'/>
+<CoordinateInterpolator DEF='I' key='0 1' keyValue='0 0 0 1 0 0 0 1 0  0 0 0 2 0 0 0 2 0'/>
+<ROUTE fromNode='T' fromField='fraction_changed' toNode='I' toField='set_fraction'/>
+<ROUTE fromNode='I' fromField='value_changed' toNode='C' toField='point'/>)")));
+  ASSERT_EQ(s.shapes.size(), 1u);
+  ASSERT_EQ(s.shapes[0].mesh_W.vertices.size(), 3u);
+  EXPECT_TRUE(s.shapes[0].mesh_W.vertices[1].isApprox(Vec3(1, 0, 0)));
+  EXPECT_TRUE(contains(s.warnings, "Coordinate 'C' has no points: a ROUTE (line 8) animates it from CoordinateInterpolator 'I'"));
+}
+
+TEST(X3dScene, ClassicEncodingIsNotRead) {
+  expect_error_in("classic.x3d", "#X3D V3.0 utf8\nPROFILE Immersive\nShape { geometry Box {} }\n",
+                  "the X3D classic VRML encoding");
 }
 
 void expect_error(const std::string& name, const std::string& text, std::int64_t line, std::string_view needle) {

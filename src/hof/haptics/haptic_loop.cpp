@@ -53,7 +53,8 @@ Vec3 Calibration::vector_to_device(const Vec3& v) const {
 
 Expected<void> validate_effects(const ForceEffects& effects) {
   if (effects.springs.size() > kMaxEffectsEach || effects.viscosities.size() > kMaxEffectsEach ||
-      effects.constants.size() > kMaxEffectsEach) {
+      effects.constants.size() > kMaxEffectsEach || effects.magnets.size() > kMaxEffectsEach ||
+      effects.position_functions.size() > kMaxEffectsEach || effects.time_functions.size() > kMaxEffectsEach) {
     return make_error(ErrorCode::kInvalidArgument, fmt::format("force effects: at most {} of each kind", kMaxEffectsEach));
   }
   for (const SpringEffect& e : effects.springs) {
@@ -70,6 +71,21 @@ Expected<void> validate_effects(const ForceEffects& effects) {
   }
   for (const ConstantForceEffect& e : effects.constants) {
     if (!e.force_n.allFinite()) return make_error(ErrorCode::kInvalidArgument, "ForceField: force must be finite");
+  }
+  // The magnets' closest point is searched over every triangle in the tick: bounded.
+  std::size_t magnet_triangles = 0;
+  for (const MagneticGeometryEffect& e : effects.magnets) {
+    if (!e.surface || !(e.spring_constant_n_per_m >= 0.0) || !std::isfinite(e.spring_constant_n_per_m) ||
+        !(e.start_distance_m >= 0.0) || !(e.escape_distance_m >= 0.0)) {
+      return make_error(ErrorCode::kInvalidArgument, "MagneticGeometryEffect: a surface, and springConstant, startDistance "
+                                                     "and escapeDistance >= 0, are needed");
+    }
+    magnet_triangles += e.surface->triangles.size();
+  }
+  if (magnet_triangles > kMaxMagnetTriangles) {
+    return make_error(ErrorCode::kInvalidArgument, fmt::format("MagneticGeometryEffect: {} triangles in all, at most {} (the "
+                                                               "closest point is searched over each in every haptic tick)",
+                                                               magnet_triangles, kMaxMagnetTriangles));
   }
   return {};
 }
@@ -96,6 +112,9 @@ HapticLoop::HapticLoop(Device& device, std::span<TripleBuffer<SurfaceSnapshot>* 
   effects_.springs.reserve(kMaxEffectsEach);
   effects_.viscosities.reserve(kMaxEffectsEach);
   effects_.constants.reserve(kMaxEffectsEach);
+  effects_.magnets.reserve(kMaxEffectsEach);
+  effects_.position_functions.reserve(kMaxEffectsEach);
+  effects_.time_functions.reserve(kMaxEffectsEach);
   apply_calibration(config_.calibration);
 }
 
@@ -157,6 +176,11 @@ void HapticLoop::take_settings() {
   for (std::size_t i = 0; i < effects_.springs.size(); ++i) effects_.springs[i].active = was_active[i];
   copy_within(effects_.viscosities, s.effects.viscosities);
   copy_within(effects_.constants, s.effects.constants);
+  for (std::size_t i = 0; i < effects_.magnets.size(); ++i) was_active[i] = effects_.magnets[i].active;
+  copy_within(effects_.magnets, s.effects.magnets);  // shared surfaces: a reference count, no allocation
+  for (std::size_t i = 0; i < effects_.magnets.size(); ++i) effects_.magnets[i].active = was_active[i];
+  copy_within(effects_.position_functions, s.effects.position_functions);
+  copy_within(effects_.time_functions, s.effects.time_functions);
 }
 
 bool HapticLoop::switch_device(Device& device) {
@@ -257,7 +281,7 @@ void HapticLoop::tick_impl(double time_s, double period_s, bool overrun) {
     }
     for (std::size_t l = 0; l < layers_.size(); ++l) requested += layer_forces[l];
     requested += tool_force;
-    requested += effects_.evaluate(x, v);
+    requested += effects_.evaluate(x, v, time_s);
   } else if (tool_) {
     tool_state.active = true;  // mounted, without a reading: free
   }

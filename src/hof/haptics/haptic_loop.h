@@ -66,6 +66,8 @@ struct HapticSettings {
   Calibration calibration;
 };
 inline constexpr std::size_t kMaxEffectsEach = 32;
+/// Triangles of all MagneticGeometryEffects together (each is searched every tick).
+inline constexpr std::size_t kMaxMagnetTriangles = 2048;
 /// Checks counts and values of a set of effects (finite, non-negative constants).
 [[nodiscard]] Expected<void> validate_effects(const ForceEffects& effects);
 

@@ -5,9 +5,12 @@
 /// their H3D surface (SmoothSurface, FrictionalSurface, MagneticSurface and the surfaces
 /// derived from them), DeformableShape's deformer, DeviceInfo devices with their calibration
 /// and haptics renderer, GlobalSettings options, force effects and viewpoints. Field names and
-/// defaults follow shared/reference/h3d-nodes.md. Nodes HoF does not model (PythonScript,
-/// ROUTE, textures, Text, PROTOs, Inline, ...) are listed in `unsupported` with one warning,
-/// never an error. Strings end here: the rest of HoF sees enums and SI values.
+/// defaults follow shared/reference/h3d-nodes.md, and ISO/IEC 19775-1 for the X3D nodes.
+/// Grouping nodes are looked into (Group, StaticGroup, Billboard, Anchor, Collision, Switch's
+/// chosen child, LOD's first level, Inline'd files beside the scene, PROTO instances with their
+/// fields substituted). Nodes HoF does not model (PythonScript, ROUTE, textures, Text, ...)
+/// are listed in `unsupported` with one warning, never an error. Strings end here: the rest of
+/// HoF sees enums and SI values.
 
 #include <array>
 #include <cstdint>
@@ -108,6 +111,7 @@ struct X3dViewpoint {
 
 struct X3dScene {
   std::filesystem::path file;
+  std::string root_element;               ///< "X3D" or "Scene" for a scene (a settings file: "DeviceInfo", ...)
   std::vector<X3dShape> shapes;
   std::vector<X3dDevice> devices;         ///< DeviceInfo.device, in order (= device index)
   std::optional<X3dGlobalSettings> global_settings;
@@ -118,8 +122,9 @@ struct X3dScene {
 };
 
 /// Reads an X3D file (with or without the <X3D><Scene> wrapper). Errors carry the file and
-/// line: malformed XML, an index out of range in an indexed set, a non-numeric field value,
-/// USE of a name not DEF'd before.
+/// line: malformed XML, the classic VRML encoding, an index out of range in an indexed set, a
+/// non-numeric field value, USE of a name not DEF'd before, an Inline that includes itself,
+/// PROTOs or Inlines nested too deep.
 [[nodiscard]] Expected<X3dScene> read_x3d_scene(const std::filesystem::path& path);
 
 }  // namespace hof::scene

@@ -202,7 +202,7 @@ Expected<MotionKind> motion_kind(const SpecParser& p, std::string_view name) {
 }
 
 std::span<const std::string_view> motion_keys(MotionKind kind) {
-  static constexpr std::string_view kPoke[] = {"start", "direction", "approach", "depth", "speed", "hold", "repeat"};
+  static constexpr std::string_view kPoke[] = {"start", "direction", "approach", "depth", "speed", "hold", "repeat", "force"};
   static constexpr std::string_view kSlide[] = {"start", "direction", "approach", "depth",       "speed", "hold",
                                                 "repeat", "slide",    "distance", "slide_speed"};
   static constexpr std::string_view kPalpate[] = {"start", "direction", "approach", "depth", "speed",
@@ -246,6 +246,7 @@ Expected<void> apply_motion_key(const SpecParser& p, const Option& o, MotionConf
     }
     return set(c.hold_s);
   }
+  if (k == "force") return set(c.stop_force_n);
   if (k == "slide") return set_vec(c.slide_direction);
   if (k == "distance") return set(c.slide_distance_m);
   if (k == "slide_speed") return set(c.slide_speed_m_per_s);

@@ -36,6 +36,10 @@ Expected<ScriptedMotion> ScriptedMotion::make(const MotionConfig& c) {
   if (!std::isfinite(c.speed_m_per_s) || c.speed_m_per_s <= 0.0)
     return invalid(fmt::format("speed must be > 0 m/s (got {})", c.speed_m_per_s));
   if (std::isnan(c.hold_s) || c.hold_s < 0.0) return invalid(fmt::format("hold must be >= 0 s (got {})", c.hold_s));
+  if (!std::isfinite(c.stop_force_n) || c.stop_force_n < 0.0)
+    return invalid(fmt::format("force must be >= 0 N (got {})", c.stop_force_n));
+  if (c.stop_force_n > 0.0 && (c.kind != MotionKind::kPoke || c.repeat != 1))
+    return invalid("force= stops one poke (motion poke, repeat=1)");
 
   ScriptedMotion m;
   m.kind_ = c.kind;
@@ -48,6 +52,12 @@ Expected<ScriptedMotion> ScriptedMotion::make(const MotionConfig& c) {
 
   switch (c.kind) {
     case MotionKind::kPoke:
+      m.direction_ = d;
+      m.speed_m_per_s_ = c.speed_m_per_s;
+      m.hold_s_ = c.hold_s;
+      m.stop_force_n_ = c.stop_force_n;
+      m.press_begin_s_ = approach / c.speed_m_per_s;
+      m.press_end_s_ = (approach + c.depth_m) / c.speed_m_per_s;
       m.add_segment(m.start_m_, m.contact_m_, c.speed_m_per_s);
       m.add_segment(m.contact_m_, m.deepest_m_, c.speed_m_per_s);
       m.add_hold(m.deepest_m_, c.hold_s);
@@ -125,6 +135,22 @@ Expected<ScriptedMotion> ScriptedMotion::make(const MotionConfig& c) {
     m.end_m_ = std::isinf(last.duration_s) ? last.from : Vec3(last.from + last.velocity * last.duration_s);
   }
   if (!(m.cycle_s_ > 0.0)) return invalid("the motion has zero duration (nothing to travel or hold)");
+  return m;
+}
+
+ScriptedMotion ScriptedMotion::stopped_at_depth(double depth_m) const {
+  ScriptedMotion m = *this;
+  m.stop_force_n_ = 0.0;
+  m.deepest_m_ = contact_m_ + std::max(0.0, depth_m) * direction_;
+  m.press_end_s_ = press_begin_s_ + std::max(0.0, depth_m) / speed_m_per_s_;
+  m.segment_count_ = 0;
+  m.add_segment(start_m_, contact_m_, speed_m_per_s_);
+  m.add_segment(contact_m_, m.deepest_m_, speed_m_per_s_);
+  m.add_hold(m.deepest_m_, hold_s_);
+  m.add_segment(m.deepest_m_, start_m_, speed_m_per_s_);
+  m.cycle_s_ = 0.0;
+  for (int i = 0; i < m.segment_count_; ++i) m.cycle_s_ += m.segments_[i].duration_s;
+  m.end_m_ = start_m_;
   return m;
 }
 
@@ -213,9 +239,26 @@ ScriptedDevice::ScriptedDevice(const ScriptedMotion& motion, const DeviceSpec& s
     : spec_(spec), motion_(motion) {}
 
 DeviceReading ScriptedDevice::read(double time_s) {
+  // A poke pressing to a force: once the force last written pushes back by the stop force
+  // during the press, the press ends at the depth reached (the path so far is unchanged).
+  const Vec3 press_direction = motion_.press_direction();
+  const double stop_force = motion_.stop_force();
+  const double pushback = -force_n_.dot(press_direction);
+  if (stop_force > 0.0 && time_s > motion_.press_begin_s() && time_s < motion_.press_end_s() && pushback >= stop_force) {
+    motion_ = motion_.stopped_at_depth((motion_.position(time_s) - motion_.contact_point()).norm());
+  }
+  // Giving way, as a hand does to any force above F (tissue pushing back, or a surface that
+  // drags the proxy away): move with the force by the excess over the device's stiffness (the
+  // rendering spring is no stiffer, so the force falls to about F without overshoot), at most
+  // 1 mm a reading.
+  const double magnitude = force_n_.norm();
+  if (stop_force > 0.0 && magnitude > stop_force) {
+    const double stiffness = spec_.max_stiffness_n_per_m > 0.0 ? spec_.max_stiffness_n_per_m : 1000.0;
+    yielded_m_ += std::min((magnitude - stop_force) / stiffness, 0.001) * (force_n_ / magnitude);
+  }
   DeviceReading r;
   r.time_s = time_s;
-  r.position_m = motion_.position(time_s);
+  r.position_m = motion_.position(time_s) + yielded_m_;
   r.velocity_m_per_s = motion_.velocity(time_s);
   const bool ended = time_s > motion_.duration();
   r.valid = !ended;

@@ -7,6 +7,12 @@
 /// Motions (device frame, metres, seconds; t = 0 is the start of the motion):
 ///  - `poke`: from `start` along the unit `direction`, travel `approach` (to the contact
 ///    plane) then `depth` further at `speed`, hold `hold` s, retract to `start` at `speed`.
+///    With `force=F` (N, > 0) the press stops early where the hand first feels F pushing back
+///    (the force written to the device, against `direction`), as a person presses to a force:
+///    the poke then holds there and retracts (`depth` is the deepest it may go). Like a hand it
+///    also gives way: whenever the force exceeds F (tissue swinging into it, a surface dragging
+///    the proxy away) it moves with the force by the excess over the device's stiffness, at most
+///    1 mm a reading.
 ///    The default approach is the distance from `start` to the plane through the origin
 ///    normal to `direction`, so the default poke presses 2 cm below y = 0.
 ///  - `press-and-slide`: the poke's press, hold, then slide `distance` along the tangent
@@ -53,6 +59,9 @@ struct MotionConfig {
   double depth_m{0.02};                        ///< travel past the approach, ≥ 0
   double speed_m_per_s{0.01};                  ///< approach, press and retract speed, > 0
   double hold_s{1.0};                          ///< pause at full depth (or the whole hold), ≥ 0
+  /// poke: stop pressing at this force against the press, N; 0 = press to `depth` whatever the
+  /// force. Only for one cycle (repeat 1).
+  double stop_force_n{0.0};
   // press-and-slide
   Vec3 slide_direction{Vec3::Zero()};          ///< zero: first axis of plane_basis(direction)
   double slide_distance_m{0.02};
@@ -112,6 +121,16 @@ class ScriptedMotion {
   [[nodiscard]] Vec3 deepest_point() const { return deepest_m_; }
   /// Where the press meets the contact plane (start + approach·direction).
   [[nodiscard]] Vec3 contact_point() const { return contact_m_; }
+  /// poke with a stop force: the force (N, against the press) at which it stops; 0 otherwise.
+  [[nodiscard]] double stop_force() const { return stop_force_n_; }
+  /// A poke's unit press direction.
+  [[nodiscard]] const Vec3& press_direction() const { return direction_; }
+  /// The same poke with its press ending `depth_m` past the contact plane (stop force off):
+  /// equal to this motion up to the time that depth is reached, then held and retracted.
+  [[nodiscard]] ScriptedMotion stopped_at_depth(double depth_m) const;
+  /// Time (s, first cycle) at which a poke's press begins past the contact plane and ends.
+  [[nodiscard]] double press_begin_s() const { return press_begin_s_; }
+  [[nodiscard]] double press_end_s() const { return press_end_s_; }
 
  private:
   /// One straight piece of a piecewise linear path: from `from` at `velocity` for `duration_s`.
@@ -145,11 +164,20 @@ class ScriptedMotion {
   double omega_rad_per_s_{0.0};
   double cycle_s_{std::numeric_limits<double>::infinity()};
   std::uint32_t repeat_{0};
+  // poke: what stopped_at_depth() needs to lay the same path out again
+  Vec3 direction_{Vec3::UnitY()};
+  double speed_m_per_s_{0.0};
+  double hold_s_{0.0};
+  double stop_force_n_{0.0};
+  double press_begin_s_{0.0};
+  double press_end_s_{0.0};
 };
 
 /// Spec `scripted:...`: plays a ScriptedMotion as a device. read(t) evaluates the motion at
 /// t (identity orientation, no buttons); after duration() health is kEnded and the reading
-/// invalid (position held at the end). write_force() is ignored (the motion is kinematic).
+/// invalid (position held at the end). The motion is kinematic: the force written moves
+/// nothing, except that a poke with a stop force ends its press where the force written last
+/// reaches it (the poke is then replaced by the same poke stopped at that depth: no allocation).
 class ScriptedDevice final : public Device {
  public:
   explicit ScriptedDevice(const ScriptedMotion& motion, const DeviceSpec& spec = DeviceSpec{});
@@ -171,6 +199,7 @@ class ScriptedDevice final : public Device {
   DeviceSpec spec_;
   ScriptedMotion motion_;
   Vec3 force_n_{Vec3::Zero()};
+  Vec3 yielded_m_{Vec3::Zero()};  ///< how far a poke pressing to a force has given way (m, device frame)
   std::atomic<DeviceHealth> health_{DeviceHealth::kOk};
 };
 
