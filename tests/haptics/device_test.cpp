@@ -223,6 +223,49 @@ TEST(ScriptedMotion, PokeReachesExactlyTheDepth) {
   EXPECT_NEAR(shallow.deepest_point().y(), 0.05 - 0.015, 1e-15);
 }
 
+// A poke with force=F presses as a hand pressing to a force: against a wall of 1000 N/m at the
+// contact plane it stops where the wall pushes back by F (not at its depth), holds there and
+// retracts; a force larger than F makes it give way.
+TEST(ScriptedMotion, APokeWithAStopForceStopsWhereItFeelsItAndGivesWay) {
+  MotionConfig c;  // start (0, 0.05, 0), down, approach 5 cm, depth 2 cm, 1 cm/s, hold 1 s
+  c.stop_force_n = 4.0;
+  ScriptedDevice device(make_motion(c));
+  const double k = 1000.0;  // N/m, a wall at y = 0
+  double deepest = 0.0, last_y = 0.05;
+  double held_since = -1.0;
+  for (double t = 0.0; t < 20.0; t += 1e-3) {
+    const DeviceReading r = device.read(t);
+    if (!r.valid) break;
+    const double penetration = std::max(0.0, -r.position_m.y());
+    deepest = std::max(deepest, penetration);
+    if (held_since < 0.0 && t > 5.1 && std::abs(r.position_m.y() - last_y) < 1e-12) held_since = t;
+    last_y = r.position_m.y();
+    device.write_force(Vec3(0, k * penetration, 0), Vec3::Zero());
+  }
+  // Stopped at F / k = 4 mm (within one reading's travel, 10 µm), far short of 2 cm.
+  EXPECT_NEAR(deepest, 4.0 / k, 1.1e-5);
+  EXPECT_GT(held_since, 5.3);
+  EXPECT_LT(held_since, 5.5);
+  EXPECT_EQ(device.health(), DeviceHealth::kEnded);  // the whole poke played, shorter
+  // Giving way: a force above F pushes the device back along it by the excess over its stiffness.
+  MotionConfig still = c;
+  still.start_m = Vec3(0, 0.0, 0);
+  still.approach_m = 0.0;
+  ScriptedDevice yielding(make_motion(still));
+  const Vec3 before = yielding.read(0.0).position_m;
+  yielding.write_force(Vec3(0, 6.0, 0), Vec3::Zero());
+  const Vec3 after = yielding.read(0.001).position_m;
+  const double stiffness = yielding.spec().max_stiffness_n_per_m;
+  EXPECT_NEAR((after - before).y(), (6.0 - 4.0) / stiffness - 0.01 * 0.001, 1e-12);
+  // A force= on anything but one poke is refused.
+  MotionConfig circle;
+  circle.kind = MotionKind::kCircle;
+  circle.stop_force_n = 1.0;
+  EXPECT_FALSE(ScriptedMotion::make(circle));
+  c.repeat = 2;
+  EXPECT_FALSE(ScriptedMotion::make(c));
+}
+
 /// Positions are continuous (no jump beyond the top speed) and the analytic velocity is the
 /// derivative wherever the path is smooth (checked by central differences away from corners).
 void check_continuity_and_velocity(const ScriptedMotion& m, double top_speed, double t_end) {

@@ -23,7 +23,9 @@ TEST(NeedleModel, FungPrePunctureReproducesMaurinsAnchorValues) {
 }
 
 TEST(NeedleModel, FungPostPunctureIsTheLiteralFitWithItsSign) {
-  const TissueNeedleParameters p;
+  // The integrated form (an option): Maurin's θ taken literally draws the needle in.
+  TissueNeedleParameters p;
+  p.fung_form = FungForm::kIntegrated;
   EXPECT_NEAR(fung_force(p.fung_post, 0.01961), -3.39, 1e-12);
   // Deeper it tends to −b = −1.7 N, from below (a < 0, F0 + b < 0).
   EXPECT_NEAR(fung_force(p.fung_post, 1.0), -1.7, 1e-6);
@@ -113,6 +115,23 @@ TEST(NeedleModel, ThePrintedFormStartsEachPhaseFromAboutZero) {
   for (double d : {0.0, 0.01, 0.03}) {
     EXPECT_NEAR(fung_force(p.fung_pre, d, FungForm::kPrinted) - fung_force(p.fung_pre, d, FungForm::kIntegrated), 2 * -0.098, 1e-12);
   }
+}
+
+TEST(NeedleModel, TheDefaultFormResistsInsertionAndThePressNeverPulls) {
+  // The default is the form whose post-puncture force pushes the needle back (Maurin et al.
+  // 2004 measured resisting forces that drop at each puncture and rise again).
+  const TissueNeedleParameters p;
+  EXPECT_EQ(p.fung_form, FungForm::kPrinted);
+  for (double d = 0.0; d <= 0.08; d += 0.001) {
+    EXPECT_GE(pre_puncture_force(p, d), 0.0) << "d = " << d;
+    if (d >= p.capsule_m) {
+      EXPECT_GT(post_puncture_force(p, d, 0.01, 0.0), 0.0) << "d = " << d;
+    }
+  }
+  // Below d0 the printed fit is negative (-0.072 N at the surface): an intact capsule does not
+  // pull, the force is zero there.
+  EXPECT_LT(fung_force(p.fung_pre, 0.0, FungForm::kPrinted), -0.05);
+  EXPECT_EQ(pre_puncture_force(p, 0.0), 0.0);
 }
 
 }  // namespace

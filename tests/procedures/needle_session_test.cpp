@@ -82,6 +82,7 @@ BoxRun pierce_box(NeedleConfig needle, haptics::RendererKind renderer, double sp
 
 TEST(NeedleInsertion, TheForceFollowsFungExactlyPhaseByPhase) {
   NeedleConfig needle;  // the literature's defaults: Fung, capsule 20 mm, relaxation 2 s
+  needle.tissue.fung_form = FungForm::kIntegrated;  // the form fung() writes out
   const BoxRun run = pierce_box(needle, haptics::RendererKind::kRuspini);
   std::set<NeedlePhase> seen;
   std::vector<NeedlePhase> order;
@@ -137,7 +138,9 @@ TEST(NeedleInsertion, TheForceFollowsFungExactlyPhaseByPhase) {
 }
 
 TEST(NeedleInsertion, PunctureSwitchesModelRelaxationDecaysExtractionPullsTheOtherWay) {
-  const BoxRun run = pierce_box(NeedleConfig{}, haptics::RendererKind::kGodObject);
+  NeedleConfig integrated;  // Maurin's θ in the integrated form (an option): it pulls in after the puncture
+  integrated.tissue.fung_form = FungForm::kIntegrated;
+  const BoxRun run = pierce_box(integrated, haptics::RendererKind::kGodObject);
   double last_pre = 0.0, first_post = 0.0, puncture_depth = -1.0;
   std::vector<double> relaxation, extraction;
   NeedlePhase previous = NeedlePhase::kFree;
@@ -166,6 +169,53 @@ TEST(NeedleInsertion, PunctureSwitchesModelRelaxationDecaysExtractionPullsTheOth
   for (double f : extraction) EXPECT_LE(f, 0.0);
   EXPECT_LT(std::abs(extraction.back()), std::abs(extraction.front()));
   EXPECT_GT(std::abs(extraction.front() - fung(kPostA, kPostB, kPostD0, kPostF0, 0.04)), 1.0);
+}
+
+// What the hand must feel with the default needle (Maurin et al. 2004, in vivo): the force
+// rises while the capsule holds, drops by at least 30% when it breaks, resists insertion after
+// it, and holds the needle back by friction while it is withdrawn.
+TEST(NeedleInsertion, TheDefaultNeedleRisesDropsAtPunctureResistsAfterAndDragsOnExtraction) {
+  const BoxRun run = pierce_box(NeedleConfig{}, haptics::RendererKind::kRuspini);
+  std::vector<double> pre, post, extraction, extraction_depth;
+  double sent_post_min = 1e9;
+  NeedlePhase previous = NeedlePhase::kFree;
+  double last_pre = 0.0, first_post = 0.0;
+  for (const haptics::HapticSample& s : run.samples) {
+    if (!s.valid) continue;
+    const auto phase = static_cast<NeedlePhase>(s.tool.phase);
+    const double f = s.tool.axial_force_n;
+    if (phase == NeedlePhase::kPrePuncture) {
+      pre.push_back(f);
+      last_pre = f;
+    }
+    if (phase == NeedlePhase::kPunctured) {
+      if (previous == NeedlePhase::kPrePuncture) first_post = f;
+      post.push_back(f);
+      // What the hand feels along the axis (the force sent, -f along -z here): pushed back out.
+      sent_post_min = std::min(sent_post_min, s.force.z());
+    }
+    if (phase == NeedlePhase::kExtraction) {
+      extraction.push_back(f);
+      extraction_depth.push_back(s.tool.depth_m);
+    }
+    previous = phase;
+  }
+  ASSERT_GT(pre.size(), 100u);
+  ASSERT_GT(post.size(), 100u);
+  ASSERT_GT(extraction.size(), 100u);
+  // Rise: monotone while the capsule holds, and to more than it began with.
+  for (std::size_t i = 1; i < pre.size(); ++i) EXPECT_GE(pre[i], pre[i - 1] - 1e-12) << "pre-puncture sample " << i;
+  EXPECT_GT(last_pre, pre.front() + 0.05);
+  // Drop at the puncture: at least 30%.
+  EXPECT_LT(first_post, 0.7 * last_pre);
+  // After it the tissue resists insertion (never draws the needle in), and the hand feels it.
+  for (double f : post) EXPECT_GT(f, 0.0);
+  EXPECT_GT(post.back(), first_post);
+  EXPECT_GT(sent_post_min, -1e-9);
+  // Extraction: friction holding the needle back, shrinking with the inserted length.
+  for (double f : extraction) EXPECT_LE(f, 0.0);
+  EXPECT_LT(std::abs(extraction.back()), std::abs(extraction.front()));
+  EXPECT_LT(extraction_depth.back(), extraction_depth.front());
 }
 
 TEST(NeedleInsertion, SimoneOkamuraPunctureThresholdAndKarnoppFriction) {

@@ -162,7 +162,7 @@ TEST(NeedleTool, NewParametersReachTheNextTickAndTheNeedleKeepsItsPhase) {
   ASSERT_TRUE(b.tool->configure(changed));
   b.tick(Vec3(0, 0, -0.0301), Vec3(0, 0, -0.01));
   EXPECT_EQ(b.phase(), NeedlePhase::kPunctured);
-  EXPECT_NEAR(b.state.axial_force_n, fung_force(changed.tissue.fung_post, b.state.depth_m), 1e-12);
+  EXPECT_NEAR(b.state.axial_force_n, fung_force(changed.tissue.fung_post, b.state.depth_m, changed.tissue.fung_form), 1e-12);
   // A bad value is refused and changes nothing.
   changed.tissue.capsule_m = -1.0;
   EXPECT_FALSE(b.tool->configure(changed));
@@ -182,7 +182,8 @@ TEST(NeedleTool, SceneLengthsInMillimetresAreConverted) {
   for (int k = 0; k <= 2500; ++k) b.tick(Vec3(0, 0, -0.01 * k), Vec3(0, 0, -10.0));  // 10 mm/s, to 25 mm
   EXPECT_NEAR(b.state.depth_m, 0.025, 1e-9);
   EXPECT_TRUE(b.state.broken);  // the 20 mm capsule, in mm
-  EXPECT_NEAR(b.state.axial_force_n, fung_force(TissueNeedleParameters{}.fung_post, 0.025), 1e-9);
+  const TissueNeedleParameters defaults;
+  EXPECT_NEAR(b.state.axial_force_n, fung_force(defaults.fung_post, 0.025, defaults.fung_form), 1e-9);
   EXPECT_NEAR(tool->spread_radius(0), 10.0, 1e-12);  // 0.01 m in mm
 }
 

@@ -15,6 +15,9 @@
 #include <cstdio>
 #include <cstring>
 #include <cstdlib>
+#include <csignal>
+#include <atomic>
+#include <signal.h>
 #include <fstream>
 #include <sys/mman.h>
 #include <sys/resource.h>
@@ -98,6 +101,42 @@ std::string finish_telemetry(std::FILE* telemetry, const std::filesystem::path& 
   return problem;
 }
 
+// Ctrl-C (SIGINT) and SIGTERM during a run: the handler only stores to lock-free atomics (all a
+// signal handler may do); the run ends after its current step and its whole report is written.
+std::atomic<coupling::Session*> g_running_session{nullptr};
+volatile std::sig_atomic_t g_stop_signal = 0;
+
+extern "C" void stop_run_on_signal(int signal_number) {
+  g_stop_signal = signal_number;
+  if (coupling::Session* session = g_running_session.load()) session->request_stop();
+}
+
+// Installs the handler for the life of one run and puts the previous handlers back after it,
+// so that a second Ctrl-C while the report is written ends the program as usual.
+class StopOnSignals {
+ public:
+  explicit StopOnSignals(coupling::Session& session) {
+    g_stop_signal = 0;
+    g_running_session.store(&session);
+    struct sigaction action {};
+    action.sa_handler = stop_run_on_signal;
+    sigemptyset(&action.sa_mask);
+    ::sigaction(SIGINT, &action, &previous_int_);
+    ::sigaction(SIGTERM, &action, &previous_term_);
+  }
+  ~StopOnSignals() {
+    ::sigaction(SIGINT, &previous_int_, nullptr);
+    ::sigaction(SIGTERM, &previous_term_, nullptr);
+    g_running_session.store(nullptr);
+  }
+  StopOnSignals(const StopOnSignals&) = delete;
+  StopOnSignals& operator=(const StopOnSignals&) = delete;
+
+ private:
+  struct sigaction previous_int_ {};
+  struct sigaction previous_term_ {};
+};
+
 }  // namespace
 
 int run_session(const RunOptions& options) {
@@ -113,6 +152,11 @@ int run_session(const RunOptions& options) {
   }
   auto world = scene::build_world(options.file, options.device.value_or(""));
   if (!world) return fail(world.error());
+  if (!world->nothing_to_touch.empty()) {
+    // Shown by `hof gui`, but a headless run would render nothing: its own status, one line.
+    std::fprintf(stderr, "hof: %s: %s; `hof gui` shows it\n", options.file.c_str(), valid_utf8(world->nothing_to_touch).c_str());
+    return kExitNothingToTouch;
+  }
   for (const std::string& w : world->warnings) {
     if (!options.quiet) std::fprintf(stderr, "hof: warning: %s\n", valid_utf8(w).c_str());
   }
@@ -166,8 +210,21 @@ int run_session(const RunOptions& options) {
   std::optional<haptics::CpuKeepAwake> keep_awake;
   if (!options.deterministic) keep_awake.emplace(options.keep_awake);
   const std::optional<double> steal_before = host_cpu_steal_s();
-  const coupling::SessionReport report = options.deterministic ? session.run_virtual(seconds, on_sample, progress)
-                                                               : session.run_realtime(seconds, on_sample, progress);
+  std::optional<StopOnSignals> stop_on_signals(std::in_place, session);
+  // A signal that came before the run began (which clears a stop request) is passed on again.
+  const ProgressSink progress_or_stop = [&](std::string_view what, double fraction) {
+    if (g_stop_signal) session.request_stop();
+    if (progress) progress(what, fraction);
+  };
+  const coupling::SessionReport report = options.deterministic ? session.run_virtual(seconds, on_sample, progress_or_stop)
+                                                               : session.run_realtime(seconds, on_sample, progress_or_stop);
+  stop_on_signals.reset();
+  const int stop_signal = g_stop_signal;
+  if (stop_signal) {
+    conditions.stopped_by = stop_signal == SIGINT ? "SIGINT" : stop_signal == SIGTERM ? "SIGTERM" : fmt::format("signal {}", stop_signal);
+    std::fprintf(stderr, "hof: %s: the run stopped after %.3f s of %.3f s; writing the report of what ran\n",
+                 conditions.stopped_by.c_str(), report.simulated_s, seconds);
+  }
   // The session has run: from here on nothing may lose its results.
   if (telemetry) conditions.telemetry_problem = finish_telemetry(telemetry, *options.out);
   if (keep_awake) {
@@ -200,6 +257,8 @@ int run_session(const RunOptions& options) {
   }
   if (!options.quiet) recording.print(report, options.deterministic, options.out);
   recording.print_warnings(report, options.deterministic, options.quiet);
+  // Stopped by a signal: its report is whole; the exit status is the shell's for that signal.
+  if (stop_signal) return 128 + stop_signal;
   if (report.diverged) return 2;
   // The device failed: the run ended early (its report is written).
   if (!report.device_failure.empty()) return 4;
@@ -208,6 +267,12 @@ int run_session(const RunOptions& options) {
 
 int run_check(const CheckOptions& options) {
   const std::string ext = options.file.extension().string();
+  if (std::error_code ec; std::filesystem::is_directory(options.file, ec)) {
+    return fail(Error{ErrorCode::kIo,
+                      "is a folder; hof check takes one file: a project (.hof), a scene (.scn, .x3d) or a mesh (.msh, .obj, "
+                      ".stl, .off, .vtu)",
+                      options.file.string(), 0, -1});
+  }
   if (ext == ".hof" || ext == ".scn" || ext == ".x3d") {
     // The same builder as `hof run`: what run would refuse is an error here.
     auto world = scene::build_world(options.file);
@@ -226,9 +291,11 @@ int run_check(const CheckOptions& options) {
         std::printf("  shape '%s': %zu triangles (rigid, fixed)\n", valid_utf8(b.name).c_str(), b.surface.triangles.size());
       }
     }
-    std::printf("  %zu touchable, %zu spring / %zu viscosity / %zu constant force effects\n", touchable,
-                world->config.effects.springs.size(), world->config.effects.viscosities.size(),
-                world->config.effects.constants.size());
+    std::printf("  %zu touchable, %zu spring / %zu viscosity / %zu constant / %zu magnetic geometry / %zu position function / "
+                "%zu time function force effects\n",
+                touchable, world->config.effects.springs.size(), world->config.effects.viscosities.size(),
+                world->config.effects.constants.size(), world->config.effects.magnets.size(),
+                world->config.effects.position_functions.size(), world->config.effects.time_functions.size());
     if (world->project.needle) {
       // Which bodies the needle enters, and with what.
       std::vector<std::string> names;

@@ -29,6 +29,10 @@ struct RunOptions {
   bool pin_threads{true};
 };
 
+/// `hof run`'s exit status for a scene that opens but has nothing to touch (no touchable
+/// shape, no force effect): distinct from 1 (an error) and from the statuses of a run.
+inline constexpr int kExitNothingToTouch = 5;
+
 int run_session(const RunOptions& options);
 
 struct CheckOptions {

@@ -109,6 +109,13 @@ void write_plots(const std::filesystem::path& dir, const coupling::SessionReport
     if (beyond_range) h << "\n\n" << longest_us << " " << beyond_range << "\n";
   }
   const double deadline_us = 2000.0;  // the deadline docs/reliability.md holds the loop to
+  // In virtual time every tick is the nominal period (nothing is timed): the histogram is one
+  // spike, and says so rather than looking like a perfect real-time loop.
+  const auto filled_bins = std::ranges::count_if(period_bins, [](std::uint32_t n) { return n > 0; });
+  const bool one_period = filled_bins == 1 && !beyond_range;
+  const std::string period_series_title =
+      one_period ? fmt::format("every tick {:.0f} us: virtual time, ticks are not timed", 1e6 * report.haptic_periods.nominal_s())
+                 : std::string("ticks per 1 us bin");
   const bool metres = unit == "m";
   const std::string length = metres ? "mm" : unit;
   const std::string scale = metres ? "*1000" : "";
@@ -130,7 +137,7 @@ void write_plots(const std::filesystem::path& dir, const coupling::SessionReport
                                      "(sqrt($8**2+$9**2+$10**2)) with points pt 7 ps 0.3 title sprintf('press %d', k)\n",
                                      press_count, scale, needle.mounted ? 20 : 16)
                        : fmt::format("plot 'telemetry.csv' every ::1 using ($11 > 0 ? $14{0} : 1/0):(sqrt($8**2+$9**2+$10**2)) "
-                                     "with points pt 7 ps 0.3 title 'surface displacement at the contact (in contact)'\n",
+                                     "with points pt 7 ps 0.3 title 'indentation since the press began (in contact)'\n",
                                      scale))},
       {"force_vs_penetration",
        fmt::format("set datafile separator ','\nset xlabel 'device-proxy penetration ({})'\nset ylabel 'force (N)'\n"
@@ -142,12 +149,13 @@ void write_plots(const std::filesystem::path& dir, const coupling::SessionReport
                    "set xrange [0:{0:.0f}]\nset style fill solid\nset boxwidth 1\nset key top right\n"
                    "set arrow from {1:.0f}, graph 0 to {1:.0f}, graph 1 nohead dt 2 lc rgb 'red'\n"
                    "set label '2 ms deadline' at {1:.0f}, graph 0.6 offset 0.5, 0 tc rgb 'red'\n"
-                   "plot 'haptic_period_histogram.dat' index 0 using 1:2 with boxes title 'ticks per 1 us bin'{2}\n",
+                   "plot 'haptic_period_histogram.dat' index 0 using 1:2 with boxes title '{3}'{2}\n",
                    1.05 * std::max(longest_us, 1.2 * deadline_us), deadline_us,
                    beyond_range ? fmt::format(", 'haptic_period_histogram.dat' index 1 using 1:2 with impulses lw 4 "
                                               "lc rgb 'red' title '{} ticks of 20 ms or more (longest {:.1f} ms)'",
                                               beyond_range, 1e-3 * longest_us)
-                                : std::string())},
+                                : std::string(),
+                   period_series_title)},
   };
   if (press_count >= 2 && press_count <= 12 && metres) {
     // A palpation sweep: each press's loading curve, titled with where it touched.
@@ -487,6 +495,7 @@ std::string RunRecording::summary_json(const coupling::SessionReport& report, co
                          {"puncture_force_n", needle.tissue.puncture_force_n}};
   }
   if (!conditions.telemetry_problem.empty()) summary["telemetry_problem"] = conditions.telemetry_problem;
+  if (!conditions.stopped_by.empty()) summary["stopped_by"] = conditions.stopped_by;
   return summary.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
 }
 
@@ -512,8 +521,14 @@ bool RunRecording::write_report_files(const std::filesystem::path& dir, const co
   for (const coupling::BodyReport& b : report.bodies) {
     if (b.contact_time_s > 0.0) touched += (touched.empty() ? "" : ", ") + json_safe(b.name);
   }
-  write_plots(dir, report,
-              fmt::format("{} - {}", json_safe(impl_->world.scene_path.filename().string()), touched.empty() ? "no contact" : touched),
+  // Titled by what the user ran (the project), with the scene it loads when that differs:
+  // several projects over one scene must not draw plots that read alike.
+  const std::filesystem::path& ran = impl_->world.file;
+  const std::filesystem::path& scene_file = impl_->world.scene_path;
+  const std::string source = ran.empty() || ran.filename() == scene_file.filename()
+                                 ? scene_file.filename().string()
+                                 : fmt::format("{} (scene {})", ran.filename().string(), scene_file.filename().string());
+  write_plots(dir, report, fmt::format("{} - {}", json_safe(source), touched.empty() ? "no contact" : touched),
               impl_->world.length_unit, quiet, impl_->needle, impl_->presses);
   return ok;
 }
@@ -577,6 +592,15 @@ void RunRecording::print(const coupling::SessionReport& report, bool determinist
 }
 
 void RunRecording::print_warnings(const coupling::SessionReport& report, bool deterministic, bool quiet) const {
+  // A run that ended before the default probe arrived touched nothing, and would say nothing
+  // of why: name the time it needs.
+  const scene::World& world = impl_->world;
+  if (world.default_probe && world.probe_arrival_s > 0.0 && report.contact_time_s <= 0.0 &&
+      report.simulated_s < world.probe_arrival_s) {
+    std::fprintf(stderr, "hof: warning: the run ended after %.2f s, before the default probe reached the surface: it needs "
+                         "about %.1f s to arrive and %.1f s for its whole press (--seconds %.0f, or leave --seconds out)\n",
+                 report.simulated_s, world.probe_arrival_s, world.probe_press_s, std::ceil(world.probe_press_s));
+  }
   const double clamped = clamped_share(report);
   if (clamped > 0.01) {
     std::fprintf(stderr, "hof: warning: the force was at the device's limit (%.1f N) for %.0f%% of the contact time: the "

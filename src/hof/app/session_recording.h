@@ -44,6 +44,7 @@ struct RunConditions {
   std::string keep_awake{"off (virtual time)"};
   std::optional<double> host_cpu_steal_s;
   std::string telemetry_problem;
+  std::string stopped_by;  ///< "SIGINT", "SIGTERM": the run was stopped before its end
 };
 
 /// The run length `hof run` takes when none is given: 5 s, or a scripted motion's whole length

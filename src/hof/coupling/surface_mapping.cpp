@@ -7,6 +7,7 @@
 #include <limits>
 #include <utility>
 
+#include "hof/collision/aabb_tree.h"
 #include "hof/mesh/tet_geometry.h"
 
 namespace hof::coupling {
@@ -80,6 +81,43 @@ Expected<SurfaceMapping> SurfaceMapping::barycentric(std::span<const Vec3> volum
     }
     m.nodes_.push_back({tets[best][0], tets[best][1], tets[best][2], tets[best][3]});
     m.weights_.push_back({best_w[0], best_w[1], best_w[2], best_w[3]});
+  }
+  return m;
+}
+
+Expected<SurfaceMapping> SurfaceMapping::onto_triangles(std::span<const Vec3> volume_nodes,
+                                                        std::span<const mesh::Tri> triangles,
+                                                        std::span<const Vec3> surface_vertices) {
+  if (triangles.empty()) {
+    return make_error(ErrorCode::kInvalidMesh, "barycentric mapping: the body has neither tetrahedra nor triangles to map onto");
+  }
+  for (std::size_t t = 0; t < triangles.size(); ++t)
+    for (mesh::NodeIndex i : triangles[t])
+      if (i < 0 || static_cast<std::size_t>(i) >= volume_nodes.size())
+        return make_error(ErrorCode::kInvalidMesh, fmt::format("barycentric mapping: triangle {} uses node {} of {}", t, i,
+                                                               volume_nodes.size()));
+  const collision::TriangleMeshView view{volume_nodes, triangles};
+  const collision::AabbTree tree = collision::AabbTree::build(view);
+  SurfaceMapping m;
+  m.identity_ = false;
+  m.arity_ = 3;
+  m.nodes_.reserve(surface_vertices.size());
+  m.weights_.reserve(surface_vertices.size());
+  for (std::size_t v = 0; v < surface_vertices.size(); ++v) {
+    const collision::ClosestPoint c =
+        tree.closest_point(view, surface_vertices[v], std::numeric_limits<double>::infinity());
+    if (c.triangle < 0 || !c.barycentric.allFinite()) {
+      return make_error(ErrorCode::kInvalidMesh, fmt::format("barycentric mapping: surface vertex {} has no triangle", v));
+    }
+    const mesh::Tri& tri = triangles[static_cast<std::size_t>(c.triangle)];
+    std::array<std::int32_t, kMaxNodesPerVertex> nodes{};
+    std::array<double, kMaxNodesPerVertex> weights{};
+    for (int k = 0; k < 3; ++k) {
+      nodes[static_cast<std::size_t>(k)] = tri[static_cast<std::size_t>(k)];
+      weights[static_cast<std::size_t>(k)] = c.barycentric[k];
+    }
+    m.nodes_.push_back(nodes);
+    m.weights_.push_back(weights);
   }
   return m;
 }

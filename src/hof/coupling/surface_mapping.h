@@ -33,6 +33,13 @@ class SurfaceMapping {
   static Expected<SurfaceMapping> barycentric(std::span<const Vec3> volume_nodes, std::span<const mesh::Tet> tets,
                                               std::span<const Vec3> surface_vertices);
 
+  /// Onto triangles (SOFA's BarycentricMapping on a triangle topology: a membrane, a surface of
+  /// springs): each surface vertex gets the barycentric weights of its closest point on the
+  /// volume's triangles. As in SOFA, a vertex off the triangles' surface follows its projection
+  /// (the offset along the normal is not kept). Errors: no triangles, a node out of range.
+  static Expected<SurfaceMapping> onto_triangles(std::span<const Vec3> volume_nodes, std::span<const mesh::Tri> triangles,
+                                                 std::span<const Vec3> surface_vertices);
+
   /// Trilinear: each surface vertex gets the trilinear weights N_c(ξ) of the hexahedron that
   /// contains it (ξ found by Newton's method on the trilinear map), or else of the nearest
   /// one (ξ outside [−1, 1]³: the weights extrapolate, as SOFA's mapping does). Errors: no
@@ -64,7 +71,7 @@ class SurfaceMapping {
 
  private:
   bool identity_{true};
-  int arity_{1};  // nodes per vertex: 1 (by index), 4 (tetrahedron) or 8 (hexahedron)
+  int arity_{1};  // nodes per vertex: 1 (by index), 3 (triangle), 4 (tetrahedron) or 8 (hexahedron)
   std::vector<std::array<std::int32_t, kMaxNodesPerVertex>> nodes_;  // (V) volume nodes, first arity_ used
   std::vector<std::array<double, kMaxNodesPerVertex>> weights_;      // (V)
 };

@@ -146,6 +146,10 @@ Format format_of(const std::filesystem::path& path) {
 }
 
 std::unexpected<Error> unknown_extension(const std::filesystem::path& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) {
+    return make_error(ErrorCode::kIo, "is a folder, not a mesh file (.msh, .obj, .stl, .off or .vtu)", path.string());
+  }
   const std::string ext = path.extension().string();
   return make_error(ErrorCode::kUnsupported,
                     (ext.empty() ? std::string("file has no extension")

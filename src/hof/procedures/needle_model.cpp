@@ -58,7 +58,10 @@ double karnopp_force(const KarnoppFriction& k, double inserted_m, double v, doub
 }
 
 double pre_puncture_force(const TissueNeedleParameters& p, double d) {
-  return p.model == NeedleForceModel::kFung ? fung_force(p.fung_pre, d, p.fung_form) : stiffness_force(p.stiffness, d);
+  // An intact capsule pushes back or not at all: Fung's fit extrapolated above the surface
+  // side of d0 (the printed form near d = 0) would draw the needle in.
+  return p.model == NeedleForceModel::kFung ? std::max(0.0, fung_force(p.fung_pre, d, p.fung_form))
+                                            : stiffness_force(p.stiffness, d);
 }
 
 double post_puncture_force(const TissueNeedleParameters& p, double d, double v, double held_n) {

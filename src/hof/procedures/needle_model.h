@@ -9,8 +9,13 @@
 ///  - Fung's law per phase (Maurin et al., "In vivo study of forces during needle insertions",
 ///    MRNV 2004): dT/dλ = a (T + b) integrated gives f(d) = (F0 + b)·e^{a(d − d0)} − b, so that
 ///    f(d0) = F0. The thesis (and the MATLAB comment it came from) prints "+ b", which gives
-///    f(d0) = F0 + 2b; HoF uses the integrated form by default and offers the printed one
-///    (FungForm: with Maurin's θ it starts each phase from ≈0). Defaults θ = [a, b, d0, F0]:
+///    f(d0) = F0 + 2b. HoF's default is the printed form: with Maurin's θ it starts each phase
+///    from ≈0 and its post-puncture force resists insertion, rising toward b = 1.7 N — the
+///    shape Maurin et al. measured (resisting forces that drop at each puncture and rise again).
+///    The integrated form with the same θ draws the needle in after the puncture (−3.39 N, eight
+///    times the puncture force, what the hand would feel), so it stays an option (FungForm) for
+///    a θ fitted to it. Before the puncture the force is never below zero (an intact capsule
+///    pushes back or not at all; the fit's extrapolation below d0 would pull). Defaults θ = [a, b, d0, F0]:
 ///    pre-puncture [0.121 /mm, −0.098 N, 11.45 mm, 0.2 N] (0.12 N at the surface, 0.39 N at
 ///    20 mm), post-puncture [−0.031 /mm, 1.7 N, 19.61 mm, −3.39 N]: taken literally, the
 ///    post-puncture force is negative (−3.39 N at 19.61 mm, tending to −1.7 N deeper): after the
@@ -106,7 +111,7 @@ struct KarnoppFriction {
 struct TissueNeedleParameters {
   bool pierceable{true};
   NeedleForceModel model{NeedleForceModel::kFung};
-  FungForm fung_form{FungForm::kIntegrated};
+  FungForm fung_form{FungForm::kPrinted};  ///< see the file comment: the form that resists insertion
   FungParameters fung_pre{};
   FungParameters fung_post{-31.0, 1.7, 0.01961, -3.39};
   StiffnessPolynomial stiffness{};

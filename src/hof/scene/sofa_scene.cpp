@@ -1,15 +1,19 @@
 #include "hof/scene/sofa_scene.h"
 #include "hof/mesh/xml_depth.h"
 
+#include <fmt/ranges.h>
+
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <map>
 #include <numbers>
 #include <sstream>
 
 #include "hof/mesh/mesh_io.h"
+#include "hof/scene/sofa_components.h"
 #include "hof/scene/sofa_scene_reader.h"
 
 namespace hof::scene::detail {
@@ -77,6 +81,14 @@ bool is_topology(std::string_view t) {
 }
 bool is_mapping(std::string_view t) { return t.ends_with("Mapping"); }
 
+// A state of 3D points. SofaCUDA's templates (CudaVec3f, CudaVec3d and the padded CudaVec3f1)
+// hold the same points on the GPU in single or double precision: HoF simulates them as the CPU
+// scene does, in double precision, so a CUDA scene is the CPU scene here and nothing is lost.
+bool is_vec3_template(std::string_view t) {
+  return t == "Vec3" || t == "Vec3d" || t == "Vec3f" || t == "CudaVec3f" || t == "CudaVec3d" || t == "CudaVec3f1" ||
+         t == "CudaVec3d1";
+}
+
 std::string_view trim(std::string_view s) {
   while (!s.empty() && std::isspace(static_cast<unsigned char>(s.front()))) s.remove_prefix(1);
   while (!s.empty() && std::isspace(static_cast<unsigned char>(s.back()))) s.remove_suffix(1);
@@ -114,7 +126,10 @@ Expected<SofaScene> Reader::run() {
   // appendix format, <hof><sofa><sg><Node …>.
   if (std::string_view(xml_root.name()) == "hof") {
     pugi::xml_node inner = xml_root.child("mechanics").child("Node");
-    if (!inner) inner = xml_root.child("sofa").child("sg").child("Node");
+    if (!inner) {
+      inner = xml_root.child("sofa").child("sg").child("Node");
+      thesis_format_ = static_cast<bool>(inner);
+    }
     if (!inner)
       return fail(ErrorCode::kParse, line_of(xml_root.offset_debug()),
                   "the project has no inline scene (<mechanics><Node> or <sofa><sg><Node>)");
@@ -126,6 +141,7 @@ Expected<SofaScene> Reader::run() {
 
   root_ = std::make_unique<SceneNode>();
   if (auto r = build_node(xml_root, *root_); !r) return std::unexpected(r.error());
+  if (auto r = check_types_and_attributes(); !r) return std::unexpected(r.error());
   if (auto r = collect_models(*root_); !r) return std::unexpected(r.error());
   list_skipped(*root_);
   // Each component not simulated is named once: those that change SOFA's result have a warning
@@ -201,6 +217,105 @@ Expected<void> Reader::build_node(const pugi::xml_node& xml, SceneNode& node) {
     c->node = &node;
     c->index = node.components.size();
     node.components.push_back(std::move(c));
+  }
+  return {};
+}
+
+// ---- what SOFA would create -------------------------------------------------------------------
+
+namespace {
+
+// A plugin from outside SOFA's own repository: its component types are not in HoF's table.
+// SOFA's modules are "Sofa.Component.X" (today) or "SofaBaseMechanics"-style (v20-v22); the
+// few plugin packs whose names also begin with "Sofa" are listed.
+bool is_external_plugin(std::string_view name) {
+  static constexpr std::string_view kExternalSofaNamed[] = {"SofaPython",  "SofaPython3",       "SofaCUDA",
+                                                            "SofaCarving", "SofaSphFluid",      "SofaDistanceGrid",
+                                                            "SofaImplicitField", "SofaOpenCL", "SofaAssimp"};
+  if (std::ranges::find(kExternalSofaNamed, name) != std::end(kExternalSofaNamed)) return true;
+  return !name.starts_with("Sofa");
+}
+
+// Attributes SOFA's parse() takes besides its data (older names it converts), and HoF's own
+// additions to a component; never warned about.
+bool is_accepted_extra_attribute(std::string_view type, std::string_view key) {
+  // The factory's own (type, template), src="@loader", and SOFA's deprecated isCompliance.
+  if (key == "name" || key == "template" || key == "type" || key == "src" || key == "isCompliance") return true;
+  // Geometry HoF reads on any component that has it (compute_data): it is not ignored here.
+  static constexpr std::string_view kGeometry[] = {"filename", "fileMesh", "position", "tetrahedra", "tetras", "triangles"};
+  if (std::ranges::find(kGeometry, key) != std::end(kGeometry)) return true;
+  if (key == "coarseCorrection" || key == "coarseRefreshSteps") return type == "CGLinearSolver";  // HoF's CG preconditioner
+  if (type.ends_with("Mapping")) return key == "object1" || key == "object2";                    // input/output before v1.0
+  if (type == "MechanicalObject" || type == "OglModel" || type == "VisualModel" || type == "VisualModelImpl") {
+    static constexpr std::string_view kLegacyTransform[] = {"dx", "dy", "dz", "rx", "ry", "rz", "scale", "sx", "sy", "sz"};
+    return std::ranges::find(kLegacyTransform, key) != std::end(kLegacyTransform);
+  }
+  if (is_loader(type)) return key == "scale";
+  return false;
+}
+
+}  // namespace
+
+// SOFA refuses a type its factory does not know ("Object type X was not created") and warns
+// about data no component takes: so does HoF, with the closest names. A scene that requires a
+// plugin from outside SOFA may name that plugin's components: those are named in a warning.
+Expected<void> Reader::check_types_and_attributes() {
+  std::vector<std::string> external_plugins;
+  std::vector<const Component*> all;
+  const auto collect = [&](const auto& self, const SceneNode& node) -> void {
+    for (const auto& c : node.components) {
+      all.push_back(c.get());
+      if (c->type == "RequiredPlugin") {
+        // pluginName lists the plugins (SOFA's vector data); without it the name is the plugin.
+        std::vector<std::string> plugins;
+        if (const std::string* list = c->attr("pluginName")) {
+          for (std::string_view one : value_tokens(*list)) plugins.emplace_back(one);
+        } else if (const std::string* name = c->attr("name")) {
+          plugins.emplace_back(trim(*name));
+        }
+        for (const std::string& plugin : plugins)
+          if (is_external_plugin(plugin) && std::ranges::find(external_plugins, plugin) == external_plugins.end())
+            external_plugins.push_back(plugin);
+      }
+    }
+    for (const auto& child : node.children) self(self, *child);
+  };
+  collect(collect, *root_);
+  // The thesis' appendix format ran SOFA with the thesis' own components (ExternalForceField
+  // carried the touch force from H3D; HoF's coupling does that job).
+  if (thesis_format_) external_plugins.emplace_back("the thesis' SOFA-H3D glue");
+  std::vector<std::string> unknown_from_plugins;
+  for (const Component* c : all) {
+    if (is_known_sofa_component(c->written) || is_known_sofa_component(c->type)) continue;
+    if (!external_plugins.empty()) {
+      unknown_from_plugins.push_back(c->label());
+      continue;
+    }
+    const std::vector<std::string> near = closest_names(c->written, known_sofa_components());
+    return fail(ErrorCode::kParse, c->line,
+                fmt::format("unknown component type '{}': SOFA has no such component (\"Object type {} was not created\"){}",
+                            c->written, c->written,
+                            near.empty() ? std::string("; check its spelling")
+                                         : fmt::format("; did you mean {}?", fmt::join(near, ", "))));
+  }
+  if (!unknown_from_plugins.empty()) {
+    warn(root_->line, fmt::format("{} component(s) of a type HoF does not know, presumably from the plugin(s) the scene "
+                                  "requires ({}), are not simulated: {}",
+                                  unknown_from_plugins.size(), fmt::join(external_plugins, ", "),
+                                  fmt::join(unknown_from_plugins, ", ")));
+  }
+  // Attributes: checked where HoF has the component's data names (the components it reads),
+  // in today's syntax (a 2008 scene's data had other names, which SOFA then took).
+  if (legacy_) return {};
+  for (const Component* c : all) {
+    const std::span<const std::string_view> data = sofa_data_names(c->type);
+    if (data.empty()) continue;
+    for (const auto& [key, value] : c->attrs) {
+      if (std::ranges::binary_search(data, std::string_view(key)) || is_accepted_extra_attribute(c->type, key)) continue;
+      const std::vector<std::string> near = closest_names(key, data, 1);
+      warn(c->line, fmt::format("{}: attribute '{}' is not a data of {} and is ignored (SOFA ignores it too){}", c->label(),
+                                key, c->type, near.empty() ? std::string() : fmt::format("; did you mean '{}'?", near.front())));
+    }
   }
   return {};
 }
@@ -338,7 +453,8 @@ Expected<Component*> Reader::resolve_link(const Component& from, std::string_vie
   return unresolved(fmt::format("no component '{}' in '{}'{}", last, node->path, parts.empty() ? " or above" : ""));
 }
 
-// A relative path is looked up in the scene's folder, then in each parent folder.
+// A relative path is looked up in the scene's folder and its parents, then in SOFA's data
+// repository (sofa_data_folders); the error lists every folder tried.
 Expected<fs::path> Reader::resolve_file(const Component& c, std::string_view key, const std::string& file) const {
   const fs::path rel(std::string(trim(file)));
   if (rel.empty()) return fail(c, fmt::format("attribute {} is empty", key));
@@ -347,13 +463,17 @@ Expected<fs::path> Reader::resolve_file(const Component& c, std::string_view key
     if (fs::is_regular_file(rel, ec)) return rel;
     return fail(c, fmt::format("file '{}' not found", rel.string()), ErrorCode::kIo);
   }
-  const fs::path first = fs::absolute(path_, ec).parent_path();
-  for (fs::path dir = first;; dir = dir.parent_path()) {
+  const fs::path scene_folder = fs::absolute(path_, ec).parent_path();
+  const std::vector<fs::path> folders = sofa_data_folders(scene_folder);
+  for (const fs::path& dir : folders)
     if (fs::is_regular_file(dir / rel, ec)) return dir / rel;
-    if (dir == dir.parent_path() || dir.empty()) break;
-  }
-  return fail(c, fmt::format("{} '{}' not found (tried {} and its parent folders)", key, rel.string(),
-                             (first / rel).string()),
+  std::string others;
+  for (std::size_t i = 1; i < folders.size(); ++i) others += fmt::format("{}{}", others.empty() ? "" : ", ", folders[i].string());
+  const bool data_path_set = std::getenv("SOFA_DATA_PATH") || std::getenv("SOFA_ROOT");
+  return fail(c,
+              fmt::format("{} '{}' not found: looked for {}{}{}", key, rel.string(), (scene_folder / rel).string(),
+                          others.empty() ? std::string() : fmt::format(", then under {}", others),
+                          data_path_set ? "" : " (set SOFA_DATA_PATH or SOFA_ROOT to add SOFA's data folders)"),
               ErrorCode::kIo);
 }
 
@@ -505,6 +625,8 @@ Expected<MeshData> Reader::compute_data(Component& c) {
   const std::string* file = c.attr("filename");
   const char* file_key = "filename";
   if (!file && (file = c.attr("fileMesh"))) file_key = "fileMesh";
+  // A MeshTopology's older name for its file (SOFA's tutorials still write it).
+  if (!file && is_topology(c.type) && (file = c.attr("fileTopology"))) file_key = "fileTopology";
   if (file && (is_loader(c.type) || is_topology(c.type) || c.type == "MechanicalObject" || c.type == "OglModel")) {
     if (c.type == "OglModel" || c.type == "MeshOBJLoader") {
       auto f = resolve_file(c, file_key, *file);  // visual surfaces are only named
@@ -628,9 +750,11 @@ Expected<void> Reader::collect_models(SceneNode& node) {
     geometry = geometry || is_topology(c->type) || (is_loader(c->type) && c->type != "MeshOBJLoader");
   }
   if (state) {
-    if (const std::string* tmpl = state->attr("template");
-        tmpl && !(*tmpl == "Vec3" || *tmpl == "Vec3d" || *tmpl == "Vec3f")) {
-      warn(state->line, fmt::format("{}: template {} is not simulated", state->label(), *tmpl));
+    if (const std::string* tmpl = state->attr("template"); tmpl && !is_vec3_template(*tmpl)) {
+      node.not_simulated_why = fmt::format("its MechanicalObject has template {}, which HoF does not simulate", *tmpl);
+      warn(state->line, fmt::format("{}: template {} is not simulated (HoF simulates 3D points: Vec3d, Vec3f and "
+                                    "SofaCUDA's CudaVec3f/CudaVec3d); node '{}' is not a body",
+                                    state->label(), *tmpl, node.path));
       state = nullptr;
     }
   }
@@ -641,6 +765,7 @@ Expected<void> Reader::collect_models(SceneNode& node) {
     auto model = make_model(node, state);
     if (!model) return std::unexpected(model.error());
     scene_.models.push_back(std::move(*model));
+    simulated_nodes_.insert(&node);
   } else if (!mapped && !solver_in_scope) {
     // Nothing moves it: a triangle collision model here is a rigid obstacle.
     auto obstacle = make_obstacle(node, state);
@@ -683,6 +808,16 @@ std::string_view what_changes(std::string_view type) {
 
 }  // namespace
 
+// Why a node is not a body: its own state's reason, or (a node mapped from it, such as a rigid
+// instrument's collision or visual model) an ancestor's; empty when neither says.
+std::string_view Reader::not_simulated_why(const SceneNode& node) const {
+  for (const SceneNode* n = &node; n; n = n->parent) {
+    if (!n->not_simulated_why.empty()) return n->not_simulated_why;
+    if (simulated_nodes_.contains(n)) return {};
+  }
+  return {};
+}
+
 void Reader::list_skipped(const SceneNode& node) {
   for (const auto& c : node.components) {
     if (c->used) continue;
@@ -696,6 +831,17 @@ void Reader::list_skipped(const SceneNode& node) {
       continue;
     }
     scene_.skipped.push_back(c->label());
+    // The node is not a body (its state is rigid, 1D, ...): its components are skipped with it,
+    // and the state's own warning says why once; "a second mass" or "missing forces" would not
+    // be true of them.
+    if (!not_simulated_why(node).empty()) continue;
+    // A mass in a node that holds no body of HoF's is not a second mass of anything.
+    if (c->type.ends_with("Mass") && !simulated_nodes_.contains(&node)) {
+      warn(c->line, fmt::format("{} changes SOFA's result and is not simulated by HoF: node '{}' is not a simulated "
+                                "body (no ODE solver above it, or its state is mapped)",
+                                c->label(), node.path));
+      continue;
+    }
     // A mapping that carries a collision model (SOFA's collision spheres) is part of that model.
     const bool carries_collision = c->type.find("Mapping") != std::string::npos &&
                                    std::ranges::any_of(node.components, [](const auto& o) {
@@ -713,6 +859,35 @@ void Reader::list_skipped(const SceneNode& node) {
 namespace hof::scene {
 
 Expected<SofaScene> read_sofa_scene(const std::filesystem::path& path) { return detail::Reader(path).run(); }
+
+std::vector<std::filesystem::path> sofa_data_folders(const std::filesystem::path& scene_folder) {
+  namespace fs = std::filesystem;
+  std::vector<fs::path> out;
+  std::error_code ec;
+  const auto add = [&](const fs::path& dir) {
+    if (dir.empty() || !fs::is_directory(dir, ec)) return;
+    const fs::path normal = dir.lexically_normal();
+    if (std::ranges::find(out, normal) == out.end()) out.push_back(normal);
+  };
+  for (fs::path dir = scene_folder;; dir = dir.parent_path()) {
+    add(dir);
+    if (dir == dir.parent_path() || dir.empty()) break;
+  }
+  if (const char* list = std::getenv("SOFA_DATA_PATH")) {
+    std::string_view rest(list);
+    while (!rest.empty()) {
+      const std::size_t colon = rest.find(':');
+      add(fs::path(std::string(rest.substr(0, colon))));
+      if (colon == std::string_view::npos) break;
+      rest.remove_prefix(colon + 1);
+    }
+  }
+  if (const char* root = std::getenv("SOFA_ROOT"); root && *root) {
+    add(fs::path(root) / "share");
+    add(fs::path(root) / "examples");
+  }
+  return out;
+}
 
 Expected<SofaScene> read_sofa_scene_text(const std::string& text, const std::filesystem::path& path) {
   return detail::Reader(path, text).run();

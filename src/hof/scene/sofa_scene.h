@@ -6,7 +6,9 @@
 /// `MechanicalObject filename=….xs3`), `@link` references and `src="@loader"`. Components
 /// HoF does not simulate (collision pipeline, RequiredPlugin, visual style, …) are listed in
 /// one warning and skipped; nothing the user wrote is silently lost (`skipped` names them).
-/// File paths resolve against the scene's folder, then its parent folders (SOFA's data path).
+/// File paths resolve as SOFA's data repository does: the scene's folder (then its parent
+/// folders), then each folder of `SOFA_DATA_PATH`, then `share/` and `examples/` under
+/// `SOFA_ROOT` (sofa_data_folders()).
 
 #include <filesystem>
 #include <optional>
@@ -52,6 +54,13 @@ struct SofaScene {
 /// Reads and validates a scene. Errors name the file, the line and the component
 /// (malformed XML, a missing mesh, a bad attribute value, an unresolved @link).
 [[nodiscard]] Expected<SofaScene> read_sofa_scene(const std::filesystem::path& path);
+
+/// The folders a relative file named by a scene in `scene_folder` is looked up in, in order:
+/// the scene's folder and its parents (HoF's bundled layout, where `mesh/` sits beside or above
+/// the scene), then SOFA's data repository: each entry of the environment's `SOFA_DATA_PATH`
+/// (separated by ':' as SOFA's FileRepository splits it on Unix), then `$SOFA_ROOT/share` and
+/// `$SOFA_ROOT/examples`. Folders that do not exist are left out.
+[[nodiscard]] std::vector<std::filesystem::path> sofa_data_folders(const std::filesystem::path& scene_folder);
 /// A scene held in memory (a project's inline scene, as edited in the window): `path` names
 /// it in errors and its folder anchors the scene's relative files.
 [[nodiscard]] Expected<SofaScene> read_sofa_scene_text(const std::string& text, const std::filesystem::path& path);

@@ -479,11 +479,13 @@ Expected<void> Reader::apply_grid(Component& c, SofaSceneModel& out) {
   m.positions = std::move(grid->nodes);
   m.hexahedra = std::move(grid->hexes);
   // fillWeighted (SOFA's default): a cell the surface passes through is about half full —
-  // half the stiffness and half the mass, whatever the modulus and density become.
+  // half the stiffness (SparseGridTopology's stiffness coefficient, which HexahedronFEMForceField
+  // applies), whatever the modulus becomes; DiagonalMass lumps the whole cell.
   auto weighted = boolean(c, "fillWeighted");
   if (!weighted) return std::unexpected(weighted.error());
   if (c.type == "SparseGridTopology" && weighted->value_or(true)) {
     m.element_fill.assign(grid->hex_on_surface.size(), 1.0);
+    m.fill_scales_mass = false;  // SOFA's DiagonalMass lumps each whole cell
     for (std::size_t h = 0; h < grid->hex_on_surface.size(); ++h) {
       if (grid->hex_on_surface[h]) m.element_fill[h] = 0.5;
     }

@@ -61,6 +61,9 @@ struct SceneNode {
   double dt_s{0.01};
   Vec3 gravity{0.0, -9.81, 0.0};
   std::int64_t line{0};
+  /// Why the node's own state is not simulated (e.g. a rigid instrument's Rigid3d state); empty
+  /// when it is, or when the node has no state.
+  std::string not_simulated_why;
 };
 
 /// Geometry a loader, topology or state provides (a field is "set" when its flag is).
@@ -83,6 +86,7 @@ struct MeshData {
 [[nodiscard]] bool is_loader(std::string_view type);
 [[nodiscard]] bool is_topology(std::string_view type);
 [[nodiscard]] bool is_mapping(std::string_view type);
+[[nodiscard]] bool is_vec3_template(std::string_view tmpl);
 /// `s` without surrounding blanks; `s` in lower case.
 [[nodiscard]] std::string_view trim(std::string_view s);
 [[nodiscard]] std::string lower(std::string s);
@@ -119,6 +123,10 @@ class Reader {
 
   // Building the graph.
   Expected<void> build_node(const pugi::xml_node& xml, SceneNode& node);
+  /// Unknown component types refused (or, with a plugin from outside SOFA, named); unknown
+  /// attributes of the components whose data HoF knows, warned about.
+  Expected<void> check_types_and_attributes();
+  [[nodiscard]] std::string_view not_simulated_why(const SceneNode& node) const;
 
   // Attribute values.
   Expected<std::vector<double>> numbers(const Component& c, std::string_view key, const std::string& text) const;
@@ -171,11 +179,13 @@ class Reader {
   std::string text_;
   bool have_text_{false};
   std::vector<std::size_t> line_starts_;
+  bool thesis_format_{false};  ///< <hof><sofa><sg>: the thesis' appendix format
   bool legacy_{false};  ///< the file uses 2008 syntax (Object tags or 2008-only names)
   std::unique_ptr<SceneNode> root_;
   std::unordered_map<const Component*, MeshData> data_cache_;
 
   std::set<const Component*> in_progress_;
+  std::set<const SceneNode*> simulated_nodes_;  ///< nodes that became a body
   SofaScene scene_;
 };
 

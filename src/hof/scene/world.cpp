@@ -65,8 +65,12 @@ Expected<coupling::SessionBody> make_deformable(const mechanics::ModelConfig& co
   const bool hexahedral = !config.hexahedra.empty();
   const auto mapped = [&](const mesh::TriMesh& surface) -> Expected<void> {
     body.surface = surface;
-    auto mapping = hexahedral ? coupling::SurfaceMapping::trilinear(config.positions, config.hexahedra, body.surface.vertices)
-                              : coupling::SurfaceMapping::barycentric(config.positions, config.tets, body.surface.vertices);
+    // SOFA's BarycentricMapping picks its mapper from the input topology: hexahedra, else
+    // tetrahedra, else triangles (a membrane or a surface of springs).
+    auto mapping = hexahedral          ? coupling::SurfaceMapping::trilinear(config.positions, config.hexahedra, body.surface.vertices)
+                   : !config.tets.empty() ? coupling::SurfaceMapping::barycentric(config.positions, config.tets, body.surface.vertices)
+                                          : coupling::SurfaceMapping::onto_triangles(config.positions, config.triangles,
+                                                                                     body.surface.vertices);
     if (!mapping) return std::unexpected(mapping.error());
     body.mapping = std::move(*mapping);
     return {};
@@ -347,14 +351,30 @@ Expected<void> apply_bodies(World& w) {
 Expected<void> add_x3d(World& w, const std::filesystem::path& file) {
   auto x3d = read_x3d_scene(file);
   if (!x3d) return std::unexpected(x3d.error());
+  // A settings fragment (a DeviceInfo file, a stylus) is X3D, but not a scene to open.
+  if (x3d->root_element != "X3D" && x3d->root_element != "Scene") {
+    return make_error(ErrorCode::kParse,
+                      fmt::format("not an X3D scene: its root element is <{}> (a scene starts with <X3D> or <Scene>)",
+                                  x3d->root_element),
+                      file.string(), 1);
+  }
   const X3dDeformableDefaults d;
   bool any_deformable = false;
+  std::size_t seen_only = 0;             // shapes without a haptic surface
+  std::vector<std::string> empty_touchable;  // shapes with a surface and no triangles
   for (const X3dShape& shape : x3d->shapes) {
     // A rigid shape is felt through its hapticGeometry when it has one (as H3D renders it); a
     // deformable one is simulated on its geometry (the mesh that deforms).
     const mesh::TriMesh& geometry =
         shape.deformable || shape.haptic_mesh_W.triangles.empty() ? shape.mesh_W : shape.haptic_mesh_W;
-    if (geometry.triangles.empty()) continue;
+    if (geometry.triangles.empty()) {
+      if (shape.touchable) {
+        empty_touchable.push_back(fmt::format("{} (line {}, {})", shape.def.empty() ? "Shape" : shape.def, shape.line,
+                                              shape.geometry_type.empty() ? "no geometry HoF draws" : shape.geometry_type + " without triangles"));
+      }
+      continue;
+    }
+    if (!shape.touchable) ++seen_only;
     const std::string name = unique_name(
         w.bodies, !shape.def.empty() ? shape.def : fmt::format("{}@{}", shape.geometry_type.empty() ? "Shape" : shape.geometry_type, shape.line));
     const Appearance appearance{shape.diffuse_color, shape.transparency};
@@ -431,12 +451,24 @@ Expected<void> add_x3d(World& w, const std::filesystem::path& file) {
   if (!x3d->viewpoints.empty()) w.project.graphics.viewpoint_m = x3d->viewpoints.front().position;
   w.skipped = x3d->unsupported;
   w.warnings = x3d->warnings;
-  const bool has_effects = !x3d->force_effects.springs.empty() || !x3d->force_effects.viscosities.empty() ||
-                           !x3d->force_effects.constants.empty();
-  if (w.bodies.empty() && !has_effects) {
-    std::string why = "the scene has nothing to touch: no Shape whose Appearance has a haptic surface, and no force effect";
-    if (!x3d->unsupported.empty()) why += fmt::format(" (not modelled: {})", fmt::join(x3d->unsupported, ", "));
-    return make_error(ErrorCode::kInvalidArgument, why, file.string());
+  if (w.bodies.empty() && x3d->force_effects.empty()) {
+    // Open what H3DViewer opens: a scene with nothing to touch is still shown. Why, once, naming
+    // the real cause (shapes only seen, a surface on no triangles, haptic nodes not modelled).
+    std::vector<std::string> causes;
+    if (seen_only > 0) {
+      causes.push_back(fmt::format("{} shape{} only seen (no haptic surface in {} Appearance)", seen_only,
+                                   seen_only == 1 ? " is" : "s are", seen_only == 1 ? "its" : "their"));
+    }
+    if (!empty_touchable.empty()) causes.push_back(fmt::format("a haptic surface on no triangles: {}", fmt::join(empty_touchable, ", ")));
+    std::vector<std::string> haptic_nodes;  // not modelled, and haptic: the likely reason
+    for (const std::string& u : x3d->unsupported) {
+      const std::string type = u.substr(0, u.find(' '));
+      if (type.ends_with("Effect") || type.ends_with("Surface") || type.ends_with("Deformer")) haptic_nodes.push_back(u);
+    }
+    if (!haptic_nodes.empty()) causes.push_back(fmt::format("haptic nodes HoF does not model: {}", fmt::join(haptic_nodes, ", ")));
+    if (x3d->shapes.empty()) causes.push_back("no Shape");
+    w.nothing_to_touch = fmt::format("nothing to touch: {}, and no force effect", fmt::join(causes, "; "));
+    w.warnings.push_back(fmt::format("{}: {} (shown, not felt)", file.string(), w.nothing_to_touch));
   }
   return {};
 }
@@ -669,18 +701,25 @@ DefaultProbe default_probe(const std::vector<coupling::SessionBody>& bodies, dou
                                    1.0);
   const double k_effective = 1.0 / (1.0 / k_device + compliance_world / s);
   const double depth_dev = std::clamp(0.4 * max_force_n / k_effective, 0.001, 0.01);
+  // The compliance at rest is only an estimate (a sagging, swinging or contact-stiffened body
+  // pushes back harder than it predicts), so the probe also presses to a force, as a hand does:
+  // it stops where it first feels half the device's limit, and never rides the safety clamp.
+  const double stop_force_n = 0.5 * max_force_n;
   const double approach_dev = clearance_dev;
   const Vec3 start_world = point + clearance_dev * s * normal;
   const Vec3 start_dev = (to_device * start_world.homogeneous()).head<3>();
   const Vec3 direction = (to_device.topLeftCorner<3, 3>() * -normal).normalized();
-  probe.device = fmt::format("scripted:poke,start={};{};{},direction={};{};{},approach={},depth={},speed={},hold=1",
+  probe.device = fmt::format("scripted:poke,start={};{};{},direction={};{};{},approach={},depth={},speed={},hold=1,force={}",
                              start_dev.x(), start_dev.y(), start_dev.z(), direction.x(), direction.y(), direction.z(),
-                             approach_dev, depth_dev, kProbeSpeed);
+                             approach_dev, depth_dev, kProbeSpeed, stop_force_n);
+  probe.arrival_s = approach_dev / kProbeSpeed;
+  probe.press_s = 2.0 * (approach_dev + depth_dev) / kProbeSpeed + 1.0;
   probe.description = fmt::format("presses body '{}' where its surface will be on arrival, ({:.4g}, {:.4g}, {:.4g}) along its inward normal ({:.3f}, {:.3f}, "
-                                  "{:.3f}), {:.1f} mm of device travel past the surface for about {:.1f} N (tissue compliance "
-                                  "{:.3g} world units/N there); {:.4g} world units per device metre",
+                                  "{:.3f}), {:.1f} mm of device travel past the surface for about {:.1f} N, stopping earlier "
+                                  "at {:.1f} N (tissue compliance {:.3g} world units/N there); {:.4g} world units per device "
+                                  "metre",
                                   target.name, point.x(), point.y(), point.z(), direction.x(), direction.y(), direction.z(),
-                                  1e3 * depth_dev, k_effective * depth_dev, compliance_world, s);
+                                  1e3 * depth_dev, k_effective * depth_dev, stop_force_n, compliance_world, s);
   return probe;
 }
 
@@ -749,7 +788,7 @@ Expected<void> add_project_scene(World& w, const std::filesystem::path& file) {
       w.project.graphics.viewpoint_m = scene_viewpoint;
     }
     if (two_sided) w.project.touchable_face = collision::TouchableFace::kFrontAndBack;  // solid='false' shapes
-    if (kept.effects.springs.empty() && kept.effects.viscosities.empty() && kept.effects.constants.empty()) w.project.effects = effects;
+    if (kept.effects.empty()) w.project.effects = effects;
     return {};
   }
   if (auto ok = add_sofa(w, named, text); !ok) {
@@ -794,6 +833,8 @@ Expected<World> finish_world(World w, bool sofa_scene, bool bare, const std::str
                                        effects_centre, radius);
     device = probe.device;
     w.default_probe = true;
+    w.probe_arrival_s = probe.arrival_s;
+    w.probe_press_s = probe.press_s;
     w.project.position_calibration = probe.calibration;
     w.defaults.push_back("device = " + device + " (the default probe: " + probe.description + ")");
   }

@@ -70,11 +70,19 @@ struct World {
   coupling::SessionConfig config;
   std::string device;                ///< the device spec (the default probe resolved)
   bool default_probe{false};         ///< the device is the builder's probe
+  /// The default probe: seconds until it reaches the surface, and its whole press (0 when it
+  /// does not press a body).
+  double probe_arrival_s{0.0};
+  double probe_press_s{0.0};
   std::string length_unit{"m"};      ///< "m", or "scene units" for a SOFA scene (no unit)
   std::vector<std::string> skipped;  ///< components not simulated, "TYPE 'name' (line N)"
   std::vector<std::string> ignored;  ///< components needing no counterpart (plugins, display, default loops)
   std::map<std::string, Appearance> appearances;  ///< by body name, where the file gives one
   std::vector<VisualShape> visuals;               ///< shapes only seen
+  /// Why nothing in the world can be touched (no touchable body, no force effect), in a
+  /// sentence; "" when something can. Such a world opens (it is shown) but `hof run` has
+  /// nothing to render and exits with its own status.
+  std::string nothing_to_touch;
   std::vector<std::string> warnings;
   std::vector<std::string> defaults; ///< "what = value (why)" for every default the builder used
   /// The calibration the file gave (identity when none), before the default probe fitted one.
@@ -116,6 +124,8 @@ void record_parameters(HofProject& project, const std::vector<coupling::Paramete
 /// device frame), and a calibration that fits the device workspace to the bodies' bounds.
 struct DefaultProbe {
   std::string device;
+  double arrival_s{0.0};  ///< until the probe reaches the surface (0: it presses nothing)
+  double press_s{0.0};    ///< the whole press: approach, press, hold, retract
   std::array<double, 16> calibration{};
   std::string description;
 };
