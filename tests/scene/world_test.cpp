@@ -487,5 +487,15 @@ TEST(World, ANeedleProjectMountsTheNeedleOnItsBodies) {
   EXPECT_NE(wrong.error().message.find("Liver"), std::string::npos) << wrong.error().to_string();
 }
 
+// H3D's Prototype example: its one Shape draws Text, which HoF does not model. The reason says
+// so (it was an empty cause: "nothing to touch: , and no force effect").
+TEST(World, AShapeOfAGeometryHoFDoesNotModelIsTheNamedReason) {
+  auto world = build_world(std::string(HOF_ANCHORS_DIR) + "/h3d/examples/All/Prototype.x3d");
+  ASSERT_TRUE(world) << world.error().to_string();
+  EXPECT_EQ(world->nothing_to_touch.find("nothing to touch: ,"), std::string::npos) << world->nothing_to_touch;
+  EXPECT_NE(world->nothing_to_touch.find("no shape has a geometry HoF models (not modelled: Text"), std::string::npos)
+      << world->nothing_to_touch;
+}
+
 }  // namespace
 }  // namespace hof::scene

@@ -843,9 +843,15 @@ void Reader::list_skipped(const SceneNode& node) {
       continue;
     }
     // A mapping that carries a collision model (SOFA's collision spheres) is part of that model.
+    // (Collision models under today's names and the older ones: SphereModel, Sphere, ...)
+    static constexpr std::string_view kOlderCollisionModels[] = {"Sphere",     "SphereModel",    "Triangle",
+                                                                 "TriangleModel", "TTriangleModel", "Line",
+                                                                 "LineModel",  "Point",          "PointModel",
+                                                                 "CubeModel",  "TriangleMeshModel", "TriangleSetModel"};
     const bool carries_collision = c->type.find("Mapping") != std::string::npos &&
                                    std::ranges::any_of(node.components, [](const auto& o) {
-                                     return o->type.ends_with("CollisionModel") || o->type == "Sphere" || o->type == "Triangle";
+                                     return o->type.ends_with("CollisionModel") ||
+                                            std::ranges::find(kOlderCollisionModels, o->type) != std::end(kOlderCollisionModels);
                                    });
     if (const std::string_view why = what_changes(c->type); !why.empty() && !carries_collision) {
       warn(c->line, fmt::format("{} changes SOFA's result and is not simulated by HoF: {}", c->label(), why));

@@ -467,6 +467,14 @@ Expected<void> add_x3d(World& w, const std::filesystem::path& file) {
     }
     if (!haptic_nodes.empty()) causes.push_back(fmt::format("haptic nodes HoF does not model: {}", fmt::join(haptic_nodes, ", ")));
     if (x3d->shapes.empty()) causes.push_back("no Shape");
+    if (causes.empty()) {
+      // Shapes whose geometry HoF does not model (Text, say): named among the nodes not modelled.
+      std::vector<std::string> geometry;
+      for (const std::string& u : x3d->unsupported) geometry.push_back(u);
+      causes.push_back(geometry.empty() ? std::string("no shape has a geometry HoF models")
+                                        : fmt::format("no shape has a geometry HoF models (not modelled: {})",
+                                                      fmt::join(geometry, ", ")));
+    }
     w.nothing_to_touch = fmt::format("nothing to touch: {}, and no force effect", fmt::join(causes, "; "));
     w.warnings.push_back(fmt::format("{}: {} (shown, not felt)", file.string(), w.nothing_to_touch));
   }
