@@ -53,5 +53,18 @@ err=$("$hof" check "$source/examples" 2>&1)
 rc=$?
 [ "$rc" -ne 0 ] && grep -q "is a folder" <<<"$err" || fail "hof check on a folder: status $rc: $err"
 
+# 5. A device that never gives a reading (a UDP bridge not sending) is named, not silent.
+err=$("$hof" run "$project" --seconds 1 --device udp:0 --quiet 2>&1 >/dev/null)
+grep -q "the device gave no reading in the whole run" <<<"$err" || fail "a silent device: $err"
+# The device named by --device is said to be the option's, not the project's.
+err=$("$hof" run "$project" --seconds 1 --device dhd --quiet 2>&1 >/dev/null)
+grep -q "the device given by --device" <<<"$err" || fail "--device error names the project: $err"
+
+# 6. A volume mesh converted to a surface format keeps only the surface's nodes.
+"$hof" mesh convert "$source/data/models/liver-simple.msh" "$work/liver-surface.obj" --quiet 2>/dev/null
+info=$("$hof" mesh info "$work/liver-surface.obj" 2>&1)
+grep -q "used by no element" <<<"$info" && fail "the converted OBJ has vertices of no face: $info"
+[ "$(grep -c '^v ' "$work/liver-surface.obj")" -gt 100 ] || fail "the converted OBJ has no surface"
+
 [ "$failures" -eq 0 ] && echo "all stop-and-report checks passed"
 exit $((failures > 0))

@@ -265,8 +265,14 @@ TEST_F(SofaSceneFiles, LinksLoaderTransformAndSolvers) {
   EXPECT_EQ(c.mass.kind, MassKind::kUniform);
   EXPECT_DOUBLE_EQ(*c.mass.vertex_mass_kg, 0.5);
   ASSERT_EQ(c.force_fields.size(), 2u);
-  EXPECT_DOUBLE_EQ(c.force_fields[0].mesh_springs->stiffness_n_per_m, 100.0);
-  EXPECT_DOUBLE_EQ(c.force_fields[0].mesh_springs->damping_n_s_per_m, 1.0);
+  // tetrasStiffness (the older name of tetrahedraStiffness) sets the tetrahedra's kind, read
+  // with SOFA's rule (each spring k/l, c/l) and its exact tangent.
+  const mechanics::MeshSpringConfig& springs = *c.force_fields[0].mesh_springs;
+  ASSERT_TRUE(springs.tetrahedra.has_value());
+  EXPECT_DOUBLE_EQ(springs.tetrahedra->stiffness, 100.0);
+  EXPECT_DOUBLE_EQ(springs.tetrahedra->damping, 1.0);
+  EXPECT_EQ(springs.rule, mechanics::SpringStiffnessRule::kDividedByRestLength);
+  EXPECT_EQ(springs.tangent, mechanics::SpringTangent::kExact);
   EXPECT_EQ(c.force_fields[1].constant_force->forces.at(0), Vec3(0, 0, 1));
   ASSERT_EQ(c.fixed.size(), 2u);
   EXPECT_EQ(c.fixed[1].directions, (std::array<bool, 3>{false, true, true}));

@@ -14,6 +14,7 @@
 #include "hof/haptics/device.h"
 #include "hof/mesh/mesh_io.h"
 #include "hof/procedures/needle_model.h"
+#include "hof/scene/project.h"
 #include "hof/scene/world.h"
 
 namespace hof::scene {
@@ -154,6 +155,31 @@ TEST(SofaWorld, TheBundledNeedleResistsInsertionAfterThePuncture) {
   EXPECT_GT(last_pre, 0.05);
   EXPECT_LT(first_post, 0.7 * last_pre);  // the drop at the puncture
   EXPECT_GT(min_post, 0.0);               // resisting, never drawing the needle in
+}
+
+// A project states its scene's unit; unstated, a SOFA scene is in "scene units" whether bare
+// or under a project (before: a project over SOFA's liver, 6 units across, reported "604 mm").
+TEST(SofaWorld, AProjectStatesItsUnitAndASofaSceneIsNeverPresumedMetres) {
+  auto poke = build_world(kExamples / "sofa-liver-poke.hof");
+  ASSERT_TRUE(poke) << poke.error().to_string();
+  EXPECT_EQ(poke->length_unit, "scene units");
+  auto bare = build_world(kExamples / "liver-medium-fem.scn");
+  ASSERT_TRUE(bare) << bare.error().to_string();
+  EXPECT_EQ(bare->length_unit, "scene units");
+  auto stated = build_world(kExamples / "liver-palpation-medium-fem.hof");
+  ASSERT_TRUE(stated) << stated.error().to_string();
+  EXPECT_EQ(stated->length_unit, "m");
+  // The same project without its unit: scene units, and saved with what it states.
+  HofProject project = *read_project(kExamples / "liver-palpation-medium-fem.hof");
+  EXPECT_EQ(project.scene_unit, "m");
+  project.scene_unit.clear();
+  auto unstated = build_world(project, kExamples / "liver-palpation-medium-fem.hof");
+  ASSERT_TRUE(unstated) << unstated.error().to_string();
+  EXPECT_EQ(unstated->length_unit, "scene units");
+  // An X3D scene is in metres (the X3D standard's unit).
+  auto x3d = build_world(write("box.x3d", "<X3D><Scene><Shape><Appearance><SmoothSurface/></Appearance><Box/></Shape></Scene></X3D>"));
+  ASSERT_TRUE(x3d) << x3d.error().to_string();
+  EXPECT_EQ(x3d->length_unit, "m");
 }
 
 }  // namespace

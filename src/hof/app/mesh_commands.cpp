@@ -1,5 +1,7 @@
 #include "hof/app/mesh_commands.h"
 
+#include <algorithm>
+
 #include <fmt/format.h>
 
 #include <cstdio>
@@ -202,14 +204,28 @@ int run_mesh_convert(const MeshConvertOptions& options) {
   auto read = mesh::read_mesh(options.input, make_terminal_progress(options.quiet));
   if (!read) return fail(read.error());
   mesh::Mesh out = std::move(read->mesh);
-  const std::string ext = options.output.extension().string();
-  // Surface formats get the boundary of a volume mesh when the file carries no triangles.
-  if ((ext == ".obj" || ext == ".off" || ext == ".OBJ" || ext == ".OFF") && out.triangles.empty() &&
-      !out.tets.empty()) {
-    const mesh::BoundarySurface boundary = mesh::extract_boundary(out.nodes, out.tets);
-    out = mesh::Mesh{};
-    out.nodes = boundary.surface.vertices;
-    out.triangles = boundary.surface.triangles;
+  std::string ext = options.output.extension().string();
+  std::ranges::transform(ext, ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  // Surface formats hold triangles only: the file's own triangles (a Gmsh file's boundary), else
+  // the boundary of its tetrahedra, on just the nodes they use — a volume's interior nodes in
+  // an OBJ would be vertices of no face.
+  if (ext == ".obj" || ext == ".off" || ext == ".stl") {
+    std::vector<mesh::Tri> triangles = out.triangles;
+    if (triangles.empty() && !out.tets.empty()) triangles = mesh::extract_boundary(out.nodes, out.tets).volume_triangles;
+    std::vector<std::int32_t> new_index(out.nodes.size(), -1);
+    mesh::Mesh surface;
+    for (mesh::Tri& t : triangles) {
+      for (mesh::NodeIndex& i : t) {
+        const auto old_index = static_cast<std::size_t>(i);
+        if (new_index[old_index] < 0) {
+          new_index[old_index] = static_cast<std::int32_t>(surface.nodes.size());
+          surface.nodes.push_back(out.nodes[old_index]);
+        }
+        i = new_index[old_index];
+      }
+    }
+    surface.triangles = std::move(triangles);
+    out = std::move(surface);
   }
   if (auto ok = mesh::write_mesh(out, options.output, *version); !ok) return fail(ok.error());
   if (!options.quiet) {

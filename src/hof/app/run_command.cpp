@@ -164,7 +164,8 @@ int run_session(const RunOptions& options) {
   auto device = haptics::open_device(world->device);
   if (!device) {
     Error e = device.error();
-    e.message = fmt::format("{} (device of {})", e.message, options.file.string());
+    e.message = options.device ? fmt::format("{} (the device given by --device)", e.message)
+                               : fmt::format("{} (device of {})", e.message, options.file.string());
     return fail(e);
   }
   coupling::SessionConfig config = world->config;

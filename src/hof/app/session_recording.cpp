@@ -601,6 +601,13 @@ void RunRecording::print_warnings(const coupling::SessionReport& report, bool de
                          "about %.1f s to arrive and %.1f s for its whole press (--seconds %.0f, or leave --seconds out)\n",
                  report.simulated_s, world.probe_arrival_s, world.probe_press_s, std::ceil(world.probe_press_s));
   }
+  // A device that never gave a reading (a UDP bridge that is not sending, say): the run
+  // touched nothing and its plots are empty; say why rather than only that plots are missing.
+  if (report.haptic_ticks > 0 && report.safety.no_reading >= static_cast<std::uint64_t>(report.haptic_ticks)) {
+    std::fprintf(stderr, "hof: warning: the device gave no reading in the whole run (%lld ticks): nothing was touched; "
+                         "is it connected and sending (device %s)?\n",
+                 static_cast<long long>(report.haptic_ticks), json_safe(world.device).c_str());
+  }
   const double clamped = clamped_share(report);
   if (clamped > 0.01) {
     std::fprintf(stderr, "hof: warning: the force was at the device's limit (%.1f N) for %.0f%% of the contact time: the "

@@ -41,8 +41,10 @@ Expected<Slot> find_slot(ModelConfig& c, std::string_view component, std::string
   for (ForceFieldConfig& f : c.force_fields) {
     if (f.name != component) continue;
     if (f.mesh_springs) {
-      if (parameter == "stiffness") return Slot{&f.mesh_springs->stiffness_n_per_m, 0.0, inf, false, false, "N/m"};
-      if (parameter == "damping") return Slot{&f.mesh_springs->damping_n_s_per_m, 0.0, inf, false, false, "N s/m"};
+      // Under SOFA's rule the value is divided by each spring's rest length: N per unit strain.
+      const bool per_strain = f.mesh_springs->rule == SpringStiffnessRule::kDividedByRestLength;
+      if (parameter == "stiffness") return Slot{&f.mesh_springs->stiffness_n_per_m, 0.0, inf, false, false, per_strain ? "N" : "N/m"};
+      if (parameter == "damping") return Slot{&f.mesh_springs->damping_n_s_per_m, 0.0, inf, false, false, per_strain ? "N s" : "N s/m"};
       if (parameter == "restLengthScale") return Slot{&f.mesh_springs->rest_length_scale, 0.0, 2.0, true, false, ""};
     }
     if (f.tetrahedron_fem) {

@@ -631,33 +631,44 @@ Expected<void> Reader::apply_force_field(Component& c, ModelConfig& m) {
     else return fail(c, fmt::format("attribute method: '{}' is not small or large", method));
     ff.triangle_fem = std::move(fem);
   } else if (c.type == "MeshSpringForceField") {
-    // HoF has one stiffness for all springs: the generic value, else that of the element kind.
+    // SOFA's MeshSpringForceField (MeshSpringForceField::init, addSpring): one spring per unique
+    // edge, its stiffness and damping the element kind's value divided by its rest length,
+    // kinds taken in the order lines, triangles, quads, tetrahedra, cubes (the first kind with
+    // the edge and a non-zero value sets it); `stiffness`/`damping` set every kind. Its tangent
+    // is SpringForceField's, unclamped.
     mechanics::MeshSpringConfig s;
-    const bool tets = !m.tets.empty();
-    // A fixed table (GCC 12 misreads vector::insert of initializer lists at -O3).
-    static constexpr std::array<std::pair<const char*, const char*>, 5> kAll{{{"stiffness", "damping"},
-                                                                              {"tetrahedraStiffness", "tetrahedraDamping"},
-                                                                              {"tetrasStiffness", "tetrasDamping"},
-                                                                              {"trianglesStiffness", "trianglesDamping"},
-                                                                              {"linesStiffness", "linesDamping"}}};
-    std::vector<std::pair<const char*, const char*>> keys;
-    for (std::size_t i = 0; i < kAll.size(); ++i) {
-      if (tets || (i != 1 && i != 2)) keys.push_back(kAll[i]);
+    s.rule = mechanics::SpringStiffnessRule::kDividedByRestLength;
+    s.tangent = mechanics::SpringTangent::kExact;
+    auto k = number(c, "stiffness");
+    auto d = number(c, "damping");
+    if (!k) return std::unexpected(k.error());
+    if (!d) return std::unexpected(d.error());
+    s.stiffness_n_per_m = k->value_or(0.0);
+    s.damping_n_s_per_m = d->value_or(0.0);
+    const auto kind = [&](const char* ks, const char* kd, const char* old_ks, const char* old_kd)
+        -> Expected<std::optional<mechanics::SpringValues>> {
+      auto kk = number(c, c.attr(ks) || !old_ks ? ks : old_ks);
+      auto dd = number(c, c.attr(kd) || !old_kd ? kd : old_kd);
+      if (!kk) return std::unexpected(kk.error());
+      if (!dd) return std::unexpected(dd.error());
+      if (!*kk && !*dd) return std::optional<mechanics::SpringValues>{};
+      return std::optional<mechanics::SpringValues>{mechanics::SpringValues{kk->value_or(0.0), dd->value_or(0.0)}};
+    };
+    auto triangles = kind("trianglesStiffness", "trianglesDamping", nullptr, nullptr);
+    auto tetrahedra = kind("tetrahedraStiffness", "tetrahedraDamping", "tetrasStiffness", "tetrasDamping");
+    if (!triangles) return std::unexpected(triangles.error());
+    if (!tetrahedra) return std::unexpected(tetrahedra.error());
+    s.triangles = *triangles;
+    s.tetrahedra = *tetrahedra;
+    // HoF's model has the edges of its triangles and tetrahedra; SOFA's lines, quads and cubes
+    // kinds add springs HoF does not have.
+    for (const char* key : {"linesStiffness", "quadsStiffness", "cubesStiffness"}) {
+      auto v = number(c, key);
+      if (!v) return std::unexpected(v.error());
+      if (*v && **v != 0.0) warn(c.line, fmt::format("{}: {} ignored (HoF's springs are the edges of the triangles and tetrahedra)", c.label(), key));
     }
-    bool found = false;
-    for (const auto& [ks, kd] : keys) {
-      auto k = number(c, ks);
-      auto d = number(c, kd);
-      if (!k) return std::unexpected(k.error());
-      if (!d) return std::unexpected(d.error());
-      if (!found && (*k || *d)) {
-        s.stiffness_n_per_m = k->value_or(0.0);
-        s.damping_n_s_per_m = d->value_or(0.0);
-        found = true;
-      } else if (found && (*k || *d)) {
-        warn(c.line, fmt::format("{}: {}/{} ignored; one stiffness for all springs", c.label(), ks, kd));
-      }
-    }
+    if (s.stiffness_n_per_m == 0.0 && s.damping_n_s_per_m == 0.0 && !s.triangles && !s.tetrahedra)
+      warn(c.line, fmt::format("{}: no stiffness set (SOFA's default 0): the springs hold nothing", c.label()));
     ff.mesh_springs = s;
   } else {  // ConstantForceField
     mechanics::ConstantForceConfig f;

@@ -822,9 +822,11 @@ Expected<World> finish_world(World w, bool sofa_scene, bool bare, const std::str
   if (auto ok = apply_regions(w); !ok) return std::unexpected(ok.error());
   if (auto ok = apply_bodies(w); !ok) return std::unexpected(ok.error());
   w.name = w.project.name;
-  // A SOFA scene carries no unit; X3D and .hof worlds are in metres (a project may declare
-  // its scene's unit).
-  w.length_unit = sofa_scene ? "scene units" : (w.project.scene_unit.empty() ? "m" : w.project.scene_unit);
+  // A project states its scene's unit (<mechanics unit="m">); unstated, X3D is in metres (the
+  // X3D standard's unit) and a SOFA scene — bare or under a project — carries none: its lengths
+  // are reported in "scene units", never presumed metres (SOFA's liver is 6 units across).
+  const bool sofa_mechanics = sofa_scene || !w.project.mechanics_inline.empty() || w.scene_path.extension() == ".scn";
+  w.length_unit = !w.project.scene_unit.empty() ? w.project.scene_unit : sofa_mechanics ? "scene units" : "m";
 
   w.file_calibration = w.project.position_calibration;
   std::string device = device_override.empty() ? (bare ? std::string("auto") : w.project.device) : device_override;

@@ -1096,10 +1096,12 @@ Expected<void> Gui::switch_component(const BodyView& body, const std::string& co
     const double mu = young / (2.0 * (1.0 + poisson)), bulk = young / (3.0 * (1.0 - 2.0 * poisson));
     edit.attributes = {{"materialName", "NeoHookean"}, {"ParameterSet", num(mu) + " " + num(bulk)}};
   } else if (choice == "MeshSpringForceField") {
-    // A starting point of the same order as the continuum (k ~ E·l over the mean edge l, a
-    // dimensional estimate; springs have no exact equivalent in 3D): tune it in the panel.
+    // A starting point of the same order as the continuum (k ~ E·l per spring over the mean
+    // edge l, a dimensional estimate; springs have no exact equivalent in 3D): tune it in the
+    // panel. SOFA's MeshSpringForceField divides the value by each spring's rest length.
     edit.type = "MeshSpringForceField";
-    edit.attributes = {{"stiffness", num(young * mean_edge_length(c))}, {"damping", "0"}};
+    const double edge = mean_edge_length(c);
+    edit.attributes = {{"stiffness", num(young * edge * edge)}, {"damping", "0"}};
   } else if (choice == "EulerImplicitSolver") {
     edit.type = choice;
     const double rk = c.ode.kind == mechanics::OdeSolverKind::kEulerImplicit ? c.ode.rayleigh_stiffness : 0.1;
@@ -1652,7 +1654,8 @@ void Gui::draw_structure_editor(BodyView& b) {
     if (ImGui::Selectable("MeshSpringForceField")) {
       edit.component = unique("springs");
       edit.type = "MeshSpringForceField";
-      edit.attributes = {{"stiffness", fmt::format("{}", young * mean_edge_length(*b.config))}};
+      const double edge = mean_edge_length(*b.config);  // per spring ~E·l; SOFA divides by l
+      edit.attributes = {{"stiffness", fmt::format("{}", young * edge * edge)}};
     }
     const bool at_stylus = last_.valid;
     if (ImGui::Selectable("FixedProjectiveConstraint: the nodes near the stylus", false, at_stylus ? 0 : ImGuiSelectableFlags_Disabled)) {
