@@ -2,13 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 #include <limits>
 #include <numeric>
 #include <utility>
 
 #include "hof/collision/triangle_queries.h"
+#include "hof/core/assert.h"
 
 namespace hof::collision {
 namespace {
@@ -25,11 +24,6 @@ struct StackEntry {
   std::int32_t node;
   double key;  // squared box distance or box entry time: the pruning key
 };
-
-[[noreturn]] void demand_failed(const char* what) {
-  std::fprintf(stderr, "hof::collision::AabbTree: %s\n", what);
-  std::abort();
-}
 
 const Vec3& corner(const TriangleMeshView& mesh, std::int32_t triangle, int k) {
   return mesh.vertices[mesh.triangles[triangle][k]];
@@ -54,9 +48,8 @@ AabbTree AabbTree::build(const TriangleMeshView& mesh, const AabbTreeOptions& op
   tree.options_ = options;
   const std::size_t f = mesh.triangles.size();
   if (f == 0) return tree;
-  if (f > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max())) {
-    demand_failed("more triangles than int32 indices");
-  }
+  HOF_CHECK(f <= static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max()),
+            "AabbTree: more triangles than int32 indices");
   const auto count = static_cast<std::int32_t>(f);
   const std::int32_t leaf_size = options.use_bound_tree && options.max_triangles_in_leaf >= 1
                                      ? options.max_triangles_in_leaf
@@ -121,7 +114,8 @@ AabbTree AabbTree::build(const TriangleMeshView& mesh, const AabbTreeOptions& op
     work.push_back({left + 1, mid, w.end, w.depth + 1});
     work.push_back({left, w.begin, mid, w.depth + 1});  // left first: depth-first layout
   }
-  if (tree.depth_ >= kStackSize) demand_failed("tree deeper than the traversal stack");
+  // The traversals' fixed stacks hold a path's far children: the depth bounds them.
+  HOF_CHECK(tree.depth_ < kStackSize, "AabbTree deeper than the traversal stack");
   tree.build_area_ = tree.fit_boxes(mesh);
   return tree;
 }
@@ -172,9 +166,8 @@ double AabbTree::fit_boxes(const TriangleMeshView& mesh) {
 }
 
 bool AabbTree::refit(const TriangleMeshView& mesh) {
-  if (mesh.triangles.size() != triangle_order_.size()) {
-    demand_failed("refit() with a different triangle count than build()");
-  }
+  HOF_CHECK(mesh.triangles.size() == triangle_order_.size(),
+            "AabbTree::refit() with a different triangle count than build()");
   const double area = fit_boxes(mesh);
   return area > options_.rebuild_area_ratio * build_area_;
 }

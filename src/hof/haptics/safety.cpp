@@ -1,5 +1,7 @@
 #include "hof/haptics/safety.h"
 
+#include "hof/core/assert.h"
+
 #include <algorithm>
 #include <cmath>
 
@@ -62,6 +64,8 @@ Vec3 SafetyFilter::filter(const Vec3& requested, Reading reading, double snapsho
     ++counters_.clamped;
   }
   if (!force.allFinite()) force.setZero();  // cannot happen; never let it through regardless
+  // The safety rule itself: what leaves this filter is finite and within the limit.
+  HOF_ASSERT(force.allFinite() && force.norm() <= limit_n_);
   last_ = force;
   return force;
 }
