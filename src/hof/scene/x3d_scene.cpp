@@ -1,23 +1,22 @@
-// X3D (H3D API) reader. One pass over the XML in document order, carrying the accumulated
-// local-to-world matrix; USE elements resolve to the last node DEF'd with that name before them,
-// a ProtoInstance to a copy of its PROTO's body with the fields substituted, an Inline to the
-// file it names (each file, and each PROTO body, with DEF names of its own).
+// X3D (H3D API) reader. One pass over the scene graph in document order, carrying the
+// accumulated local-to-world matrix. The files and what their nodes stand for (USE → the node
+// DEF'd before it, ProtoInstance → a copy of its PROTO's body with the fields substituted,
+// Inline → the file it names; each file and PROTO body with DEF names of its own) are
+// detail/x3d_source's; the meshes of the geometry nodes detail/x3d_geometry's.
 // Failures inside the walk are raised as a private exception and returned as hof::Error at
 // the single entry point, so nothing escapes this file.
 
 #include "hof/scene/x3d_scene.h"
-#include "hof/mesh/xml_depth.h"
 #include "hof/scene/detail/x3d_geometry.h"
+#include "hof/scene/detail/x3d_source.h"
 
 #include <fmt/format.h>
 #include <pugixml.hpp>
 
 #include <algorithm>
 #include <array>
-#include <cctype>
 #include <memory>
 #include <optional>
-#include <charconv>
 #include <cmath>
 #include <fstream>
 #include <map>
@@ -33,25 +32,8 @@ namespace fs = std::filesystem;
 using Mat4 = Eigen::Matrix4d;
 using haptics::SurfaceKind;
 
-struct ParseFailure {
-  Error error;
-};
-
 bool ends_with(std::string_view s, std::string_view suffix) {
   return s.size() >= suffix.size() && s.substr(s.size() - suffix.size()) == suffix;
-}
-
-std::vector<std::string_view> tokens(std::string_view text) {
-  std::vector<std::string_view> out;
-  std::size_t i = 0;
-  auto is_sep = [](char c) { return c == ',' || c == ' ' || c == '\t' || c == '\n' || c == '\r'; };
-  while (i < text.size()) {
-    while (i < text.size() && is_sep(text[i])) ++i;
-    const std::size_t start = i;
-    while (i < text.size() && !is_sep(text[i])) ++i;
-    if (i > start) out.push_back(text.substr(start, i - start));
-  }
-  return out;
 }
 
 Mat4 axis_angle(const std::vector<double>& r) {
@@ -73,46 +55,6 @@ void transform_mesh(mesh::TriMesh& m, const Mat4& X) {
     for (auto& t : m.triangles) std::swap(t[1], t[2]);
 }
 
-// One parsed XML file: the scene, an Inline'd file, or a PROTO body instantiated (whose
-// elements carry the line they came from in `hof-line`, since their text is a copy).
-struct Document {
-  fs::path file;
-  std::string text;
-  std::vector<std::ptrdiff_t> line_starts{0};
-  pugi::xml_document xml;
-  std::map<std::string, std::vector<pugi::xml_node>, std::less<>> defs;
-  std::map<std::string, pugi::xml_node, std::less<>> protos;  // ProtoDeclare / ExternProtoDeclare by name
-  std::vector<pugi::xml_node> routes;
-  const Document* scope{nullptr};  // a PROTO body: the document of its declaration
-  int proto_depth{0};              // PROTO bodies instantiated inside one another
-};
-
-constexpr int kMaxInlineDepth = 16;  // Inline inside Inline, as deep as a sane scene goes
-constexpr int kMaxProtoDepth = 16;   // PROTO instances inside PROTO bodies
-
-// The strings of an MFString field: `"a" "b"` (X3D XML encoding), or one unquoted value.
-std::vector<std::string> mf_string(std::string_view text) {
-  std::vector<std::string> out;
-  if (text.find('"') == std::string_view::npos) {
-    const auto t = tokens(text);
-    if (!t.empty()) out.emplace_back(text.substr(text.find_first_not_of(" \t\r\n")));
-    while (!out.empty() && !out.back().empty() && std::isspace(static_cast<unsigned char>(out.back().back()))) out.back().pop_back();
-    return out;
-  }
-  for (std::size_t i = 0; i < text.size(); ++i) {
-    if (text[i] != '"') continue;
-    std::string value;
-    for (++i; i < text.size() && text[i] != '"'; ++i) {
-      if (text[i] == '\\' && i + 1 < text.size()) ++i;
-      value += text[i];
-    }
-    out.push_back(std::move(value));
-  }
-  return out;
-}
-
-bool is_remote(std::string_view url) { return url.find("://") != std::string_view::npos || url.starts_with("urn:"); }
-
 class X3dReader {
  public:
   explicit X3dReader(fs::path file) { scene_.file = std::move(file); }
@@ -120,14 +62,14 @@ class X3dReader {
   X3dScene run(std::string text) {
     const std::string_view head = std::string_view(text).substr(0, 64);
     if (head.starts_with("#X3D") || head.starts_with("#VRML")) {
-      fail_at(scene_.file, 1, ErrorCode::kUnsupported,
+      source_.fail_at(scene_.file, 1, ErrorCode::kUnsupported,
               "the X3D classic VRML encoding (#X3D / #VRML) is not read: only X3D's XML encoding (<X3D>...)");
     }
-    Document& doc = parse(scene_.file, std::move(text), nullptr, 0);
+    detail::X3dDocument& doc = source_.parse(scene_.file, std::move(text), nullptr, 0);
     const pugi::xml_node root = doc.xml.document_element();
-    if (!root) fail_at(scene_.file, 1, ErrorCode::kParse, "no root element");
+    if (!root) source_.fail_at(scene_.file, 1, ErrorCode::kParse, "no root element");
     scene_.root_element = root.name();
-    inline_stack_.push_back(weakly_canonical(scene_.file));
+    inline_stack_.push_back(source_.weakly_canonical(scene_.file));
     visit(root, Mat4::Identity());
     if (!scene_.unsupported.empty()) {
       std::string list;
@@ -140,298 +82,13 @@ class X3dReader {
   }
 
  private:
-  static fs::path weakly_canonical(const fs::path& p) {
-    std::error_code ec;
-    fs::path c = fs::weakly_canonical(p, ec);
-    return ec ? p : c;
-  }
-
-  // ---- documents
-  Document& parse(fs::path file, std::string text, const Document* scope, int proto_depth) {
-    auto doc = std::make_unique<Document>();
-    doc->file = std::move(file);
-    doc->text = std::move(text);
-    doc->scope = scope;
-    doc->proto_depth = proto_depth;
-    for (std::size_t i = 0; i < doc->text.size(); ++i)
-      if (doc->text[i] == '\n') doc->line_starts.push_back(static_cast<std::ptrdiff_t>(i + 1));
-    const auto parsed = doc->xml.load_buffer(doc->text.data(), doc->text.size(), pugi::parse_default);
-    if (!parsed) fail_at(doc->file, line_in(*doc, parsed.offset), ErrorCode::kParse, fmt::format("malformed XML: {}", parsed.description()));
-    if (const pugi::xml_node deep = mesh::first_too_deep_element(doc->xml)) {
-      fail_at(doc->file, line_in(*doc, deep.offset_debug()), ErrorCode::kParse,
-              fmt::format("<{}> is nested deeper than {} levels", deep.name(), mesh::kMaxXmlDepth));
-    }
-    collect(*doc, doc->xml);
-    docs_.push_back(std::move(doc));
-    return *docs_.back();
-  }
-
-  // DEF names and PROTO declarations of a document.
-  static void collect(Document& doc, pugi::xml_node n) {
-    for (pugi::xml_node c : n.children()) {
-      if (c.type() != pugi::node_element) continue;
-      if (const char* d = c.attribute("DEF").as_string(); *d) doc.defs[d].push_back(c);
-      const std::string_view t = c.name();
-      if (t == "ROUTE") doc.routes.push_back(c);
-      if (t == "ProtoDeclare" || t == "ExternProtoDeclare") {
-        doc.protos.emplace(c.attribute("name").as_string(), c);
-        continue;  // a PROTO body's DEF names are its own
-      }
-      collect(doc, c);
-    }
-  }
-
-  const Document& doc_of(pugi::xml_node n) const {
-    const pugi::xml_node root = n.root();
-    for (const auto& d : docs_)
-      if (d->xml == root) return *d;
-    return *docs_.front();
-  }
-
-  static std::int64_t line_in(const Document& d, std::ptrdiff_t offset) {
-    return std::upper_bound(d.line_starts.begin(), d.line_starts.end(), offset) - d.line_starts.begin();
-  }
-  std::int64_t line_of(pugi::xml_node n) const {
-    if (const pugi::xml_attribute l = n.attribute("hof-line")) return l.as_llong();
-    return line_in(doc_of(n), n.offset_debug());
-  }
-  std::string where(pugi::xml_node n) const { return fmt::format("{}:{}", doc_of(n).file.string(), line_of(n)); }
-
-  [[noreturn]] static void fail_at(const fs::path& file, std::int64_t line, ErrorCode code, std::string message) {
-    throw ParseFailure{Error{code, std::move(message), file.string(), line, -1}};
-  }
-  [[noreturn]] void fail(pugi::xml_node n, ErrorCode code, std::string message) const {
-    fail_at(doc_of(n).file, line_of(n), code, std::move(message));
-  }
-  void warn(pugi::xml_node n, std::string_view message) { scene_.warnings.push_back(fmt::format("{}: {}", where(n), message)); }
-
-  // ---- DEF/USE and PROTO instances
-  // The node a possible USE element stands for: the last node DEF'd with that name before it
-  // (in a PROTO body, else in the document it was declared in).
-  pugi::xml_node resolve_use(pugi::xml_node n) const {
-    const std::string_view use = n.attribute("USE").as_string();
-    if (use.empty()) return n;
-    pugi::xml_node found;
-    for (const Document* d = &doc_of(n); d && !found; d = d->scope) {
-      const auto it = d->defs.find(use);
-      if (it == d->defs.end()) continue;
-      for (pugi::xml_node def : it->second)
-        if (d != &doc_of(n) || def.offset_debug() < n.offset_debug()) found = def;
-    }
-    if (!found) fail(n, ErrorCode::kParse, fmt::format("<{} USE='{}'>: no node DEF'd with that name before", n.name(), use));
-    // A USE inside the node it names would contain itself: an endless tree.
-    for (pugi::xml_node a = n.parent(); a; a = a.parent()) {
-      if (a == found) {
-        fail(n, ErrorCode::kParse,
-             fmt::format("<{} USE='{}'> is inside the node it names (line {}): a cycle", n.name(), use, line_of(found)));
-      }
-    }
-    return found;
-  }
-
-  pugi::xml_node resolve(pugi::xml_node n) {
-    n = resolve_use(n);
-    if (std::string_view(n.name()) == "ProtoInstance") {
-      if (const pugi::xml_node body = instantiate(n)) return body;
-    }
-    return n;
-  }
-
-  // The declaration of PROTO `name` seen from `doc` (an ExternProtoDeclare is followed to the
-  // ProtoDeclare in its file). Null when there is none (the instance is then not modelled).
-  pugi::xml_node declaration(pugi::xml_node at, std::string_view name) {
-    for (const Document* d = &doc_of(at); d; d = d->scope) {
-      const auto it = d->protos.find(name);
-      if (it == d->protos.end()) continue;
-      const pugi::xml_node decl = it->second;
-      if (std::string_view(decl.name()) == "ProtoDeclare") return decl;
-      // ExternProtoDeclare: the first url found beside the file, "FILE#NAME" (NAME defaults
-      // to the extern's own name).
-      for (const std::string& url : mf_string(decl.attribute("url").as_string())) {
-        if (is_remote(url)) continue;
-        const std::size_t hash = url.find('#');
-        const fs::path path = d->file.parent_path() / url.substr(0, hash);
-        const std::string target = hash == std::string::npos ? std::string(name) : url.substr(hash + 1);
-        if (!fs::is_regular_file(path)) continue;
-        const Document& ext = load(decl, path);
-        const auto found = ext.protos.find(target);
-        if (found != ext.protos.end() && std::string_view(found->second.name()) == "ProtoDeclare") return found->second;
-      }
-      warn(decl, fmt::format("ExternProtoDeclare '{}': no ProtoDeclare found at its url {}", name, decl.attribute("url").as_string()));
-      return {};
-    }
-    return {};
-  }
-
-  // A ProtoInstance: a copy of the first node of its PROTO's body, with every IS/connect
-  // replaced by the instance's fieldValue (or the interface's default), as 19775-1's prototype semantics say. The
-  // other body nodes are not rendered (the spec: only the first node is the instance's type).
-  pugi::xml_node instantiate(pugi::xml_node instance) {
-    if (const auto it = instances_.find(instance.hash_value()); it != instances_.end()) return it->second;
-    const std::string name = instance.attribute("name").as_string();
-    const pugi::xml_node decl = declaration(instance, name);
-    if (!decl) return {};
-    const Document& home = doc_of(decl);
-    if (doc_of(instance).proto_depth >= kMaxProtoDepth) {
-      fail(instance, ErrorCode::kParse,
-           fmt::format("ProtoInstance '{}': PROTOs instantiated more than {} deep (a PROTO whose body instantiates itself?)",
-                       name, kMaxProtoDepth));
-    }
-    pugi::xml_node first;
-    for (pugi::xml_node c : decl.child("ProtoBody").children())
-      if (c.type() == pugi::node_element) { first = c; break; }
-    if (!first) {
-      warn(instance, fmt::format("ProtoInstance '{}': its ProtoBody is empty", name));
-      instances_[instance.hash_value()] = {};
-      return {};
-    }
-    // Field values: the interface's defaults, then the instance's own.
-    std::map<std::string, pugi::xml_node, std::less<>> values;
-    for (pugi::xml_node f : decl.child("ProtoInterface").children("field")) values[f.attribute("name").as_string()] = f;
-    for (pugi::xml_node f : instance.children("fieldValue")) values[f.attribute("name").as_string()] = f;
-
-    pugi::xml_document copy;
-    pugi::xml_node body = copy.append_copy(first);
-    mark_lines(first, body);
-    substitute(body, values, instance);
-    std::ostringstream text;
-    copy.save(text, "", pugi::format_raw | pugi::format_no_declaration);
-    Document& d = parse(home.file, text.str(), &home, doc_of(instance).proto_depth + 1);
-    const pugi::xml_node result = d.xml.document_element();
-    instances_[instance.hash_value()] = result;
-    return result;
-  }
-
-  // Every element of `copy` gets the line of its original (its text is not the file's).
-  void mark_lines(pugi::xml_node original, pugi::xml_node copy) const {
-    if (!copy.attribute("hof-line")) copy.append_attribute("hof-line") = static_cast<long long>(line_of(original));
-    pugi::xml_node c = copy.first_child();
-    for (pugi::xml_node o = original.first_child(); o && c; o = o.next_sibling(), c = c.next_sibling())
-      if (o.type() == pugi::node_element) mark_lines(o, c);
-  }
-
-  void substitute(pugi::xml_node n, const std::map<std::string, pugi::xml_node, std::less<>>& values, pugi::xml_node instance) {
-    for (pugi::xml_node is = n.child("IS"); is; is = n.child("IS")) {
-      for (pugi::xml_node connect : is.children("connect")) {
-        const std::string node_field = connect.attribute("nodeField").as_string();
-        const std::string proto_field = connect.attribute("protoField").as_string();
-        const auto it = values.find(proto_field);
-        if (it == values.end()) continue;  // no value anywhere: the node's own default holds
-        const pugi::xml_node v = it->second;
-        if (const pugi::xml_attribute a = v.attribute("value")) {
-          pugi::xml_attribute target = n.attribute(node_field.c_str());
-          if (!target) target = n.append_attribute(node_field.c_str());
-          target.set_value(a.value());
-        }
-        // SFNode / MFNode values: copies of the nodes, in the connected field.
-        for (pugi::xml_node c : v.children()) {
-          if (c.type() != pugi::node_element) continue;
-          const pugi::xml_node source = resolve_use(c);
-          pugi::xml_node added = n.append_copy(source);
-          mark_lines(source, added);
-          added.remove_attribute("DEF");
-          pugi::xml_attribute field = added.attribute("containerField");
-          if (!field) field = added.append_attribute("containerField");
-          field.set_value(node_field.c_str());
-        }
-      }
-      n.remove_child(is);
-    }
-    for (pugi::xml_node c : n.children())
-      if (c.type() == pugi::node_element) substitute(c, values, instance);
-  }
-
-  // An Inline'd file, read once (then shared).
-  const Document& load(pugi::xml_node at, const fs::path& path) {
-    const fs::path key = weakly_canonical(path);
-    for (const auto& d : docs_)
-      if (d->scope == nullptr && weakly_canonical(d->file) == key) return *d;
-    std::ifstream in(path, std::ios::binary);
-    if (!in) fail(at, ErrorCode::kIo, fmt::format("cannot open '{}'", path.string()));
-    std::ostringstream buffer;
-    buffer << in.rdbuf();
-    return parse(path, buffer.str(), nullptr, 0);
-  }
-
   void unsupported(pugi::xml_node original, std::string_view extra = {}) {
-    const pugi::xml_node n = resolve_use(original);
+    const pugi::xml_node n = source_.resolve_use(original);
     std::string def = n.attribute("DEF").as_string();
     std::string entry = def.empty() ? std::string(n.name()) : fmt::format("{} '{}'", n.name(), def);
     if (std::string_view(n.name()) == "ProtoInstance") entry += fmt::format(" '{}'", n.attribute("name").as_string());
     if (!extra.empty()) entry += fmt::format(" {}", extra);
-    scene_.unsupported.push_back(fmt::format("{} (line {})", entry, line_of(original)));
-  }
-
-  // ---- field values (empty or missing attribute = default)
-  std::vector<double> numbers(pugi::xml_node n, const char* field) const {
-    std::vector<double> out;
-    for (std::string_view tok : tokens(n.attribute(field).as_string())) {
-      if (!tok.empty() && tok.front() == '+') tok.remove_prefix(1);
-      double v = 0.0;
-      const auto [ptr, ec] = std::from_chars(tok.data(), tok.data() + tok.size(), v);
-      if (ec != std::errc{} || ptr != tok.data() + tok.size() || !std::isfinite(v))
-        fail(n, ErrorCode::kParse, fmt::format("<{}> field {}: '{}' is not a number", n.name(), field, tok));
-      out.push_back(v);
-    }
-    return out;
-  }
-  std::vector<double> numbers(pugi::xml_node n, const char* field, std::size_t count, std::vector<double> def) const {
-    auto v = numbers(n, field);
-    if (v.empty()) return def;
-    if (v.size() != count)
-      fail(n, ErrorCode::kParse, fmt::format("<{}> field {}: expected {} numbers, got {}", n.name(), field, count, v.size()));
-    return v;
-  }
-  double number(pugi::xml_node n, const char* field, double def) const { return numbers(n, field, 1, {def})[0]; }
-  Vec3 vec3(pugi::xml_node n, const char* field, const Vec3& def) const {
-    const auto v = numbers(n, field, 3, {def.x(), def.y(), def.z()});
-    return {v[0], v[1], v[2]};
-  }
-  // An MF field of `width`-tuples (MFVec2f: 2, MFVec3f: 3, MFRotation: 4); `def` when absent.
-  std::vector<double> tuples(pugi::xml_node n, const char* field, std::size_t width, std::vector<double> def) const {
-    auto v = numbers(n, field);
-    if (v.empty() && !n.attribute(field)) return def;
-    if (v.size() % width != 0)
-      fail(n, ErrorCode::kParse, fmt::format("<{}> field {}: {} numbers, not a multiple of {}", n.name(), field, v.size(), width));
-    return v;
-  }
-  std::vector<std::int64_t> integers(pugi::xml_node n, const char* field) const {
-    std::vector<std::int64_t> out;
-    for (double v : numbers(n, field)) {
-      if (v != std::floor(v)) fail(n, ErrorCode::kParse, fmt::format("<{}> field {}: {} is not an integer", n.name(), field, v));
-      // Past ±2⁶³ the conversion is undefined (found by fuzz_x3d): no index or count is that large.
-      if (!(v >= -0x1p63 && v < 0x1p63))
-        fail(n, ErrorCode::kParse, fmt::format("<{}> field {}: {} is out of range", n.name(), field, v));
-      out.push_back(static_cast<std::int64_t>(v));
-    }
-    return out;
-  }
-  std::int64_t integer(pugi::xml_node n, const char* field, std::int64_t def) const {
-    const auto v = integers(n, field);
-    return v.empty() ? def : v[0];
-  }
-  bool boolean(pugi::xml_node n, const char* field, bool def) const {
-    const std::string_view s = n.attribute(field).as_string();
-    if (s.empty()) return def;
-    if (s == "true" || s == "TRUE" || s == "True") return true;
-    if (s == "false" || s == "FALSE" || s == "False") return false;
-    fail(n, ErrorCode::kParse, fmt::format("<{}> field {}: '{}' is not a boolean", n.name(), field, s));
-  }
-  std::string string(pugi::xml_node n, const char* field, std::string_view def) const {
-    std::string s = n.attribute(field).as_string();
-    if (s.size() >= 2 && s.front() == '"' && s.back() == '"') s = s.substr(1, s.size() - 2);
-    return s.empty() ? std::string(def) : s;
-  }
-  template <class E>
-  E choice(pugi::xml_node n, const char* field, std::initializer_list<std::pair<std::string_view, E>> options, E def) const {
-    const std::string s = string(n, field, "");
-    if (s.empty()) return def;
-    std::string names;
-    for (const auto& [name, value] : options) {
-      if (name == s) return value;
-      names += fmt::format(" {}", name);
-    }
-    fail(n, ErrorCode::kParse, fmt::format("<{}> field {}: '{}' is not one of{}", n.name(), field, s, names));
+    scene_.unsupported.push_back(fmt::format("{} (line {})", entry, source_.line_of(original)));
   }
 
   // ---- scene graph
@@ -474,14 +131,14 @@ class X3dReader {
     // USE copies subtrees: a chain of nodes each USE'd twice by the next doubles the tree at
     // every link (2^40 nodes from 40 lines). Bounded, so such a file is refused, not a hang.
     if (++visited_ > kMaxVisitedNodes) {
-      fail(original, ErrorCode::kParse, fmt::format("the scene expands to more than {} nodes through USE", kMaxVisitedNodes));
+      source_.fail(original, ErrorCode::kParse, fmt::format("the scene expands to more than {} nodes through USE", kMaxVisitedNodes));
     }
     const std::string_view tag = original.name();
     if (tag == "head" || tag == "meta" || tag == "component" || tag == "unit" || tag == "ProtoDeclare" ||
         tag == "ExternProtoDeclare") {
       return;  // PROTO declarations: read where they are instantiated
     }
-    const pugi::xml_node n = resolve(original);
+    const pugi::xml_node n = source_.resolve(original);
     const std::string_view t = n.name();
     if (t == "HapticLayeredGroup") {
       // H3D: each child is a haptic layer, rendered with its own proxy (forces summed).
@@ -498,7 +155,7 @@ class X3dReader {
     } else if (t == "Switch") {
       // 19775-1, Switch: only the child whichChoice names is traversed; −1 (the default) or an
       // index past the children: none.
-      if (const pugi::xml_node c = nth_child(n, integer(n, "whichChoice", -1)); c && integer(n, "whichChoice", -1) >= 0) visit(c, X);
+      if (const pugi::xml_node c = nth_child(n, source_.integer(n, "whichChoice", -1)); c && source_.integer(n, "whichChoice", -1) >= 0) visit(c, X);
     } else if (t == "LOD") {
       // 19775-1, LOD: level 0, the most detailed, is shown nearest the viewer; HoF has no
       // viewer distance, and takes that one.
@@ -508,7 +165,7 @@ class X3dReader {
     } else if (t == "Transform") {
       visit_children(n, X * transform_matrix(n));
     } else if (t == "MatrixTransform") {
-      const auto m = numbers(n, "matrix", 16, {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1});
+      const auto m = source_.numbers(n, "matrix", 16, {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1});
       visit_children(n, X * Eigen::Map<const Eigen::Matrix<double, 4, 4, Eigen::RowMajor>>(m.data()));
     } else if (t == "FitToBoxTransform") {
       fit_to_box(n, X);
@@ -520,22 +177,22 @@ class X3dReader {
       global_settings(n);
     } else if (t == "SpringEffect") {
       haptics::SpringEffect s;
-      s.position_m = (X * vec3(n, "position", Vec3::Zero()).homogeneous()).head<3>();
-      s.spring_constant_n_per_m = number(n, "springConstant", 100.0);
-      s.start_distance_m = number(n, "startDistance", 0.01);
-      s.escape_distance_m = number(n, "escapeDistance", 0.01);
-      s.damping_n_s_per_m = number(n, "damping", 0.0);
+      s.position_m = (X * source_.vec3(n, "position", Vec3::Zero()).homogeneous()).head<3>();
+      s.spring_constant_n_per_m = source_.number(n, "springConstant", 100.0);
+      s.start_distance_m = source_.number(n, "startDistance", 0.01);
+      s.escape_distance_m = source_.number(n, "escapeDistance", 0.01);
+      s.damping_n_s_per_m = source_.number(n, "damping", 0.0);
       scene_.force_effects.springs.push_back(s);
     } else if (t == "ViscosityEffect") {
       haptics::ViscosityEffect v;
-      v.viscosity_pa_s = number(n, "viscosity", 0.01);
-      v.radius_m = number(n, "radius", 0.0025);
-      v.damping_factor = number(n, "dampingFactor", 0.5);
-      v.enabled = boolean(n, "enabled", true);
+      v.viscosity_pa_s = source_.number(n, "viscosity", 0.01);
+      v.radius_m = source_.number(n, "radius", 0.0025);
+      v.damping_factor = source_.number(n, "dampingFactor", 0.5);
+      v.enabled = source_.boolean(n, "enabled", true);
       scene_.force_effects.viscosities.push_back(v);
     } else if (t == "ForceField") {
       // The force keeps its magnitude and turns with the enclosing transforms.
-      const Vec3 f = vec3(n, "force", Vec3::Zero());
+      const Vec3 f = source_.vec3(n, "force", Vec3::Zero());
       const Vec3 d = X.topLeftCorner<3, 3>() * f;
       scene_.force_effects.constants.push_back({d.norm() > 0.0 ? Vec3(d.normalized() * f.norm()) : Vec3::Zero()});
     } else if (t == "MagneticGeometryEffect") {
@@ -546,10 +203,10 @@ class X3dReader {
       rotational_spring_effect(n);
     } else if (t == "Viewpoint") {
       X3dViewpoint v;
-      v.position = vec3(n, "position", v.position);
-      const auto o = numbers(n, "orientation", 4, {0, 0, 1, 0});
+      v.position = source_.vec3(n, "position", v.position);
+      const auto o = source_.numbers(n, "orientation", 4, {0, 0, 1, 0});
       std::copy(o.begin(), o.end(), v.orientation.begin());
-      v.field_of_view_rad = number(n, "fieldOfView", v.field_of_view_rad);
+      v.field_of_view_rad = source_.number(n, "fieldOfView", v.field_of_view_rad);
       scene_.viewpoints.push_back(v);
     } else {
       unsupported(original);
@@ -559,42 +216,42 @@ class X3dReader {
   // Inline (19775-1, Networking): the first of its urls found beside the file that holds it, read as
   // a scene of its own (its DEF names are its own) under the current transform. A url on the
   // network, or none found, is a warning; an Inline that includes itself, directly or through
-  // others, or nests past kMaxInlineDepth, is an error (the scene would be endless).
+  // others, or nests past detail::kMaxInlineDepth, is an error (the scene would be endless).
   void inline_file(pugi::xml_node n, const Mat4& X) {
-    if (!boolean(n, "load", true)) return;
-    const std::vector<std::string> urls = mf_string(n.attribute("url").as_string());
-    const fs::path folder = doc_of(n).file.parent_path();
+    if (!source_.boolean(n, "load", true)) return;
+    const std::vector<std::string> urls = detail::x3d_mf_string(n.attribute("url").as_string());
+    const fs::path folder = source_.doc_of(n).file.parent_path();
     for (const std::string& url : urls) {
-      if (is_remote(url)) continue;
+      if (detail::x3d_is_remote(url)) continue;
       const fs::path path = folder / url.substr(0, url.find('#'));
       if (!fs::is_regular_file(path)) continue;
-      const fs::path key = weakly_canonical(path);
+      const fs::path key = source_.weakly_canonical(path);
       if (std::ranges::find(inline_stack_, key) != inline_stack_.end()) {
         std::string chain;
         for (const fs::path& p : inline_stack_) chain += p.filename().string() + " → ";
-        fail(n, ErrorCode::kParse, fmt::format("Inline url '{}' includes a file that includes it: {}{}", url, chain,
+        source_.fail(n, ErrorCode::kParse, fmt::format("Inline url '{}' includes a file that includes it: {}{}", url, chain,
                                                path.filename().string()));
       }
-      if (static_cast<int>(inline_stack_.size()) > kMaxInlineDepth)
-        fail(n, ErrorCode::kParse, fmt::format("Inline url '{}': Inlines nest deeper than {}", url, kMaxInlineDepth));
-      const Document& d = load(n, path);
+      if (static_cast<int>(inline_stack_.size()) > detail::kMaxInlineDepth)
+        source_.fail(n, ErrorCode::kParse, fmt::format("Inline url '{}': Inlines nest deeper than {}", url, detail::kMaxInlineDepth));
+      const detail::X3dDocument& d = source_.load(n, path);
       if (!d.xml.document_element()) return;
       inline_stack_.push_back(key);
       visit(d.xml.document_element(), X);
       inline_stack_.pop_back();
       return;
     }
-    warn(n, urls.empty() ? std::string("Inline without a url")
+    source_.warn(n, urls.empty() ? std::string("Inline without a url")
                          : fmt::format("Inline: none of its urls is a file beside the scene ({}): not shown",
                                        n.attribute("url").as_string()));
   }
   // X3D Transform: T · C · R · SR · S · SR⁻¹ · C⁻¹.
   Mat4 transform_matrix(pugi::xml_node n) const {
-    const Vec3 t = vec3(n, "translation", Vec3::Zero());
-    const Vec3 c = vec3(n, "center", Vec3::Zero());
-    const Vec3 s = vec3(n, "scale", Vec3::Ones());
-    const Mat4 R = axis_angle(numbers(n, "rotation", 4, {0, 0, 1, 0}));
-    const Mat4 SR = axis_angle(numbers(n, "scaleOrientation", 4, {0, 0, 1, 0}));
+    const Vec3 t = source_.vec3(n, "translation", Vec3::Zero());
+    const Vec3 c = source_.vec3(n, "center", Vec3::Zero());
+    const Vec3 s = source_.vec3(n, "scale", Vec3::Ones());
+    const Mat4 R = axis_angle(source_.numbers(n, "rotation", 4, {0, 0, 1, 0}));
+    const Mat4 SR = axis_angle(source_.numbers(n, "scaleOrientation", 4, {0, 0, 1, 0}));
     Mat4 S = Mat4::Identity();
     S.diagonal().head<3>() = s;
     return translation(t) * translation(c) * R * SR * S * SR.transpose() * translation(-c);
@@ -603,10 +260,10 @@ class X3dReader {
   // FitToBoxTransform: the children are read in its local frame, their bound is scaled and
   // moved into the box, then everything is taken to the world frame.
   void fit_to_box(pugi::xml_node n, const Mat4& X) {
-    const Vec3 box_size = vec3(n, "boxSize", Vec3::Constant(0.1));
-    const Vec3 box_center = vec3(n, "boxCenter", Vec3::Zero());
-    const bool uniform = boolean(n, "uniformScalingOnly", false);
-    const bool active = boolean(n, "active", true);
+    const Vec3 box_size = source_.vec3(n, "boxSize", Vec3::Constant(0.1));
+    const Vec3 box_center = source_.vec3(n, "boxCenter", Vec3::Zero());
+    const bool uniform = source_.boolean(n, "uniformScalingOnly", false);
+    const bool active = source_.boolean(n, "active", true);
     const std::size_t first_shape = scene_.shapes.size();
     const std::size_t first_spring = scene_.force_effects.springs.size();
     const std::size_t first_constant = scene_.force_effects.constants.size();
@@ -655,11 +312,11 @@ class X3dReader {
   void shape(pugi::xml_node original, pugi::xml_node n, const Mat4& X) {
     X3dShape s;
     s.def = n.attribute("DEF").as_string();
-    s.line = line_of(original);
+    s.line = source_.line_of(original);
     s.deformable = std::string_view(n.name()) == "DeformableShape";
     for (pugi::xml_node c_orig : n.children()) {
       if (!is_child(c_orig)) continue;
-      const pugi::xml_node c = resolve(c_orig);
+      const pugi::xml_node c = source_.resolve(c_orig);
       const std::string_view t = c.name();
       const std::string_view field = c_orig.attribute("containerField").as_string();
       if (t == "Appearance") {
@@ -691,10 +348,10 @@ class X3dReader {
   void appearance(pugi::xml_node n, X3dShape& s) {
     for (pugi::xml_node c_orig : n.children()) {
       if (!is_child(c_orig)) continue;
-      const pugi::xml_node c = resolve(c_orig);
+      const pugi::xml_node c = source_.resolve(c_orig);
       const std::string_view t = c.name();
       if (t == "Material" || t == "TwoSidedMaterial") {
-        s.diffuse_color = vec3(c, "diffuseColor", s.diffuse_color);
+        s.diffuse_color = source_.vec3(c, "diffuseColor", s.diffuse_color);
         s.transparency = std::clamp(c.attribute("transparency").as_double(0.0), 0.0, 1.0);
         s.has_material = true;
       } else if (is_surface(t)) {
@@ -707,7 +364,7 @@ class X3dReader {
         pugi::xml_node first;
         for (pugi::xml_node m : c.children()) {
           if (!is_child(m)) continue;
-          const pugi::xml_node r = resolve(m);
+          const pugi::xml_node r = source_.resolve(m);
           if (!first && is_surface(r.name())) first = r;
           else unsupported(m);
         }
@@ -727,17 +384,17 @@ class X3dReader {
     haptics::SurfaceMaterial m;
     const bool magnetic = t == "MagneticSurface" || t == "OpenHapticsSurface";
     m.kind = t == "SmoothSurface" ? SurfaceKind::kSmooth : magnetic ? SurfaceKind::kMagnetic : SurfaceKind::kFrictional;
-    m.stiffness = number(n, "stiffness", 0.5);
-    m.damping_n_s_per_m = number(n, "damping", 0.0);
-    m.use_relative_values = boolean(n, "useRelativeValues", true);
+    m.stiffness = source_.number(n, "stiffness", 0.5);
+    m.damping_n_s_per_m = source_.number(n, "damping", 0.0);
+    m.use_relative_values = source_.boolean(n, "useRelativeValues", true);
     if (m.kind == SurfaceKind::kSmooth) {
       m.static_friction = 0.0;  // HAPI::FrictionSurface(k, d, 0, 0)
       m.dynamic_friction = 0.0;
     } else {
-      m.static_friction = number(n, "staticFriction", 0.1);
-      m.dynamic_friction = number(n, "dynamicFriction", 0.4);
+      m.static_friction = source_.number(n, "staticFriction", 0.1);
+      m.dynamic_friction = source_.number(n, "dynamicFriction", 0.4);
     }
-    if (magnetic) m.snap_distance_m = number(n, "snapDistance", 0.01);
+    if (magnetic) m.snap_distance_m = source_.number(n, "snapDistance", 0.01);
     for (pugi::xml_node c : n.children())  // texture maps and the like
       if (is_child(c)) unsupported(c);
     return m;
@@ -747,13 +404,13 @@ class X3dReader {
   mesh::TriMesh geometry(pugi::xml_node n, bool& solid, X3dShape& s) {
     const std::string_view t = n.name();
     // 19775-1: the Geometry2D nodes are two-sided by default (solid FALSE), the others solid.
-    solid = boolean(n, "solid", !(t == "Rectangle2D" || t == "Disk2D"));
+    solid = source_.boolean(n, "solid", !(t == "Rectangle2D" || t == "Disk2D"));
     mesh::TriMesh m;
     pugi::xml_node coord;
     std::vector<pugi::xml_node> members;  // a GeometryGroup's geometries
     for (pugi::xml_node c_orig : n.children()) {
       if (!is_child(c_orig)) continue;
-      const pugi::xml_node c = resolve(c_orig);
+      const pugi::xml_node c = source_.resolve(c_orig);
       const std::string_view ct = c.name();
       if (ct == "Coordinate" || ct == "CoordinateDouble") coord = c;
       else if (ct == "HapticsOptions") { if (!s.haptics_options) s.haptics_options = haptics_options(c); }
@@ -762,21 +419,21 @@ class X3dReader {
       else unsupported(c_orig);
     }
     if (t == "Sphere") {
-      m = detail::make_sphere(number(n, "radius", 1.0));
+      m = detail::make_sphere(source_.number(n, "radius", 1.0));
     } else if (t == "Box") {
-      m = detail::make_box(vec3(n, "size", Vec3::Constant(2.0)));
+      m = detail::make_box(source_.vec3(n, "size", Vec3::Constant(2.0)));
     } else if (t == "Cylinder") {
-      const double r = number(n, "radius", 1.0);
-      m = detail::make_round(r, r, number(n, "height", 2.0), boolean(n, "side", true), boolean(n, "bottom", true),
-                             boolean(n, "top", true));
+      const double r = source_.number(n, "radius", 1.0);
+      m = detail::make_round(r, r, source_.number(n, "height", 2.0), source_.boolean(n, "side", true), source_.boolean(n, "bottom", true),
+                             source_.boolean(n, "top", true));
     } else if (t == "Cone") {
-      m = detail::make_round(number(n, "bottomRadius", 1.0), 0.0, number(n, "height", 2.0), boolean(n, "side", true),
-                             boolean(n, "bottom", true), false);
+      m = detail::make_round(source_.number(n, "bottomRadius", 1.0), 0.0, source_.number(n, "height", 2.0), source_.boolean(n, "side", true),
+                             source_.boolean(n, "bottom", true), false);
     } else if (t == "Rectangle2D") {
-      const auto sz = numbers(n, "size", 2, {2.0, 2.0});
+      const auto sz = source_.numbers(n, "size", 2, {2.0, 2.0});
       m = detail::make_rectangle(sz[0], sz[1]);
     } else if (t == "Disk2D") {
-      m = detail::make_disk(number(n, "innerRadius", 0.0), number(n, "outerRadius", 1.0));
+      m = detail::make_disk(source_.number(n, "innerRadius", 0.0), source_.number(n, "outerRadius", 1.0));
     } else if (t == "ElevationGrid") {
       m = elevation_grid(n);
     } else if (t == "Extrusion") {
@@ -800,25 +457,25 @@ class X3dReader {
   // ElevationGrid (19775-1, Geometry3D): xDimension × zDimension heights (default 0 × 0: empty),
   // spacings 1, ccw TRUE.
   mesh::TriMesh elevation_grid(pugi::xml_node n) {
-    const std::int64_t nx = integer(n, "xDimension", 0);
-    const std::int64_t nz = integer(n, "zDimension", 0);
-    const auto height = numbers(n, "height");
+    const std::int64_t nx = source_.integer(n, "xDimension", 0);
+    const std::int64_t nz = source_.integer(n, "zDimension", 0);
+    const auto height = source_.numbers(n, "height");
     if (nx < 0 || nz < 0 || nx > 100000 || nz > 100000)
-      fail(n, ErrorCode::kParse, fmt::format("<ElevationGrid>: xDimension {} and zDimension {} must be in [0, 100000]", nx, nz));
+      source_.fail(n, ErrorCode::kParse, fmt::format("<ElevationGrid>: xDimension {} and zDimension {} must be in [0, 100000]", nx, nz));
     if (static_cast<std::int64_t>(height.size()) < nx * nz)
-      fail(n, ErrorCode::kInvalidMesh, fmt::format("<ElevationGrid>: {} heights for a {} × {} grid", height.size(), nx, nz));
-    mesh::TriMesh m = detail::make_elevation_grid(nx, nz, number(n, "xSpacing", 1.0), number(n, "zSpacing", 1.0), height);
-    if (!boolean(n, "ccw", true)) flip(m);
+      source_.fail(n, ErrorCode::kInvalidMesh, fmt::format("<ElevationGrid>: {} heights for a {} × {} grid", height.size(), nx, nz));
+    mesh::TriMesh m = detail::make_elevation_grid(nx, nz, source_.number(n, "xSpacing", 1.0), source_.number(n, "zSpacing", 1.0), height);
+    if (!source_.boolean(n, "ccw", true)) flip(m);
     return m;
   }
 
   // Extrusion (19775-1, Geometry3D): defaults crossSection the square 1 1, 1 −1, −1 −1, −1 1,
   // 1 1; spine 0 0 0, 0 1 0; scale 1 1; orientation 0 0 1 0; both caps; ccw TRUE.
   mesh::TriMesh extrusion(pugi::xml_node n) {
-    const auto cs = tuples(n, "crossSection", 2, {1, 1, 1, -1, -1, -1, -1, 1, 1, 1});
-    const auto sp = tuples(n, "spine", 3, {0, 0, 0, 0, 1, 0});
-    const auto sc = tuples(n, "scale", 2, {1, 1});
-    const auto orient = tuples(n, "orientation", 4, {0, 0, 1, 0});
+    const auto cs = source_.tuples(n, "crossSection", 2, {1, 1, 1, -1, -1, -1, -1, 1, 1, 1});
+    const auto sp = source_.tuples(n, "spine", 3, {0, 0, 0, 0, 1, 0});
+    const auto sc = source_.tuples(n, "scale", 2, {1, 1});
+    const auto orient = source_.tuples(n, "orientation", 4, {0, 0, 1, 0});
     std::vector<detail::Vec2> cross_section, scale;
     std::vector<Vec3> spine;
     std::vector<detail::Vec4> orientation;
@@ -829,12 +486,12 @@ class X3dReader {
     if (scale.empty()) scale.emplace_back(1.0, 1.0);
     if (orientation.empty()) orientation.emplace_back(0.0, 0.0, 1.0, 0.0);
     if (cross_section.size() < 2 || spine.size() < 2) {
-      warn(n, fmt::format("Extrusion: {} cross-section and {} spine points: no surface", cross_section.size(), spine.size()));
+      source_.warn(n, fmt::format("Extrusion: {} cross-section and {} spine points: no surface", cross_section.size(), spine.size()));
       return {};
     }
-    mesh::TriMesh m = detail::make_extrusion(cross_section, spine, scale, orientation, boolean(n, "beginCap", true),
-                                             boolean(n, "endCap", true));
-    if (!boolean(n, "ccw", true)) flip(m);
+    mesh::TriMesh m = detail::make_extrusion(cross_section, spine, scale, orientation, source_.boolean(n, "beginCap", true),
+                                             source_.boolean(n, "endCap", true));
+    if (!source_.boolean(n, "ccw", true)) flip(m);
     return m;
   }
 
@@ -846,13 +503,13 @@ class X3dReader {
   // fills (an animation), is drawn at the interpolator's first key; HoF does not animate.
   std::vector<Vec3> points(pugi::xml_node coord) {
     std::vector<Vec3> out;
-    const auto p = numbers(coord, "point");
+    const auto p = source_.numbers(coord, "point");
     if (p.size() % 3 != 0)
-      fail(coord, ErrorCode::kParse, fmt::format("<{}> field point: {} numbers, not a multiple of 3", coord.name(), p.size()));
+      source_.fail(coord, ErrorCode::kParse, fmt::format("<{}> field point: {} numbers, not a multiple of 3", coord.name(), p.size()));
     for (std::size_t i = 0; i + 2 < p.size(); i += 3) out.emplace_back(p[i], p[i + 1], p[i + 2]);
     const std::string_view def = coord.attribute("DEF").as_string();
     if (!out.empty() || def.empty()) return out;
-    const Document& d = doc_of(coord);
+    const detail::X3dDocument& d = source_.doc_of(coord);
     for (const pugi::xml_node route : d.routes) {
       const std::string_view to_field = route.attribute("toField").as_string();
       if (def != route.attribute("toNode").as_string() || (to_field != "point" && to_field != "set_point")) continue;
@@ -864,17 +521,17 @@ class X3dReader {
         if (!source && !it->second.empty()) source = it->second.back();
       }
       if (source && std::string_view(source.name()) == "CoordinateInterpolator") {
-        const auto keys = numbers(source, "key");
-        const auto values = tuples(source, "keyValue", 3, {});
+        const auto keys = source_.numbers(source, "key");
+        const auto values = source_.tuples(source, "keyValue", 3, {});
         const std::size_t per_key = keys.empty() ? 0 : values.size() / 3 / keys.size();
         for (std::size_t i = 0; i < per_key; ++i) out.emplace_back(values[3 * i], values[3 * i + 1], values[3 * i + 2]);
-        warn(coord, fmt::format("Coordinate '{}' has no points: a ROUTE (line {}) animates it from CoordinateInterpolator "
+        source_.warn(coord, fmt::format("Coordinate '{}' has no points: a ROUTE (line {}) animates it from CoordinateInterpolator "
                                 "'{}' (line {}); drawn still, at its first key (HoF does not animate)",
-                                def, line_of(route), from, line_of(source)));
+                                def, source_.line_of(route), from, source_.line_of(source)));
       } else {
-        warn(coord, fmt::format("Coordinate '{}' has no points: they come through a ROUTE (line {}) from {} '{}', which "
+        source_.warn(coord, fmt::format("Coordinate '{}' has no points: they come through a ROUTE (line {}) from {} '{}', which "
                                 "HoF does not run; the shape has no surface",
-                                def, line_of(route), source ? source.name() : "an unknown node", from));
+                                def, source_.line_of(route), source ? source.name() : "an unknown node", from));
       }
       return out;
     }
@@ -898,13 +555,13 @@ class X3dReader {
     const std::int64_t count = static_cast<std::int64_t>(m.vertices.size());
     if (indexed) {
       // Fans, strips and faces end at −1 (the last one may omit it); triangles and quads run on.
-      for (std::int64_t i : integers(n, t == "IndexedFaceSet" ? "coordIndex" : "index")) {
+      for (std::int64_t i : source_.integers(n, t == "IndexedFaceSet" ? "coordIndex" : "index")) {
         if (i == -1 && separated) {
           runs.emplace_back();
           continue;
         }
         if (i < 0 || i >= count)
-          fail(n, ErrorCode::kInvalidMesh, fmt::format("<{}>: index {} out of range (the Coordinate has {} points)", t, i, count));
+          source_.fail(n, ErrorCode::kInvalidMesh, fmt::format("<{}>: index {} out of range (the Coordinate has {} points)", t, i, count));
         runs.back().push_back(static_cast<mesh::NodeIndex>(i));
       }
     } else if (separated) {
@@ -912,9 +569,9 @@ class X3dReader {
       const char* field = grouping == VertexGrouping::kFans ? "fanCount" : "stripCount";
       std::int64_t next = 0;
       runs.clear();
-      for (std::int64_t c : integers(n, field)) {
+      for (std::int64_t c : source_.integers(n, field)) {
         if (c < 0 || next + c > count) {
-          warn(n, fmt::format("{}: {} {} past the {} points: the rest ignored", t, field, c, count));
+          source_.warn(n, fmt::format("{}: {} {} past the {} points: the rest ignored", t, field, c, count));
           break;
         }
         runs.emplace_back();
@@ -925,12 +582,12 @@ class X3dReader {
     }
     const std::size_t left_out = detail::append_grouped(m.triangles, grouping, runs);
     if (left_out > 0) {
-      warn(n, fmt::format("{}: {} {} left over (not a whole {}): ignored", t, left_out, indexed ? "indices" : "points",
+      source_.warn(n, fmt::format("{}: {} {} left over (not a whole {}): ignored", t, left_out, indexed ? "indices" : "points",
                           grouping == VertexGrouping::kQuads       ? "quad"
                           : grouping == VertexGrouping::kTriangles ? "triangle"
                                                                    : "triangle (fewer than 3)"));
     }
-    if (!boolean(n, "ccw", true)) flip(m);
+    if (!source_.boolean(n, "ccw", true)) flip(m);
   }
 
   // ---- force effects beyond springs, viscosity and constant forces
@@ -939,15 +596,15 @@ class X3dReader {
   // sets springConstant 100 (its header says 300): the constructor's value is the default.
   void magnetic_geometry_effect(pugi::xml_node n, const Mat4& X) {
     haptics::MagneticGeometryEffect e;
-    e.enabled = boolean(n, "enabled", true);
-    e.start_distance_m = number(n, "startDistance", 0.01);
-    e.escape_distance_m = number(n, "escapeDistance", 0.01);
-    e.spring_constant_n_per_m = number(n, "springConstant", 100.0);
+    e.enabled = source_.boolean(n, "enabled", true);
+    e.start_distance_m = source_.number(n, "startDistance", 0.01);
+    e.escape_distance_m = source_.number(n, "escapeDistance", 0.01);
+    e.spring_constant_n_per_m = source_.number(n, "springConstant", 100.0);
     X3dShape scratch;
     auto surface = std::make_shared<mesh::TriMesh>();
     for (pugi::xml_node c_orig : n.children()) {
       if (!is_child(c_orig)) continue;
-      const pugi::xml_node c = resolve(c_orig);
+      const pugi::xml_node c = source_.resolve(c_orig);
       if (!is_geometry(c.name())) {
         unsupported(c_orig);
         continue;
@@ -958,7 +615,7 @@ class X3dReader {
       break;  // an SFNode: the first geometry
     }
     if (surface->triangles.empty()) {
-      warn(n, "MagneticGeometryEffect without a geometry (or with an empty one): no force");
+      source_.warn(n, "MagneticGeometryEffect without a geometry (or with an empty one): no force");
       return;
     }
     e.surface = std::move(surface);
@@ -973,7 +630,7 @@ class X3dReader {
     const std::array<std::string_view, 3> fields{"xFunction", "yFunction", "zFunction"};
     for (pugi::xml_node c_orig : n.children()) {
       if (!is_child(c_orig)) continue;
-      const pugi::xml_node c = resolve(c_orig);
+      const pugi::xml_node c = source_.resolve(c_orig);
       const std::string_view field = c_orig.attribute("containerField").as_string();
       const auto slot = std::ranges::find(fields, field);
       if (std::string_view(c.name()) != "GeneralFunction" || slot == fields.end()) {
@@ -981,20 +638,20 @@ class X3dReader {
         continue;
       }
       std::vector<std::string> params;
-      for (std::string_view p : tokens(c.attribute("params").as_string())) params.emplace_back(p);
+      for (std::string_view p : detail::x3d_tokens(c.attribute("params").as_string())) params.emplace_back(p);
       const std::size_t wanted = of_time ? 1 : 3;
       if (params.size() != wanted) {
         // H3D ignores the effect then (it prints a warning): so does HoF.
-        warn(c, fmt::format("{}: GeneralFunction params '{}' must name {} variable(s): the effect is ignored", n.name(),
+        source_.warn(c, fmt::format("{}: GeneralFunction params '{}' must name {} variable(s): the effect is ignored", n.name(),
                             c.attribute("params").as_string(), wanted));
         return;
       }
       auto expression = haptics::FunctionExpression::make(c.attribute("function").as_string(), params);
-      if (!expression) fail(c, ErrorCode::kParse, fmt::format("<GeneralFunction> function: {}", expression.error().message));
+      if (!expression) source_.fail(c, ErrorCode::kParse, fmt::format("<GeneralFunction> function: {}", expression.error().message));
       f[static_cast<std::size_t>(slot - fields.begin())] = *expression;
     }
     if (!f[0] || !f[1] || !f[2]) {
-      warn(n, fmt::format("{}: xFunction, yFunction and zFunction are all needed (H3D ignores the effect otherwise): ignored",
+      source_.warn(n, fmt::format("{}: xFunction, yFunction and zFunction are all needed (H3D ignores the effect otherwise): ignored",
                           n.name()));
       return;
     }
@@ -1011,17 +668,17 @@ class X3dReader {
   // ---- options
   X3dHapticsOptions haptics_options(pugi::xml_node n) const {
     X3dHapticsOptions o;
-    o.touchable_face = choice<X3dTouchableFace>(n, "touchableFace",
+    o.touchable_face = source_.choice<X3dTouchableFace>(n, "touchableFace",
                                                 {{"AS_GRAPHICS", X3dTouchableFace::kAsGraphics},
                                                  {"FRONT", X3dTouchableFace::kFront},
                                                  {"BACK", X3dTouchableFace::kBack},
                                                  {"FRONT_AND_BACK", X3dTouchableFace::kFrontAndBack}},
                                                 o.touchable_face);
-    o.max_distance_m = number(n, "maxDistance", o.max_distance_m);
-    o.look_ahead_factor = number(n, "lookAheadFactor", o.look_ahead_factor);
-    o.use_bound_tree = boolean(n, "useBoundTree", o.use_bound_tree);
-    o.interpolate_force_effects = boolean(n, "interpolateForceEffects", o.interpolate_force_effects);
-    o.dynamic_mode = choice<X3dDynamicMode>(n, "dynamicMode",
+    o.max_distance_m = source_.number(n, "maxDistance", o.max_distance_m);
+    o.look_ahead_factor = source_.number(n, "lookAheadFactor", o.look_ahead_factor);
+    o.use_bound_tree = source_.boolean(n, "useBoundTree", o.use_bound_tree);
+    o.interpolate_force_effects = source_.boolean(n, "interpolateForceEffects", o.interpolate_force_effects);
+    o.dynamic_mode = source_.choice<X3dDynamicMode>(n, "dynamicMode",
                                             {{"TRANSFORM_CHANGED", X3dDynamicMode::kTransformChanged},
                                              {"ALWAYS", X3dDynamicMode::kAlways},
                                              {"NEVER", X3dDynamicMode::kNever}},
@@ -1031,10 +688,10 @@ class X3dReader {
 
   X3dBoundTreeOptions bound_tree_options(pugi::xml_node n) const {
     X3dBoundTreeOptions o;
-    o.bound_type = choice<X3dBoundType>(
+    o.bound_type = source_.choice<X3dBoundType>(
         n, "boundType", {{"AABB", X3dBoundType::kAabb}, {"OBB", X3dBoundType::kObb}, {"SPHERE", X3dBoundType::kSphere}},
         o.bound_type);
-    const auto leaf = integers(n, "maxTrianglesInLeaf");
+    const auto leaf = source_.integers(n, "maxTrianglesInLeaf");
     if (!leaf.empty()) o.max_triangles_in_leaf = static_cast<std::int32_t>(leaf[0]);
     return o;
   }
@@ -1044,7 +701,7 @@ class X3dReader {
     X3dGlobalSettings& g = *scene_.global_settings;
     for (pugi::xml_node c_orig : n.children()) {
       if (c_orig.type() != pugi::node_element) continue;
-      const pugi::xml_node c = resolve(c_orig);
+      const pugi::xml_node c = source_.resolve(c_orig);
       const std::string_view t = c.name();
       if (t == "HapticsOptions") {
         if (!g.haptics) g.haptics = haptics_options(c);
@@ -1053,11 +710,11 @@ class X3dReader {
       } else if (t == "DebugOptions") {
         if (g.debug) continue;
         X3dDebugOptions d;
-        d.draw_bound = boolean(c, "drawBound", false);
-        const auto depth = integers(c, "drawBoundTree");
+        d.draw_bound = source_.boolean(c, "drawBound", false);
+        const auto depth = source_.integers(c, "drawBoundTree");
         if (!depth.empty()) d.draw_bound_tree = static_cast<std::int32_t>(depth[0]);
-        d.draw_haptic_triangles = boolean(c, "drawHapticTriangles", false);
-        d.print_shader_warnings = boolean(c, "printShaderWarnings", false);
+        d.draw_haptic_triangles = source_.boolean(c, "drawHapticTriangles", false);
+        d.print_shader_warnings = source_.boolean(c, "printShaderWarnings", false);
         g.debug = d;
       } else {
         unsupported(c_orig);
@@ -1069,7 +726,7 @@ class X3dReader {
   void device_info(pugi::xml_node n) {
     for (pugi::xml_node c_orig : n.children()) {
       if (c_orig.type() != pugi::node_element) continue;
-      const pugi::xml_node c = resolve(c_orig);
+      const pugi::xml_node c = source_.resolve(c_orig);
       if (!ends_with(c.name(), "Device")) {
         unsupported(c_orig);
         continue;
@@ -1077,15 +734,15 @@ class X3dReader {
       X3dDevice d;
       d.type = c.name();
       d.def = c.attribute("DEF").as_string();
-      d.device_name = string(c, "deviceName", "");
-      const auto pc = numbers(c, "positionCalibration", 16, {d.position_calibration.begin(), d.position_calibration.end()});
+      d.device_name = source_.string(c, "deviceName", "");
+      const auto pc = source_.numbers(c, "positionCalibration", 16, {d.position_calibration.begin(), d.position_calibration.end()});
       std::copy(pc.begin(), pc.end(), d.position_calibration.begin());
-      const auto oc = numbers(c, "orientationCalibration", 4, {1, 0, 0, 0});
+      const auto oc = source_.numbers(c, "orientationCalibration", 4, {1, 0, 0, 0});
       std::copy(oc.begin(), oc.end(), d.orientation_calibration.begin());
-      d.force_limit_n = number(c, "forceLimit", -1.0);
+      d.force_limit_n = source_.number(c, "forceLimit", -1.0);
       for (pugi::xml_node r_orig : c.children()) {
         if (r_orig.type() != pugi::node_element) continue;
-        const pugi::xml_node r = resolve(r_orig);
+        const pugi::xml_node r = source_.resolve(r_orig);
         const std::string_view rt = r.name();
         const std::string_view field = r_orig.attribute("containerField").as_string();
         if (field == "stylus") continue;  // the drawn stylus: graphics only
@@ -1099,7 +756,7 @@ class X3dReader {
         if (rt == "GodObjectRenderer") renderer.kind = haptics::RendererKind::kGodObject;
         if (rt == "RuspiniRenderer") {
           renderer.kind = haptics::RendererKind::kRuspini;
-          renderer.proxy_radius_m = number(r, "proxyRadius", 0.0025);
+          renderer.proxy_radius_m = source_.number(r, "proxyRadius", 0.0025);
         }
         d.renderer = renderer;
       }
@@ -1107,12 +764,11 @@ class X3dReader {
     }
   }
 
-  std::vector<std::unique_ptr<Document>> docs_;  // [0] the scene; then Inlines and PROTO bodies
-  std::map<std::size_t, pugi::xml_node> instances_;  // ProtoInstance → its body, made once
   std::vector<fs::path> inline_stack_;  // the files being read, outermost first
   static constexpr std::int64_t kMaxVisitedNodes = 200000;
   std::int64_t visited_{0};
   X3dScene scene_;
+  detail::X3dSource source_{scene_.warnings};  // after scene_: it writes scene_.warnings
   int layer_{0};  // haptic layer of the shapes being visited
 };
 
@@ -1126,7 +782,7 @@ Expected<X3dScene> read_x3d_scene(const std::filesystem::path& path) {
   try {
     X3dReader reader(path);
     return reader.run(buffer.str());
-  } catch (const ParseFailure& f) {
+  } catch (const detail::X3dParseFailure& f) {
     return std::unexpected(f.error);
   }
 }
