@@ -24,6 +24,9 @@ void add_mesh_commands(CLI::App& app, int& status) {
       "info", "Print nodes, elements, surface, bounding box, volume, quality and problems of a mesh");
   info_cmd->add_option("file", info.file, "Mesh file (.msh, .obj, .stl, .off, .vtu)")->required();
   info_cmd->add_flag("--json", info.json, "Print the report as JSON");
+  info_cmd->add_option("--unit", info.unit,
+                       "Unit of the file's numbers (m, cm, mm): lengths are then reported in metres "
+                       "(a mesh file does not state its unit)");
   info_cmd->add_flag("-q,--quiet", info.quiet, "No progress output");
   info_cmd->callback([&] { status = hof::app::run_mesh_info(info); });
 

@@ -28,10 +28,28 @@ Expected<mesh::MshVersion> msh_version(int v) {
                     fmt::format("--msh-version must be 2 (v2.2) or 4 (v4.1), got {}", v));
 }
 
+// A mesh file's numbers carry no unit (Gmsh, OBJ, STL, OFF, VTU alike): lengths are reported
+// as the file's numbers unless the user states the unit, and then in metres.
+struct LengthUnit {
+  bool stated{false};
+  double to_m{1.0};
+  std::string label{"file units"};
+  [[nodiscard]] double volume_to_m3() const { return to_m * to_m * to_m; }
+  [[nodiscard]] std::string volume_label() const { return stated ? label + "^3" : "(" + label + ")^3"; }
+};
+
+Expected<LengthUnit> length_unit(const std::string& name) {
+  if (name.empty()) return LengthUnit{};
+  if (name == "m") return LengthUnit{true, 1.0, "m"};
+  if (name == "cm") return LengthUnit{true, 1e-2, "m"};
+  if (name == "mm") return LengthUnit{true, 1e-3, "m"};
+  return make_error(ErrorCode::kInvalidArgument, fmt::format("--unit must be m, cm or mm, got '{}'", name));
+}
+
 nlohmann::json vec_json(const Vec3& v) { return nlohmann::json::array({v.x(), v.y(), v.z()}); }
 
 nlohmann::json report_json(const std::filesystem::path& file, const mesh::ReadReport& read,
-                           const mesh::MeshReport& r) {
+                           const mesh::MeshReport& r, const LengthUnit& unit) {
   nlohmann::json j;
   j["file"] = file.string();
   j["format"] = read.format;
@@ -48,18 +66,20 @@ nlohmann::json report_json(const std::filesystem::path& file, const mesh::ReadRe
                   {"non_manifold_vertices", r.surface.non_manifold_vertices},
                   {"misoriented_edges", r.surface.misoriented_edges},
                   {"components", r.surface.components},
-                  {"area_m2", r.surface.area_m2}};
-  j["bounding_box_m"] = {{"min", vec_json(r.bbox_min)}, {"max", vec_json(r.bbox_max)},
-                         {"size", vec_json(r.bbox_max - r.bbox_min)}};
-  j["volume_m3"] = r.volume_m3;
+                  {"area", r.surface.area_m2 * unit.to_m * unit.to_m}};
+  // Lengths in metres when the user stated the file's unit, else in the file's own numbers.
+  j["length_unit"] = unit.label;
+  j["bounding_box"] = {{"min", vec_json(r.bbox_min * unit.to_m)}, {"max", vec_json(r.bbox_max * unit.to_m)},
+                       {"size", vec_json((r.bbox_max - r.bbox_min) * unit.to_m)}};
+  j["volume"] = r.volume_m3 * unit.volume_to_m3();
   if (r.tets > 0) {
     j["quality"] = {{"min_dihedral_deg", r.quality.min_dihedral_deg},
                     {"max_dihedral_deg", r.quality.max_dihedral_deg},
                     {"mean_min_dihedral_deg", r.quality.mean_min_dihedral_deg},
                     {"min_radius_ratio", r.quality.min_radius_ratio},
                     {"mean_radius_ratio", r.quality.mean_radius_ratio},
-                    {"min_tet_volume_m3", r.quality.min_volume_m3},
-                    {"max_tet_volume_m3", r.quality.max_volume_m3},
+                    {"min_tet_volume", r.quality.min_volume_m3 * unit.volume_to_m3()},
+                    {"max_tet_volume", r.quality.max_volume_m3 * unit.volume_to_m3()},
                     {"inverted", r.quality.inverted},
                     {"degenerate", r.quality.degenerate}};
   }
@@ -71,8 +91,11 @@ nlohmann::json report_json(const std::filesystem::path& file, const mesh::ReadRe
 }
 
 void print_report(const std::filesystem::path& file, const mesh::ReadReport& read,
-                  const mesh::MeshReport& r) {
-  const Vec3 size = r.bbox_max - r.bbox_min;
+                  const mesh::MeshReport& r, const LengthUnit& unit) {
+  const Vec3 lo = r.bbox_min * unit.to_m;
+  const Vec3 hi = r.bbox_max * unit.to_m;
+  const Vec3 size = hi - lo;
+  const std::string& u = unit.label;
   fmt::print("{} ({})\n", file.string(), read.format);
   fmt::print("  nodes              {}\n", r.nodes);
   fmt::print("  tetrahedra         {}\n", r.tets);
@@ -83,11 +106,10 @@ void print_report(const std::filesystem::path& file, const mesh::ReadReport& rea
              r.surface.closed_outward()    ? "closed, outward"
              : r.surface.closed_manifold() ? "closed, inward"
                                            : "not closed");
-  fmt::print("  bounding box       [{:.4g}, {:.4g}, {:.4g}] to [{:.4g}, {:.4g}, {:.4g}] m\n",
-             r.bbox_min.x(), r.bbox_min.y(), r.bbox_min.z(), r.bbox_max.x(), r.bbox_max.y(),
-             r.bbox_max.z());
-  fmt::print("  size               {:.4g} x {:.4g} x {:.4g} m\n", size.x(), size.y(), size.z());
-  fmt::print("  volume             {:.6g} m^3{}\n", r.volume_m3,
+  fmt::print("  bounding box       [{:.4g}, {:.4g}, {:.4g}] to [{:.4g}, {:.4g}, {:.4g}] {}\n", lo.x(), lo.y(),
+             lo.z(), hi.x(), hi.y(), hi.z(), u);
+  fmt::print("  size               {:.4g} x {:.4g} x {:.4g} {}\n", size.x(), size.y(), size.z(), u);
+  fmt::print("  volume             {:.6g} {}{}\n", r.volume_m3 * unit.volume_to_m3(), unit.volume_label(),
              r.tets > 0 ? "" : " (enclosed by the triangles)");
   if (r.tets > 0) {
     const auto& q = r.quality;
@@ -95,7 +117,8 @@ void print_report(const std::filesystem::path& file, const mesh::ReadReport& rea
                q.min_dihedral_deg, q.max_dihedral_deg, q.mean_min_dihedral_deg);
     fmt::print("  radius ratio       min {:.3f}, mean {:.3f} (1 = regular)\n", q.min_radius_ratio,
                q.mean_radius_ratio);
-    fmt::print("  tet volume         min {:.4g} m^3, max {:.4g} m^3\n", q.min_volume_m3, q.max_volume_m3);
+    fmt::print("  tet volume         min {:.4g} {}, max {:.4g} {}\n", q.min_volume_m3 * unit.volume_to_m3(),
+               unit.volume_label(), q.max_volume_m3 * unit.volume_to_m3(), unit.volume_label());
     fmt::print("  inverted           {}\n", q.inverted);
   }
   if (read.ignored_points + read.ignored_lines + read.ignored_other > 0) {
@@ -103,6 +126,9 @@ void print_report(const std::filesystem::path& file, const mesh::ReadReport& rea
                read.ignored_lines, read.ignored_other);
   }
   for (const std::string& w : read.warnings) fmt::print("  warning: {}\n", w);
+  if (!unit.stated) {
+    fmt::print("  length unit        not stated by the file (lengths as its numbers); --unit m|cm|mm states it\n");
+  }
   if (r.problems.empty()) {
     fmt::print("  problems           none\n");
   } else {
@@ -138,13 +164,15 @@ Expected<void> write_with_surface(const mesh::Mesh& m, const std::filesystem::pa
 }  // namespace
 
 int run_mesh_info(const MeshInfoOptions& options) {
+  const auto unit = length_unit(options.unit);
+  if (!unit) return fail(unit.error());
   auto read = mesh::read_mesh(options.file, make_terminal_progress(options.quiet || options.json));
   if (!read) return fail(read.error());
   const mesh::MeshReport report = mesh::make_mesh_report(read->mesh);
   if (options.json) {
-    fmt::print("{}\n", report_json(options.file, read->report, report).dump(2));
+    fmt::print("{}\n", report_json(options.file, read->report, report, *unit).dump(2));
   } else {
-    print_report(options.file, read->report, report);
+    print_report(options.file, read->report, report, *unit);
   }
   return 0;
 }

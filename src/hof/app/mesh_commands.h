@@ -12,6 +12,8 @@ namespace hof::app {
 
 struct MeshInfoOptions {
   std::filesystem::path file;
+  /// The unit of the file's numbers (m, cm, mm); empty: not stated, lengths as the numbers.
+  std::string unit;
   bool json{false};
   bool quiet{false};
 };
