@@ -497,5 +497,100 @@ TEST(World, AShapeOfAGeometryHoFDoesNotModelIsTheNamedReason) {
       << world->nothing_to_touch;
 }
 
+
+// Found on H3D's own examples (issue 35, the survey of 227 scenes): each a message that named
+// the wrong cause, or content that was lost or felt where H3D would not.
+TEST(World, X3dToggleGroupWithHapticsOffIsSeenNotFelt) {
+  EXPECT_EQ(nothing_to_touch("toggle_shape.x3d", "<ToggleGroup hapticsOn='false'><Shape>" + kSurface +
+                                                     "<Sphere radius='0.05'/></Shape></ToggleGroup>"),
+            "nothing to touch: 1 shape is under a ToggleGroup with hapticsOn false, and no force effect");
+  EXPECT_EQ(nothing_to_touch("toggle_effect.x3d",
+                             "<ToggleGroup hapticsOn='false'><TimeFunctionEffect/></ToggleGroup>"),
+            "nothing to touch: 1 force effect is under a ToggleGroup with hapticsOn false; no Shape");
+  // Haptics on (the default): felt as before.
+  auto world = build_world(write("toggle_on.x3d", x3d("<ToggleGroup><Shape>" + kSurface +
+                                                      "<Sphere radius='0.05'/></Shape></ToggleGroup>")));
+  ASSERT_TRUE(world) << world.error().to_string();
+  EXPECT_EQ(world->bodies.size(), 1u);
+}
+
+TEST(World, X3dGeometryNamedSurfaceIsGeometryNotAHapticNode) {
+  EXPECT_EQ(nothing_to_touch("nurbs.x3d", "<Shape><Appearance><Material/></Appearance><NurbsPatchSurface/></Shape>"),
+            "nothing to touch: no shape has a geometry HoF models (not modelled: NurbsPatchSurface (line 2)), and no "
+            "force effect");
+  // A surface HoF does not have, in an Appearance, is the haptic cause.
+  EXPECT_EQ(nothing_to_touch("surface.x3d", "<Shape><Appearance><LatexSurface/></Appearance><Box/></Shape>"),
+            "nothing to touch: 1 shape is only seen (no haptic surface in its Appearance); haptic nodes HoF does not "
+            "model: LatexSurface (line 2), and no force effect");
+}
+
+TEST(World, X3dNodesOfAnotherFileAreNamedWithThatFile) {
+  write("proto_lib.x3d", x3d("<ProtoDeclare name='Label'><ProtoBody><Group><PythonScript/></Group></ProtoBody>"
+                             "</ProtoDeclare>"));
+  auto world = build_world(write("proto_use.x3d", x3d("<ExternProtoDeclare name='Label' url='\"proto_lib.x3d#Label\"'/>"
+                                                      "<ProtoInstance name='Label'/>")));
+  ASSERT_TRUE(world) << world.error().to_string();
+  EXPECT_TRUE(std::ranges::any_of(world->skipped, [](const std::string& s) { return s == "PythonScript (proto_lib.x3d line 2)"; }))
+      << world->skipped.size();
+}
+
+TEST(World, X3dRefusalOfAFragmentNamesTheLineOfItsRoot) {
+  const fs::path fragment = write("fragment.x3d", "<?xml version='1.0'?>\n<Group><Shape><Box/></Shape></Group>\n");
+  auto world = build_world(fragment);
+  ASSERT_FALSE(world);
+  EXPECT_EQ(world.error().line, 2);
+}
+
+TEST(World, X3dInlineOfAClassicVrmlFileIsNotShownAndTheSceneOpens) {
+  write("classic.wrl", "#VRML V2.0 utf8\nShape { geometry Box {} }\n");
+  auto world = build_world(write("inline_wrl.x3d", x3d("<Inline url='\"classic.wrl\"'/><Shape>" + kSurface +
+                                                       "<Sphere radius='0.05'/></Shape>")));
+  ASSERT_TRUE(world) << world.error().to_string();
+  EXPECT_EQ(world->bodies.size(), 1u);
+  EXPECT_TRUE(std::ranges::any_of(world->warnings, [](const std::string& w) {
+    return w.find("Inline url 'classic.wrl': the classic VRML encoding") != std::string::npos;
+  }));
+}
+
+TEST(World, X3dDynamicTransformPlacesItsChildrenWhereItStarts) {
+  auto world = build_world(write("dynamic.x3d", x3d("<DynamicTransform position='0.2 0 0'><Shape>" + kSurface +
+                                                    "<Sphere radius='0.05'/></Shape></DynamicTransform>")));
+  ASSERT_TRUE(world) << world.error().to_string();
+  ASSERT_EQ(world->bodies.size(), 1u);
+  Vec3 centre = Vec3::Zero();
+  for (const Vec3& v : world->bodies[0].surface.vertices) centre += v;
+  centre /= static_cast<double>(world->bodies[0].surface.vertices.size());
+  EXPECT_NEAR(centre.x(), 0.2, 1e-9);
+  EXPECT_TRUE(std::ranges::any_of(world->warnings, [](const std::string& w) { return w.find("motion") != std::string::npos; }));
+}
+
+TEST(World, X3dOpenHapticsSurfaceIsMagneticOnlyWhenItSaysSo) {
+  for (const auto& [field, kind] : {std::pair{std::string(""), haptics::SurfaceKind::kFrictional},
+                                    std::pair{std::string("magnetic='true'"), haptics::SurfaceKind::kMagnetic}}) {
+    auto world = build_world(write("openhaptics.x3d", x3d("<Shape><Appearance><OpenHapticsSurface " + field +
+                                                          "/></Appearance><Sphere radius='0.05'/></Shape>")));
+    ASSERT_TRUE(world) << world.error().to_string();
+    ASSERT_EQ(world->bodies.size(), 1u);
+    ASSERT_TRUE(world->bodies[0].material);
+    EXPECT_EQ(world->bodies[0].material->kind, kind) << field;
+  }
+}
+
+TEST(World, X3dDeformableShapeWithOnlyAHapticGeometryIsTouchable) {
+  auto world = build_world(write("deform_haptic.x3d",
+                                 x3d("<DeformableShape>" + kSurface + "<IndexedTriangleSet containerField='hapticGeometry' "
+                                     "index='0 1 2 0 2 3'><Coordinate point='0 0 0 1 0 0 1 1 0 0 1 0'/>"
+                                     "</IndexedTriangleSet></DeformableShape>")));
+  ASSERT_TRUE(world) << world.error().to_string();
+  ASSERT_EQ(world->bodies.size(), 1u);
+  EXPECT_TRUE(world->bodies[0].deformable());
+}
+
+TEST(World, X3dZeroSizeGeometryIsSaid) {
+  auto world = build_world(write("zero.x3d", x3d("<Shape>" + kSurface + "<Sphere radius='0'/></Shape>")));
+  ASSERT_TRUE(world) << world.error().to_string();
+  EXPECT_TRUE(std::ranges::any_of(world->warnings, [](const std::string& w) { return w.find("has zero size") != std::string::npos; }));
+}
+
 }  // namespace
 }  // namespace hof::scene

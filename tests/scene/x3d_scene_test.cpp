@@ -94,9 +94,10 @@ TEST(X3dScene, SurfacesKindsAndValues) {
   EXPECT_DOUBLE_EQ(magnetic.static_friction, 0.0);
   EXPECT_DOUBLE_EQ(magnetic.snap_distance_m, 0.01);
 
-  // OpenHapticsSurface derives from MagneticSurface: all defaults.
+  // OpenHapticsSurface derives from MagneticSurface, with `magnetic` false by default
+  // (h3d-nodes.md): a frictional surface with MagneticSurface's defaults.
   EXPECT_EQ(s.shapes[3].surface_type, "OpenHapticsSurface");
-  EXPECT_EQ(s.shapes[3].surface.kind, SurfaceKind::kMagnetic);
+  EXPECT_EQ(s.shapes[3].surface.kind, SurfaceKind::kFrictional);
   EXPECT_DOUBLE_EQ(s.shapes[3].surface.stiffness, 0.5);
   EXPECT_DOUBLE_EQ(s.shapes[3].surface.static_friction, 0.1);
   // DepthMap and HapticTextures surfaces are frictional (their maps are not modelled).
@@ -113,9 +114,12 @@ TEST(X3dScene, SurfacesKindsAndValues) {
 
   // The labels are instances of the ExternProto 'Text' (Prototype.x3d beside the scene).
   EXPECT_FALSE(contains(s.unsupported, "ProtoInstance"));
-  EXPECT_TRUE(contains(s.unsupported, "Text (line"));
+  // Text is in the PROTO's body: named with the file its line is in.
+  EXPECT_TRUE(contains(s.unsupported, "Text (Prototype.x3d line 26)"));
   EXPECT_TRUE(contains(s.unsupported, "ImageTexture 'I' (line"));
-  EXPECT_EQ(s.warnings.size(), 1u);
+  // The list of nodes not modelled, and once per surface HoF approximates what it renders.
+  EXPECT_EQ(s.warnings.size(), 4u);
+  EXPECT_TRUE(contains(s.warnings, "DepthMapSurface: rendered as a frictional surface: its depth map is not modelled"));
 }
 
 TEST(X3dScene, HapticsOptionsPerGeometryAndSharedAppearance) {

@@ -356,11 +356,12 @@ Expected<void> add_x3d(World& w, const std::filesystem::path& file) {
     return make_error(ErrorCode::kParse,
                       fmt::format("not an X3D scene: its root element is <{}> (a scene starts with <X3D> or <Scene>)",
                                   x3d->root_element),
-                      file.string(), 1);
+                      file.string(), x3d->root_line);
   }
   const X3dDeformableDefaults d;
   bool any_deformable = false;
   std::size_t seen_only = 0;             // shapes without a haptic surface
+  std::size_t switched_off = 0;          // shapes with one, under a ToggleGroup hapticsOn false
   std::vector<std::string> empty_touchable;  // shapes with a surface and no triangles
   for (const X3dShape& shape : x3d->shapes) {
     // A rigid shape is felt through its hapticGeometry when it has one (as H3D renders it); a
@@ -374,7 +375,8 @@ Expected<void> add_x3d(World& w, const std::filesystem::path& file) {
       }
       continue;
     }
-    if (!shape.touchable) ++seen_only;
+    if (shape.haptics_switched_off) ++switched_off;
+    else if (!shape.touchable) ++seen_only;
     const std::string name = unique_name(
         w.bodies, !shape.def.empty() ? shape.def : fmt::format("{}@{}", shape.geometry_type.empty() ? "Shape" : shape.geometry_type, shape.line));
     const Appearance appearance{shape.diffuse_color, shape.transparency};
@@ -459,23 +461,29 @@ Expected<void> add_x3d(World& w, const std::filesystem::path& file) {
       causes.push_back(fmt::format("{} shape{} only seen (no haptic surface in {} Appearance)", seen_only,
                                    seen_only == 1 ? " is" : "s are", seen_only == 1 ? "its" : "their"));
     }
-    if (!empty_touchable.empty()) causes.push_back(fmt::format("a haptic surface on no triangles: {}", fmt::join(empty_touchable, ", ")));
-    std::vector<std::string> haptic_nodes;  // not modelled, and haptic: the likely reason
-    for (const std::string& u : x3d->unsupported) {
-      const std::string type = u.substr(0, u.find(' '));
-      if (type.ends_with("Effect") || type.ends_with("Surface") || type.ends_with("Deformer")) haptic_nodes.push_back(u);
+    if (switched_off > 0) {
+      causes.push_back(fmt::format("{} shape{} under a ToggleGroup with hapticsOn false", switched_off,
+                                   switched_off == 1 ? " is" : "s are"));
     }
-    if (!haptic_nodes.empty()) causes.push_back(fmt::format("haptic nodes HoF does not model: {}", fmt::join(haptic_nodes, ", ")));
+    if (x3d->effects_switched_off > 0) {
+      causes.push_back(fmt::format("{} force effect{} under a ToggleGroup with hapticsOn false", x3d->effects_switched_off,
+                                   x3d->effects_switched_off == 1 ? " is" : "s are"));
+    }
+    if (!empty_touchable.empty()) causes.push_back(fmt::format("a haptic surface on no triangles: {}", fmt::join(empty_touchable, ", ")));
+    // Not modelled, and haptic (an Appearance's surface, an effect, a deformer): the likely reason.
+    if (!x3d->unsupported_haptic.empty()) {
+      causes.push_back(fmt::format("haptic nodes HoF does not model: {}", fmt::join(x3d->unsupported_haptic, ", ")));
+    }
     if (x3d->shapes.empty()) causes.push_back("no Shape");
     if (causes.empty()) {
-      // Shapes whose geometry HoF does not model (Text, say): named among the nodes not modelled.
-      std::vector<std::string> geometry;
-      for (const std::string& u : x3d->unsupported) geometry.push_back(u);
-      causes.push_back(geometry.empty() ? std::string("no shape has a geometry HoF models")
-                                        : fmt::format("no shape has a geometry HoF models (not modelled: {})",
-                                                      fmt::join(geometry, ", ")));
+      // Shapes whose geometry HoF does not model (Text, NurbsPatchSurface, ...): those geometries.
+      causes.push_back(x3d->unsupported_geometry.empty()
+                           ? std::string("no shape has a geometry HoF models")
+                           : fmt::format("no shape has a geometry HoF models (not modelled: {})",
+                                         fmt::join(x3d->unsupported_geometry, ", ")));
     }
-    w.nothing_to_touch = fmt::format("nothing to touch: {}, and no force effect", fmt::join(causes, "; "));
+    w.nothing_to_touch = fmt::format("nothing to touch: {}{}", fmt::join(causes, "; "),
+                                     x3d->effects_switched_off > 0 ? "" : ", and no force effect");
     w.warnings.push_back(fmt::format("{}: {} (shown, not felt)", file.string(), w.nothing_to_touch));
   }
   return {};

@@ -17,6 +17,7 @@
 #include <array>
 #include <memory>
 #include <optional>
+#include <set>
 #include <cmath>
 #include <fstream>
 #include <map>
@@ -69,6 +70,7 @@ class X3dReader {
     const pugi::xml_node root = doc.xml.document_element();
     if (!root) source_.fail_at(scene_.file, 1, ErrorCode::kParse, "no root element");
     scene_.root_element = root.name();
+    scene_.root_line = source_.line_of(root);
     inline_stack_.push_back(source_.weakly_canonical(scene_.file));
     visit(root, Mat4::Identity());
     if (!scene_.unsupported.empty()) {
@@ -82,13 +84,23 @@ class X3dReader {
   }
 
  private:
-  void unsupported(pugi::xml_node original, std::string_view extra = {}) {
+  enum class Slot : std::uint8_t { kOther, kGeometry, kHaptic };
+  // A node not modelled, named with its line — and its file when that is not the scene's (an
+  // Inline'd file, the file of a PROTO's declaration), so the line can be found.
+  void unsupported(pugi::xml_node original, std::string_view extra = {}, Slot slot = Slot::kOther) {
     const pugi::xml_node n = source_.resolve_use(original);
     std::string def = n.attribute("DEF").as_string();
     std::string entry = def.empty() ? std::string(n.name()) : fmt::format("{} '{}'", n.name(), def);
     if (std::string_view(n.name()) == "ProtoInstance") entry += fmt::format(" '{}'", n.attribute("name").as_string());
     if (!extra.empty()) entry += fmt::format(" {}", extra);
-    scene_.unsupported.push_back(fmt::format("{} (line {})", entry, source_.line_of(original)));
+    const fs::path& file = source_.doc_of(original).file;
+    entry = file == scene_.file ? fmt::format("{} (line {})", entry, source_.line_of(original))
+                                : fmt::format("{} ({} line {})", entry, file.filename().string(), source_.line_of(original));
+    const std::string_view type = n.name();
+    if (slot == Slot::kOther && (type.ends_with("Effect") || type.ends_with("Deformer"))) slot = Slot::kHaptic;
+    if (slot == Slot::kGeometry) scene_.unsupported_geometry.push_back(entry);
+    if (slot == Slot::kHaptic) scene_.unsupported_haptic.push_back(entry);
+    scene_.unsupported.push_back(std::move(entry));
   }
 
   // ---- scene graph
@@ -97,7 +109,7 @@ class X3dReader {
   // turns its children toward the viewer: HoF, with no viewer to face, leaves them unturned.
   static bool is_group(std::string_view t) {
     return t == "X3D" || t == "Scene" || t == "Group" || t == "StaticGroup" || t == "HapticLayeredGroup" ||
-           t == "ToggleGroup" || t == "Collision" || t == "Billboard" || t == "Anchor";
+           t == "Collision" || t == "Billboard" || t == "Anchor";
   }
   static bool is_geometry(std::string_view t) {
     return t == "Sphere" || t == "Box" || t == "Cylinder" || t == "Cone" || t == "IndexedTriangleSet" ||
@@ -152,6 +164,32 @@ class X3dReader {
       layer_ = outer;
     } else if (is_group(t)) {
       visit_children(n, X);
+    } else if (t == "ToggleGroup") {
+      // H3D ToggleGroup: graphicsOn / hapticsOn switch its children's drawing and feel.
+      // Haptics off: its shapes are seen only, its force effects not rendered; graphics off
+      // as well: nothing of it is shown either.
+      const bool haptics_on = source_.boolean(n, "hapticsOn", true);
+      const bool graphics_on = source_.boolean(n, "graphicsOn", true);
+      if (!haptics_on && !graphics_on) return;
+      if (!haptics_on) {
+        ++haptics_off_;
+        visit_children(n, X);
+        --haptics_off_;
+      } else {
+        visit_children(n, X);
+      }
+    } else if (t == "DynamicTransform") {
+      // H3D DynamicTransform: a rigid body moved by its own dynamics (mass, momentum, force).
+      // HoF places its children where it starts — `position`, `orientation` — and says once
+      // that it does not move them.
+      const Vec3 p = source_.vec3(n, "position", Vec3::Zero());
+      const Mat4 R = axis_angle(source_.numbers(n, "orientation", 4, {0, 0, 1, 0}));
+      if (!dynamic_transform_noted_) {
+        source_.warn(n, "DynamicTransform: its children are placed where it starts (position, orientation); its motion "
+                        "(mass, momentum, force, torque) is not simulated");
+        dynamic_transform_noted_ = true;
+      }
+      visit_children(n, X * translation(p) * R);
     } else if (t == "Switch") {
       // 19775-1, Switch: only the child whichChoice names is traversed; −1 (the default) or an
       // index past the children: none.
@@ -175,6 +213,9 @@ class X3dReader {
       device_info(n);
     } else if (t == "GlobalSettings") {
       global_settings(n);
+    } else if (haptics_off_ > 0 && (t.ends_with("Effect") || t == "ForceField")) {
+      source_.warn(n, fmt::format("{}: under a ToggleGroup with hapticsOn false, not rendered", t));
+      ++scene_.effects_switched_off;
     } else if (t == "SpringEffect") {
       haptics::SpringEffect s;
       s.position_m = (X * source_.vec3(n, "position", Vec3::Zero()).homogeneous()).head<3>();
@@ -225,6 +266,13 @@ class X3dReader {
       if (detail::x3d_is_remote(url)) continue;
       const fs::path path = folder / url.substr(0, url.find('#'));
       if (!fs::is_regular_file(path)) continue;
+      if (is_classic_vrml(path)) {
+        // H3DViewer reads the classic encoding too; HoF reads X3D's XML only: the Inline is
+        // not shown, the scene still opens.
+        source_.warn(n, fmt::format("Inline url '{}': the classic VRML encoding (.wrl, #VRML / #X3D) is not read: "
+                                    "not shown", url));
+        return;
+      }
       const fs::path key = source_.weakly_canonical(path);
       if (std::ranges::find(inline_stack_, key) != inline_stack_.end()) {
         std::string chain;
@@ -245,6 +293,17 @@ class X3dReader {
                          : fmt::format("Inline: none of its urls is a file beside the scene ({}): not shown",
                                        n.attribute("url").as_string()));
   }
+  // A file in X3D's classic (VRML) encoding: by its extension or its header line.
+  static bool is_classic_vrml(const fs::path& path) {
+    const std::string ext = path.extension().string();
+    if (ext == ".wrl" || ext == ".wrz" || ext == ".x3dv" || ext == ".x3dvz") return true;
+    std::ifstream in(path, std::ios::binary);
+    char head[5] = {};
+    in.read(head, 5);
+    const std::string_view h(head, static_cast<std::size_t>(in.gcount()));
+    return h.starts_with("#VRML") || h.starts_with("#X3D");
+  }
+
   // X3D Transform: T · C · R · SR · S · SR⁻¹ · C⁻¹.
   Mat4 transform_matrix(pugi::xml_node n) const {
     const Vec3 t = source_.vec3(n, "translation", Vec3::Zero());
@@ -333,11 +392,42 @@ class X3dReader {
       } else if (s.deformable && (field == "deformer" || ends_with(t, "Deformer"))) {
         s.deformer_type = t;
       } else {
-        unsupported(c_orig);
+        // A Shape's children are its appearance and its geometry (a node's default
+        // containerField): what is not an Appearance sits in the geometry slot.
+        const bool in_geometry_slot = field.empty() || field == "geometry" || field == "hapticGeometry";
+        unsupported(c_orig, {}, in_geometry_slot ? Slot::kGeometry : Slot::kOther);
       }
     }
+    if (s.deformable && s.mesh_W.triangles.empty() && !s.haptic_mesh_W.triangles.empty()) {
+      // A DeformableShape with only a hapticGeometry: that geometry is what is felt (H3D
+      // renders it), so it is the one simulated.
+      s.geometry_type = s.haptic_geometry_type;
+      s.mesh_W = std::move(s.haptic_mesh_W);
+      s.haptic_mesh_W = {};
+    }
+    if (s.touchable && haptics_off_ > 0) {
+      source_.warn(original, "Shape under a ToggleGroup with hapticsOn false: seen, not felt");
+      s.touchable = false;
+      s.haptics_switched_off = true;
+    }
+    warn_if_zero_size(original, s);
     s.layer = layer_;
     scene_.shapes.push_back(std::move(s));
+  }
+
+  // A geometry scaled to nothing (radius 0, a Transform's scale 0) has no surface to touch.
+  void warn_if_zero_size(pugi::xml_node original, const X3dShape& s) {
+    const mesh::TriMesh& m = !s.haptic_mesh_W.triangles.empty() ? s.haptic_mesh_W : s.mesh_W;
+    if (m.triangles.empty()) return;
+    Eigen::AlignedBox3d bound;
+    for (const Vec3& v : m.vertices) bound.extend(v);
+    const Vec3 size = bound.sizes();
+    int flat = 0;
+    for (int k = 0; k < 3; ++k) flat += size[k] <= 1e-12 ? 1 : 0;
+    if (flat >= 2) {
+      source_.warn(original, fmt::format("{} has zero size ({} x {} x {} m): nothing to see or touch",
+                                         s.geometry_type.empty() ? "Shape" : s.geometry_type, size.x(), size.y(), size.z()));
+    }
   }
 
   static bool is_surface(std::string_view t) {
@@ -374,7 +464,9 @@ class X3dReader {
           s.surface = surface(first);
         }
       } else {
-        unsupported(c_orig);
+        const std::string_view field = c_orig.attribute("containerField").as_string();
+        const bool haptic = field == "surface" || t.ends_with("Surface");
+        unsupported(c_orig, {}, haptic ? Slot::kHaptic : Slot::kOther);
       }
     }
   }
@@ -382,7 +474,9 @@ class X3dReader {
   haptics::SurfaceMaterial surface(pugi::xml_node n) {
     const std::string_view t = n.name();
     haptics::SurfaceMaterial m;
-    const bool magnetic = t == "MagneticSurface" || t == "OpenHapticsSurface";
+    // OpenHapticsSurface is magnetic only when its `magnetic` field says so (default false).
+    const bool magnetic =
+        t == "MagneticSurface" || (t == "OpenHapticsSurface" && source_.boolean(n, "magnetic", false));
     m.kind = t == "SmoothSurface" ? SurfaceKind::kSmooth : magnetic ? SurfaceKind::kMagnetic : SurfaceKind::kFrictional;
     m.stiffness = source_.number(n, "stiffness", 0.5);
     m.damping_n_s_per_m = source_.number(n, "damping", 0.0);
@@ -395,6 +489,15 @@ class X3dReader {
       m.dynamic_friction = source_.number(n, "dynamicFriction", 0.4);
     }
     if (magnetic) m.snap_distance_m = source_.number(n, "snapDistance", 0.01);
+    // What HoF renders in place of H3D's surfaces it does not have, said once per type.
+    if (t == "OpenHapticsSurface" || t == "DepthMapSurface" || t == "HapticTexturesSurface") {
+      const std::string_view as = t == "OpenHapticsSurface" ? "HoF's frictional (or, with magnetic true, magnetic) surface "
+                                                              "with its stiffness, damping and friction (HLAPI's own "
+                                                              "rendering is not modelled)"
+                                  : t == "DepthMapSurface" ? "a frictional surface: its depth map is not modelled"
+                                                           : "a frictional surface: its texture maps are not modelled";
+      if (approximated_.insert(std::string(t)).second) source_.warn(n, fmt::format("{}: rendered as {}", t, as));
+    }
     for (pugi::xml_node c : n.children())  // texture maps and the like
       if (is_child(c)) unsupported(c);
     return m;
@@ -770,6 +873,9 @@ class X3dReader {
   X3dScene scene_;
   detail::X3dSource source_{scene_.warnings};  // after scene_: it writes scene_.warnings
   int layer_{0};  // haptic layer of the shapes being visited
+  int haptics_off_{0};  // ToggleGroups with hapticsOn false around the nodes being visited
+  bool dynamic_transform_noted_{false};
+  std::set<std::string, std::less<>> approximated_;  // surface types already said to be approximated
 };
 
 }  // namespace

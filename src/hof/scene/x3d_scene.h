@@ -72,7 +72,8 @@ struct X3dShape {
   std::string haptic_geometry_type;  ///< Shape.hapticGeometry node type ("" if none)
   mesh::TriMesh haptic_mesh_W;       ///< hapticGeometry, world frame (empty if none)
   bool solid{true};            ///< X3D `solid` of the geometry
-  bool touchable{false};       ///< has an Appearance.surface
+  bool touchable{false};       ///< has an Appearance.surface (and haptics on: ToggleGroup hapticsOn)
+  bool haptics_switched_off{false};  ///< has a surface, under a ToggleGroup with hapticsOn false
   std::string surface_type;    ///< "SmoothSurface", ... ("" if none)
   haptics::SurfaceMaterial surface;  ///< meaningful when touchable
   bool deformable{false};      ///< a DeformableShape
@@ -112,12 +113,19 @@ struct X3dViewpoint {
 struct X3dScene {
   std::filesystem::path file;
   std::string root_element;               ///< "X3D" or "Scene" for a scene (a settings file: "DeviceInfo", ...)
+  std::int64_t root_line{1};              ///< line of the root element
   std::vector<X3dShape> shapes;
   std::vector<X3dDevice> devices;         ///< DeviceInfo.device, in order (= device index)
   std::optional<X3dGlobalSettings> global_settings;
   haptics::ForceEffects force_effects;    ///< positions and forces in the world frame
   std::vector<X3dViewpoint> viewpoints;
   std::vector<std::string> unsupported;   ///< "TYPE 'DEF' (line N)" of every node not modelled
+                                          ///< ("(FILE line N)" when in an Inline'd or PROTO file)
+  /// Of those, the ones in a Shape's geometry slot (Text, NurbsPatchSurface, ...) and the
+  /// haptic ones (an Appearance's surface, a force effect, a deformer): what a scene with
+  /// nothing to touch names as the cause.
+  std::vector<std::string> unsupported_geometry, unsupported_haptic;
+  int effects_switched_off{0};            ///< force effects under a ToggleGroup with hapticsOn false
   std::vector<std::string> warnings;      ///< "FILE:LINE: ..." notes
 };
 
