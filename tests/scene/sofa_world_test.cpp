@@ -14,6 +14,7 @@
 #include "hof/haptics/device.h"
 #include "hof/mesh/mesh_io.h"
 #include "hof/procedures/needle_model.h"
+#include "hof/scene/device_config.h"
 #include "hof/scene/project.h"
 #include "hof/scene/world.h"
 
@@ -108,7 +109,7 @@ TEST(SofaWorld, TheDefaultProbeStaysUnderTheDeviceLimitOnEveryBundledAndAnchorSc
     auto world = build_world(scene);
     ASSERT_TRUE(world) << world.error().to_string();
     ASSERT_TRUE(world->default_probe);
-    auto device = haptics::open_device(world->device);
+    auto device = scene::open_device(world->device);
     ASSERT_TRUE(device) << device.error().to_string();
     const double limit = (*device)->spec().max_force_n;
     coupling::SessionConfig config = world->config;
@@ -132,7 +133,7 @@ TEST(SofaWorld, TheDefaultProbeStaysUnderTheDeviceLimitOnEveryBundledAndAnchorSc
 TEST(SofaWorld, TheBundledNeedleResistsInsertionAfterThePuncture) {
   auto world = build_world(kExamples / "needle-liver.hof");
   ASSERT_TRUE(world) << world.error().to_string();
-  auto device = haptics::open_device(world->device);
+  auto device = scene::open_device(world->device);
   ASSERT_TRUE(device) << device.error().to_string();
   coupling::SessionConfig config = world->config;
   config.haptics.realtime_priority = false;

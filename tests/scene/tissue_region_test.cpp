@@ -12,6 +12,7 @@
 #include "hof/coupling/session.h"
 #include "hof/haptics/device.h"
 #include "hof/mechanics/mechanical_model.h"
+#include "hof/scene/device_config.h"
 #include "hof/scene/project.h"
 #include "hof/scene/world.h"
 
@@ -30,7 +31,7 @@ Palpation palpate(const HofProject& project) {
   auto world = build_world(project, kExamples / "liver-tumour-palpation.hof");
   EXPECT_TRUE(world) << world.error().to_string();
   if (!world) return {};
-  auto device = haptics::open_device(world->device);
+  auto device = scene::open_device(world->device);
   EXPECT_TRUE(device) << device.error().to_string();
   const double duration = (*device)->script_duration_s();
   coupling::SessionConfig config = world->config;

@@ -1,6 +1,7 @@
 // The one builder: X3D geometry touched where H3D draws it, rigid and deformable bodies,
 // effect-only worlds, SOFA scenes with several bodies, project parameters, the default probe.
 
+#include "hof/scene/device_config.h"
 #include "hof/scene/world.h"
 
 #include <gtest/gtest.h>
@@ -386,7 +387,7 @@ TEST(World, ChangesThroughTheCommandSeamAreInTheNextSavedProject) {
   ASSERT_TRUE(write_project(p, file));
   auto world = build_world(file);
   ASSERT_TRUE(world) << world.error().to_string();
-  auto device = haptics::open_device(world->device);
+  auto device = scene::open_device(world->device);
   ASSERT_TRUE(device);
   coupling::SessionConfig config = world->config;
   config.haptics.realtime_priority = false;
@@ -421,7 +422,7 @@ TEST(World, DefaultProbeStartsOutsideAndPressesWhateverTheUpAxis) {
     auto world = build_world(file);
     ASSERT_TRUE(world) << world.error().to_string();
     EXPECT_TRUE(world->default_probe);
-    auto device = haptics::open_device(world->device);
+    auto device = scene::open_device(world->device);
     ASSERT_TRUE(device) << device.error().to_string();
     auto session = coupling::Session::make(std::move(world->bodies), std::move(*device), world->config);
     ASSERT_TRUE(session);

@@ -39,6 +39,7 @@
 #include "hof/mesh/hex_grid.h"
 #include "hof/mesh/mesh_io.h"
 #include "hof/procedures/needle.h"
+#include "hof/scene/device_config.h"
 #include "hof/scene/project.h"
 #include "hof/scene/world.h"
 
@@ -161,7 +162,7 @@ int run_session(const RunOptions& options) {
     if (!options.quiet) std::fprintf(stderr, "hof: warning: %s\n", valid_utf8(w).c_str());
   }
   // (The components not simulated are in the reader's warnings above, and in summary.json.)
-  auto device = haptics::open_device(world->device);
+  auto device = scene::open_device(world->device);
   if (!device) {
     Error e = device.error();
     e.message = options.device ? fmt::format("{} (the device given by --device)", e.message)
@@ -328,7 +329,7 @@ int run_check(const CheckOptions& options) {
       std::printf("  not needed in HoF: %zu component(s): %s\n", world->ignored.size(), list.c_str());
     }
     for (const auto& w : world->warnings) std::printf("warning: %s\n", valid_utf8(w).c_str());
-    if (auto device = haptics::open_device(world->device); !device) {
+    if (auto device = scene::open_device(world->device); !device) {
       std::printf("%s\n", device.error().to_string().c_str());
       ++problems;
     }

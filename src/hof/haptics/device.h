@@ -92,7 +92,8 @@ class Device {
   virtual void stop_servo() {}
 };
 
-/// Opens a device from a spec string:
+/// Opens a device from a spec string (transitional: callers above coupling use
+/// scene::open_device; this stays while coupling's SetDevice carries a spec string):
 ///   replay:PATH.csv[,loop]                       recorded trajectory (docs/device-protocol.md)
 ///   scripted:poke[,key=value...]                 built-in motions: poke, press-and-slide, palpate, circle
 ///   virtual-hand:MOTION[,key=value...]           compliant hand following a scripted motion

@@ -32,6 +32,7 @@
 #include "hof/mesh/mesh_report.h"
 #include "hof/mesh/tetrahedralize.h"
 #include "hof/procedures/needle.h"
+#include "hof/scene/device_config.h"
 #include "hof/scene/project.h"
 #include "hof/scene/world.h"
 
@@ -332,7 +333,7 @@ class PyWorld {
   }
 
   static std::unique_ptr<PyWorld> make(scene::World world) {
-    auto device = haptics::open_device(world.device);
+    auto device = scene::open_device(world.device);
     if (!device) {
       Error e = device.error();
       e.message = fmt::format("{} (device of {})", e.message, world.file.string());

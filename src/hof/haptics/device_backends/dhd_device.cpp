@@ -205,13 +205,8 @@ Expected<std::unique_ptr<Device>> open_dhd_device(const DhdConfig& config) {
   const auto handle = static_cast<char>(id);
   const DhdModel model = dhd_model(api.get_system_type(handle));
   DeviceSpec spec;
-  if (!config.model.empty()) {
-    auto given = device_spec_for_model(config.model);
-    if (!given) {
-      api.close(handle);
-      return std::unexpected(given.error());
-    }
-    spec = *given;
+  if (config.model) {
+    spec = *config.model;
   } else {
     spec.model = model.name;
     if (api.get_system_name) {

@@ -19,6 +19,7 @@
 
 #include <atomic>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "hof/core/error.h"
@@ -29,7 +30,7 @@ namespace hof::haptics {
 struct DhdConfig {
   int index{0};            ///< which device, in the SDK's enumeration order
   std::string library;     ///< the SDK's file; empty: $HOF_DHD_LIBRARY, else libdhd.so from the loader's path
-  std::string model;       ///< a device_spec_for_model() name to use instead of the SDK's model ("" = the SDK's)
+  std::optional<DeviceSpec> model;  ///< a known model's figures (device_spec_for_model) instead of what the device reports
 };
 
 /// The Force Dimension model of a dhdGetSystemType() value and its figures: name, maximum

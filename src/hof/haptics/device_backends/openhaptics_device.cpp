@@ -290,13 +290,8 @@ Expected<std::unique_ptr<Device>> open_openhaptics_device(const OpenHapticsConfi
   api.get_doublev(kNominalMaxDamping, &damping);
   api.get_doublev(kUsableWorkspaceDimensions, workspace.data());
   const char* model = api.get_string(kDeviceModelType);
-  if (!config.model.empty()) {
-    auto given = device_spec_for_model(config.model);
-    if (!given) {
-      api.disable_device(handle);
-      return std::unexpected(given.error());
-    }
-    spec = *given;
+  if (config.model) {
+    spec = *config.model;
   } else {
     spec.model = model && *model ? model : "OpenHaptics device";
     // The HD API's figures: N, N/mm, N·s/mm, and the usable workspace's box in mm

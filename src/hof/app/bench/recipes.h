@@ -1,0 +1,90 @@
+#pragma once
+/// @file
+/// The bench's model recipes: the four standard livers and a hexahedral sparse grid over the
+/// medium one, and the mechanics settings of each cell (the thesis' and the physiological
+/// ones, the solvers, the haptic-rate CG). Every timer builds its model from these, so a cell
+/// means the same model wherever it is timed.
+
+#include <cstddef>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "hof/core/error.h"
+#include "hof/coupling/session.h"
+#include "hof/haptics/device_backends/scripted_device.h"
+#include "hof/mechanics/mechanical_model.h"
+#include "hof/mesh/boundary.h"
+#include "hof/mesh/liver_generator.h"
+
+namespace hof::app::bench {
+
+/// A body of the bench: its volume mesh (tetrahedra or hexahedra) and its surface.
+struct Body {
+  std::string name;
+  std::vector<Vec3> nodes;
+  std::vector<mesh::Tet> tets;
+  std::vector<mesh::Hex> hexes;
+  std::size_t surface_triangles{0};
+  mesh::TriMesh surface;
+};
+
+/// The bodies, each generated once on first use (the fine liver takes seconds).
+class Bodies {
+ public:
+  /// `simple`, `coarse`, `medium`, `fine` (mesh::LiverResolution) or `sparse-grid`.
+  [[nodiscard]] Expected<const Body*> by_name(const std::string& name);
+
+ private:
+  Expected<const Body*> liver(mesh::LiverResolution r);
+  Expected<const Body*> sparse_grid();
+  std::map<std::string, Body> bodies_;
+};
+
+enum class Field { kSprings, kSmall, kLarge, kNeoHookean, kHexahedra };
+enum class Settings { kThesis, kPhysiological };
+enum class Solver { kExplicitEuler, kSymplecticEuler, kRungeKutta4, kStatic, kImplicitCg, kImplicitLdlt };
+
+[[nodiscard]] const char* field_name(Field f);
+[[nodiscard]] const char* settings_name(Settings s);
+[[nodiscard]] const char* solver_name(Solver s);
+[[nodiscard]] std::string dt_label(double dt);
+
+/// The body with a force field and settings, implicit Euler + CG 25 at dt 0.02 s, resting on
+/// its lowest 4 mm.
+[[nodiscard]] mechanics::ModelConfig body_config(const Body& b, Field field, Settings s);
+/// Switches the ODE (and linear) solver of `c` and sets its step.
+void set_solver(mechanics::ModelConfig& c, Solver s, double dt_s);
+
+/// The haptic-rate cells' name: warm-started two-level CG (use_haptic_rate_solver).
+inline constexpr const char* kHapticRateCell = "two-level-warm";
+
+/// The haptic-rate CG: few warm-started iterations, the matrix assembled every few steps.
+void use_haptic_rate_cg(mechanics::ModelConfig& c);
+
+/// The physiological co-rotational liver with implicit Euler + CG at dt: most of the matrix
+/// past the thesis' own figures. Gravity off where the organ is pressed (carried by the tissue
+/// around it, as in the example scenes).
+struct CorotationalSetup {
+  double dt_s;
+  int iterations{25};
+  bool haptic_rate_cg{false};
+  bool gravity{true};
+};
+
+[[nodiscard]] mechanics::ModelConfig corotational_config(const Body& b, const CorotationalSetup& s);
+
+/// The co-rotational liver of the coupling cells: no gravity, strongly damped (quasi-static
+/// press), CG 100 to 1e-9.
+[[nodiscard]] mechanics::ModelConfig coupling_press_config(const Body& b);
+
+/// The surface vertex every press comes down on: the highest near the middle of the top.
+[[nodiscard]] std::size_t pressed_vertex(const Body& b, const mesh::BoundarySurface& boundary);
+
+/// The press of the framework cells: from 1 cm above the point, 8 mm deep at 2 cm/s, held.
+[[nodiscard]] haptics::MotionConfig framework_press(const Vec3& top);
+
+/// The session of the framework cells: 1 kHz Ruspini renderer, the given coupling.
+[[nodiscard]] coupling::SessionConfig framework_session_config(coupling::ContactCoupling mode);
+
+}  // namespace hof::app::bench
