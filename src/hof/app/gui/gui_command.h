@@ -5,6 +5,7 @@
 /// names, a scene edit, a region, the needle, recording, the view). A panel returns them; the
 /// window applies them, in order, after the panel is drawn.
 
+#include <cstdint>
 #include <filesystem>
 #include <string>
 #include <variant>
@@ -26,6 +27,23 @@ struct SetAttribute {
 /// The scene tree's structural edit of a body's node (the world's models rebuilt from it).
 struct EditScene {
   scene::SceneEdit edit;
+};
+/// A component added to a body's node, its values from the body's current ones.
+struct AddComponent {
+  enum class Kind : std::uint8_t {
+    kTetrahedronFem,  ///< a TetrahedronFEMForceField with the body's E and ν
+    kMeshSprings,     ///< a MeshSpringForceField of the same order of stiffness
+    kPinNearStylus,   ///< a FixedProjectiveConstraint of the nodes near the stylus
+  };
+  std::string body;
+  Kind kind{Kind::kTetrahedronFem};
+  double pin_radius_m{0.0};  ///< kPinNearStylus: 0 = a twentieth of the scene
+};
+/// A spherical material region at the stylus, stiffer by `modulus_factor` than the body.
+struct AddRegionAtStylus {
+  std::string body;
+  double radius_m{0.0};  ///< 0: a tenth of the scene
+  double modulus_factor{4.0};
 };
 /// A component switched to another type, with the values that carry over (E, ν, masses).
 struct SwitchComponent {
@@ -63,7 +81,7 @@ struct Report {
 };
 }  // namespace action
 
-using GuiCommand = std::variant<coupling::Command, action::SetAttribute, action::EditScene, action::SwitchComponent, action::SetRegions,
+using GuiCommand = std::variant<coupling::Command, action::SetAttribute, action::EditScene, action::AddComponent, action::AddRegionAtStylus, action::SwitchComponent, action::SetRegions,
                                 action::SetEffects, action::MountNeedle, action::SetAnimating, action::ResetWorld,
                                 action::SetRealtimePacing, action::StartRecording, action::StopRecording, action::ResetCamera,
                                 action::DismissError, action::Report>;

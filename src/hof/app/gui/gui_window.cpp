@@ -408,6 +408,10 @@ Expected<void> GuiWindow::apply(const GuiCommand& command) {
           return apply_set(c.element, c.attribute, c.value);
         } else if constexpr (std::is_same_v<T, action::EditScene>) {
           return change_structure(c.edit, std::nullopt);
+        } else if constexpr (std::is_same_v<T, action::AddComponent>) {
+          return add_component(c);
+        } else if constexpr (std::is_same_v<T, action::AddRegionAtStylus>) {
+          return add_region_at_stylus(c);
         } else if constexpr (std::is_same_v<T, action::SwitchComponent>) {
           return switch_component(c.body, c.component, c.choice);
         } else if constexpr (std::is_same_v<T, action::SetRegions>) {

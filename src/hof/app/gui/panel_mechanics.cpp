@@ -17,54 +17,19 @@ namespace {
 /// Below a body's components: add one (a force field, the nodes near the stylus pinned), and
 /// the body's material regions.
 void structure_editor(const WorldView& w, const BodyView& b, MechanicsPanelState& ui, GuiCommands& out) {
-  if (!b.config) return;
-  const double size = w.scene_size();
+  if (!b.structure) return;
   const std::string id = b.name;
   // Add a component.
   ImGui::SetNextItemWidth(200);
   if (ImGui::BeginCombo(fmt::format("add##{}", id).c_str(), "add a component...")) {
-    const auto unique = [&](const std::string& base) {
-      std::string name = base;
-      for (int n = 2; std::any_of(b.parameters.begin(), b.parameters.end(), [&](const std::string& p) { return p.starts_with(name + "/"); }) ||
-                      std::any_of(b.config->fixed.begin(), b.config->fixed.end(), [&](const auto& f) { return f.name == name; }) ||
-                      std::any_of(b.config->force_fields.begin(), b.config->force_fields.end(), [&](const auto& f) { return f.name == name; });
-           ++n) {
-        name = base + std::to_string(n);
-      }
-      return name;
-    };
-    const auto [young, poisson] = elastic_moduli(*b.config);
-    scene::SceneEdit edit{scene::SceneEdit::Action::kAdd, b.name, "", "", {}};
-    if (ImGui::Selectable("TetrahedronFEMForceField")) {
-      edit.component = unique("FEM");
-      edit.type = "TetrahedronFEMForceField";
-      edit.attributes = {{"youngModulus", fmt::format("{}", young)}, {"poissonRatio", fmt::format("{}", poisson)}, {"method", "large"}};
-    }
-    if (ImGui::Selectable("MeshSpringForceField")) {
-      edit.component = unique("springs");
-      edit.type = "MeshSpringForceField";
-      const double edge = mean_edge_length(*b.config);  // per spring ~E·l; SOFA divides by l
-      edit.attributes = {{"stiffness", fmt::format("{}", young * edge * edge)}};
-    }
+    using Kind = action::AddComponent::Kind;
+    if (ImGui::Selectable("TetrahedronFEMForceField")) out.push_back(action::AddComponent{b.name, Kind::kTetrahedronFem, 0.0});
+    if (ImGui::Selectable("MeshSpringForceField")) out.push_back(action::AddComponent{b.name, Kind::kMeshSprings, 0.0});
     const bool at_stylus = w.last.valid;
     if (ImGui::Selectable("FixedProjectiveConstraint: the nodes near the stylus", false, at_stylus ? 0 : ImGuiSelectableFlags_Disabled)) {
-      const double radius = ui.pin_radius_m > 0.0f ? ui.pin_radius_m : 0.05 * size;
-      std::string indices;
-      for (std::size_t i = 0; i < b.config->positions.size(); ++i) {
-        if ((b.config->positions[i] - w.last.proxy).norm() <= radius) indices += (indices.empty() ? "" : " ") + std::to_string(i);
-      }
-      if (indices.empty()) {
-        out.push_back(action::Report{fmt::format("no node of {} within {:.3g} of the stylus: nothing to pin", b.name, radius), true});
-      } else {
-        edit.component = unique("pin");
-        edit.type = "FixedProjectiveConstraint";
-        edit.attributes = {{"indices", indices}};
-      }
+      out.push_back(action::AddComponent{b.name, Kind::kPinNearStylus, ui.pin_radius_m});
     }
     ImGui::EndCombo();
-    if (!edit.type.empty()) {
-      out.push_back(action::EditScene{edit});
-    }
   }
   ImGui::SetNextItemWidth(120);
   ImGui::InputFloat(fmt::format("pin radius (0: auto)##{}", id).c_str(), &ui.pin_radius_m, 0.0f, 0.0f, "%.4g");
@@ -94,22 +59,11 @@ void structure_editor(const WorldView& w, const BodyView& b, MechanicsPanelState
   ImGui::SameLine();
   ImGui::SetNextItemWidth(70);
   ImGui::InputFloat(fmt::format("x E##{}", id).c_str(), &ui.region_factor, 0.0f, 0.0f, "%.3g");
-  const bool has_tets = std::any_of(b.config->force_fields.begin(), b.config->force_fields.end(),
+  const bool has_tets = std::any_of(b.structure->force_fields.begin(), b.structure->force_fields.end(),
                                     [](const auto& f) { return f.tetrahedron_fem || f.neo_hookean || f.triangle_fem || f.hexahedron_fem; });
   if (!has_tets) ImGui::TextDisabled("(regions need an FEM force field)");
   if (has_tets && ImGui::Button(fmt::format("+ region at the stylus##{}", id).c_str())) {
-    if (!w.last.valid) {
-      out.push_back(action::Report{"the stylus has no position yet", true});
-    } else {
-      scene::MaterialRegion r;
-      r.name = fmt::format("region{}", w.project.regions.size() + 1);
-      r.body = b.name;
-      r.center = w.last.contact ? w.last.contact_point : w.last.proxy;
-      r.radius = ui.region_radius_m > 0.0f ? ui.region_radius_m : 0.1 * size;
-      r.young_modulus_pa = elastic_moduli(*b.config).first * std::max(static_cast<double>(ui.region_factor), 1e-3);
-      regions = w.project.regions;
-      regions->push_back(r);
-    }
+    out.push_back(action::AddRegionAtStylus{b.name, ui.region_radius_m, ui.region_factor});
   }
   if (regions) out.push_back(action::SetRegions{std::move(*regions)});
 }
@@ -122,13 +76,13 @@ GuiCommands mechanics_panel(const WorldView& w, MechanicsPanelState& ui) {
   for (const BodyView& b : w.bodies) {
     const std::string label = fmt::format("{} ({})", b.name, b.deformable ? "deformable" : "rigid");
     if (!ImGui::TreeNodeEx(label.c_str(), ImGuiTreeNodeFlags_DefaultOpen)) continue;
-    if (!b.config) {
+    if (!b.structure) {
       ImGui::TextDisabled("fixed shape: touchable, never deforms");
       ImGui::TreePop();
       continue;
     }
-    ImGui::TextDisabled("%zu nodes, %zu tetrahedra, %zu fixed", b.config->positions.size(), b.config->tets.size(), b.fixed_points.size());
-    for (const auto& [component, type] : components_of(*b.config)) {
+    ImGui::TextDisabled("%zu nodes, %zu tetrahedra, %zu fixed", b.structure->positions.size(), b.structure->tets.size(), b.fixed_points.size());
+    for (const auto& [component, type] : components_of(*b.structure)) {
       const std::string prefix = component + "/";
       const bool has_parameters = std::any_of(b.parameters.begin(), b.parameters.end(), [&](const std::string& p) { return p.starts_with(prefix); });
       const std::string node = fmt::format("{} {}##{}/{}", type, component.empty() ? b.name : component, b.name, component);
@@ -169,7 +123,8 @@ GuiCommands mechanics_panel(const WorldView& w, MechanicsPanelState& ui) {
       for (const std::string& p : b.parameters) {
         if (!p.starts_with(prefix)) continue;
         const std::string parameter = p.substr(prefix.size());
-        const auto value = mechanics::get_parameter(*b.config, component, parameter);
+        // The value as the accepted commands leave it: the session's.
+        const auto value = w.session->parameter(b.name, component, parameter);
         if (!value) continue;
         double v = *value;
         ImGui::SetNextItemWidth(130);

@@ -20,7 +20,7 @@ std::vector<BodyView> body_views(const scene::World& world) {
     v.name = b.name;
     v.deformable = b.deformable();
     v.layer = b.layer;
-    if (b.config) v.set_config(*b.config);
+    if (b.config) v.set_structure(*b.config);
     if (const auto a = world.appearances.find(b.name); a != world.appearances.end()) {
       render::Material m;
       m.diffuse = render::Rgba(static_cast<float>(a->second.diffuse_color.x()), static_cast<float>(a->second.diffuse_color.y()),
@@ -204,8 +204,9 @@ void GuiWindow::reset_camera() {
   const bool x3d = file_.extension() == ".x3d";
   Vec3 up = x3d ? Vec3::UnitY() : Vec3::UnitZ();
   for (const BodyView& b : bodies_) {
-    if (!x3d && b.config && b.config->gravity_m_per_s2.norm() > 0.0) {
-      up = -b.config->gravity_m_per_s2.normalized();
+    if (x3d || !b.structure) continue;
+    if (const Vec3 gravity = current_config(b).gravity_m_per_s2; gravity.norm() > 0.0) {
+      up = -gravity.normalized();
       break;
     }
   }

@@ -74,10 +74,7 @@ Expected<void> GuiWindow::set_mechanics_parameter(const std::string& element, co
     return std::unexpected(e);
   }
   for (BodyView& b : bodies_) {
-    if (b.name == body && b.config) {
-      (void)mechanics::set_parameter(*b.config, component, attribute, v);
-      b.stress.reset();  // its moduli may have changed
-    }
+    if (b.name == body) b.stress.reset();  // its moduli may have changed
   }
   submitted_changes_.push_back(coupling::ParameterChange{body, component, attribute, v});
   if (recording_) recording_->events.push_back(fmt::format("{:.3f}: set {} {}", recording_->seconds(), name, value));
@@ -149,7 +146,7 @@ Expected<void> GuiWindow::change_structure(const std::optional<scene::SceneEdit>
   }
   for (const coupling::SessionBody& b : world->bodies) {
     for (BodyView& v : bodies_) {
-      if (v.name == b.name && b.config) v.set_config(*b.config);
+      if (v.name == b.name && b.config) v.set_structure(*b.config);
     }
   }
   for (const std::string& w : world->warnings) {
@@ -172,8 +169,8 @@ Expected<void> GuiWindow::change_structure(const std::optional<scene::SceneEdit>
 Expected<void> GuiWindow::switch_component(const std::string& body, const std::string& component, const std::string& choice) {
   const auto b = std::find_if(bodies_.begin(), bodies_.end(), [&](const BodyView& v) { return v.name == body; });
   if (b == bodies_.end()) return make_error(ErrorCode::kInvalidArgument, fmt::format("no body '{}'", body));
-  if (!b->config) return make_error(ErrorCode::kInvalidArgument, fmt::format("body '{}' is rigid", body));
-  auto edit = switch_edit(*b->config, body, component, choice);
+  if (!b->structure) return make_error(ErrorCode::kInvalidArgument, fmt::format("body '{}' is rigid", body));
+  auto edit = switch_edit(current_config(*b), body, component, choice);
   if (!edit) return std::unexpected(edit.error());
   auto done = change_structure(*edit, std::nullopt);
   if (!done && (choice == "CGLinearSolver" || choice == "SparseLDLSolver")) {
@@ -182,6 +179,79 @@ Expected<void> GuiWindow::switch_component(const std::string& body, const std::s
     return change_structure(*edit, std::nullopt);
   }
   return done;
+}
+
+mechanics::ModelConfig GuiWindow::current_config(const BodyView& body) const {
+  // The model as last built, with the values submitted since (all of them accepted by the
+  // session's seam): what the session's own configuration holds, derived when it is needed.
+  mechanics::ModelConfig c = *body.structure;
+  for (const coupling::ParameterChange& change : submitted_changes_) {
+    if (change.body == body.name) (void)mechanics::set_parameter(c, change.component, change.parameter, change.value);
+  }
+  return c;
+}
+
+Expected<void> GuiWindow::add_component(const action::AddComponent& add) {
+  const auto b = std::find_if(bodies_.begin(), bodies_.end(), [&](const BodyView& v) { return v.name == add.body; });
+  if (b == bodies_.end() || !b->structure) return make_error(ErrorCode::kInvalidArgument, fmt::format("no deformable body '{}'", add.body));
+  const mechanics::ModelConfig c = current_config(*b);
+  // A name no component of the node has yet: BASE, else BASE2, BASE3, ...
+  const auto unique = [&](const std::string& base) {
+    std::string name = base;
+    for (int n = 2; std::any_of(b->parameters.begin(), b->parameters.end(), [&](const std::string& p) { return p.starts_with(name + "/"); }) ||
+                    std::any_of(c.fixed.begin(), c.fixed.end(), [&](const auto& f) { return f.name == name; }) ||
+                    std::any_of(c.force_fields.begin(), c.force_fields.end(), [&](const auto& f) { return f.name == name; });
+         ++n) {
+      name = base + std::to_string(n);
+    }
+    return name;
+  };
+  const auto [young, poisson] = elastic_moduli(c);
+  scene::SceneEdit edit{scene::SceneEdit::Action::kAdd, add.body, "", "", {}};
+  switch (add.kind) {
+    case action::AddComponent::Kind::kTetrahedronFem:
+      edit.component = unique("FEM");
+      edit.type = "TetrahedronFEMForceField";
+      edit.attributes = {{"youngModulus", fmt::format("{}", young)}, {"poissonRatio", fmt::format("{}", poisson)}, {"method", "large"}};
+      break;
+    case action::AddComponent::Kind::kMeshSprings: {
+      edit.component = unique("springs");
+      edit.type = "MeshSpringForceField";
+      const double edge = mean_edge_length(c);  // per spring ~E·l; SOFA divides by l
+      edit.attributes = {{"stiffness", fmt::format("{}", young * edge * edge)}};
+      break;
+    }
+    case action::AddComponent::Kind::kPinNearStylus: {
+      const double radius = add.pin_radius_m > 0.0 ? add.pin_radius_m : 0.05 * scene_size();
+      std::string indices;
+      for (std::size_t i = 0; i < c.positions.size(); ++i) {
+        if ((c.positions[i] - last_.proxy).norm() <= radius) indices += (indices.empty() ? "" : " ") + std::to_string(i);
+      }
+      if (indices.empty()) {
+        return make_error(ErrorCode::kInvalidArgument, fmt::format("no node of {} within {:.3g} of the stylus: nothing to pin", add.body, radius));
+      }
+      edit.component = unique("pin");
+      edit.type = "FixedProjectiveConstraint";
+      edit.attributes = {{"indices", indices}};
+      break;
+    }
+  }
+  return change_structure(edit, std::nullopt);
+}
+
+Expected<void> GuiWindow::add_region_at_stylus(const action::AddRegionAtStylus& add) {
+  if (!last_.valid) return make_error(ErrorCode::kInvalidArgument, "the stylus has no position yet");
+  const auto b = std::find_if(bodies_.begin(), bodies_.end(), [&](const BodyView& v) { return v.name == add.body; });
+  if (b == bodies_.end() || !b->structure) return make_error(ErrorCode::kInvalidArgument, fmt::format("no deformable body '{}'", add.body));
+  scene::MaterialRegion r;
+  r.name = fmt::format("region{}", project_.regions.size() + 1);
+  r.body = add.body;
+  r.center = last_.contact ? last_.contact_point : last_.proxy;
+  r.radius = add.radius_m > 0.0 ? add.radius_m : 0.1 * scene_size();
+  r.young_modulus_pa = elastic_moduli(current_config(*b)).first * std::max(add.modulus_factor, 1e-3);
+  std::vector<scene::MaterialRegion> regions = project_.regions;
+  regions.push_back(r);
+  return change_structure(std::nullopt, regions);
 }
 
 Expected<void> GuiWindow::set_effects(const haptics::ForceEffects& effects) {

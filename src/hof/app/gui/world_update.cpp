@@ -165,8 +165,8 @@ void GuiWindow::update_stress() {
   std::vector<Vec3> surface;
   for (std::size_t i = 0; i < bodies_.size() && i < x.size(); ++i) {
     BodyView& b = bodies_[i];
-    if (!b.config || x[i].size() != 3 * b.config->positions.size()) continue;
-    if (!b.stress) b.stress = std::make_shared<mechanics::VonMisesStress>(*b.config);
+    if (!b.structure || x[i].size() != 3 * b.structure->positions.size()) continue;
+    if (!b.stress) b.stress = std::make_shared<mechanics::VonMisesStress>(current_config(b));
     if (!b.stress->available()) continue;
     b.stress->node_stress(x[i], b.node_stress);
     // Node values to the surface through the body's own mapping (a scalar in x).

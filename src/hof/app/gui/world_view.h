@@ -61,15 +61,18 @@ struct BodyView {
   std::optional<render::Material> material;  // the file's (an X3D Material), else the project's
   bool deformable{false};
   int layer{0};
-  std::optional<mechanics::ModelConfig> config;  // as the accepted commands leave it
-  std::vector<std::string> parameters;           // "component/parameter"
+  /// The model as it was last built (the world opened, or a structural edit): its mesh and
+  /// components. Not its current values: those are the session's (Session::parameter()); the
+  /// window never keeps a second copy of them.
+  std::shared_ptr<const mechanics::ModelConfig> structure;
+  std::vector<std::string> parameters;  // "component/parameter"
   std::vector<Vec3> fixed_points;
   std::shared_ptr<mechanics::VonMisesStress> stress;  // made on first use (colorBy stress)
   std::vector<double> node_stress;                    // Pa, scratch
 
-  /// What the panels show of `c` (the model as the accepted commands leave it).
-  void set_config(const mechanics::ModelConfig& c) {
-    config = c;
+  /// What the panels show of a model just built.
+  void set_structure(const mechanics::ModelConfig& c) {
+    structure = std::make_shared<const mechanics::ModelConfig>(c);
     parameters = mechanics::parameter_names(c);
     fixed_points.clear();
     for (const auto& f : c.fixed) {
