@@ -24,6 +24,19 @@ namespace action {
 struct SetAttribute {
   std::string element, attribute, value;
 };
+/// The project's graphics settings replaced (a typed edit of HofProject::graphics, checked by
+/// scene::check_graphics); `settings` names each change as the project file does
+/// ("graphics@renderMode wireframe"), for a recording's events.
+struct SetGraphics {
+  scene::GraphicsSetup graphics;
+  std::vector<std::string> settings;
+};
+/// The project's haptic surface replaced (HofProject::surface, checked by haptics::validate):
+/// the bodies without a surface of their own take it.
+struct SetSurface {
+  haptics::SurfaceMaterial surface;
+  std::vector<std::string> settings;
+};
 /// The scene tree's structural edit of a body's node (the world's models rebuilt from it).
 struct EditScene {
   scene::SceneEdit edit;
@@ -81,7 +94,7 @@ struct Report {
 };
 }  // namespace action
 
-using GuiCommand = std::variant<coupling::Command, action::SetAttribute, action::EditScene, action::AddComponent, action::AddRegionAtStylus, action::SwitchComponent, action::SetRegions,
+using GuiCommand = std::variant<coupling::Command, action::SetAttribute, action::SetGraphics, action::SetSurface, action::EditScene, action::AddComponent, action::AddRegionAtStylus, action::SwitchComponent, action::SetRegions,
                                 action::SetEffects, action::MountNeedle, action::SetAnimating, action::ResetWorld,
                                 action::SetRealtimePacing, action::StartRecording, action::StopRecording, action::ResetCamera,
                                 action::DismissError, action::Report>;

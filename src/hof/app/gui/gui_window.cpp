@@ -406,6 +406,10 @@ Expected<void> GuiWindow::apply(const GuiCommand& command) {
           return session_->submit(c);
         } else if constexpr (std::is_same_v<T, action::SetAttribute>) {
           return apply_set(c.element, c.attribute, c.value);
+        } else if constexpr (std::is_same_v<T, action::SetGraphics>) {
+          return set_graphics(c);
+        } else if constexpr (std::is_same_v<T, action::SetSurface>) {
+          return set_surface(c);
         } else if constexpr (std::is_same_v<T, action::EditScene>) {
           return change_structure(c.edit, std::nullopt);
         } else if constexpr (std::is_same_v<T, action::AddComponent>) {

@@ -85,6 +85,10 @@ class GuiWindow {
   /// A component's switch to another type, with the values that carry over (E, ν, masses).
   Expected<void> switch_component(const std::string& body, const std::string& component, const std::string& choice);
   Expected<void> set_effects(const haptics::ForceEffects& effects);
+  Expected<void> set_graphics(const action::SetGraphics& edit);
+  Expected<void> set_surface(const action::SetSurface& edit);
+  /// Settings changed by a typed edit: the project has changes; a recording lists them.
+  void note_settings(const std::vector<std::string>& settings);
   Expected<void> add_component(const action::AddComponent& add);
   Expected<void> add_region_at_stylus(const action::AddRegionAtStylus& add);
   /// A body's model as the accepted commands leave it (as built, with the values submitted since).

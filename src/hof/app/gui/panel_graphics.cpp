@@ -4,61 +4,100 @@
 #include <imgui.h>
 
 #include <algorithm>
+#include <charconv>
 #include <iterator>
+#include <optional>
 
 #include "hof/app/gui/panels.h"
 
 namespace hof::app::gui {
 
+namespace {
+
+/// A float as the project file writes it and reads it back (its shortest text), so that a
+/// colour picked here is the number a saved project holds.
+double as_written(float v) {
+  const std::string text = fmt::format("{}", v);
+  double out = 0.0;
+  std::from_chars(text.data(), text.data() + text.size(), out);
+  return out;
+}
+
+std::string joined(const float (&v)[3]) { return fmt::format("{} {} {}", v[0], v[1], v[2]); }
+Vec3 as_written(const float (&v)[3]) { return Vec3(as_written(v[0]), as_written(v[1]), as_written(v[2])); }
+
+}  // namespace
+
 GuiCommands graphics_panel(const WorldView& w, ViewOptions& view) {
   GuiCommands out;
-  const auto set = [&](const char* element, const char* attribute, const std::string& value) {
-    out.push_back(action::SetAttribute{element, attribute, value});
-  };
+  // The settings changed this frame, as one typed edit of the project's graphics (with each
+  // change named as the project file names it, for a recording's events).
   const scene::GraphicsSetup& g = w.project.graphics;
+  std::optional<action::SetGraphics> edit;
+  const auto change = [&](const char* element, const char* attribute, const std::string& value, const auto& apply) {
+    if (!edit) edit = action::SetGraphics{g, {}};
+    apply(edit->graphics);
+    edit->settings.push_back(fmt::format("{}@{} {}", element, attribute, value));
+  };
   const char* modes[] = {"shaded", "wireframe", "shaded+wireframe", "points"};
   int mode = static_cast<int>(std::find(std::begin(modes), std::end(modes), g.render_mode) - std::begin(modes));
   ImGui::SetNextItemWidth(200);
-  if (ImGui::Combo("renderMode", &mode, modes, 4)) set("graphics", "renderMode", modes[mode]);
+  if (ImGui::Combo("renderMode", &mode, modes, 4)) {
+    change("graphics", "renderMode", modes[mode], [&](scene::GraphicsSetup& n) { n.render_mode = modes[mode]; });
+  }
   const char* colourings[] = {"material", "displacement", "strain", "stress"};
   int colouring = g.color_by == "displacement" ? 1 : g.color_by == "strain" ? 2 : g.color_by == "stress" ? 3 : 0;
   ImGui::SetNextItemWidth(200);
-  if (ImGui::Combo("colorBy", &colouring, colourings, 4)) set("graphics", "colorBy", colourings[colouring]);
+  if (ImGui::Combo("colorBy", &colouring, colourings, 4)) {
+    change("graphics", "colorBy", colourings[colouring], [&](scene::GraphicsSetup& n) { n.color_by = colourings[colouring]; });
+  }
   float diffuse[3] = {static_cast<float>(g.diffuse_color.x()), static_cast<float>(g.diffuse_color.y()), static_cast<float>(g.diffuse_color.z())};
   if (ImGui::ColorEdit3("diffuseColor", diffuse)) {
-    set("graphics/material", "diffuseColor", fmt::format("{} {} {}", diffuse[0], diffuse[1], diffuse[2]));
+    change("graphics/material", "diffuseColor", joined(diffuse), [&](scene::GraphicsSetup& n) { n.diffuse_color = as_written(diffuse); });
   }
+  const auto unit = [&](const char* element, const char* attribute, float v, double scene::GraphicsSetup::*field) {
+    change(element, attribute, number_text(v), [&](scene::GraphicsSetup& n) { n.*field = v; });
+  };
   float shininess = static_cast<float>(g.shininess), transparency = static_cast<float>(g.transparency);
   ImGui::SetNextItemWidth(200);
-  if (ImGui::SliderFloat("shininess", &shininess, 0.0f, 1.0f)) set("graphics/material", "shininess", number_text(shininess));
+  if (ImGui::SliderFloat("shininess", &shininess, 0.0f, 1.0f)) unit("graphics/material", "shininess", shininess, &scene::GraphicsSetup::shininess);
   ImGui::SetNextItemWidth(200);
-  if (ImGui::SliderFloat("transparency", &transparency, 0.0f, 0.9f)) set("graphics/material", "transparency", number_text(transparency));
+  if (ImGui::SliderFloat("transparency", &transparency, 0.0f, 0.9f)) {
+    unit("graphics/material", "transparency", transparency, &scene::GraphicsSetup::transparency);
+  }
   if (ImGui::TreeNode("Lights")) {
     bool headlight = g.headlight;
-    if (ImGui::Checkbox("headlight", &headlight)) set("graphics/light", "headlight", headlight ? "true" : "false");
+    if (ImGui::Checkbox("headlight", &headlight)) {
+      change("graphics/light", "headlight", headlight ? "true" : "false", [&](scene::GraphicsSetup& n) { n.headlight = headlight; });
+    }
     float head = static_cast<float>(g.headlight_intensity), key = static_cast<float>(g.light_intensity),
           ambient = static_cast<float>(g.ambient_intensity);
     ImGui::SetNextItemWidth(160);
-    if (ImGui::SliderFloat("headlightIntensity", &head, 0.0f, 1.0f)) set("graphics/light", "headlightIntensity", number_text(head));
+    if (ImGui::SliderFloat("headlightIntensity", &head, 0.0f, 1.0f)) {
+      unit("graphics/light", "headlightIntensity", head, &scene::GraphicsSetup::headlight_intensity);
+    }
     float direction[3] = {static_cast<float>(g.light_direction.x()), static_cast<float>(g.light_direction.y()),
                           static_cast<float>(g.light_direction.z())};
     ImGui::SetNextItemWidth(200);
     if (ImGui::SliderFloat3("direction", direction, -1.0f, 1.0f) && Eigen::Vector3f(direction[0], direction[1], direction[2]).norm() > 1e-3f) {
-      set("graphics/light", "direction", fmt::format("{} {} {}", direction[0], direction[1], direction[2]));
+      change("graphics/light", "direction", joined(direction), [&](scene::GraphicsSetup& n) { n.light_direction = as_written(direction); });
     }
     ImGui::SetNextItemWidth(160);
-    if (ImGui::SliderFloat("intensity", &key, 0.0f, 1.0f)) set("graphics/light", "intensity", number_text(key));
+    if (ImGui::SliderFloat("intensity", &key, 0.0f, 1.0f)) unit("graphics/light", "intensity", key, &scene::GraphicsSetup::light_intensity);
     ImGui::SetNextItemWidth(160);
-    if (ImGui::SliderFloat("ambientIntensity", &ambient, 0.0f, 1.0f)) set("graphics/light", "ambientIntensity", number_text(ambient));
+    if (ImGui::SliderFloat("ambientIntensity", &ambient, 0.0f, 1.0f)) {
+      unit("graphics/light", "ambientIntensity", ambient, &scene::GraphicsSetup::ambient_intensity);
+    }
     ImGui::TreePop();
   }
   if (ImGui::Button("Reset view")) out.push_back(action::ResetCamera{});
   ImGui::SameLine();
   if (ImGui::Button("Keep this view in the project")) {
     const Vec3 eye = w.camera.eye(), target = w.camera.target();
-    set("graphics", "viewpoint", fmt::format("{} {} {}", eye.x(), eye.y(), eye.z()));
-    set("graphics", "lookAt", fmt::format("{} {} {}", target.x(), target.y(), target.z()));
+    change("graphics", "viewpoint", fmt::format("{} {} {}", eye.x(), eye.y(), eye.z()), [&](scene::GraphicsSetup& n) { n.viewpoint_m = eye; });
+    change("graphics", "lookAt", fmt::format("{} {} {}", target.x(), target.y(), target.z()), [&](scene::GraphicsSetup& n) { n.look_at_m = target; });
   }
+  if (edit) out.push_back(std::move(*edit));
   ImGui::Separator();
   ImGui::TextDisabled("debug views");
   ImGui::Checkbox("bound-tree boxes", &view.show_bound_tree);

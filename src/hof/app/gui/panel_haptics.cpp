@@ -161,22 +161,35 @@ GuiCommands haptics_panel(const WorldView& w, HapticsPanelState& ui) {
   if (ImGui::Combo("touchableFace", &face, faces, 3)) set("haptics", "touchableFace", faces[face]);
   ImGui::Separator();
   ImGui::TextDisabled("surface");
+  // The surface changed this frame, as one typed edit of the project's surface.
+  std::optional<action::SetSurface> surface;
+  const auto change = [&](const char* attribute, const std::string& value, const auto& apply) {
+    if (!surface) surface = action::SetSurface{w.project.surface, {}};
+    apply(surface->surface);
+    surface->settings.push_back(fmt::format("haptics/surface@{} {}", attribute, value));
+  };
   int kind = static_cast<int>(w.project.surface.kind);
   const char* kinds[] = {"SmoothSurface", "FrictionalSurface", "MagneticSurface"};
   ImGui::SetNextItemWidth(200);
-  if (kind >= 0 && kind < 3 && ImGui::Combo("type", &kind, kinds, 3)) set("haptics/surface", "type", kinds[kind]);
-  const auto number = [&](const char* label, const char* attribute, double value) {
+  if (kind >= 0 && kind < 3 && ImGui::Combo("type", &kind, kinds, 3)) {
+    change("type", kinds[kind], [&](haptics::SurfaceMaterial& m) { m.kind = static_cast<haptics::SurfaceKind>(kind); });
+  }
+  const auto number = [&](const char* label, const char* attribute, double haptics::SurfaceMaterial::*field) {
+    double value = w.project.surface.*field;
     ImGui::SetNextItemWidth(200);
     if (ImGui::InputDouble(label, &value, 0.0, 0.0, "%.4g", ImGuiInputTextFlags_EnterReturnsTrue)) {
-      set("haptics/surface", attribute, number_text(value));
+      change(attribute, number_text(value), [&](haptics::SurfaceMaterial& m) { m.*field = value; });
     }
   };
-  number("stiffness", "stiffness", w.project.surface.stiffness);
-  number("damping (N s/m)", "damping", w.project.surface.damping_n_s_per_m);
-  number("staticFriction", "staticFriction", w.project.surface.static_friction);
-  number("dynamicFriction", "dynamicFriction", w.project.surface.dynamic_friction);
+  number("stiffness", "stiffness", &haptics::SurfaceMaterial::stiffness);
+  number("damping (N s/m)", "damping", &haptics::SurfaceMaterial::damping_n_s_per_m);
+  number("staticFriction", "staticFriction", &haptics::SurfaceMaterial::static_friction);
+  number("dynamicFriction", "dynamicFriction", &haptics::SurfaceMaterial::dynamic_friction);
   bool relative = w.project.surface.use_relative_values;
-  if (ImGui::Checkbox("useRelativeValues", &relative)) set("haptics/surface", "useRelativeValues", relative ? "true" : "false");
+  if (ImGui::Checkbox("useRelativeValues", &relative)) {
+    change("useRelativeValues", relative ? "true" : "false", [&](haptics::SurfaceMaterial& m) { m.use_relative_values = relative; });
+  }
+  if (surface) out.push_back(std::move(*surface));
   ImGui::Separator();
   ImGui::TextDisabled("options (saved; they apply when the project is reopened)");
   bool tree = w.project.use_bound_tree;

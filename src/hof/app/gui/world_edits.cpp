@@ -181,6 +181,47 @@ Expected<void> GuiWindow::switch_component(const std::string& body, const std::s
   return done;
 }
 
+Expected<void> GuiWindow::set_graphics(const action::SetGraphics& edit) {
+  // A typed edit of the project in memory: checked as a file's <graphics> is, drawn by the
+  // window only (nothing for the session).
+  if (!session_) return make_error(ErrorCode::kInvalidArgument, "no world is open");
+  if (auto ok = scene::check_graphics(edit.graphics); !ok) {
+    Error e = ok.error();
+    e.message = fmt::format("'{}': {}", edit.settings.empty() ? std::string("graphics") : edit.settings.front(), e.message);
+    return std::unexpected(e);
+  }
+  project_.graphics = edit.graphics;
+  note_settings(edit.settings);
+  return {};
+}
+
+Expected<void> GuiWindow::set_surface(const action::SetSurface& edit) {
+  // A typed edit of the project in memory; the bodies without a surface of their own take it
+  // through the seam.
+  if (!session_) return make_error(ErrorCode::kInvalidArgument, "no world is open");
+  if (auto ok = haptics::validate(edit.surface); !ok) {
+    Error e = ok.error();
+    e.message = fmt::format("'{}': {}", edit.settings.empty() ? std::string("haptics/surface") : edit.settings.front(), e.message);
+    return std::unexpected(e);
+  }
+  for (const BodyView& b : bodies_) {
+    const bool own = std::any_of(project_.bodies.begin(), project_.bodies.end(), [&](const auto& s) { return s.name == b.name && s.surface; }) ||
+                     std::any_of(project_.obstacles.begin(), project_.obstacles.end(), [&](const auto& o) { return o.name == b.name && o.surface; });
+    if (own) continue;
+    if (auto ok = session_->submit(coupling::command::SetMaterial{b.name, edit.surface}); !ok) return ok;
+  }
+  project_.surface = edit.surface;
+  note_settings(edit.settings);
+  return {};
+}
+
+void GuiWindow::note_settings(const std::vector<std::string>& settings) {
+  if (recording_) {
+    for (const std::string& s : settings) recording_->events.push_back(fmt::format("{:.3f}: set {}", recording_->seconds(), s));
+  }
+  dirty_ = true;
+}
+
 mechanics::ModelConfig GuiWindow::current_config(const BodyView& body) const {
   // The model as last built, with the values submitted since (all of them accepted by the
   // session's seam): what the session's own configuration holds, derived when it is needed.
