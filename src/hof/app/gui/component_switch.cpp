@@ -1,4 +1,4 @@
-#include "hof/app/gui/component_switch.h"
+#include "hof/app/gui/detail/component_switch.h"
 
 #include <fmt/format.h>
 

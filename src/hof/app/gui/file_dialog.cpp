@@ -1,4 +1,4 @@
-#include "hof/app/gui/file_dialog.h"
+#include "hof/app/gui/detail/file_dialog.h"
 
 #include <imgui.h>
 

@@ -17,7 +17,7 @@
 #include <thread>
 #include <type_traits>
 
-#include "hof/app/gui/gui_window.h"
+#include "hof/app/gui/detail/gui_window.h"
 #include "hof/core/cpu_affinity.h"
 #include "hof/core/file_write.h"
 #include "hof/haptics/cpu_keep_awake.h"

@@ -8,7 +8,7 @@
 #include <chrono>
 #include <ctime>
 
-#include "hof/app/gui/panels.h"
+#include "hof/app/gui/detail/panels.h"
 
 namespace hof::app::gui {
 

@@ -8,7 +8,7 @@
 #include <iterator>
 #include <optional>
 
-#include "hof/app/gui/panels.h"
+#include "hof/app/gui/detail/panels.h"
 
 namespace hof::app::gui {
 

@@ -6,8 +6,8 @@
 #include <algorithm>
 #include <optional>
 
-#include "hof/app/gui/component_switch.h"
-#include "hof/app/gui/panels.h"
+#include "hof/app/gui/detail/component_switch.h"
+#include "hof/app/gui/detail/panels.h"
 #include "hof/mechanics/model_parameters.h"
 
 namespace hof::app::gui {

@@ -2,7 +2,7 @@
 // events), newest last.
 #include <imgui.h>
 
-#include "hof/app/gui/panels.h"
+#include "hof/app/gui/detail/panels.h"
 
 namespace hof::app::gui {
 

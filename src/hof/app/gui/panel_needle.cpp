@@ -5,7 +5,7 @@
 
 #include <array>
 
-#include "hof/app/gui/panels.h"
+#include "hof/app/gui/detail/panels.h"
 
 namespace hof::app::gui {
 

@@ -3,8 +3,8 @@
 #include <fmt/format.h>
 #include <imgui.h>
 
-#include "hof/app/gui/panels.h"
-#include "hof/app/gui/scene_drawing.h"
+#include "hof/app/gui/detail/panels.h"
+#include "hof/app/gui/detail/scene_drawing.h"
 
 namespace hof::app::gui {
 

@@ -2,7 +2,7 @@
 // meanwhile as events, and beside it the project that replays it; the current shape exported.
 #include <fmt/format.h>
 
-#include "hof/app/gui/gui_window.h"
+#include "hof/app/gui/detail/gui_window.h"
 #include "hof/core/file_write.h"
 #include "hof/mesh/mesh_io.h"
 

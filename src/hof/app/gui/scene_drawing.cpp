@@ -4,8 +4,8 @@
 
 #include <algorithm>
 
-#include "hof/app/gui/gui_window.h"
-#include "hof/app/gui/scene_drawing.h"
+#include "hof/app/gui/detail/gui_window.h"
+#include "hof/app/gui/detail/scene_drawing.h"
 
 namespace hof::app::gui {
 

@@ -5,7 +5,7 @@
 #include <chrono>
 #include <cstdio>
 
-#include "hof/app/gui/gui_window.h"
+#include "hof/app/gui/detail/gui_window.h"
 
 namespace hof::app::gui {
 

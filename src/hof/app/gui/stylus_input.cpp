@@ -7,7 +7,7 @@
 
 #include <cmath>
 
-#include "hof/app/gui/gui_window.h"
+#include "hof/app/gui/detail/gui_window.h"
 
 namespace hof::app::gui {
 

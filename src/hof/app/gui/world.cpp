@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <limits>
 
-#include "hof/app/gui/gui_window.h"
+#include "hof/app/gui/detail/gui_window.h"
 #include "hof/haptics/device_backends/mouse_device.h"
 
 namespace hof::app::gui {

@@ -7,8 +7,8 @@
 #include <charconv>
 #include <cmath>
 
-#include "hof/app/gui/component_switch.h"
-#include "hof/app/gui/gui_window.h"
+#include "hof/app/gui/detail/component_switch.h"
+#include "hof/app/gui/detail/gui_window.h"
 #include "hof/haptics/device_backends/mouse_device.h"
 #include "hof/mechanics/model_parameters.h"
 #include "hof/scene/sofa_scene_edit.h"

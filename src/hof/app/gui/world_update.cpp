@@ -5,7 +5,7 @@
 
 #include <algorithm>
 
-#include "hof/app/gui/gui_window.h"
+#include "hof/app/gui/detail/gui_window.h"
 #include "hof/mesh/surface_strain.h"
 #include "hof/render/colormap.h"
 

@@ -7,8 +7,8 @@
 
 #include <array>
 
-#include "hof/app/gui/gui_command.h"
-#include "hof/app/gui/world_view.h"
+#include "hof/app/gui/detail/gui_command.h"
+#include "hof/app/gui/detail/world_view.h"
 
 namespace hof::app::gui {
 

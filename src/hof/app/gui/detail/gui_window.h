@@ -21,12 +21,12 @@
 #include <string>
 #include <vector>
 
-#include "hof/app/gui/file_dialog.h"
+#include "hof/app/gui/detail/file_dialog.h"
 #include "hof/app/gui/gui_app.h"
-#include "hof/app/gui/gui_command.h"
+#include "hof/app/gui/detail/gui_command.h"
 #include "hof/app/gui/gui_script.h"
-#include "hof/app/gui/panels.h"
-#include "hof/app/gui/world_view.h"
+#include "hof/app/gui/detail/panels.h"
+#include "hof/app/gui/detail/world_view.h"
 #include "hof/haptics/device_backends/mouse_device.h"
 #include "hof/scene/world.h"
 
