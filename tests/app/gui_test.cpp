@@ -402,3 +402,26 @@ TEST(GuiWindow, StartsEmptyOpensAFileAndAFileThatDoesNotLoadLeavesTheWorldAsItWa
 }
 
 }  // namespace
+
+// The window's typed graphics edit is checked as a project file's <graphics> is.
+TEST(GuiTypedEdits, GraphicsAreCheckedAsTheProjectFileChecksThem) {
+  hof::scene::GraphicsSetup g;
+  EXPECT_TRUE(hof::scene::check_graphics(g));
+  g.render_mode = "shaded+wireframe";
+  g.color_by = "stress";
+  EXPECT_TRUE(hof::scene::check_graphics(g));
+  hof::scene::GraphicsSetup bad = g;
+  bad.render_mode = "glossy";
+  ASSERT_FALSE(hof::scene::check_graphics(bad));
+  EXPECT_NE(hof::scene::check_graphics(bad).error().message.find("unknown renderMode \"glossy\""), std::string::npos);
+  bad = g;
+  bad.transparency = 1.5;
+  ASSERT_FALSE(hof::scene::check_graphics(bad));
+  EXPECT_NE(hof::scene::check_graphics(bad).error().message.find("transparency must be in [0, 1]"), std::string::npos);
+  bad = g;
+  bad.light_direction = hof::Vec3::Zero();
+  EXPECT_FALSE(hof::scene::check_graphics(bad));
+  bad = g;
+  bad.diffuse_color = hof::Vec3(0.2, 1.2, 0.0);
+  EXPECT_FALSE(hof::scene::check_graphics(bad));
+}

@@ -1,0 +1,45 @@
+#pragma once
+/// @file
+/// The window's panels (Dear ImGui, immediate mode): each is a function over the read-only
+/// world view that draws its widgets and returns what the user asked for as commands; the
+/// window applies them after the panel. A panel's own inputs (a text being typed, a radius
+/// to use next) are its state, passed in beside the view.
+
+#include <array>
+
+#include "hof/app/gui/detail/gui_command.h"
+#include "hof/app/gui/detail/world_view.h"
+
+namespace hof::app::gui {
+
+/// The world's name, an error, the controls (animate, step, reset, record), the live figures
+/// and the force and indentation plots.
+[[nodiscard]] GuiCommands controls_panel(const WorldView& w);
+/// The contact (or the needle's state) at the latest tick.
+[[nodiscard]] GuiCommands touch_panel(const WorldView& w);
+/// The needle stylus: mounted or not, and its tissue parameters.
+[[nodiscard]] GuiCommands needle_panel(const WorldView& w);
+
+struct MechanicsPanelState {
+  float region_radius_m{0.0f};  // 0: a tenth of the scene
+  float region_factor{4.0f};    // × the force field's modulus
+  float pin_radius_m{0.0f};     // 0: a twentieth of the scene
+};
+/// The scene tree: each body's components with their parameters, switched, added, removed;
+/// the material regions.
+[[nodiscard]] GuiCommands mechanics_panel(const WorldView& w, MechanicsPanelState& ui);
+
+struct HapticsPanelState {
+  std::array<char, 256> device_spec{};  // the device being typed
+};
+/// The device, the renderer, the calibration, the surface and the force effects.
+[[nodiscard]] GuiCommands haptics_panel(const WorldView& w, HapticsPanelState& ui);
+/// The project's graphics settings, and the window's debug views (`view`, edited in place).
+[[nodiscard]] GuiCommands graphics_panel(const WorldView& w, ViewOptions& view);
+/// The log of messages.
+[[nodiscard]] GuiCommands messages_panel(const WorldView& w);
+
+/// A number as the project file writes it (the shortest text that reads back the same).
+[[nodiscard]] std::string number_text(double v);
+
+}  // namespace hof::app::gui
