@@ -410,6 +410,8 @@ Expected<void> GuiWindow::apply(const GuiCommand& command) {
           return set_graphics(c);
         } else if constexpr (std::is_same_v<T, action::SetSurface>) {
           return set_surface(c);
+        } else if constexpr (std::is_same_v<T, action::SetRendering>) {
+          return set_rendering(c);
         } else if constexpr (std::is_same_v<T, action::EditScene>) {
           return change_structure(c.edit, std::nullopt);
         } else if constexpr (std::is_same_v<T, action::AddComponent>) {

@@ -117,14 +117,23 @@ GuiCommands haptics_panel(const WorldView& w, HapticsPanelState& ui) {
   if (ImGui::Button("Force Dimension")) set("haptics", "device", "dhd");
   ImGui::SameLine();
   if (ImGui::Button("Mouse")) set("haptics", "device", "mouse");
+  // The renderer's settings changed this frame, as one typed edit of the project.
+  std::optional<action::SetRendering> rendering;
+  const auto render = [&](const char* attribute, const std::string& value, const auto& apply) {
+    if (!rendering) rendering = action::SetRendering{{w.project.renderer, w.project.proxy_radius_m, w.project.force_shading, w.project.touchable_face}, {}};
+    apply(rendering->rendering);
+    rendering->settings.push_back(fmt::format("haptics@{} {}", attribute, value));
+  };
   int renderer = static_cast<int>(w.project.renderer);
   const char* renderers[] = {"PenaltyRenderer", "GodObjectRenderer", "RuspiniRenderer"};
   ImGui::SetNextItemWidth(200);
-  if (ImGui::Combo("renderer", &renderer, renderers, 3)) set("haptics", "renderer", renderers[renderer]);
+  if (ImGui::Combo("renderer", &renderer, renderers, 3)) {
+    render("renderer", renderers[renderer], [&](action::Rendering& r) { r.renderer = static_cast<haptics::RendererKind>(renderer); });
+  }
   double radius = w.project.proxy_radius_m;
   ImGui::SetNextItemWidth(200);
   if (ImGui::InputDouble("proxyRadius (m)", &radius, 0.0, 0.0, "%.4g", ImGuiInputTextFlags_EnterReturnsTrue)) {
-    set("haptics", "proxyRadius", number_text(radius));
+    render("proxyRadius", number_text(radius), [&](action::Rendering& r) { r.proxy_radius_m = radius; });
   }
   double limit = w.project.safety.max_force_n;
   ImGui::SetNextItemWidth(200);
@@ -154,11 +163,16 @@ GuiCommands haptics_panel(const WorldView& w, HapticsPanelState& ui) {
     set("haptics/safety", "maxForce", number_text(limit));
   }
   bool shading = w.project.force_shading;
-  if (ImGui::Checkbox("forceShading", &shading)) set("haptics", "forceShading", shading ? "true" : "false");
+  if (ImGui::Checkbox("forceShading", &shading)) {
+    render("forceShading", shading ? "true" : "false", [&](action::Rendering& r) { r.force_shading = shading; });
+  }
   int face = static_cast<int>(w.project.touchable_face);
   const char* faces[] = {"FRONT", "BACK", "FRONT_AND_BACK"};
   ImGui::SetNextItemWidth(200);
-  if (ImGui::Combo("touchableFace", &face, faces, 3)) set("haptics", "touchableFace", faces[face]);
+  if (ImGui::Combo("touchableFace", &face, faces, 3)) {
+    render("touchableFace", faces[face], [&](action::Rendering& r) { r.touchable_face = static_cast<collision::TouchableFace>(face); });
+  }
+  if (rendering) out.push_back(std::move(*rendering));
   ImGui::Separator();
   ImGui::TextDisabled("surface");
   // The surface changed this frame, as one typed edit of the project's surface.

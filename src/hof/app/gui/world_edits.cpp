@@ -215,6 +215,23 @@ Expected<void> GuiWindow::set_surface(const action::SetSurface& edit) {
   return {};
 }
 
+Expected<void> GuiWindow::set_rendering(const action::SetRendering& edit) {
+  // A typed edit of the project in memory, then the haptic loop's renderer from it.
+  if (!session_) return make_error(ErrorCode::kInvalidArgument, "no world is open");
+  if (!std::isfinite(edit.rendering.proxy_radius_m)) {
+    return make_error(ErrorCode::kInvalidArgument, fmt::format("'haptics@proxyRadius': {} is not a number", edit.rendering.proxy_radius_m));
+  }
+  scene::HofProject next = project_;
+  next.renderer = edit.rendering.renderer;
+  next.proxy_radius_m = edit.rendering.proxy_radius_m;
+  next.force_shading = edit.rendering.force_shading;
+  next.touchable_face = edit.rendering.touchable_face;
+  if (auto ok = session_->submit(coupling::command::SetRenderer{scene::session_config(next).haptics.renderer}); !ok) return ok;
+  project_ = std::move(next);
+  note_settings(edit.settings);
+  return {};
+}
+
 void GuiWindow::note_settings(const std::vector<std::string>& settings) {
   if (recording_) {
     for (const std::string& s : settings) recording_->events.push_back(fmt::format("{:.3f}: set {}", recording_->seconds(), s));

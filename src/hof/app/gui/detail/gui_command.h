@@ -37,6 +37,19 @@ struct SetSurface {
   haptics::SurfaceMaterial surface;
   std::vector<std::string> settings;
 };
+/// The project's haptic rendering settings (<haptics renderer proxyRadius forceShading
+/// touchableFace>), as HofProject holds them.
+struct Rendering {
+  haptics::RendererKind renderer{haptics::RendererKind::kRuspini};
+  double proxy_radius_m{0.0025};
+  bool force_shading{true};
+  collision::TouchableFace touchable_face{collision::TouchableFace::kFront};
+};
+/// The project's rendering settings replaced (typed), sent to the haptic loop as SetRenderer.
+struct SetRendering {
+  Rendering rendering;
+  std::vector<std::string> settings;
+};
 /// The scene tree's structural edit of a body's node (the world's models rebuilt from it).
 struct EditScene {
   scene::SceneEdit edit;
@@ -94,7 +107,7 @@ struct Report {
 };
 }  // namespace action
 
-using GuiCommand = std::variant<coupling::Command, action::SetAttribute, action::SetGraphics, action::SetSurface, action::EditScene, action::AddComponent, action::AddRegionAtStylus, action::SwitchComponent, action::SetRegions,
+using GuiCommand = std::variant<coupling::Command, action::SetAttribute, action::SetGraphics, action::SetSurface, action::SetRendering, action::EditScene, action::AddComponent, action::AddRegionAtStylus, action::SwitchComponent, action::SetRegions,
                                 action::SetEffects, action::MountNeedle, action::SetAnimating, action::ResetWorld,
                                 action::SetRealtimePacing, action::StartRecording, action::StopRecording, action::ResetCamera,
                                 action::DismissError, action::Report>;

@@ -87,6 +87,7 @@ class GuiWindow {
   Expected<void> set_effects(const haptics::ForceEffects& effects);
   Expected<void> set_graphics(const action::SetGraphics& edit);
   Expected<void> set_surface(const action::SetSurface& edit);
+  Expected<void> set_rendering(const action::SetRendering& edit);
   /// Settings changed by a typed edit: the project has changes; a recording lists them.
   void note_settings(const std::vector<std::string>& settings);
   Expected<void> add_component(const action::AddComponent& add);
