@@ -9,7 +9,7 @@
 #include <algorithm>
 #include <tuple>
 
-#include "hof/mechanics/assembly.h"
+#include "hof/mechanics/detail/assembly.h"
 #include "hof/mechanics/detail/solver_workspace.h"
 #include "hof/mechanics/model_parameters.h"
 #include "hof/mechanics/step.h"

@@ -9,7 +9,7 @@
 #include <Eigen/Eigenvalues>
 #include <cmath>
 
-#include "hof/mechanics/assembly.h"
+#include "hof/mechanics/detail/assembly.h"
 #include "hof/mechanics/detail/solver_workspace.h"
 #include "hof/mechanics/step.h"
 #include "test_meshes.h"

@@ -10,7 +10,7 @@
 #include <random>
 #include <vector>
 
-#include "hof/mechanics/linear_solve.h"
+#include "hof/mechanics/detail/linear_solve.h"
 #include "hof/mechanics/detail/solver_workspace.h"
 #include "hof/mechanics/step.h"
 #include "hof/mesh/liver_generator.h"

@@ -2,7 +2,7 @@
 #include "hof/mechanics/detail/solver_workspace.h"
 
 #include "hof/mechanics/parallel.h"
-#include "hof/mechanics/vector_kernels.h"
+#include "hof/mechanics/detail/vector_kernels.h"
 
 namespace hof::mechanics {
 

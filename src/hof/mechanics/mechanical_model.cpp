@@ -8,7 +8,7 @@
 #include <numeric>
 
 #include "hof/mechanics/detail/workspace_setup.h"
-#include "hof/mechanics/linear_solve.h"
+#include "hof/mechanics/detail/linear_solve.h"
 #include "hof/mechanics/mechanical_state.h"
 #include "hof/mechanics/neo_hookean_force_field.h"
 #include "hof/mesh/hex_grid.h"

@@ -2,7 +2,7 @@
 
 #include <fmt/format.h>
 
-#include "hof/mechanics/tet_rest_geometry.h"
+#include "hof/mechanics/detail/tet_rest_geometry.h"
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/SVD>

@@ -1,9 +1,9 @@
 #include "hof/mechanics/point_compliance.h"
 #include "hof/mechanics/detail/solver_workspace.h"
 
-#include "hof/mechanics/assembly.h"
+#include "hof/mechanics/detail/assembly.h"
 #include "hof/mechanics/forces.h"
-#include "hof/mechanics/vector_kernels.h"
+#include "hof/mechanics/detail/vector_kernels.h"
 
 namespace hof::mechanics {
 

@@ -5,8 +5,8 @@
 ///   1. forces.cpp                the forces at x, v (and the element data the assembly reads)
 ///   2. detail/<integrator>.cpp   one leaf file per scheme — explicit_euler, runge_kutta4,
 ///                                implicit_euler, static_solver — which assembles A = αM + βK
-///                                (assembly.cpp) and solves A·x = b by CG or LDLᵀ
-///                                (linear_solve.cpp) when it needs to, then updates v and x
+///                                (detail/assembly.cpp) and solves A·x = b by CG or LDLᵀ
+///                                (detail/linear_solve.cpp) when it needs to, then updates v and x
 ///   3. the divergence checks, which record a Fault (fault.h) and put it in words
 /// Also the energies used by tests and reports. forces.h and point_compliance.h are included
 /// for the callers that read forces or compliances between steps.

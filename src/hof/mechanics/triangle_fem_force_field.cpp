@@ -6,7 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "hof/mechanics/tet_rest_geometry.h"
+#include "hof/mechanics/detail/tet_rest_geometry.h"
 
 namespace hof::mechanics {
 

@@ -1,9 +1,9 @@
-#include "hof/mechanics/assembly.h"
+#include "hof/mechanics/detail/assembly.h"
 #include "hof/mechanics/detail/solver_workspace.h"
 #include "hof/mechanics/detail/integrators.h"
-#include "hof/mechanics/linear_solve.h"
+#include "hof/mechanics/detail/linear_solve.h"
 #include "hof/mechanics/parallel.h"
-#include "hof/mechanics/vector_kernels.h"
+#include "hof/mechanics/detail/vector_kernels.h"
 
 namespace hof::mechanics::detail {
 

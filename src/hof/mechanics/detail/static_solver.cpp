@@ -1,11 +1,11 @@
 #include <algorithm>
 #include <cmath>
 
-#include "hof/mechanics/assembly.h"
+#include "hof/mechanics/detail/assembly.h"
 #include "hof/mechanics/detail/solver_workspace.h"
 #include "hof/mechanics/detail/integrators.h"
 #include "hof/mechanics/forces.h"
-#include "hof/mechanics/linear_solve.h"
+#include "hof/mechanics/detail/linear_solve.h"
 
 namespace hof::mechanics::detail {
 

@@ -1,4 +1,4 @@
-#include "hof/mechanics/coarse_correction.h"
+#include "hof/mechanics/detail/coarse_correction.h"
 #include "hof/mechanics/detail/solver_workspace.h"
 
 #include <algorithm>
@@ -7,7 +7,7 @@
 #include <limits>
 #include <map>
 
-#include "hof/mechanics/linear_solve.h"
+#include "hof/mechanics/detail/linear_solve.h"
 
 namespace hof::mechanics::detail {
 

@@ -1,4 +1,4 @@
-#include "hof/mechanics/linear_solve.h"
+#include "hof/mechanics/detail/linear_solve.h"
 #include "hof/mechanics/detail/solver_workspace.h"
 
 #include <cholmod.h>
@@ -9,10 +9,10 @@
 #include <cmath>
 #include <cstring>
 
-#include "hof/mechanics/cg_kernels.h"
-#include "hof/mechanics/coarse_correction.h"
+#include "hof/mechanics/detail/cg_kernels.h"
+#include "hof/mechanics/detail/coarse_correction.h"
 #include "hof/mechanics/parallel.h"
-#include "hof/mechanics/vector_kernels.h"
+#include "hof/mechanics/detail/vector_kernels.h"
 
 namespace hof::mechanics::detail {
 

@@ -1,9 +1,9 @@
-#include "hof/mechanics/assembly.h"
+#include "hof/mechanics/detail/assembly.h"
 #include "hof/mechanics/detail/solver_workspace.h"
 
 #include <algorithm>
 
-#include "hof/mechanics/linear_solve.h"
+#include "hof/mechanics/detail/linear_solve.h"
 
 namespace hof::mechanics::detail {
 
