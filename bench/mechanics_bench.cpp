@@ -19,7 +19,7 @@
 #include <map>
 #include <string>
 
-#include "hof/mechanics/linear_solve.h"
+#include "hof/mechanics/detail/linear_solve.h"
 #include "hof/mechanics/step.h"
 #include "hof/mesh/boundary.h"
 #include "hof/mesh/hex_grid.h"

@@ -9,7 +9,8 @@
 #include <algorithm>
 #include <tuple>
 
-#include "hof/mechanics/assembly.h"
+#include "hof/mechanics/detail/assembly.h"
+#include "hof/mechanics/detail/solver_workspace.h"
 #include "hof/mechanics/model_parameters.h"
 #include "hof/mechanics/step.h"
 #include "hof/mesh/liver_generator.h"
@@ -50,7 +51,7 @@ TEST(SystemAssembly, TheSinglePrecisionCopyHoldsHeldNodesAsTheDoubleMatrixDoes) 
   press(liver, s.state, 2.0);
   for (int k = 0; k < 5; ++k) ASSERT_TRUE(step(s.model, s.state));  // a deformed, rotated shape
   detail::assemble_system(s.model, s.state, 1.1, 2e-6, detail::AssemblyTarget::kSolver);
-  BlockSparseMatrix& a = s.state.work.system;
+  BlockSparseMatrix& a = s.state.work->system;
   const Eigen::Index n = 3 * static_cast<Eigen::Index>(a.block_rows());
   Eigen::MatrixXd single = Eigen::MatrixXd::Zero(n, n);
   for (std::int32_t r = 0; r < a.block_rows(); ++r) {
@@ -86,7 +87,7 @@ TEST(CoarseCorrection, AggregatesCoverEveryNodeAndEachHoldsEnoughForItsRigidMoti
     ModelConfig c = physiological_liver_config(body);
     c.linear.coarse_correction = true;
     const Solver s = make_solver(c);
-    const CoarseSpace& coarse = s.state.work.coarse;
+    const detail::CoarseSpace& coarse = s.state.work->coarse;
     const std::size_t n = body.nodes.size();
     ASSERT_GE(coarse.aggregates, 1) << n << " nodes";
     EXPECT_LE(coarse.aggregates, 40) << n << " nodes";
@@ -123,8 +124,8 @@ TEST(CoarseCorrection, TwoLevelCgConvergesToTheExactSolveEvenWithAStaleCoarseMat
     const Eigen::VectorXd v0 = exact.state.v;
     ASSERT_TRUE(step(exact.model, exact.state));
     ASSERT_TRUE(step(two_level.model, two_level.state));
-    ASSERT_TRUE(two_level.state.work.coarse.usable);
-    EXPECT_EQ(two_level.state.work.coarse.built_step, 0);
+    ASSERT_TRUE(two_level.state.work->coarse.usable);
+    EXPECT_EQ(two_level.state.work->coarse.built_step, 0);
     EXPECT_LT(step_error(v0, two_level.state.v, exact.state.v), 1e-6) << "step " << n;
     two_level.state.x = exact.state.x;
     two_level.state.v = exact.state.v;

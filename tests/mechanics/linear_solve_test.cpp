@@ -10,7 +10,8 @@
 #include <random>
 #include <vector>
 
-#include "hof/mechanics/linear_solve.h"
+#include "hof/mechanics/detail/linear_solve.h"
+#include "hof/mechanics/detail/solver_workspace.h"
 #include "hof/mechanics/step.h"
 #include "hof/mesh/liver_generator.h"
 
@@ -91,7 +92,7 @@ TEST(DirectSolver, SolutionEqualsAnIndependentFactorisation) {
   ASSERT_TRUE(model) << model.error().to_string();
   MechanicalState state = make_state(*model);
   for (int i = 0; i < 3; ++i) ASSERT_TRUE(step(*model, state)) << state.divergence.reason;
-  const Eigen::SparseMatrix<double> a = to_sparse(state.work.system);
+  const Eigen::SparseMatrix<double> a = to_sparse(state.work->system);
   const Eigen::VectorXd b = random_rhs(*model);
   Eigen::VectorXd x(b.size());
   ASSERT_TRUE(detail::solve_system(*model, state, b, x));
@@ -105,7 +106,7 @@ TEST(DirectSolver, SolutionEqualsAnIndependentFactorisation) {
   EXPECT_LT(difference, 1e-10);
   EXPECT_LT((a * x - b).norm() / b.norm(), 1e-12);
   // The step's own solve: its velocity change solves the step's system.
-  EXPECT_LT((a * state.work.dv - state.work.b).norm() / state.work.b.norm(), 1e-12);
+  EXPECT_LT((a * state.work->dv - state.work->b).norm() / state.work->b.norm(), 1e-12);
 }
 
 // A matrix that is not positive definite (here one free node's diagonal block negated, which
@@ -115,7 +116,7 @@ TEST(DirectSolver, FallsBackToLdltWhenNotPositiveDefinite) {
   ASSERT_TRUE(model) << model.error().to_string();
   MechanicalState state = make_state(*model);
   ASSERT_TRUE(step(*model, state)) << state.divergence.reason;
-  BlockSparseMatrix& system = state.work.system;
+  BlockSparseMatrix& system = state.work->system;
   const std::int32_t node = 10;
   ASSERT_FALSE(model->fixed_dof_mask[3 * node]);
   system.block(system.diagonal_slot(node)) *= -1.0;

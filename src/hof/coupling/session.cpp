@@ -197,8 +197,7 @@ Session::Session(std::vector<SessionBody> bodies, std::unique_ptr<haptics::Devic
       if (r.body.deformable()) {
         // point_elastic_force's scratch: the elements touching a full patch (a node has a few
         // tens), sized here so that no step allocates.
-        r.state.work.node_marks.assign(r.body.model->node_count(), 0);
-        r.state.work.element_scratch.reserve(32 * kFemReactionPatchCapacity);
+        mechanics::reserve_point_force_scratch(*r.body.model, r.state, 32 * kFemReactionPatchCapacity);
       }
     }
   }
@@ -1174,7 +1173,7 @@ void Session::start_realtime() {
   for (BodyRuntime& r : bodies_) {
     fit_threads(r);
     // What the bodies' steps will really run on (a model with threads of its own keeps them).
-    if (r.body.deformable()) rt_report_.simulation_threads = r.state.arena->max_concurrency();
+    if (r.body.deformable()) rt_report_.simulation_threads = mechanics::thread_count(r.state);
   }
   rt_start_ = Clock::now();
   cpu_plan_ = config_.pin_threads ? plan_cpus(allowed_cpus()) : CpuPlan{};

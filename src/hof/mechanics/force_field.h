@@ -16,6 +16,7 @@
 #include <string>
 #include <string_view>
 #include <utility>
+#include <variant>
 #include <vector>
 
 #include "hof/core/types.h"
@@ -23,14 +24,42 @@
 
 namespace hof::mechanics {
 
-/// Per-state data of a force field, sized by ForceField::make_state().
-struct ForceFieldState {
-  std::vector<Mat3> rotations;                 ///< (E) element rotations (co-rotational FEM)
-  std::vector<Eigen::Quaterniond> warm_start;  ///< (E) last polar rotation, to start from
-  std::vector<double> element_scalars;         ///< field-specific per-element values
-  std::vector<Eigen::Matrix<double, 9, 9>> element_tangents;  ///< (E) dP/dF (hyperelastic)
-  std::vector<Mat3> element_matrices;          ///< (E) field-specific per-element 3x3 data
+/// What a linear tetrahedral FEM field keeps per state (tetrahedron_fem_force_field.cpp).
+struct TetrahedronFemState {
+  /// Per element corner (padded to whole groups of simd lanes): the rotated, scaled shape
+  /// gradient √V R b that the force pass writes and the stiffness reads.
+  std::vector<double> scaled_gradients;
+  /// Per element corner, same layout: its elastic force in the last pass, before the nodes
+  /// gather them.
+  std::vector<double> corner_forces;
 };
+
+/// What a hexahedral FEM field keeps per state: each element's rotation (co-rotational).
+struct HexahedronFemState {
+  std::vector<Mat3> rotations;  ///< (E)
+};
+
+/// What a spring field keeps per state: per spring (in simd groups) the record of its last
+/// force evaluation that the stiffness reads (direction, length, stiffness terms).
+struct SpringState {
+  std::vector<double> records;
+};
+
+/// What a membrane (triangle FEM) field keeps per state.
+struct MembraneState {
+  std::vector<Mat3> frames;           ///< (T) each triangle's current in-plane frame (first two columns)
+  std::vector<double> voigt_stress;   ///< (3T) each triangle's in-plane stress (xx, yy, xy), Pa·m
+};
+
+/// What a Neo-Hookean field keeps per state: each element's tangent dP/dF.
+struct NeoHookeanState {
+  std::vector<Eigen::Matrix<double, 9, 9>> tangents;  ///< (E)
+};
+
+/// Per-state data of a force field, made by ForceField::make_state(): one alternative per kind
+/// of field (monostate: a field that keeps nothing, such as a constant force).
+using ForceFieldState =
+    std::variant<std::monostate, TetrahedronFemState, HexahedronFemState, SpringState, MembraneState, NeoHookeanState>;
 
 class ForceField {
  public:
@@ -112,6 +141,9 @@ class ForceField {
     (void)x;
     return -1;
   }
+
+  /// What one element of this field is called in a sentence ("tetrahedron 12 is inverted").
+  [[nodiscard]] virtual std::string_view element_noun() const { return "element"; }
 
  private:
   std::string name_;

@@ -1,7 +1,8 @@
 #include "hof/mechanics/forces.h"
+#include "hof/mechanics/detail/solver_workspace.h"
 
 #include "hof/mechanics/parallel.h"
-#include "hof/mechanics/vector_kernels.h"
+#include "hof/mechanics/detail/vector_kernels.h"
 
 namespace hof::mechanics {
 
@@ -24,7 +25,7 @@ void compute_forces(const MechanicalModel& model, MechanicalState& state, const 
 
 Vec3 point_elastic_force(const MechanicalModel& model, MechanicalState& state, std::span<const std::int32_t> nodes,
                          std::span<const double> weights) {
-  SolverWorkspace& w = state.work;
+  detail::SolverWorkspace& w = *state.work;
   if (w.node_marks.size() != model.node_count()) w.node_marks.assign(model.node_count(), 0);
   // A node listed twice counts once: the marks are a set.
   for (std::size_t i = 0; i < nodes.size(); ++i) {

@@ -272,7 +272,7 @@ Expected<std::unique_ptr<HexahedronFemForceField>> HexahedronFemForceField::make
 }
 
 ForceFieldState HexahedronFemForceField::make_state() const {
-  ForceFieldState s;
+  HexahedronFemState s;
   s.rotations.assign(elements_.size(), Mat3::Identity());
   return s;
 }
@@ -352,13 +352,14 @@ Vector24 HexahedronFemForceField::displacement(const Element& e, const Mat3& r, 
 
 void HexahedronFemForceField::add_force(const Eigen::VectorXd& x, const Eigen::VectorXd& /*v*/, ForceFieldState& state,
                                         Eigen::VectorXd& f) const {
+  std::vector<Mat3>& rotations = std::get<HexahedronFemState>(state).rotations;
   // One colour at a time, its elements in parallel: no two of them share a node, so each adds
   // its corner forces with plain stores, in an order independent of the thread count.
   coloring_.for_each([&](std::int32_t index) {
     const Element& e = elements_[static_cast<std::size_t>(index)];
     const std::array<Vec3, 8> offsets = current_offsets(e, x);
     const Mat3 r = rotation(e, offsets);
-    state.rotations[static_cast<std::size_t>(index)] = r;
+    rotations[static_cast<std::size_t>(index)] = r;
     // f = −R K (Rᵀ x − x₀) (Nesme et al. 2005).
     const Vector24 ku = e.young_modulus_pa * (stiffness_[static_cast<std::size_t>(e.stiffness)] * displacement(e, r, offsets));
     for (int c = 0; c < 8; ++c) {
@@ -405,6 +406,7 @@ template <StiffnessTarget kTarget>
 void HexahedronFemForceField::write_stiffness(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const {
   constexpr bool kSet = kTarget != StiffnessTarget::kAddDouble;
   const bool rotated = config_.method != FemMethod::kSmall;
+  const std::vector<Mat3>& rotations = std::get<HexahedronFemState>(state).rotations;
   const auto& row_start = k.row_start();
   parallel_chunks(
       incidence_.start.size() - 1, 64,
@@ -422,7 +424,7 @@ void HexahedronFemForceField::write_stiffness(const ForceFieldState& state, doub
             const int a = entry & 7;
             const Element& e = elements_[index];
             const double* k0 = stiffness_lanes_.data() + kLaneMatrixSize * static_cast<std::size_t>(e.stiffness);
-            const Mat3& r = state.rotations[index];
+            const Mat3& r = rotations[index];
             const double s = scale * e.young_modulus_pa;
             Lanes scaled_r[3];
             for (int q = 0; q < 3; ++q) scaled_r[q] = Lanes{s * r(0, q), s * r(1, q), s * r(2, q), 0.0};

@@ -63,6 +63,7 @@ class HexahedronFemForceField final : public ForceField {
   bool set_stiffness_single(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const override;
   [[nodiscard]] double potential_energy(const Eigen::VectorXd& x, const ForceFieldState& state) const override;
   [[nodiscard]] std::int64_t find_invalid_element(const Eigen::VectorXd& x) const override;
+  [[nodiscard]] std::string_view element_noun() const override { return "hexahedron"; }
 
   [[nodiscard]] const HexahedronFemConfig& config() const { return config_; }
   [[nodiscard]] std::size_t element_count() const { return elements_.size(); }

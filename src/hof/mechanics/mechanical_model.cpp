@@ -1,4 +1,5 @@
 #include "hof/mechanics/mechanical_model.h"
+#include "hof/mechanics/detail/solver_workspace.h"
 
 #include <fmt/format.h>
 
@@ -6,7 +7,8 @@
 #include <cmath>
 #include <numeric>
 
-#include "hof/mechanics/linear_solve.h"
+#include "hof/mechanics/detail/workspace_setup.h"
+#include "hof/mechanics/detail/linear_solve.h"
 #include "hof/mechanics/mechanical_state.h"
 #include "hof/mechanics/neo_hookean_force_field.h"
 #include "hof/mesh/hex_grid.h"
@@ -341,6 +343,23 @@ MechanicalState::MechanicalState(MechanicalState&&) noexcept = default;
 MechanicalState& MechanicalState::operator=(MechanicalState&&) noexcept = default;
 MechanicalState::~MechanicalState() = default;
 
+void detail::size_workspace(const MechanicalModel& model, MechanicalState& s) {
+  const Eigen::Index dofs = 3 * static_cast<Eigen::Index>(model.node_count());
+  if (!s.work) s.work = std::make_unique<detail::SolverWorkspace>();
+  detail::SolverWorkspace& w = *s.work;
+  for (Eigen::VectorXd* vec : {&w.b, &w.dv, &w.cg_previous, &w.r, &w.p, &w.z, &w.ap, &w.az, &w.diag_inv, &w.x_saved, &w.v_saved, &w.k1x,
+                               &w.k1v, &w.k2x, &w.k2v, &w.k3x, &w.k3v, &w.k4x, &w.k4v, &w.xt, &w.vt}) {
+    *vec = Eigen::VectorXd::Zero(dofs);
+  }
+  w.partials.assign(1024, 0.0);
+  w.p_single.assign(4 * model.node_count() + 4, 0.0f);
+  w.block_jacobi.assign(model.node_count(), Mat3::Identity());
+  if (model.needs_matrix) {
+    w.system = model.pattern;
+    detail::prepare_linear_solver(model, s, s.work->arena->max_concurrency());
+  }
+}
+
 MechanicalState make_state(const MechanicalModel& model) {
   MechanicalState s;
   const Eigen::Index dofs = 3 * static_cast<Eigen::Index>(model.node_count());
@@ -350,26 +369,23 @@ MechanicalState make_state(const MechanicalModel& model) {
   s.external_force = Eigen::VectorXd::Zero(dofs);
   for (std::size_t i = 0; i < model.node_count(); ++i) s.x.segment<3>(3 * static_cast<Eigen::Index>(i)) = model.rest_positions[i];
   for (const auto& field : model.force_fields) s.field_states.push_back(field->make_state());
-  SolverWorkspace& w = s.work;
-  for (Eigen::VectorXd* vec : {&w.b, &w.dv, &w.cg_previous, &w.r, &w.p, &w.z, &w.ap, &w.az, &w.diag_inv, &w.x_saved, &w.v_saved, &w.k1x,
-                               &w.k1v, &w.k2x, &w.k2v, &w.k3x, &w.k3v, &w.k4x, &w.k4v, &w.xt, &w.vt}) {
-    *vec = Eigen::VectorXd::Zero(dofs);
-  }
-  w.partials.assign(1024, 0.0);
-  w.p_single.assign(4 * model.node_count() + 4, 0.0f);
-  w.block_jacobi.assign(model.node_count(), Mat3::Identity());
-  s.arena = std::make_unique<tbb::task_arena>(model.threads > 0 ? model.threads : int{tbb::task_arena::automatic});
-  if (model.needs_matrix) {
-    w.system = model.pattern;
-    detail::prepare_linear_solver(model, s, s.arena->max_concurrency());
-  }
+  s.work = std::make_unique<detail::SolverWorkspace>();
+  s.work->arena = std::make_unique<tbb::task_arena>(model.threads > 0 ? model.threads : int{tbb::task_arena::automatic});
+  detail::size_workspace(model, s);
   return s;
 }
 
 void set_threads(const MechanicalModel& model, MechanicalState& state, int threads) {
   const int wanted = threads > 0 ? threads : model.threads > 0 ? model.threads : int{tbb::task_arena::automatic};
-  state.arena = std::make_unique<tbb::task_arena>(wanted);
-  detail::prepare_cg_threads(model, state, state.arena->max_concurrency());
+  state.work->arena = std::make_unique<tbb::task_arena>(wanted);
+  detail::prepare_cg_threads(model, state, state.work->arena->max_concurrency());
+}
+
+int thread_count(const MechanicalState& state) { return state.work->arena->max_concurrency(); }
+
+void reserve_point_force_scratch(const MechanicalModel& model, MechanicalState& state, std::size_t elements) {
+  state.work->node_marks.assign(model.node_count(), 0);
+  state.work->element_scratch.reserve(elements);
 }
 
 void reset(const MechanicalModel& model, MechanicalState& state) {
@@ -384,9 +400,9 @@ void reset(const MechanicalModel& model, MechanicalState& state) {
   state.divergence = {};
   state.stats = {};
   // As a fresh state: no warm-start guess, no assembled matrix to reuse.
-  state.work.cg_previous.setZero();
-  state.work.system_assembled_step = -1;
-  state.work.coarse.built_step = -1;
+  state.work->cg_previous.setZero();
+  state.work->system_assembled_step = -1;
+  state.work->coarse.built_step = -1;
   for (std::size_t k = 0; k < model.force_fields.size(); ++k) {
     ForceFieldState fresh = model.force_fields[k]->make_state();
     state.field_states[k] = std::move(fresh);

@@ -1,18 +1,17 @@
 #pragma once
 /// @file
 /// Everything about a mechanical model that changes while it runs: positions, velocities,
-/// forces, the coupling input, per-field element data, solver scratch (sized once, so a step
-/// never allocates), and the divergence report.
+/// forces, the coupling input, per-field element data (a typed state per force field) and the
+/// divergence report. The solver's scratch, factorisation and threads are its workspace
+/// (detail/solver_workspace.h), held here only as an opaque handle.
 
-#include <Eigen/Cholesky>
 #include <Eigen/Core>
-#include <tbb/task_arena.h>
 #include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
 
-#include "hof/mechanics/block_sparse_matrix.h"
+#include "hof/mechanics/fault.h"
 #include "hof/mechanics/force_field.h"
 
 namespace hof::mechanics {
@@ -23,6 +22,8 @@ struct MechanicalModel;
 struct Divergence {
   bool diverged{false};
   std::int64_t step{-1};       ///< step index at which it was detected
+  Fault fault;                 ///< what and where, as data
+  // The fault in words (describe_fault), made once when step() reports it.
   std::string component;       ///< e.g. "TetrahedronFEMForceField 'FEM'" or "EulerExplicitSolver"
   std::string reason;          ///< one sentence
 };
@@ -38,62 +39,12 @@ struct StepStats {
   double residual_force_n{0.0};  ///< static solver: |f| at exit
 };
 
-/// The sparse direct solver's state (CHOLMOD's factors and workspace, linear_solve.cpp): kept
-/// out of this header so that HoF's headers do not need SuiteSparse's.
-struct DirectSolver;
-struct DirectSolverDeleter {
-  void operator()(DirectSolver* solver) const noexcept;
-};
-
-/// The coarse space of the CG's two-level preconditioner (coarse_correction.h): sized when
-/// the state is made, formed and factored every few steps.
-struct CoarseSpace {
-  std::int32_t aggregates{0};             // 0: no coarse space
-  std::vector<std::int32_t> aggregate;    // (N) aggregate of each node
-  std::vector<Eigen::Vector3d> arm;       // (N) node minus its aggregate's centre, over the aggregate's size
-  std::vector<Eigen::Vector3d> centre;    // (aggregates) scratch for the centres
-  std::vector<double> size;               // (aggregates) half the largest extent of each aggregate
-  std::vector<std::int32_t> members;      // (aggregates) scratch for the node counts
-  Eigen::MatrixXd matrix;                 // (6G × 6G) Pᵀ A P
-  Eigen::LLT<Eigen::MatrixXd> factor;     // its Cholesky factor
-  Eigen::VectorXd solution;               // (6G) Pᵀ r, then the coarse solution
-  std::vector<double> partials;           // (CG chunks × 6G) each chunk's Pᵀ r, added in chunk order
-  std::int64_t built_step{-1};            // the step whose matrix and positions formed it (−1: none)
-  bool usable{false};                     // the last factorisation succeeded
-};
-
-/// Solver scratch, sized by make_state().
-struct SolverWorkspace {
-  Eigen::VectorXd b, dv, r, p, z, ap, az, diag_inv;  // CG and implicit Euler (3N); diag_inv: 1 / A's diagonal (two-level CG)
-  Eigen::VectorXd cg_previous;                     // (3N) the last CG solution: a warm start's guess
-  Eigen::VectorXd x_saved, v_saved;               // last good state, restored on divergence
-  Eigen::VectorXd k1x, k1v, k2x, k2v, k3x, k3v, k4x, k4v, xt, vt;  // RK4
-  std::vector<float, Eigen::aligned_allocator<float>> p_single;  // CG direction rounded, 4 per node (+ exchange copies)
-  std::vector<double> partials;                    // deterministic reductions
-  // The CG's exchange between threads (see solve_cg): the entries of the direction that a
-  // thread's rows read from other threads' nodes are also copied to a compact block of
-  // p_single after the first N+1 nodes, and the product reads them there.
-  std::size_t cg_parts{1};                         // threads the CG's chunks are split over
-  std::vector<std::int32_t> cg_pair_columns;       // the single copy's pair columns, redirected (empty: no exchange)
-  std::vector<std::int32_t> cg_send_start;         // (CG chunks+1) each chunk's range in cg_send_from/to
-  std::vector<std::int32_t> cg_send_from, cg_send_to;  // node of the chunk, node index of its copy
-  BlockSparseMatrix system;                        // A = αM + βK, values refilled each step
-  // The step at which implicit Euler assembled `system` for itself with these coefficients
-  // (−1: it holds something else, e.g. the compliance's K): what matrix reuse may reuse.
-  std::int64_t system_assembled_step{-1};
-  std::uint64_t system_assemblies{0};              // counts assemble_system's fills of `system`
-  std::uint64_t diag_inv_assembly{0};              // the fill diag_inv was taken from (0: none)
-  double system_mass_coeff{0.0}, system_stiffness_coeff{0.0};
-  std::vector<Eigen::Matrix3d> block_jacobi;       // (N) inverse diagonal blocks
-  CoarseSpace coarse;                              // the CG's two-level preconditioner, when on
-  // point_elastic_force: the set of a patch's nodes (one flag per node, cleared after each
-  // use) and the elements touching them.
-  std::vector<std::uint8_t> node_marks;
-  std::vector<std::int32_t> element_scratch;
-  // Sparse direct solver (kSparseLdlt): the pattern's ordering and symbolic analysis, made
-  // once by make_state; each step copies values and factors numerically.
-  std::unique_ptr<DirectSolver, DirectSolverDeleter> direct;
-};
+namespace detail {
+/// The solver's workspace (detail/solver_workspace.h): scratch vectors sized once, the system
+/// matrix, the direct solver's factorisation, the CG's coarse space and thread plan, and the
+/// task arena the steps run in. Only the stepping code reads it.
+struct SolverWorkspace;
+}  // namespace detail
 
 struct MechanicalState {
   MechanicalState();
@@ -110,8 +61,8 @@ struct MechanicalState {
   std::vector<ForceFieldState> field_states;  ///< one per model force field
   Divergence divergence;
   StepStats stats;
-  SolverWorkspace work;
-  std::unique_ptr<tbb::task_arena> arena;     ///< limits the threads this model uses
+  /// The solver's own (made by make_state): nothing physical, nothing a caller reads.
+  std::unique_ptr<detail::SolverWorkspace> work;
 
   /// Node i's position / velocity.
   [[nodiscard]] Eigen::Vector3d position(std::int32_t i) const { return x.segment<3>(3 * static_cast<Eigen::Index>(i)); }
@@ -125,6 +76,13 @@ struct MechanicalState {
 /// that is unset too). Results do not depend on it (the loops' chunks are fixed). Between
 /// steps; it allocates.
 void set_threads(const MechanicalModel& model, MechanicalState& state, int threads);
+
+/// The threads the state's steps run on.
+[[nodiscard]] int thread_count(const MechanicalState& state);
+
+/// Sizes the scratch of point_elastic_force (forces.h) for patches touching up to `elements`
+/// elements, so that a contact's reaction allocates nothing. Between steps; it allocates.
+void reserve_point_force_scratch(const MechanicalModel& model, MechanicalState& state, std::size_t elements);
 
 /// Back to rest: positions to rest, velocities and forces to zero, time to 0, divergence
 /// cleared. Keeps the scratch (no allocation).

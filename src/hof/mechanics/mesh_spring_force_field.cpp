@@ -196,8 +196,8 @@ void fill_spring_pairs(const double* __restrict records, const Spring* __restric
 }  // namespace
 
 ForceFieldState MeshSpringForceField::make_state() const {
-  ForceFieldState s;
-  s.element_scalars.assign(kRecord * simd::kLanes * groups_.size(), 0.0);
+  SpringState s;
+  s.records.assign(kRecord * simd::kLanes * groups_.size(), 0.0);
   return s;
 }
 
@@ -301,7 +301,7 @@ void MeshSpringForceField::add_force(const Eigen::VectorXd& x, const Eigen::Vect
                                      Eigen::VectorXd& f) const {
   const double* xs = x.data();
   const double* vs = v.data();
-  double* records = state.element_scalars.data();
+  double* records = std::get<SpringState>(state).records.data();
   // Spring pass, four springs at a time: tension and stiffness block of each.
   parallel_chunks(
       groups_.size(), 64,
@@ -322,7 +322,7 @@ void MeshSpringForceField::add_force(const Eigen::VectorXd& x, const Eigen::Vect
 // Σ K_s over the node's springs. No atomics, fixed summation order.
 template <StiffnessTarget kTarget>
 void MeshSpringForceField::write_stiffness(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const {
-  const double* records = state.element_scalars.data();
+  const double* records = std::get<SpringState>(state).records.data();
   parallel_chunks(
       springs_.size(), 1024,
       [&](std::size_t begin, std::size_t end) {

@@ -2,7 +2,7 @@
 
 #include <fmt/format.h>
 
-#include "hof/mechanics/tet_rest_geometry.h"
+#include "hof/mechanics/detail/tet_rest_geometry.h"
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/SVD>
@@ -194,9 +194,9 @@ Expected<std::unique_ptr<NeoHookeanForceField>> NeoHookeanForceField::make(const
 
 ForceFieldState NeoHookeanForceField::make_state() const {
   // Tangents start at the rest state, so add_stiffness before any add_force is meaningful.
-  ForceFieldState s;
+  NeoHookeanState s;
   const DiagonalLaw law{lambda_, mu_};
-  s.element_tangents.assign(elements_.size(), law.tangent(signed_svd(Mat3::Identity())));
+  s.tangents.assign(elements_.size(), law.tangent(signed_svd(Mat3::Identity())));
   return s;
 }
 
@@ -220,23 +220,25 @@ void NeoHookeanForceField::add_force(const Eigen::VectorXd& x, const Eigen::Vect
                                      Eigen::VectorXd& f) const {
   const DiagonalLaw law{lambda_, mu_};
   // A state not made by make_state() is sized here once (the only allocation).
-  if (state.element_tangents.size() != elements_.size()) state.element_tangents.resize(elements_.size());
+  std::vector<Mat9>& tangents = std::get<NeoHookeanState>(state).tangents;
+  if (tangents.size() != elements_.size()) tangents.resize(elements_.size());
   coloring_.for_each([&](std::int32_t index) {
     const Element& e = elements_[index];
     // Stress from the rotation-preserving SVD (invertible FEM), nodal forces f_i = −V P b_i,
     // and the projected tangent for add_stiffness.
     const SignedSvd d = signed_svd(deformation_gradient(e, x));
     const Mat3 vp = -e.volume * law.first_piola(d);
-    state.element_tangents[index] = law.tangent(d);
+    tangents[index] = law.tangent(d);
     for (int i = 0; i < 4; ++i) f.segment<3>(3 * static_cast<Eigen::Index>(e.nodes[i])) += vp * e.gradients[i];
   });
 }
 
 void NeoHookeanForceField::add_stiffness(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const {
   double* values = k.values();
+  const std::vector<Mat9>& tangents = std::get<NeoHookeanState>(state).tangents;
   coloring_.for_each([&](std::int32_t index) {
     const Element& e = elements_[index];
-    const Mat9& t = state.element_tangents[index];
+    const Mat9& t = tangents[index];
     // K_ij(k,p) = V Σ_{l,n} b_i[l] (∂P_kl/∂F_pn) b_j[n], from F = Σ x_j b_jᵀ. First
     // m_j(r,p) = Σ_n T(r, p + 3n) b_j[n] (9x3), then K_ij = V Σ_l b_i[l] m_j(rows 3l..3l+2).
     std::array<Eigen::Matrix<double, 9, 3>, 4> m;

@@ -1,15 +1,16 @@
 #include "hof/mechanics/point_compliance.h"
+#include "hof/mechanics/detail/solver_workspace.h"
 
-#include "hof/mechanics/assembly.h"
+#include "hof/mechanics/detail/assembly.h"
 #include "hof/mechanics/forces.h"
-#include "hof/mechanics/vector_kernels.h"
+#include "hof/mechanics/detail/vector_kernels.h"
 
 namespace hof::mechanics {
 
 bool compute_point_compliance(const MechanicalModel& model, MechanicalState& state, std::span<const std::int32_t> nodes,
                               std::span<const double> weights, Mat3& compliance, int max_iterations) {
   if (model.fixed_dofs.empty() || nodes.size() != weights.size() || !model.needs_matrix) return false;
-  SolverWorkspace& w = state.work;
+  detail::SolverWorkspace& w = *state.work;
   // Linearise at the current state (refreshes element rotations), K alone, fixed dofs held.
   compute_forces(model, state, state.x, state.v, w.xt);
   detail::assemble_system(model, state, 0.0, 1.0, detail::AssemblyTarget::kDouble);

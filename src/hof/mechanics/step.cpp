@@ -1,96 +1,76 @@
 #include "hof/mechanics/step.h"
+#include "hof/mechanics/detail/solver_workspace.h"
 
-#include <fmt/format.h>
-
-#include <cmath>
-
-#include "hof/mechanics/integrators.h"
+#include "hof/mechanics/detail/integrators.h"
 
 namespace hof::mechanics {
 
 namespace {
 
-const char* solver_type(OdeSolverKind kind) {
-  switch (kind) {
-    case OdeSolverKind::kEulerExplicit: return "EulerExplicitSolver";
-    case OdeSolverKind::kRungeKutta4: return "RungeKutta4Solver";
-    case OdeSolverKind::kStatic: return "StaticSolver";
-    case OdeSolverKind::kEulerImplicit: return "EulerImplicitSolver";
-  }
-  return "solver";
-}
-
-void diverge(MechanicalState& state, std::string component, std::string reason) {
-  state.divergence.diverged = true;
-  state.divergence.step = state.steps;
-  state.divergence.component = std::move(component);
-  state.divergence.reason = std::move(reason);
-}
-
-// First node whose position or velocity is not finite or whose speed exceeds the limit, as
-// (node, is_speed). Deterministic scan.
-std::pair<std::int64_t, bool> find_bad_node(const MechanicalModel& model, const MechanicalState& state) {
+// First node whose position or velocity is not finite or whose speed exceeds the limit.
+// Deterministic scan.
+Fault find_bad_node(const MechanicalModel& model, const MechanicalState& state) {
   const double max_speed2 = model.max_speed_m_per_s * model.max_speed_m_per_s;
   for (std::size_t i = 0; i < model.node_count(); ++i) {
     const Eigen::Index k = 3 * static_cast<Eigen::Index>(i);
     const auto xi = state.x.segment<3>(k);
     const auto vi = state.v.segment<3>(k);
-    if (!xi.allFinite() || !vi.allFinite()) return {static_cast<std::int64_t>(i), false};
-    if (vi.squaredNorm() > max_speed2) return {static_cast<std::int64_t>(i), true};
+    if (!xi.allFinite() || !vi.allFinite()) return {FaultKind::kNonFiniteNode, static_cast<std::int64_t>(i), -1, 0.0};
+    if (vi.squaredNorm() > max_speed2) return {FaultKind::kRunawayNode, static_cast<std::int64_t>(i), -1, vi.norm()};
   }
-  return {-1, false};
+  return {};
+}
+
+// The divergence checks after a step, in the order that explains best: a broken solve, a
+// non-finite node, a linear element turned inside out (it explains a runaway better than the
+// speed does), then a runaway node.
+Fault check_step(const MechanicalModel& model, const MechanicalState& state, bool solved) {
+  if (!solved) return {FaultKind::kLinearSolveFailed, -1, -1, 0.0};
+  const Fault node = find_bad_node(model, state);
+  if (node.kind == FaultKind::kNonFiniteNode) return node;
+  for (std::size_t k = 0; k < model.force_fields.size(); ++k) {
+    if (const std::int64_t element = model.force_fields[k]->find_invalid_element(state.x); element >= 0) {
+      return {FaultKind::kInvertedElement, element, static_cast<std::int32_t>(k), 0.0};
+    }
+  }
+  return node;
+}
+
+// One step's stages, in order; the integrator is a leaf that integrates from the forces.
+bool run_stages(const MechanicalModel& model, MechanicalState& state) {
+  // Stage 1, the forces at the state's positions and velocities (static equilibrium: at rest).
+  if (model.ode.kind == OdeSolverKind::kStatic) state.v.setZero();
+  const auto t0 = detail::StageClock::now();
+  compute_forces(model, state, state.x, state.v, state.f);
+  state.stats.force_s = detail::seconds_since(t0);
+  // Stage 2, the integrator: assembly and solve when implicit, then x and v advance.
+  switch (model.ode.kind) {
+    case OdeSolverKind::kEulerExplicit: return detail::explicit_euler_step(model, state);
+    case OdeSolverKind::kRungeKutta4: return detail::runge_kutta4_step(model, state);
+    case OdeSolverKind::kStatic: return detail::static_step(model, state);
+    case OdeSolverKind::kEulerImplicit: return detail::implicit_euler_step(model, state);
+  }
+  return true;
 }
 
 }  // namespace
 
 bool step(const MechanicalModel& model, MechanicalState& state) {
   if (state.divergence.diverged) return false;
-  SolverWorkspace& w = state.work;
+  detail::SolverWorkspace& w = *state.work;
   w.x_saved = state.x;
   w.v_saved = state.v;
   state.stats = {};
 
-  bool ok = true;
-  state.arena->execute([&] {
-    switch (model.ode.kind) {
-      case OdeSolverKind::kEulerExplicit: ok = detail::explicit_euler_step(model, state); break;
-      case OdeSolverKind::kRungeKutta4: ok = detail::runge_kutta4_step(model, state); break;
-      case OdeSolverKind::kStatic: ok = detail::static_step(model, state); break;
-      case OdeSolverKind::kEulerImplicit: ok = detail::implicit_euler_step(model, state); break;
-    }
-  });
+  bool solved = true;
+  state.work->arena->execute([&] { solved = run_stages(model, state); });
 
-  // Divergence: a broken solve, a non-finite or runaway node, a linear element turned inside
-  // out. The state goes back to the last good step; nothing non-finite leaves this function.
-  if (!ok) {
-    const char* type = model.linear.kind == LinearSolverKind::kSparseLdlt ? "SparseLDLSolver" : "CGLinearSolver";
-    diverge(state, fmt::format("{} '{}'", type, model.linear.name),
-            "the linear solve broke down (singular or non-finite system)");
-  } else {
-    const auto [node, speed] = find_bad_node(model, state);
-    // Names are formatted only on failure: a good step allocates nothing.
-    auto solver = [&] { return fmt::format("{} '{}'", solver_type(model.ode.kind), model.ode.name); };
-    if (node >= 0 && !speed) {
-      diverge(state, solver(), fmt::format("node {} has a non-finite position or velocity", node));
-    }
-    // An inverted linear element explains a runaway better than the speed does: look first.
-    for (const auto& field : model.force_fields) {
-      if (state.divergence.diverged) break;
-      if (const std::int64_t element = field->find_invalid_element(state.x); element >= 0) {
-        diverge(state, fmt::format("{} '{}'", field->type_name(), field->name()),
-                fmt::format("{} {} is inverted: linear (small) FEM cannot recover; use method "
-                            "\"large\" or \"polar\", or a Neo-Hookean material",
-                            field->type_name() == "HexahedronFEMForceField" ? "hexahedron" : field->type_name() == "TetrahedronFEMForceField" ? "tetrahedron" : "element", element));
-      }
-    }
-    if (!state.divergence.diverged && node >= 0 && speed) {
-      diverge(state, solver(),
-              fmt::format("node {} moves at {:.3g} m/s, above the {:.3g} m/s limit: the simulation is "
-                          "unstable (reduce dt, raise damping or use an implicit solver)",
-                          node, state.velocity(static_cast<std::int32_t>(node)).norm(), model.max_speed_m_per_s));
-    }
-  }
-  if (state.divergence.diverged) {
+  // Divergence: the state goes back to the last good step; nothing non-finite leaves this
+  // function. The fault is put in words here, at the edge, and only on failure: a good step
+  // allocates nothing.
+  if (const Fault fault = check_step(model, state, solved); fault.kind != FaultKind::kNone) {
+    FaultText text = describe_fault(model, fault);
+    state.divergence = {true, state.steps, fault, std::move(text.component), std::move(text.reason)};
     state.x = w.x_saved;
     state.v = w.v_saved;
     state.f.setZero();

@@ -1,13 +1,13 @@
 #pragma once
 /// @file
-/// Advancing a mechanical model. The stages of a step run one way, each in its own file and
+/// Advancing a mechanical model. step() (step.cpp) runs the stages of a step itself, one way,
 /// none calling back into an earlier one:
-///   step.cpp          the dispatcher: the model's integrator, then the divergence checks
-///   integrators.cpp   explicit Euler, RK4, static (Newton), implicit Euler: each sequences
-///   forces.cpp          1. the forces (and the element data the assembly reads)
-///   assembly.cpp        2. A = αM + βK (implicit and static)
-///   linear_solve.cpp    3. A·x = b by CG or LDLᵀ (implicit and static)
-///                     and then integrates (updates v and x) itself.
+///   1. forces.cpp                the forces at x, v (and the element data the assembly reads)
+///   2. detail/<integrator>.cpp   one leaf file per scheme — explicit_euler, runge_kutta4,
+///                                implicit_euler, static_solver — which assembles A = αM + βK
+///                                (detail/assembly.cpp) and solves A·x = b by CG or LDLᵀ
+///                                (detail/linear_solve.cpp) when it needs to, then updates v and x
+///   3. the divergence checks, which record a Fault (fault.h) and put it in words
 /// Also the energies used by tests and reports. forces.h and point_compliance.h are included
 /// for the callers that read forces or compliances between steps.
 

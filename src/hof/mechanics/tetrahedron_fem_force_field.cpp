@@ -2,7 +2,7 @@
 
 #include <fmt/format.h>
 
-#include "hof/mechanics/tet_rest_geometry.h"
+#include "hof/mechanics/detail/tet_rest_geometry.h"
 
 #include <Eigen/SVD>
 #include <algorithm>
@@ -155,16 +155,16 @@ Expected<std::unique_ptr<TetrahedronFemForceField>> TetrahedronFemForceField::ma
 }
 
 ForceFieldState TetrahedronFemForceField::make_state() const {
-  ForceFieldState s;
-  // element_scalars: per element corner (padded to whole groups), the rotated scaled
-  // gradient c̃ = √V R b, then after all of them the corner's elastic force (same layout,
-  // see kCornerStride). At rest R = I.
+  TetrahedronFemState s;
+  // Per element corner (padded to whole groups): the rotated scaled gradient c̃ = √V R b, and
+  // the corner's elastic force (same layout, see kCornerStride). At rest R = I.
   const std::size_t padded = simd::kLanes * groups_.size();
-  s.element_scalars.assign(2 * (kElementStride * padded + kArrayPadding), 0.0);
+  s.scaled_gradients.assign(kElementStride * padded + kArrayPadding, 0.0);
+  s.corner_forces.assign(kElementStride * padded + kArrayPadding, 0.0);
   for (std::size_t e = 0; e < elements_.size(); ++e) {
     const double root_volume = std::sqrt(elements_[e].volume);
     for (int i = 0; i < 4; ++i) {
-      for (int q = 0; q < 3; ++q) s.element_scalars[kElementStride * e + kCornerStride * i + q] = root_volume * elements_[e].gradients[i][q];
+      for (int q = 0; q < 3; ++q) s.scaled_gradients[kElementStride * e + kCornerStride * i + q] = root_volume * elements_[e].gradients[i][q];
     }
   }
   return s;
@@ -342,9 +342,9 @@ void TetrahedronFemForceField::large_groups(const ElementGroup* __restrict group
   }
 }
 
-void TetrahedronFemForceField::element_pass_large(const Eigen::VectorXd& x, ForceFieldState& state) const {
-  double* stiffness_vectors = state.element_scalars.data();
-  double* corner_forces = stiffness_vectors + kElementStride * simd::kLanes * groups_.size() + kArrayPadding;
+void TetrahedronFemForceField::element_pass_large(const Eigen::VectorXd& x, TetrahedronFemState& state) const {
+  double* stiffness_vectors = state.scaled_gradients.data();
+  double* corner_forces = state.corner_forces.data();
   parallel_chunks(
       groups_.size(), 16,
       [&](std::size_t begin, std::size_t end) {
@@ -365,9 +365,9 @@ Mat3 TetrahedronFemForceField::element_force_map(const Element& e, const Eigen::
 }
 
 // Any rotation (small: R = I; polar), one element at a time, same outputs.
-void TetrahedronFemForceField::element_pass_general(const Eigen::VectorXd& x, ForceFieldState& state) const {
-  double* stiffness_vectors = state.element_scalars.data();
-  double* corner_forces = stiffness_vectors + kElementStride * simd::kLanes * groups_.size() + kArrayPadding;
+void TetrahedronFemForceField::element_pass_general(const Eigen::VectorXd& x, TetrahedronFemState& state) const {
+  double* stiffness_vectors = state.scaled_gradients.data();
+  double* corner_forces = state.corner_forces.data();
   parallel_chunks(
       elements_.size(), 64,
       [&](std::size_t begin, std::size_t end) {
@@ -409,12 +409,12 @@ bool TetrahedronFemForceField::add_force_sum_on(const Eigen::VectorXd& x, const 
 }
 
 void TetrahedronFemForceField::add_force(const Eigen::VectorXd& x, const Eigen::VectorXd& /*v*/,
-                                         ForceFieldState& state, Eigen::VectorXd& f) const {
+                                         ForceFieldState& field_state, Eigen::VectorXd& f) const {
+  TetrahedronFemState& state = std::get<TetrahedronFemState>(field_state);
   if (config_.method == FemMethod::kLarge) element_pass_large(x, state);
   else element_pass_general(x, state);
   // Node pass: each node gathers its corners' forces over its elements, in a fixed order.
-  const double* corner_forces =
-      state.element_scalars.data() + kElementStride * simd::kLanes * groups_.size() + kArrayPadding;
+  const double* corner_forces = state.corner_forces.data();
   parallel_chunks(
       incidence_.start.size() - 1, 128,
       [&](std::size_t begin, std::size_t end) {
@@ -515,7 +515,7 @@ void fill_edge_blocks(const double* __restrict c, const Edge* __restrict edges,
 
 template <StiffnessTarget kTarget>
 void TetrahedronFemForceField::write_stiffness(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const {
-  const double* c = state.element_scalars.data();
+  const double* c = std::get<TetrahedronFemState>(state).scaled_gradients.data();
   const double lambda = scale * lame_.lambda;
   const double mu = scale * lame_.mu;
   parallel_chunks(

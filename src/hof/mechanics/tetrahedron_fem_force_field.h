@@ -70,6 +70,7 @@ class TetrahedronFemForceField final : public ForceField {
   bool set_stiffness_single(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const override;
   [[nodiscard]] double potential_energy(const Eigen::VectorXd& x, const ForceFieldState& state) const override;
   [[nodiscard]] std::int64_t find_invalid_element(const Eigen::VectorXd& x) const override;
+  [[nodiscard]] std::string_view element_noun() const override { return "tetrahedron"; }
 
   [[nodiscard]] const TetrahedronFemConfig& config() const { return config_; }
   [[nodiscard]] std::size_t element_count() const { return elements_.size(); }
@@ -104,11 +105,11 @@ class TetrahedronFemForceField final : public ForceField {
   // The element's nodal-force map −V R σ at x (f_i = map · b_i), and its rotation R.
   Mat3 element_force_map(const Element& e, const Eigen::VectorXd& x, Mat3& r) const;
   // Per-element pass: corner forces and rotated scaled gradients into `state`.
-  void element_pass_large(const Eigen::VectorXd& x, ForceFieldState& state) const;
+  void element_pass_large(const Eigen::VectorXd& x, TetrahedronFemState& state) const;
   // Groups [begin, end) of the `large` pass (plain pointers keep the loop in registers).
   static void large_groups(const ElementGroup* groups, std::size_t begin, std::size_t end, const double* xs,
                            double lambda, double two_mu, double* stiffness_vectors, double* corner_forces);
-  void element_pass_general(const Eigen::VectorXd& x, ForceFieldState& state) const;
+  void element_pass_general(const Eigen::VectorXd& x, TetrahedronFemState& state) const;
   template <StiffnessTarget kTarget>
   void write_stiffness(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const;
 

@@ -6,7 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "hof/mechanics/tet_rest_geometry.h"
+#include "hof/mechanics/detail/tet_rest_geometry.h"
 
 namespace hof::mechanics {
 
@@ -133,10 +133,10 @@ Expected<std::unique_ptr<TriangleFemForceField>> TriangleFemForceField::make(con
 }
 
 ForceFieldState TriangleFemForceField::make_state() const {
-  ForceFieldState s;
-  s.element_matrices.assign(elements_.size(), Mat3::Zero());
-  s.element_scalars.assign(3 * elements_.size(), 0.0);  // Voigt stress per element
-  for (std::size_t t = 0; t < elements_.size(); ++t) s.element_matrices[t].leftCols<2>() = elements_[t].rest_frame;
+  MembraneState s;
+  s.frames.assign(elements_.size(), Mat3::Zero());
+  s.voigt_stress.assign(3 * elements_.size(), 0.0);
+  for (std::size_t t = 0; t < elements_.size(); ++t) s.frames[t].leftCols<2>() = elements_[t].rest_frame;
   return s;
 }
 
@@ -176,12 +176,13 @@ Eigen::Matrix<double, 6, 1> TriangleFemForceField::displacement(const Element& e
 
 void TriangleFemForceField::add_force(const Eigen::VectorXd& x, const Eigen::VectorXd&, ForceFieldState& state,
                                       Eigen::VectorXd& f) const {
+  MembraneState& membrane = std::get<MembraneState>(state);
   for (std::size_t t = 0; t < elements_.size(); ++t) {
     const Element& e = elements_[t];
     const Frame r = frame(e, x);
-    state.element_matrices[t].leftCols<2>() = r;
+    membrane.frames[t].leftCols<2>() = r;
     const Eigen::Matrix<double, 6, 1> u = displacement(e, r, x);
-    Eigen::Map<Eigen::Vector3d>(state.element_scalars.data() + 3 * t) = e.stress * u;
+    Eigen::Map<Eigen::Vector3d>(membrane.voigt_stress.data() + 3 * t) = e.stress * u;
     const Eigen::Matrix<double, 6, 1> local = -(e.stiffness * u);
     for (std::size_t i = 0; i < 3; ++i) {
       f.segment<3>(3 * static_cast<Eigen::Index>(e.nodes[i])) += r * local.segment<2>(static_cast<Eigen::Index>(2 * i));
@@ -192,12 +193,13 @@ void TriangleFemForceField::add_force(const Eigen::VectorXd& x, const Eigen::Vec
 void TriangleFemForceField::add_stiffness(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const {
   // K_ab = R K_e[ab] Rᵀ (the co-rotational stiffness as SOFA assembles it, without the
   // frame's rotation term) plus the tension's initial-stress term.
+  const MembraneState& membrane = std::get<MembraneState>(state);
   for (std::size_t t = 0; t < elements_.size(); ++t) {
     const Element& e = elements_[t];
-    const Frame r = state.element_matrices[t].leftCols<2>();
+    const Frame r = membrane.frames[t].leftCols<2>();
     // The tension's initial-stress term, its compression clamped at 0 (a slack membrane
     // buckles rather than pushes): σ⁺ from the eigen-decomposition of the 2x2 stress.
-    const Eigen::Vector3d voigt = Eigen::Map<const Eigen::Vector3d>(state.element_scalars.data() + 3 * t);
+    const Eigen::Vector3d voigt = Eigen::Map<const Eigen::Vector3d>(membrane.voigt_stress.data() + 3 * t);
     Eigen::Matrix2d sigma;
     sigma << voigt.x(), voigt.z(), voigt.z(), voigt.y();
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig;

@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "hof/mechanics/tet_rest_geometry.h"
+#include "hof/mechanics/detail/tet_rest_geometry.h"
 #include "hof/mechanics/tetrahedron_fem_force_field.h"
 
 namespace hof::mechanics {

@@ -1,4 +1,4 @@
-#include "hof/mechanics/tet_rest_geometry.h"
+#include "hof/mechanics/detail/tet_rest_geometry.h"
 
 #include <fmt/format.h>
 

@@ -1,4 +1,5 @@
-#include "hof/mechanics/coarse_correction.h"
+#include "hof/mechanics/detail/coarse_correction.h"
+#include "hof/mechanics/detail/solver_workspace.h"
 
 #include <algorithm>
 #include <array>
@@ -6,7 +7,7 @@
 #include <limits>
 #include <map>
 
-#include "hof/mechanics/linear_solve.h"
+#include "hof/mechanics/detail/linear_solve.h"
 
 namespace hof::mechanics::detail {
 
@@ -120,7 +121,7 @@ void prepare_coarse_space(const MechanicalModel& model, CoarseSpace& coarse, std
 }
 
 bool build_coarse_space(const MechanicalModel& model, MechanicalState& state) {
-  CoarseSpace& coarse = state.work.coarse;
+  CoarseSpace& coarse = state.work->coarse;
   coarse.usable = false;
   coarse.built_step = state.steps;
   if (coarse.aggregates == 0) return false;
@@ -151,7 +152,7 @@ bool build_coarse_space(const MechanicalModel& model, MechanicalState& state) {
   }
 
   // Pᵀ A P, block by block: (Pᵢᵀ Aᵢⱼ Pⱼ) into the aggregates' 6x6 block.
-  const BlockSparseMatrix& a = state.work.system;
+  const BlockSparseMatrix& a = state.work->system;
   const bool single = uses_single_precision(model);
   Eigen::MatrixXd& m = coarse.matrix;
   m.setZero();

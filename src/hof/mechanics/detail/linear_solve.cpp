@@ -1,4 +1,5 @@
-#include "hof/mechanics/linear_solve.h"
+#include "hof/mechanics/detail/linear_solve.h"
+#include "hof/mechanics/detail/solver_workspace.h"
 
 #include <cholmod.h>
 #include <dlfcn.h>
@@ -8,12 +9,12 @@
 #include <cmath>
 #include <cstring>
 
-#include "hof/mechanics/cg_kernels.h"
-#include "hof/mechanics/coarse_correction.h"
+#include "hof/mechanics/detail/cg_kernels.h"
+#include "hof/mechanics/detail/coarse_correction.h"
 #include "hof/mechanics/parallel.h"
-#include "hof/mechanics/vector_kernels.h"
+#include "hof/mechanics/detail/vector_kernels.h"
 
-namespace hof::mechanics {
+namespace hof::mechanics::detail {
 
 // The sparse direct solver: CHOLMOD (SuiteSparse; Chen, Davis, Hager, Rajamanickam, "Algorithm
 // 887: CHOLMOD, supernodal sparse Cholesky factorization and update/downdate", ACM TOMS 35(3),
@@ -97,9 +98,6 @@ struct DirectSolver {
 
 void DirectSolverDeleter::operator()(DirectSolver* solver) const noexcept { delete solver; }
 
-}  // namespace hof::mechanics
-
-namespace hof::mechanics::detail {
 
 namespace {
 
@@ -212,11 +210,11 @@ void prepare_cg_exchange(const MechanicalModel& model, SolverWorkspace& w, int t
 }  // namespace
 
 void prepare_cg_threads(const MechanicalModel& model, MechanicalState& state, int threads) {
-  if (model.needs_matrix) prepare_cg_exchange(model, state.work, threads);
+  if (model.needs_matrix) prepare_cg_exchange(model, *state.work, threads);
 }
 
 void prepare_linear_solver(const MechanicalModel& model, MechanicalState& state, int threads) {
-  SolverWorkspace& w = state.work;
+  SolverWorkspace& w = *state.work;
   if (model.needs_matrix) {
     w.system.prepare_single_precision();
     prepare_cg_exchange(model, w, threads);
@@ -304,7 +302,7 @@ void prepare_linear_solver(const MechanicalModel& model, MechanicalState& state,
 }
 
 DirectSolverInfo direct_solver_info(const MechanicalState& state) {
-  const DirectSolver* d = state.work.direct.get();
+  const DirectSolver* d = state.work->direct.get();
   if (d == nullptr) return {};
   return {true, d->supernodal != nullptr && d->supernodal->is_super != 0, d->last_used_fallback, d->factorisations,
           d->ordering, d->factor_nonzeros, d->factor_flops};
@@ -315,7 +313,7 @@ namespace {
 // Numeric factorisation of this step's A (supernodal LLᵀ; simplicial LDLᵀ if A is not
 // positive definite), then the solve, both on P A Pᵀ.
 bool solve_direct(MechanicalState& state, const Eigen::VectorXd& b, Eigen::VectorXd& x) {
-  SolverWorkspace& w = state.work;
+  SolverWorkspace& w = *state.work;
   if (!w.direct) return false;  // its analysis ran out of memory
   DirectSolver& d = *w.direct;
   cholmod_common& cc = d.common;
@@ -371,7 +369,7 @@ bool solve_direct(MechanicalState& state, const Eigen::VectorXd& b, Eigen::Vecto
 // barrier when the machine is oversubscribed and one of its threads is descheduled, while a
 // task loop lets the running threads take over the waiting chunks.
 bool solve_cg(const MechanicalModel& model, MechanicalState& state, const Eigen::VectorXd& b, Eigen::VectorXd& x) {
-  SolverWorkspace& w = state.work;
+  SolverWorkspace& w = *state.work;
   const LinearSolverConfig& cfg = model.linear;
   const BlockSparseMatrix& a = w.system;
   const std::size_t nodes = model.node_count();

@@ -1,4 +1,4 @@
-#include "hof/mechanics/cg_kernels.h"
+#include "hof/mechanics/detail/cg_kernels.h"
 
 #include "hof/mechanics/simd_lanes.h"
 

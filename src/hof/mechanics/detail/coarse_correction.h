@@ -26,6 +26,7 @@
 #include <cstdint>
 
 #include "hof/mechanics/mechanical_model.h"
+#include "hof/mechanics/detail/solver_workspace.h"
 #include "hof/mechanics/mechanical_state.h"
 
 namespace hof::mechanics::detail {

@@ -1,4 +1,4 @@
-#include "hof/mechanics/vector_kernels.h"
+#include "hof/mechanics/detail/vector_kernels.h"
 
 #include "hof/mechanics/parallel.h"
 #include "hof/mechanics/simd_lanes.h"

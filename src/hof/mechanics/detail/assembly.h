@@ -5,6 +5,7 @@
 /// zero), from the element data the force stage left in the field states.
 
 #include "hof/mechanics/mechanical_model.h"
+#include "hof/mechanics/detail/solver_workspace.h"
 #include "hof/mechanics/mechanical_state.h"
 
 namespace hof::mechanics::detail {
@@ -16,9 +17,9 @@ enum class AssemblyTarget : std::uint8_t {
   kDouble,  ///< the double values (and the single copy when the solver uses it)
 };
 
-/// A = mass_coeff·M + stiffness_coeff·K into state.work.system, K linearised where the force
+/// A = mass_coeff·M + stiffness_coeff·K into state.work->system, K linearised where the force
 /// fields last evaluated forces. Marks the matrix as not implicit Euler's own
-/// (state.work.system_assembled_step = −1): the caller that owns it says so.
+/// (state.work->system_assembled_step = −1): the caller that owns it says so.
 void assemble_system(const MechanicalModel& model, MechanicalState& state, double mass_coeff, double stiffness_coeff,
                      AssemblyTarget target = AssemblyTarget::kSolver);
 

@@ -1,12 +1,16 @@
-// Time integration: energy behaviour of each ODE solver on an undamped vibrating block, the
+// The integrators (src/hof/mechanics/detail/*: explicit Euler, RK4, implicit Euler, static)
+// through step(): energy behaviour of each ODE solver on an undamped vibrating block, the
 // critical time step of explicit Euler, and divergence reporting.
 
 #include <gtest/gtest.h>
 
+#include <fmt/format.h>
+
 #include <Eigen/Eigenvalues>
 #include <cmath>
 
-#include "hof/mechanics/assembly.h"
+#include "hof/mechanics/detail/assembly.h"
+#include "hof/mechanics/detail/solver_workspace.h"
 #include "hof/mechanics/step.h"
 #include "test_meshes.h"
 
@@ -50,9 +54,9 @@ double total_energy(const MechanicalModel& model, const MechanicalState& state) 
 double highest_frequency(const MechanicalModel& model) {
   MechanicalState state = make_state(model);
   compute_forces(model, state, state.x, state.v, state.f);
-  state.work.system = model.pattern;
+  state.work->system = model.pattern;
   detail::assemble_system(model, state, 0.0, 1.0);
-  const Eigen::MatrixXd k = state.work.system.to_dense();
+  const Eigen::MatrixXd k = state.work->system.to_dense();
   Eigen::VectorXd inv_sqrt_m(k.rows());
   for (Eigen::Index i = 0; i < k.rows(); ++i) inv_sqrt_m[i] = 1.0 / std::sqrt(model.node_mass_kg[static_cast<std::size_t>(i / 3)]);
   const Eigen::MatrixXd scaled = inv_sqrt_m.asDiagonal() * k * inv_sqrt_m.asDiagonal();
@@ -127,6 +131,8 @@ TEST(Dynamics, ExplicitEulerBeyondCriticalStepIsReportedAsDiverged) {
   EXPECT_TRUE(state.divergence.diverged);
   EXPECT_NE(state.divergence.component.find("EulerExplicitSolver"), std::string::npos);
   EXPECT_NE(state.divergence.reason.find("unstable"), std::string::npos) << state.divergence.reason;
+  EXPECT_EQ(state.divergence.fault.kind, FaultKind::kRunawayNode);
+  EXPECT_GT(state.divergence.fault.value, model->max_speed_m_per_s);
   EXPECT_TRUE(state.x.allFinite());
   EXPECT_TRUE(state.v.allFinite());
   // It stays stopped, and a reset brings it back to rest.
@@ -161,6 +167,9 @@ TEST(Dynamics, InvertedLinearElementUnderExtremeLoadIsReported) {
   ASSERT_TRUE(diverged);
   EXPECT_NE(state.divergence.component.find("TetrahedronFEMForceField 'FEM'"), std::string::npos);
   EXPECT_NE(state.divergence.reason.find("inverted"), std::string::npos);
+  EXPECT_EQ(state.divergence.fault.kind, FaultKind::kInvertedElement);
+  EXPECT_EQ(state.divergence.fault.field, 0);
+  EXPECT_NE(state.divergence.reason.find(fmt::format("tetrahedron {} is", state.divergence.fault.index)), std::string::npos);
   EXPECT_TRUE(state.x.allFinite());
 }
 

@@ -1,8 +1,9 @@
-#include "hof/mechanics/assembly.h"
+#include "hof/mechanics/detail/assembly.h"
+#include "hof/mechanics/detail/solver_workspace.h"
 
 #include <algorithm>
 
-#include "hof/mechanics/linear_solve.h"
+#include "hof/mechanics/detail/linear_solve.h"
 
 namespace hof::mechanics::detail {
 
@@ -19,7 +20,7 @@ bool assemble_single_only(const MechanicalModel& model, MechanicalState& state, 
     only = model.force_fields[k].get();
     only_index = k;
   }
-  BlockSparseMatrix& a = state.work.system;
+  BlockSparseMatrix& a = state.work->system;
   if (only == nullptr || !only->set_stiffness_single(state.field_states[only_index], stiffness_coeff, a)) return false;
   constexpr std::int64_t kColumn = BlockSparseMatrix::kSingleColumnStride;
   for (std::size_t n = 0; n < model.node_count(); ++n) {
@@ -63,13 +64,13 @@ bool assemble_single_only(const MechanicalModel& model, MechanicalState& state, 
 
 void assemble_system(const MechanicalModel& model, MechanicalState& state, double mass_coeff, double stiffness_coeff,
                      AssemblyTarget target) {
-  state.work.system_assembled_step = -1;  // the caller says whether this is implicit Euler's own A
-  ++state.work.system_assemblies;
+  state.work->system_assembled_step = -1;  // the caller says whether this is implicit Euler's own A
+  ++state.work->system_assemblies;
   if (target == AssemblyTarget::kSolver && uses_single_precision(model) &&
       assemble_single_only(model, state, mass_coeff, stiffness_coeff)) {
     return;
   }
-  BlockSparseMatrix& a = state.work.system;
+  BlockSparseMatrix& a = state.work->system;
   // The first field that covers the whole pattern sets the values (no clearing pass).
   bool initialised = false;
   for (std::size_t k = 0; k < model.force_fields.size(); ++k) {
