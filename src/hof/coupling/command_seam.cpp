@@ -110,7 +110,8 @@ Expected<double> CommandSeam::parameter(std::string_view body, std::string_view 
 Expected<void> CommandSeam::submit(const Command& submitted) {
   Command command = submitted;
   if (const auto* set = std::get_if<command::SetParameter>(&command);
-      set && fem_reaction_ && set->component.empty() && set->parameter == "dt" && !detail::fem_reaction_step_fits(set->value, haptic_rate_hz_)) {
+      set && fem_reaction_ && set->component.empty() && mechanics::parameter_id(set->parameter) == mechanics::ParameterId::kDt &&
+      !detail::fem_reaction_step_fits(set->value, haptic_rate_hz_)) {
     return make_error(ErrorCode::kInvalidArgument,
                       fmt::format("body '{}': dt {:g} s: coupling fem-reaction needs dt equal to the haptic period, {:g} s", set->body,
                                   set->value, 1.0 / haptic_rate_hz_));
@@ -338,7 +339,9 @@ bool CommandSeam::apply(const command::SetParameter& set, Applying& a) {
   for (BodyRuntime& r : a.world.bodies) {
     if (r.body.name != set.body || !r.body.config) continue;
     mechanics::ModelConfig config = *r.body.config;
-    auto ok = mechanics::set_parameter(config, set.component, set.parameter, set.value);
+    // Validated when submitted: the name is a parameter's, and the typed id sets it.
+    const auto id = mechanics::parameter_id(set.parameter);
+    auto ok = id ? mechanics::set_parameter(config, set.component, *id, set.value) : Expected<void>(std::unexpected(id.error()));
     auto model = ok ? mechanics::build_model(config) : Expected<mechanics::MechanicalModel>(std::unexpected(ok.error()));
     const std::string what =
         fmt::format("{}/{}{}{} = {}", set.body, set.component, set.component.empty() ? "" : "/", set.parameter, set.value);
