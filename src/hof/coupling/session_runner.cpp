@@ -14,16 +14,12 @@ namespace hof::coupling::detail {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
 // Real time: how far the simulation may fall behind the clock and still catch up (steps
 // without sleeping until it is back); farther behind, it gives the time up and goes on from
 // now. A step's cost varies by a tenth from step to step: without catching up, every step
 // slower than dt would be lost for good while a faster one waits, and the simulation would
 // keep real time only if its slowest steps did.
 constexpr double kMaxCatchUp_s = 0.02;
-
-double seconds_between(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
 
 // What a failed device says, or a plain reason when it says nothing.
 std::string failure_of(const haptics::Device& device) {

@@ -22,10 +22,6 @@ namespace hof::coupling::detail {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
-double seconds_between(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
-
 // Generalised winding number of a closed surface part at p (Van Oosterom & Strackee 1983):
 // 1 inside, 0 outside.
 bool inside_part(const haptics::SurfacePart& part, const std::vector<mesh::Tri>& triangles, const std::vector<Vec3>& x,

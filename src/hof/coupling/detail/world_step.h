@@ -8,6 +8,7 @@
 
 #include <array>
 #include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <memory>
 #include <span>
@@ -23,6 +24,9 @@ class CommandSeam;
 namespace hof::coupling::detail {
 
 class SnapshotPublisher;
+
+using Clock = std::chrono::steady_clock;
+inline double seconds_between(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
 
 // The FEM-reaction coupling's patch: the surface within this radius of the contact (or twice the
 // contact triangle's longest edge, when larger), at most this many nodes.
