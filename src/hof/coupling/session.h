@@ -37,6 +37,8 @@
 #include "hof/core/cpu_affinity.h"
 #include "hof/core/error.h"
 #include "hof/core/progress.h"
+#include "hof/core/triple_buffer.h"
+#include "hof/coupling/command_seam.h"
 #include "hof/coupling/surface_mapping.h"
 #include "hof/coupling/tool_coupling.h"
 #include "hof/haptics/device.h"
@@ -139,70 +141,13 @@ struct SessionReport {
   haptics::SafetyCounters safety;
 };
 
-// ---- The command seam: changes applied by the simulation between two steps.
-namespace command {
-/// A named parameter of a body's component (mechanics::set_parameter names).
-struct SetParameter {
-  std::string body;
-  std::string component;  ///< "" for the model itself (dt, ...)
-  std::string parameter;
-  double value{0.0};
-};
-struct Pause {};
-struct Resume {};
-struct SingleStep {
-  int steps{1};
-};
-struct Reset {};
-/// The haptic surface of one body ("" = every body).
-struct SetMaterial {
-  std::string body;
-  haptics::SurfaceMaterial material;
-};
-struct SetEffects {
-  haptics::ForceEffects effects;
-};
-struct SetRenderer {
-  haptics::RendererConfig renderer;
-};
-/// A force limit below the device's (haptics::SafetyConfig::max_force_n; 0: the device's).
-struct SetForceLimit {
-  double max_force_n{0.0};
-};
-/// Another device (a spec, see haptics::open_device): opened when submitted (a device that is
-/// not there is refused then), switched to between two ticks with its own force limit.
-struct SetDevice {
-  std::string spec;
-  /// Filled by submit(); a caller that opened the device itself (to keep a handle on it,
-  /// as the window does for the mouse) passes it here.
-  std::shared_ptr<haptics::Device> opened;
-};
-/// Another device calibration (device → world), e.g. the window's "fit the workspace to the
-/// scene": the proxy restarts at the next reading. The linear part must be invertible.
-struct SetCalibration {
-  haptics::Calibration calibration;
-};
-/// Another model for a deformable body, on the same mesh (a structural edit: a force field,
-/// solver, mass or constraint switched, added or removed; material regions). Built and
-/// checked when submitted (on the caller's thread); the simulation swaps it in between two
-/// steps, from the body's current shape and motion. The body's earlier parameter changes are
-/// taken as part of `config` (parameter_changes() forgets them).
-struct SetModel {
-  std::string body;
-  mechanics::ModelConfig config;
-  /// Filled by submit(): the model built from `config`.
-  std::shared_ptr<mechanics::MechanicalModel> built;
-};
-}  // namespace command
-using Command = std::variant<command::SetParameter, command::Pause, command::Resume, command::SingleStep, command::Reset,
-                             command::SetMaterial, command::SetEffects, command::SetRenderer, command::SetForceLimit,
-                             command::SetDevice, command::SetModel, command::SetCalibration>;
+// The command seam (command::SetParameter, ..., Command, ParameterChange): command_seam.h.
 
-/// A parameter changed through the seam, as a project saves it.
-struct ParameterChange {
-  std::string body, component, parameter;
-  double value{0.0};
-};
+namespace detail {
+struct World;
+class SnapshotPublisher;
+class SessionRunner;
+}  // namespace detail
 
 class Session {
  public:
@@ -231,15 +176,15 @@ class Session {
   void poll(const std::function<void(const haptics::HapticSample&)>& on_sample);
   /// Stops both threads (joins) and returns the report. Idempotent.
   SessionReport stop_realtime(const std::function<void(const haptics::HapticSample&)>& on_sample = {});
-  [[nodiscard]] bool realtime_running() const { return sim_thread_.joinable(); }
+  [[nodiscard]] bool realtime_running() const;
   /// The simulation thread has ended on its own (it diverged): stop_realtime() says why.
-  [[nodiscard]] bool simulation_ended() const { return sim_finished_.load(std::memory_order_acquire) && !stop_sim_.load(); }
+  [[nodiscard]] bool simulation_ended() const;
   /// Real time: pace the simulation to the wall clock (true, the default) or step as fast as
   /// it goes (the haptic loop still runs at its own rate). Any thread.
-  void set_realtime_pacing(bool paced) { paced_.store(paced, std::memory_order_relaxed); }
-  [[nodiscard]] bool realtime_pacing() const { return paced_.load(std::memory_order_relaxed); }
+  void set_realtime_pacing(bool paced);
+  [[nodiscard]] bool realtime_pacing() const;
   /// Simulation steps taken since the session was made (any thread: for a live steps/s).
-  [[nodiscard]] std::uint64_t steps_taken() const { return steps_taken_.load(std::memory_order_relaxed); }
+  [[nodiscard]] std::uint64_t steps_taken() const;
 
   /// The command seam: validates `command` now (a clear error, nothing changed, when it is
   /// wrong) and queues it; the simulation applies it before its next step. Any thread.
@@ -250,7 +195,7 @@ class Session {
   /// Asks a run in progress (run_virtual, run_realtime) to end after the current step; the
   /// run returns its report as far as it went. Any thread (a Ctrl-C handler, a supervisor).
   /// The next run clears it.
-  void request_stop() { stop_requested_.store(true, std::memory_order_relaxed); }
+  void request_stop();
   /// Parameters changed through submit() so far, in order (to save with the project): those
   /// the simulation has applied, and with `with_queued` those accepted for the next step too.
   [[nodiscard]] std::vector<ParameterChange> parameter_changes(bool with_queued = false) const;
@@ -277,107 +222,25 @@ class Session {
   /// thread (the window's stress colours). Published with every step from the first call on.
   TripleBuffer<std::vector<std::vector<double>>>& graphics_states();
   /// Simulated time of the world so far, s (read it when no run is going on).
-  [[nodiscard]] double simulated_time() const { return time_s_; }
+  [[nodiscard]] double simulated_time() const;
   /// The world simulation step dt (the smallest body dt), s.
-  [[nodiscard]] double dt() const { return dt_.load(std::memory_order_relaxed); }
+  [[nodiscard]] double dt() const;
   /// The calibration in force (the configuration's, or the last SetCalibration submitted).
   [[nodiscard]] haptics::Calibration calibration() const;
   /// SetCalibration commands the simulation has passed to the haptic loop so far (any thread:
   /// a caller that moves a stylus in device coordinates waits for its change to arrive).
-  [[nodiscard]] std::uint64_t calibrations_applied() const { return calibrations_applied_.load(std::memory_order_acquire); }
-  [[nodiscard]] const haptics::HapticLoop& haptic_loop() const { return *loop_; }
+  [[nodiscard]] std::uint64_t calibrations_applied() const;
+  [[nodiscard]] const haptics::HapticLoop& haptic_loop() const;
 
  private:
-  struct BodyRuntime;
-  struct LayerRuntime;
-  struct StateTimer;
   Session(std::vector<SessionBody> bodies, std::unique_ptr<haptics::Device> device, const SessionConfig& config);
 
-  // The one stepping function: commands, contact forces, every body steps, publish.
-  // Returns false on divergence (report.divergence says which body and why).
-  bool step_world(SessionReport& report, StateTimer& timer, double clock_s);
-  void take_contacts(SessionReport& report);
-  void apply_commands(SessionReport& report);
-  bool advance_bodies(SessionReport& report);
-  void publish(double time_s);
-  struct LayerJob {  // a layer's shape after a step, staged for its snapshot
-    std::vector<Vec3> positions, velocities;
-    haptics::LocalContactModel local;
-  };
-  struct PublishJob {
-    double clock_s{0.0};
-    std::vector<LayerJob> layers;
-  };
-  [[nodiscard]] haptics::LocalContactModel local_contact_model(std::size_t layer);
-  void make_snapshot_of(std::size_t layer, std::span<const Vec3> positions, std::span<const Vec3> velocities,
-                        const haptics::LocalContactModel& local, double clock_s);
-  void publisher_loop();
-  void start_publisher();
-  void stop_publisher();
-  void publish_settings();
-  void count_fall_through(SessionReport& report);
-  void finish_report(SessionReport& report, const StateTimer& timer, double wall_s) const;
-  void simulation_loop();
-  void fit_threads(BodyRuntime& r) const;
-  [[nodiscard]] int simulation_threads() const;
-  void simulation_thread(double dt);
-  void begin_run();
-
-  std::vector<BodyRuntime> bodies_;
-  std::vector<BodyRuntime*> due_;  // the bodies stepping this step (scratch)
-  std::vector<char> step_ok_;      // their results (scratch)
-  std::unique_ptr<haptics::Device> device_;
-  std::vector<std::shared_ptr<haptics::Device>> switched_devices_;  // kept until the loop is gone
-  haptics::Device* last_device_{nullptr};  // the device the ticks used at the last step
-  SessionConfig config_;
-  std::atomic<double> dt_{0.01};  // written by the simulation (a dt command), read anywhere
-  double time_s_{0.0};       // simulated time of the world
-  std::int64_t virtual_ticks_{0};  // haptic ticks run in virtual time so far (their clock)
-  std::vector<std::unique_ptr<LayerRuntime>> layers_;
-  TripleBuffer<haptics::HapticSettings> settings_;
-  haptics::HapticSettings current_settings_;
-  std::unique_ptr<haptics::HapticLoop> loop_;
-  // Contact since the last step.
-  int ticks_since_step_{0};
-  std::int32_t last_body_{-1};
-  std::int32_t last_triangle_{-1};   // in its layer's snapshot
-  Vec3 last_barycentric_{Vec3::Zero()};
-  std::int32_t contact_ticks_since_publish_{0};
-  bool last_proxy_valid_{false};
-  bool last_tick_valid_{false};
-  bool first_reading_seen_{false};
-  // Commands.
-  mutable std::mutex commands_mutex_;
-  std::vector<Command> pending_;
-  std::vector<ParameterChange> changes_;
-  haptics::Calibration submitted_calibration_;
-  std::atomic<std::uint64_t> calibrations_applied_{0};
-  std::vector<std::pair<std::string, haptics::SurfaceMaterial>> material_changes_;
-  std::vector<mechanics::ModelConfig> validated_configs_;  // configs as the accepted commands leave them
-  std::vector<char> has_mechanics_;                        // per body, fixed: a model and its config
-  bool paused_{false};
-  std::atomic<bool> graphics_wanted_{false};
-  std::atomic<bool> states_wanted_{false};
-  TripleBuffer<std::vector<std::vector<double>>> graphics_states_;
-  std::int64_t contact_ticks_this_step_{0};
-  int single_steps_{0};
-  // Real time.
-  std::thread sim_thread_;
-  // The publisher thread (real time): makes the snapshots of the shapes the simulation stages.
-  std::thread publisher_;
-  CpuPlan cpu_plan_;  // real time: where the threads run
-  std::unique_ptr<TripleBuffer<PublishJob>> publish_jobs_;
-  PublishJob inline_job_;  // virtual time: staged and made on the caller's thread
-  std::atomic<bool> stop_publisher_{false};
-  std::atomic<bool> stop_sim_{false};
-  std::atomic<bool> sim_finished_{false};
-  std::atomic<bool> paced_{true};
-  std::atomic<bool> stop_requested_{false};
-  std::atomic<std::uint64_t> steps_taken_{0};
-  SessionReport rt_report_;
-  int step_threads_{0};  // the bodies' threads while in real time (0: their own setting)
-  std::unique_ptr<StateTimer> rt_timer_;
-  std::chrono::steady_clock::time_point rt_start_;
+  // The world and the parts that step it (coupling/detail/): the seam's commands reach the
+  // world through step_world(), which the runner calls; the publisher makes its snapshots.
+  std::unique_ptr<detail::World> world_;
+  std::unique_ptr<detail::SnapshotPublisher> publisher_;
+  std::unique_ptr<CommandSeam> seam_;
+  std::unique_ptr<detail::SessionRunner> runner_;
 };
 
 }  // namespace hof::coupling

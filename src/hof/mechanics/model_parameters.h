@@ -12,6 +12,7 @@
 ///   component = "" (the model itself): dt, maxSpeed, gravityX, gravityY, gravityZ
 /// Values are SI (N/m, Pa, s, kg, kg/m³).
 
+#include <cstdint>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -21,13 +22,39 @@
 
 namespace hof::mechanics {
 
+/// The parameters a component may have, by what they are; their names (SOFA's data names)
+/// are in one table (parameter_name, parameter_id). Which component has which is
+/// set_parameter's business.
+enum class ParameterId : std::uint8_t {
+  kDt, kMaxSpeed, kGravityX, kGravityY, kGravityZ,                          // the model itself
+  kStiffness, kDamping, kRestLengthScale,                                   // mesh springs
+  kYoungModulus, kPoissonRatio, kThickness, kRestScale,                     // FEM, Neo-Hookean, membrane
+  kRayleighStiffness, kRayleighMass, kMatrixReuseSteps,                     // the ODE solver
+  kIterations, kWarmStart, kCoarseCorrection, kCoarseRefreshSteps, kTolerance, kThreshold,  // the linear solver
+  kTotalMass, kMassDensity,                                                 // the mass
+};
+inline constexpr std::size_t kParameterCount = 23;
+
+/// The scene's name of a parameter ("youngModulus").
+[[nodiscard]] std::string_view parameter_name(ParameterId id);
+/// The parameter of a scene's name, once, at the edge; an unknown name is an error naming the
+/// closest known names.
+[[nodiscard]] Expected<ParameterId> parameter_id(std::string_view name);
+
+/// Sets parameter `id` of `component` in `config` to `value` after checking its range. Errors
+/// (kInvalidArgument) name the component, the parameter and the allowed range, and leave
+/// `config` unchanged.
+[[nodiscard]] Expected<void> set_parameter(ModelConfig& config, std::string_view component, ParameterId id, double value);
+/// The current value of parameter `id` of `component`.
+[[nodiscard]] Expected<double> get_parameter(const ModelConfig& config, std::string_view component, ParameterId id);
+
 /// Sets `parameter` of `component` in `config` to `value` after checking its range. Errors
 /// (kInvalidArgument) name the component, the parameter and the allowed range, and leave
 /// `config` unchanged.
 [[nodiscard]] Expected<void> set_parameter(ModelConfig& config, std::string_view component, std::string_view parameter,
                                            double value);
 
-/// The current value of a parameter (same names as set_parameter).
+/// The current value of a parameter by name (same names as set_parameter).
 [[nodiscard]] Expected<double> get_parameter(const ModelConfig& config, std::string_view component,
                                              std::string_view parameter);
 
