@@ -3,9 +3,9 @@ include(GNUInstallDirs)
 # hof_module(NAME SOURCES ... DEPENDS ...): one static library per module of the design,
 # `hof_<name>` with alias `hof::<name>` (installed and exported as `HoF::<name>`), include root
 # at src/ so headers read <hof/<name>/x.h>. Its public headers are installed with it; those
-# under detail/ stay private.
+# under detail/ (and under the PRIVATE_HEADER_DIRS given) stay private.
 function(hof_module name)
-  cmake_parse_arguments(ARG "" "" "SOURCES;DEPENDS;PRIVATE_DEPENDS" ${ARGN})
+  cmake_parse_arguments(ARG "" "" "SOURCES;DEPENDS;PRIVATE_DEPENDS;PRIVATE_HEADER_DIRS" ${ARGN})
   add_library(hof_${name} STATIC ${ARG_SOURCES})
   add_library(hof::${name} ALIAS hof_${name})
   target_include_directories(hof_${name} PUBLIC
@@ -15,8 +15,12 @@ function(hof_module name)
   target_link_libraries(hof_${name} PUBLIC ${ARG_DEPENDS} PRIVATE $<BUILD_INTERFACE:hof_warnings> ${ARG_PRIVATE_DEPENDS})
   set_target_properties(hof_${name} PROPERTIES EXPORT_NAME ${name})
   install(TARGETS hof_${name} EXPORT HoFTargets ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR} COMPONENT development)
+  set(excluded PATTERN "detail" EXCLUDE)
+  foreach(dir IN LISTS ARG_PRIVATE_HEADER_DIRS)
+    list(APPEND excluded PATTERN "${dir}" EXCLUDE)
+  endforeach()
   install(DIRECTORY ${CMAKE_CURRENT_SOURCE_DIR}/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/hof/${name} COMPONENT development
-    FILES_MATCHING PATTERN "*.h" PATTERN "detail" EXCLUDE)
+    FILES_MATCHING PATTERN "*.h" ${excluded})
   set_property(GLOBAL APPEND PROPERTY HOF_MODULES ${name})
 endfunction()
 
