@@ -1,4 +1,5 @@
 #include "hof/scene/project.h"
+#include "hof/scene/detail/project_names.h"
 #include "hof/mesh/xml_depth.h"
 
 #include "hof/core/file_write.h"
@@ -17,15 +18,7 @@
 
 namespace hof::scene {
 
-namespace {
-
-std::string number(double v) {
-  char buffer[64];
-  const auto result = std::to_chars(buffer, buffer + sizeof buffer, v);
-  return std::string(buffer, result.ptr);
-}
-
-std::string vec(const Vec3& v) { return number(v.x()) + " " + number(v.y()) + " " + number(v.z()); }
+namespace detail {
 
 const char* renderer_name(haptics::RendererKind k) {
   switch (k) {
@@ -35,32 +28,12 @@ const char* renderer_name(haptics::RendererKind k) {
   }
   return "RuspiniRenderer";
 }
-const char* face_name(collision::TouchableFace f) {
-  switch (f) {
-    case collision::TouchableFace::kFront: return "FRONT";
-    case collision::TouchableFace::kBack: return "BACK";
-    case collision::TouchableFace::kFrontAndBack: return "FRONT_AND_BACK";
-  }
-  return "FRONT";
-}
-const char* coupling_name(coupling::ContactCoupling c) {
-  switch (c) {
-    case coupling::ContactCoupling::kClosestVertex: return "closest-vertex";
-    case coupling::ContactCoupling::kBarycentric: return "barycentric";
-    case coupling::ContactCoupling::kCompliance: return "compliance";
-    case coupling::ContactCoupling::kFemReaction: return "fem-reaction";
-  }
-  return "barycentric";
-}
-const char* surface_name(haptics::SurfaceKind k) {
-  switch (k) {
-    case haptics::SurfaceKind::kSmooth: return "SmoothSurface";
-    case haptics::SurfaceKind::kFrictional: return "FrictionalSurface";
-    case haptics::SurfaceKind::kMagnetic: return "MagneticSurface";
-    case haptics::SurfaceKind::kZeroForce: return "ZeroForceSurface";
-  }
-  return "SmoothSurface";
-}
+
+}  // namespace detail
+
+using detail::renderer_name;
+
+namespace {
 
 // Line of a byte offset in the file text (for error messages).
 std::int64_t line_of(const std::string& text, std::ptrdiff_t offset) {
@@ -146,69 +119,12 @@ haptics::SurfaceMaterial read_surface(ProjectReader& r, const pugi::xml_node& s)
 
 }  // namespace
 
-namespace {
-
-// Text for an XML attribute value: markup characters escaped; bytes that are not UTF-8 (a
-// Latin-1 name, say) written as U+FFFD so the file stays well-formed.
-std::string xml_escape(std::string_view text) {
-  std::string out;
-  for (const char c : valid_utf8(text)) {
-    switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
-    }
-  }
-  return out;
-}
-
-}  // namespace
 
 namespace {
 
-std::string surface_xml(const haptics::SurfaceMaterial& s, std::string_view indent) {
-  return fmt::format(
-      "{}<surface type=\"{}\" stiffness=\"{}\" damping=\"{}\" useRelativeValues=\"{}\" staticFriction=\"{}\" "
-      "dynamicFriction=\"{}\" snapDistance=\"{}\"/>\n",
-      indent, surface_name(s.kind), number(s.stiffness), number(s.damping_n_s_per_m), s.use_relative_values ? "true" : "false",
-      number(s.static_friction), number(s.dynamic_friction), number(s.snap_distance_m));
-}
 
-std::string numbers(std::initializer_list<double> values) {
-  std::string out;
-  for (double v : values) out += (out.empty() ? "" : " ") + number(v);
-  return out;
-}
 
-std::string tissue_xml(const procedures::TissueNeedleParameters& t, const std::string& body) {
-  const std::string named = body.empty() ? std::string() : fmt::format(" body=\"{}\"", xml_escape(body));
-  return fmt::format(
-      "      <tissue{} pierceable=\"{}\" model=\"{}\" capsule=\"{}\" punctureForce=\"{}\" relaxationTime=\"{}\" "
-      "fungForm=\"{}\" fungPre=\"{}\" fungPost=\"{}\" stiffness=\"{}\" cuttingForce=\"{}\" friction=\"{}\" frictionVelocityBand=\"{}\" "
-      "lateralStiffness=\"{}\" lateralDamping=\"{}\" spreadRadius=\"{}\" pathTolerance=\"{}\"/>\n",
-      named, t.pierceable ? "true" : "false", procedures::model_name(t.model), number(t.capsule_m), number(t.puncture_force_n),
-      number(t.relaxation_time_s), procedures::form_name(t.fung_form), numbers({t.fung_pre.a_per_m, t.fung_pre.b_n, t.fung_pre.d0_m, t.fung_pre.f0_n}),
-      numbers({t.fung_post.a_per_m, t.fung_post.b_n, t.fung_post.d0_m, t.fung_post.f0_n}),
-      numbers({t.stiffness.a0_n, t.stiffness.a1_n_per_m, t.stiffness.a2_n_per_m2}), number(t.cutting_force_n),
-      numbers({t.friction.static_positive_n_per_m, t.friction.static_negative_n_per_m, t.friction.damping_positive_n_s_per_m2,
-               t.friction.damping_negative_n_s_per_m2}),
-      number(t.friction.velocity_band_m_per_s), number(t.lateral_stiffness_n_per_m), number(t.lateral_damping_n_s_per_m),
-      number(t.spread_radius_m), number(t.path_tolerance_m));
-}
 
-std::string needle_xml(const procedures::NeedleConfig& n) {
-  const procedures::NeedleGeometry& g = n.geometry;
-  std::string out = fmt::format(
-      "    <needle axis=\"{}\" velocityFilter=\"{}\" length=\"{}\" shaftDiameter=\"{}\" tipDiameter=\"{}\" tipLength=\"{}\" "
-      "syringeDiameter=\"{}\" syringeLength=\"{}\">\n",
-      procedures::axis_name(n.axis), number(n.velocity_filter_s), number(g.length_m), number(g.shaft_diameter_m), number(g.tip_diameter_m),
-      number(g.tip_length_m), number(g.syringe_diameter_m), number(g.syringe_length_m));
-  out += tissue_xml(n.tissue, "");
-  for (const auto& [body, tissue] : n.bodies) out += tissue_xml(tissue, body);
-  return out + "    </needle>\n";
-}
 
 // N numbers of an attribute (e.g. fungPre="a b d0 F0"), else an error naming it.
 template <std::size_t N>
@@ -333,109 +249,6 @@ Expected<void> check_graphics(const GraphicsSetup& g) {
   return {};
 }
 
-std::string to_xml(const HofProject& p) {
-  std::string out;
-  out += "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
-  out += fmt::format("<hof version=\"1\" name=\"{}\">\n", xml_escape(p.name));
-  // Parameters set on the scene's bodies (the command seam's changes), after the scene.
-  std::string sets;
-  for (const coupling::ParameterChange& c : p.parameters) {
-    sets += fmt::format("    <set body=\"{}\" component=\"{}\" parameter=\"{}\" value=\"{}\"/>\n", xml_escape(c.body),
-                        xml_escape(c.component), xml_escape(c.parameter), number(c.value));
-  }
-  for (const MaterialRegion& region : p.regions) {
-    const std::string force_field =
-        region.force_field.empty() ? std::string() : fmt::format(" forceField=\"{}\"", xml_escape(region.force_field));
-    std::string shape;
-    switch (region.shape) {
-      case MaterialRegion::Shape::kSphere:
-        shape = fmt::format("shape=\"sphere\" center=\"{}\" radius=\"{}\"", vec(region.center), number(region.radius));
-        break;
-      case MaterialRegion::Shape::kBox:
-        shape = fmt::format("shape=\"box\" min=\"{}\" max=\"{}\"", vec(region.box_min), vec(region.box_max));
-        break;
-      case MaterialRegion::Shape::kGroup: shape = fmt::format("shape=\"group\" physicalGroup=\"{}\"", region.physical_group); break;
-    }
-    std::string material;
-    if (region.young_modulus_pa) material += fmt::format(" youngModulus=\"{}\"", number(*region.young_modulus_pa));
-    if (region.poisson_ratio) material += fmt::format(" poissonRatio=\"{}\"", number(*region.poisson_ratio));
-    if (region.mass_density_kg_per_m3) material += fmt::format(" massDensity=\"{}\"", number(*region.mass_density_kg_per_m3));
-    sets += fmt::format("    <region name=\"{}\" body=\"{}\"{} {}{}/>\n", xml_escape(region.name), xml_escape(region.body),
-                        force_field, shape, material);
-  }
-  const std::string unit = p.scene_unit.empty() ? std::string() : fmt::format(" unit=\"{}\"", xml_escape(p.scene_unit));
-  if (!p.mechanics_inline.empty()) {
-    out += fmt::format("  <mechanics{}>\n", unit) + p.mechanics_inline + sets + "  </mechanics>\n";
-  } else if (sets.empty()) {
-    out += fmt::format("  <mechanics scene=\"{}\"{}/>\n", xml_escape(p.mechanics_scene.generic_string()), unit);
-  } else {
-    out += fmt::format("  <mechanics scene=\"{}\"{}>\n", xml_escape(p.mechanics_scene.generic_string()), unit) + sets +
-           "  </mechanics>\n";
-  }
-  if (!p.bodies.empty() || !p.obstacles.empty()) {
-    out += "  <bodies>\n";
-    for (const BodySetup& b : p.bodies) {
-      std::string model = b.model.empty() ? std::string() : fmt::format(" model=\"{}\"", xml_escape(b.model));
-      if (b.grid[0] > 0) model += fmt::format(" grid=\"{} {} {}\"", b.grid[0], b.grid[1], b.grid[2]);
-      if (b.surface) {
-        out += fmt::format("    <body name=\"{}\"{}>\n", xml_escape(b.name), model) + surface_xml(*b.surface, "      ") + "    </body>\n";
-      } else {
-        out += fmt::format("    <body name=\"{}\"{}/>\n", xml_escape(b.name), model);
-      }
-    }
-    for (const ObstacleSetup& o : p.obstacles) {
-      const std::string open = fmt::format("    <obstacle name=\"{}\" mesh=\"{}\" translation=\"{}\"", xml_escape(o.name),
-                                           xml_escape(o.mesh.generic_string()), vec(o.translation));
-      out += o.surface ? open + ">\n" + surface_xml(*o.surface, "      ") + "    </obstacle>\n" : open + "/>\n";
-    }
-    out += "  </bodies>\n";
-  }
-  out += fmt::format(
-      "  <haptics device=\"{}\" hapticRate=\"{}\" renderer=\"{}\" proxyRadius=\"{}\" forceShading=\"{}\" "
-      "touchableFace=\"{}\" coupling=\"{}\">\n",
-      xml_escape(p.device), number(p.haptic_rate_hz), renderer_name(p.renderer), number(p.proxy_radius_m), p.force_shading ? "true" : "false",
-      face_name(p.touchable_face), coupling_name(p.coupling));
-  std::string calibration;
-  for (std::size_t i = 0; i < 16; ++i) calibration += (i ? " " : "") + number(p.position_calibration[i]);
-  out += fmt::format("    <calibration positionCalibration=\"{}\"/>\n", calibration);
-  out += surface_xml(p.surface, "    ");
-  out += fmt::format("    <safety fadeIn=\"{}\" fadeOut=\"{}\" maxSnapshotAge=\"{}\" maxConsecutiveOverruns=\"{}\" maxForce=\"{}\"/>\n",
-                     number(p.safety.fade_in_s), number(p.safety.fade_out_s), number(p.safety.max_snapshot_age_s),
-                     p.safety.max_consecutive_overruns, number(p.safety.max_force_n));
-  out += fmt::format("    <options useBoundTree=\"{}\" maxTrianglesInLeaf=\"{}\"/>\n", p.use_bound_tree ? "true" : "false",
-                     p.max_triangles_in_leaf);
-  out += fmt::format("    <stylus radius=\"{}\" length=\"{}\"/>\n", number(p.stylus_radius_m), number(p.stylus_length_m));
-  if (p.needle) out += needle_xml(*p.needle);
-  if (p.effects.springs.empty() && p.effects.viscosities.empty() && p.effects.constants.empty()) {
-    out += "    <effects/>\n";
-  } else {
-    out += "    <effects>\n";
-    for (const auto& e : p.effects.springs) {
-      out += fmt::format(
-          "      <SpringEffect position=\"{}\" springConstant=\"{}\" startDistance=\"{}\" escapeDistance=\"{}\" damping=\"{}\"/>\n",
-          vec(e.position_m), number(e.spring_constant_n_per_m), number(e.start_distance_m), number(e.escape_distance_m),
-          number(e.damping_n_s_per_m));
-    }
-    for (const auto& e : p.effects.viscosities) {
-      out += fmt::format("      <ViscosityEffect viscosity=\"{}\" radius=\"{}\" dampingFactor=\"{}\" enabled=\"{}\"/>\n",
-                         number(e.viscosity_pa_s), number(e.radius_m), number(e.damping_factor), e.enabled ? "true" : "false");
-    }
-    for (const auto& e : p.effects.constants) out += fmt::format("      <ForceField force=\"{}\"/>\n", vec(e.force_n));
-    out += "    </effects>\n";
-  }
-  out += "  </haptics>\n";
-  out += fmt::format("  <graphics viewpoint=\"{}\" lookAt=\"{}\" renderMode=\"{}\" colorBy=\"{}\">\n", vec(p.graphics.viewpoint_m),
-                     vec(p.graphics.look_at_m), p.graphics.render_mode, p.graphics.color_by);
-  out += fmt::format("    <material diffuseColor=\"{}\" specularColor=\"{}\" shininess=\"{}\" transparency=\"{}\"/>\n",
-                     vec(p.graphics.diffuse_color), vec(p.graphics.specular_color), number(p.graphics.shininess),
-                     number(p.graphics.transparency));
-  out += fmt::format("    <light headlight=\"{}\" headlightIntensity=\"{}\" direction=\"{}\" intensity=\"{}\" ambientIntensity=\"{}\"/>\n",
-                     p.graphics.headlight ? "true" : "false", number(p.graphics.headlight_intensity), vec(p.graphics.light_direction),
-                     number(p.graphics.light_intensity), number(p.graphics.ambient_intensity));
-  out += "  </graphics>\n";
-  out += "</hof>\n";
-  return out;
-}
 
 Expected<HofProject> read_project(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);
@@ -512,6 +325,250 @@ Expected<void> set_project_attribute(HofProject& project, const std::filesystem:
   return {};
 }
 
+namespace {
+
+// <region>: a part of a body with its own material (sphere, box or a Gmsh physical group).
+MaterialRegion read_region(ProjectReader& r, const pugi::xml_node& node) {
+  MaterialRegion region;
+  region.name = node.attribute("name").as_string("region");
+  region.body = node.attribute("body").as_string("");
+  region.force_field = node.attribute("forceField").as_string("");
+  if (region.body.empty()) r.fail(node, "<region> needs body=\"NAME\" (the body whose elements it holds)");
+  const std::string shape = node.attribute("shape").as_string("sphere");
+  if (shape == "sphere") {
+    region.shape = MaterialRegion::Shape::kSphere;
+    region.center = r.get_vec(node, "center", Vec3::Zero());
+    region.radius = r.get(node, "radius", 0.0);
+    if (!(region.radius > 0.0)) r.fail(node, "<region shape=\"sphere\"> needs radius > 0");
+  } else if (shape == "box") {
+    region.shape = MaterialRegion::Shape::kBox;
+    region.box_min = r.get_vec(node, "min", Vec3::Zero());
+    region.box_max = r.get_vec(node, "max", Vec3::Zero());
+    if (!(region.box_max.array() > region.box_min.array()).all()) r.fail(node, "<region shape=\"box\"> needs min < max on every axis");
+  } else if (shape == "group") {
+    region.shape = MaterialRegion::Shape::kGroup;
+    if (!node.attribute("physicalGroup")) r.fail(node, "<region shape=\"group\"> needs physicalGroup=\"TAG\" (a Gmsh physical tag)");
+    const double tag = r.get(node, "physicalGroup", 0.0);
+    if (!(std::abs(tag) < 2e9) || tag != std::floor(tag)) r.fail(node, "<region physicalGroup> must be a whole number (a Gmsh physical tag)");
+    else region.physical_group = static_cast<std::int32_t>(tag);
+  } else {
+    r.fail(node, fmt::format("<region> shape=\"{}\": expected sphere, box or group", shape));
+  }
+  if (node.attribute("youngModulus")) {
+    region.young_modulus_pa = r.get(node, "youngModulus", 0.0);
+    if (!(*region.young_modulus_pa > 0.0)) r.fail(node, "<region> youngModulus must be > 0 (Pa)");
+  }
+  if (node.attribute("poissonRatio")) {
+    region.poisson_ratio = r.get(node, "poissonRatio", 0.0);
+    if (!(*region.poisson_ratio > -1.0 && *region.poisson_ratio < 0.5)) r.fail(node, "<region> poissonRatio must be in (-1, 0.5)");
+  }
+  if (node.attribute("massDensity")) {
+    region.mass_density_kg_per_m3 = r.get(node, "massDensity", 0.0);
+    if (!(*region.mass_density_kg_per_m3 > 0.0)) r.fail(node, "<region> massDensity must be > 0 (kg/m^3)");
+  }
+  if (!region.young_modulus_pa && !region.poisson_ratio && !region.mass_density_kg_per_m3) {
+    r.fail(node, "<region> needs youngModulus, poissonRatio or massDensity");
+  }
+  return region;
+}
+
+// <bodies>: the bodies' options (<body>) and fixed obstacles (<obstacle>).
+void read_bodies(ProjectReader& r, const pugi::xml_node& bodies, HofProject& p) {
+  for (const pugi::xml_node b : bodies.children()) {
+    if (b.type() != pugi::node_element) continue;
+    const std::string tag = b.name();
+    const std::string name = b.attribute("name").as_string("");
+    if (name.empty()) {
+      r.fail(b, fmt::format("<{}> needs a name", tag));
+      continue;
+    }
+    std::optional<haptics::SurfaceMaterial> surface;
+    if (const pugi::xml_node s = b.child("surface")) surface = read_surface(r, s);
+    if (tag == "body") {
+      const std::string model = b.attribute("model").as_string("");
+      if (!model.empty() && model != "springs" && model != "membrane" && model != "hexahedra") {
+        r.fail(b, fmt::format("<body model=\"{}\">: expected springs, membrane (surface bodies) or hexahedra (volume bodies)", model));
+      }
+      std::array<int, 3> grid{0, 0, 0};
+      if (b.attribute("grid")) {
+        const Vec3 n = r.get_vec(b, "grid", Vec3::Zero());
+        if (model != "hexahedra") r.fail(b, "<body grid=...> goes with model=\"hexahedra\"");
+        if (!(n.array() >= 2.0).all() || !(n.array() <= 512.0).all() || !(n.array() == n.array().floor()).all()) {
+          r.fail(b, "<body grid=\"nx ny nz\">: whole numbers of nodes per axis, 2 to 512");
+        } else {  // converted only once in range
+          for (int a = 0; a < 3; ++a) grid[static_cast<std::size_t>(a)] = static_cast<int>(n[a]);
+        }
+      }
+      p.bodies.push_back(BodySetup{name, surface, model, grid});
+    } else if (tag == "obstacle") {
+      ObstacleSetup o;
+      o.name = name;
+      o.mesh = b.attribute("mesh").as_string("");
+      if (o.mesh.empty()) r.fail(b, "<obstacle> needs mesh=\"FILE\" (OBJ, STL, OFF or a tetrahedral mesh)");
+      o.translation = r.get_vec(b, "translation", Vec3::Zero());
+      o.surface = surface;
+      p.obstacles.push_back(std::move(o));
+    } else {
+      r.fail(b, fmt::format("unknown element <{}> in <bodies> (body, obstacle)", tag));
+    }
+  }
+}
+
+// <haptics>: the device, rate, renderer, contact coupling, calibration, surface, options,
+// stylus, needle, force effects and safety.
+void read_haptics(ProjectReader& r, const pugi::xml_node& h, HofProject& p) {
+  p.device = h.attribute("device").as_string(p.device.c_str());
+  p.haptic_rate_hz = r.get(h, "hapticRate", p.haptic_rate_hz);
+  const std::string renderer = h.attribute("renderer").as_string(renderer_name(p.renderer));
+  if (renderer == "RuspiniRenderer") p.renderer = haptics::RendererKind::kRuspini;
+  else if (renderer == "GodObjectRenderer") p.renderer = haptics::RendererKind::kGodObject;
+  else if (renderer == "PenaltyRenderer") p.renderer = haptics::RendererKind::kPenalty;
+  else r.fail(h, fmt::format("unknown renderer \"{}\" (RuspiniRenderer, GodObjectRenderer, PenaltyRenderer)", renderer));
+  p.proxy_radius_m = r.get(h, "proxyRadius", p.proxy_radius_m);
+  p.force_shading = r.get_bool(h, "forceShading", p.force_shading);
+  const std::string face = h.attribute("touchableFace").as_string("FRONT");
+  if (face == "FRONT") p.touchable_face = collision::TouchableFace::kFront;
+  else if (face == "BACK") p.touchable_face = collision::TouchableFace::kBack;
+  else if (face == "FRONT_AND_BACK") p.touchable_face = collision::TouchableFace::kFrontAndBack;
+  else r.fail(h, fmt::format("unknown touchableFace \"{}\" (FRONT, BACK, FRONT_AND_BACK)", face));
+  const std::string coupling = h.attribute("coupling").as_string("barycentric");
+  if (coupling == "barycentric") p.coupling = coupling::ContactCoupling::kBarycentric;
+  else if (coupling == "closest-vertex") p.coupling = coupling::ContactCoupling::kClosestVertex;
+  else if (coupling == "compliance") p.coupling = coupling::ContactCoupling::kCompliance;
+  else if (coupling == "fem-reaction") p.coupling = coupling::ContactCoupling::kFemReaction;
+  else r.fail(h, fmt::format("unknown coupling \"{}\" (barycentric, closest-vertex, compliance, fem-reaction)", coupling));
+  if (const pugi::xml_node c = h.child("calibration")) {
+    if (const pugi::xml_attribute a = c.attribute("positionCalibration")) {
+      std::istringstream values(a.value());
+      for (double& v : p.position_calibration) {
+        if (!(values >> v)) {
+          r.fail(c, "positionCalibration must be 16 numbers (a row-major 4x4 matrix)");
+          break;
+        }
+      }
+    }
+  }
+  if (const pugi::xml_node s = h.child("surface")) p.surface = read_surface(r, s);
+  if (const pugi::xml_node o = h.child("options")) {
+    p.use_bound_tree = r.get_bool(o, "useBoundTree", p.use_bound_tree);
+    p.max_triangles_in_leaf = r.get_count(o, "maxTrianglesInLeaf", p.max_triangles_in_leaf, 1, 1000000);
+  }
+  if (const pugi::xml_node st = h.child("stylus")) {
+    p.stylus_radius_m = r.get(st, "radius", p.stylus_radius_m);
+    p.stylus_length_m = r.get(st, "length", p.stylus_length_m);
+  }
+  if (const pugi::xml_node n = h.child("needle")) p.needle = read_needle(r, n);
+  for (const pugi::xml_node e : h.child("effects").children()) {
+    const std::string type = e.name();
+    if (type == "SpringEffect") {
+      haptics::SpringEffect spring;
+      spring.position_m = r.get_vec(e, "position", spring.position_m);
+      spring.spring_constant_n_per_m = r.get(e, "springConstant", spring.spring_constant_n_per_m);
+      spring.start_distance_m = r.get(e, "startDistance", spring.start_distance_m);
+      spring.escape_distance_m = r.get(e, "escapeDistance", spring.escape_distance_m);
+      spring.damping_n_s_per_m = r.get(e, "damping", spring.damping_n_s_per_m);
+      p.effects.springs.push_back(spring);
+    } else if (type == "ViscosityEffect") {
+      haptics::ViscosityEffect viscosity;
+      viscosity.viscosity_pa_s = r.get(e, "viscosity", viscosity.viscosity_pa_s);
+      viscosity.radius_m = r.get(e, "radius", viscosity.radius_m);
+      viscosity.damping_factor = r.get(e, "dampingFactor", viscosity.damping_factor);
+      viscosity.enabled = r.get_bool(e, "enabled", viscosity.enabled);
+      p.effects.viscosities.push_back(viscosity);
+    } else if (type == "ForceField") {
+      p.effects.constants.push_back(haptics::ConstantForceEffect{r.get_vec(e, "force", Vec3::Zero())});
+    } else if (e.type() == pugi::node_element) {
+      r.fail(e, fmt::format("unknown force effect <{}> (SpringEffect, ViscosityEffect, ForceField)", type));
+    }
+  }
+  if (const pugi::xml_node s = h.child("safety")) {
+    p.safety.fade_in_s = r.get(s, "fadeIn", p.safety.fade_in_s);
+    p.safety.fade_out_s = r.get(s, "fadeOut", p.safety.fade_out_s);
+    p.safety.max_snapshot_age_s = r.get(s, "maxSnapshotAge", p.safety.max_snapshot_age_s);
+    p.safety.max_consecutive_overruns = r.get_count(s, "maxConsecutiveOverruns", p.safety.max_consecutive_overruns, 1, 1000000);
+    p.safety.max_force_n = r.get(s, "maxForce", p.safety.max_force_n);
+    if (!(p.safety.max_force_n >= 0.0)) r.fail(s, fmt::format("<safety> maxForce must be >= 0 N (0: the device's own limit), got {}", p.safety.max_force_n));
+  }
+}
+
+// The thesis' appendix project: <h3d><haptics><device filename="DeviceX.x3d"/>…
+// <graphics><viewpoint filename="…x3d"/>. The device file gives the calibration and the
+// renderer; the viewpoint file the camera. (Stylus and geometry files: the stylus is drawn
+// by HoF, the touchable surface comes from the simulated body.)
+Expected<void> read_h3d_files(const pugi::xml_node& h3d, const std::filesystem::path& path, HofProject& p) {
+  if (!h3d) return {};
+  const std::filesystem::path folder = path.parent_path();
+  if (const char* device = h3d.child("haptics").child("device").attribute("filename").as_string(nullptr)) {
+    auto x3d = read_x3d_scene(folder / device);
+    if (!x3d) return std::unexpected(x3d.error());
+    if (!x3d->devices.empty()) {
+      const X3dDevice& d = x3d->devices.front();
+      p.position_calibration = d.position_calibration;
+      if (d.renderer && d.renderer->kind) {
+        p.renderer = *d.renderer->kind;
+        p.proxy_radius_m = d.renderer->proxy_radius_m;
+      }
+    }
+  }
+  if (const char* viewpoint = h3d.child("graphics").child("viewpoint").attribute("filename").as_string(nullptr)) {
+    auto x3d = read_x3d_scene(folder / viewpoint);
+    if (!x3d) return std::unexpected(x3d.error());
+    if (!x3d->viewpoints.empty()) p.graphics.viewpoint_m = x3d->viewpoints.front().position;
+  }
+  return {};
+}
+
+// <graphics>: the camera, render mode, colours, material and light.
+void read_graphics(ProjectReader& r, const pugi::xml_node& g, HofProject& p) {
+  // A value in [0, 1] (colours' parts, intensities, shininess), else an error naming it.
+  const auto unit_interval = [&](const pugi::xml_node& node, const char* name, double fallback) {
+    const double v = r.get(node, name, fallback);
+    if (!(v >= 0.0 && v <= 1.0)) {
+      r.fail(node, fmt::format("<{}> {} must be in [0, 1], got {}", node.name(), name, v));
+      return fallback;
+    }
+    return v;
+  };
+  p.graphics.viewpoint_m = r.get_vec(g, "viewpoint", p.graphics.viewpoint_m);
+  p.graphics.look_at_m = r.get_vec(g, "lookAt", p.graphics.look_at_m);
+  p.graphics.render_mode = g.attribute("renderMode").as_string(p.graphics.render_mode.c_str());
+  if (p.graphics.render_mode != "shaded" && p.graphics.render_mode != "wireframe" &&
+      p.graphics.render_mode != "shaded+wireframe" && p.graphics.render_mode != "points") {
+    r.fail(g, fmt::format("unknown renderMode \"{}\" (shaded, wireframe, shaded+wireframe, points)", p.graphics.render_mode));
+  }
+  p.graphics.color_by = g.attribute("colorBy").as_string(p.graphics.color_by.c_str());
+  if (p.graphics.color_by != "material" && p.graphics.color_by != "displacement" && p.graphics.color_by != "strain" &&
+      p.graphics.color_by != "stress") {
+    r.fail(g, fmt::format("unknown colorBy \"{}\" (material, displacement, strain, stress)", p.graphics.color_by));
+  }
+  if (const pugi::xml_node m = g.child("material")) {
+    const auto unit_colour = [&](const char* name, const Vec3& fallback) {
+      const Vec3 c = r.get_vec(m, name, fallback);
+      if (!((c.array() >= 0.0).all() && (c.array() <= 1.0).all())) {
+        r.fail(m, fmt::format("<material> {} must be three numbers in [0, 1]", name));
+        return fallback;
+      }
+      return c;
+    };
+    const auto unit_number = [&](const char* name, double fallback) { return unit_interval(m, name, fallback); };
+    p.graphics.diffuse_color = unit_colour("diffuseColor", p.graphics.diffuse_color);
+    p.graphics.specular_color = unit_colour("specularColor", p.graphics.specular_color);
+    p.graphics.shininess = unit_number("shininess", p.graphics.shininess);
+    p.graphics.transparency = unit_number("transparency", p.graphics.transparency);
+  }
+  if (const pugi::xml_node l = g.child("light")) {
+    const auto unit_number = [&](const char* name, double fallback) { return unit_interval(l, name, fallback); };
+    p.graphics.headlight = r.get_bool(l, "headlight", p.graphics.headlight);
+    p.graphics.headlight_intensity = unit_number("headlightIntensity", p.graphics.headlight_intensity);
+    p.graphics.light_direction = r.get_vec(l, "direction", p.graphics.light_direction);
+    if (!(p.graphics.light_direction.norm() > 0.0)) r.fail(l, "<light> direction must not be zero");
+    p.graphics.light_intensity = unit_number("intensity", p.graphics.light_intensity);
+    p.graphics.ambient_intensity = unit_number("ambientIntensity", p.graphics.ambient_intensity);
+  }
+}
+
+}  // namespace
+
 Expected<HofProject> parse_project(const std::string& text, const std::filesystem::path& path) {
   pugi::xml_document doc;
   const pugi::xml_parse_result parsed = doc.load_buffer(text.data(), text.size());
@@ -556,232 +613,11 @@ Expected<HofProject> parse_project(const std::string& text, const std::filesyste
     }
     p.parameters.push_back(std::move(c));
   }
-  for (const pugi::xml_node node : mechanics.children("region")) {
-    MaterialRegion region;
-    region.name = node.attribute("name").as_string("region");
-    region.body = node.attribute("body").as_string("");
-    region.force_field = node.attribute("forceField").as_string("");
-    if (region.body.empty()) r.fail(node, "<region> needs body=\"NAME\" (the body whose elements it holds)");
-    const std::string shape = node.attribute("shape").as_string("sphere");
-    if (shape == "sphere") {
-      region.shape = MaterialRegion::Shape::kSphere;
-      region.center = r.get_vec(node, "center", Vec3::Zero());
-      region.radius = r.get(node, "radius", 0.0);
-      if (!(region.radius > 0.0)) r.fail(node, "<region shape=\"sphere\"> needs radius > 0");
-    } else if (shape == "box") {
-      region.shape = MaterialRegion::Shape::kBox;
-      region.box_min = r.get_vec(node, "min", Vec3::Zero());
-      region.box_max = r.get_vec(node, "max", Vec3::Zero());
-      if (!(region.box_max.array() > region.box_min.array()).all()) r.fail(node, "<region shape=\"box\"> needs min < max on every axis");
-    } else if (shape == "group") {
-      region.shape = MaterialRegion::Shape::kGroup;
-      if (!node.attribute("physicalGroup")) r.fail(node, "<region shape=\"group\"> needs physicalGroup=\"TAG\" (a Gmsh physical tag)");
-      const double tag = r.get(node, "physicalGroup", 0.0);
-      if (!(std::abs(tag) < 2e9) || tag != std::floor(tag)) r.fail(node, "<region physicalGroup> must be a whole number (a Gmsh physical tag)");
-      else region.physical_group = static_cast<std::int32_t>(tag);
-    } else {
-      r.fail(node, fmt::format("<region> shape=\"{}\": expected sphere, box or group", shape));
-    }
-    if (node.attribute("youngModulus")) {
-      region.young_modulus_pa = r.get(node, "youngModulus", 0.0);
-      if (!(*region.young_modulus_pa > 0.0)) r.fail(node, "<region> youngModulus must be > 0 (Pa)");
-    }
-    if (node.attribute("poissonRatio")) {
-      region.poisson_ratio = r.get(node, "poissonRatio", 0.0);
-      if (!(*region.poisson_ratio > -1.0 && *region.poisson_ratio < 0.5)) r.fail(node, "<region> poissonRatio must be in (-1, 0.5)");
-    }
-    if (node.attribute("massDensity")) {
-      region.mass_density_kg_per_m3 = r.get(node, "massDensity", 0.0);
-      if (!(*region.mass_density_kg_per_m3 > 0.0)) r.fail(node, "<region> massDensity must be > 0 (kg/m^3)");
-    }
-    if (!region.young_modulus_pa && !region.poisson_ratio && !region.mass_density_kg_per_m3) {
-      r.fail(node, "<region> needs youngModulus, poissonRatio or massDensity");
-    }
-    p.regions.push_back(std::move(region));
-  }
-  for (const pugi::xml_node b : root.child("bodies").children()) {
-    if (b.type() != pugi::node_element) continue;
-    const std::string tag = b.name();
-    const std::string name = b.attribute("name").as_string("");
-    if (name.empty()) {
-      r.fail(b, fmt::format("<{}> needs a name", tag));
-      continue;
-    }
-    std::optional<haptics::SurfaceMaterial> surface;
-    if (const pugi::xml_node s = b.child("surface")) surface = read_surface(r, s);
-    if (tag == "body") {
-      const std::string model = b.attribute("model").as_string("");
-      if (!model.empty() && model != "springs" && model != "membrane" && model != "hexahedra") {
-        r.fail(b, fmt::format("<body model=\"{}\">: expected springs, membrane (surface bodies) or hexahedra (volume bodies)", model));
-      }
-      std::array<int, 3> grid{0, 0, 0};
-      if (b.attribute("grid")) {
-        const Vec3 n = r.get_vec(b, "grid", Vec3::Zero());
-        if (model != "hexahedra") r.fail(b, "<body grid=...> goes with model=\"hexahedra\"");
-        if (!(n.array() >= 2.0).all() || !(n.array() <= 512.0).all() || !(n.array() == n.array().floor()).all()) {
-          r.fail(b, "<body grid=\"nx ny nz\">: whole numbers of nodes per axis, 2 to 512");
-        } else {  // converted only once in range
-          for (int a = 0; a < 3; ++a) grid[static_cast<std::size_t>(a)] = static_cast<int>(n[a]);
-        }
-      }
-      p.bodies.push_back(BodySetup{name, surface, model, grid});
-    } else if (tag == "obstacle") {
-      ObstacleSetup o;
-      o.name = name;
-      o.mesh = b.attribute("mesh").as_string("");
-      if (o.mesh.empty()) r.fail(b, "<obstacle> needs mesh=\"FILE\" (OBJ, STL, OFF or a tetrahedral mesh)");
-      o.translation = r.get_vec(b, "translation", Vec3::Zero());
-      o.surface = surface;
-      p.obstacles.push_back(std::move(o));
-    } else {
-      r.fail(b, fmt::format("unknown element <{}> in <bodies> (body, obstacle)", tag));
-    }
-  }
-  if (const pugi::xml_node h = root.child("haptics")) {
-    p.device = h.attribute("device").as_string(p.device.c_str());
-    p.haptic_rate_hz = r.get(h, "hapticRate", p.haptic_rate_hz);
-    const std::string renderer = h.attribute("renderer").as_string(renderer_name(p.renderer));
-    if (renderer == "RuspiniRenderer") p.renderer = haptics::RendererKind::kRuspini;
-    else if (renderer == "GodObjectRenderer") p.renderer = haptics::RendererKind::kGodObject;
-    else if (renderer == "PenaltyRenderer") p.renderer = haptics::RendererKind::kPenalty;
-    else r.fail(h, fmt::format("unknown renderer \"{}\" (RuspiniRenderer, GodObjectRenderer, PenaltyRenderer)", renderer));
-    p.proxy_radius_m = r.get(h, "proxyRadius", p.proxy_radius_m);
-    p.force_shading = r.get_bool(h, "forceShading", p.force_shading);
-    const std::string face = h.attribute("touchableFace").as_string("FRONT");
-    if (face == "FRONT") p.touchable_face = collision::TouchableFace::kFront;
-    else if (face == "BACK") p.touchable_face = collision::TouchableFace::kBack;
-    else if (face == "FRONT_AND_BACK") p.touchable_face = collision::TouchableFace::kFrontAndBack;
-    else r.fail(h, fmt::format("unknown touchableFace \"{}\" (FRONT, BACK, FRONT_AND_BACK)", face));
-    const std::string coupling = h.attribute("coupling").as_string("barycentric");
-    if (coupling == "barycentric") p.coupling = coupling::ContactCoupling::kBarycentric;
-    else if (coupling == "closest-vertex") p.coupling = coupling::ContactCoupling::kClosestVertex;
-    else if (coupling == "compliance") p.coupling = coupling::ContactCoupling::kCompliance;
-    else if (coupling == "fem-reaction") p.coupling = coupling::ContactCoupling::kFemReaction;
-    else r.fail(h, fmt::format("unknown coupling \"{}\" (barycentric, closest-vertex, compliance, fem-reaction)", coupling));
-    if (const pugi::xml_node c = h.child("calibration")) {
-      if (const pugi::xml_attribute a = c.attribute("positionCalibration")) {
-        std::istringstream values(a.value());
-        for (double& v : p.position_calibration) {
-          if (!(values >> v)) {
-            r.fail(c, "positionCalibration must be 16 numbers (a row-major 4x4 matrix)");
-            break;
-          }
-        }
-      }
-    }
-    if (const pugi::xml_node s = h.child("surface")) p.surface = read_surface(r, s);
-    if (const pugi::xml_node o = h.child("options")) {
-      p.use_bound_tree = r.get_bool(o, "useBoundTree", p.use_bound_tree);
-      p.max_triangles_in_leaf = r.get_count(o, "maxTrianglesInLeaf", p.max_triangles_in_leaf, 1, 1000000);
-    }
-    if (const pugi::xml_node st = h.child("stylus")) {
-      p.stylus_radius_m = r.get(st, "radius", p.stylus_radius_m);
-      p.stylus_length_m = r.get(st, "length", p.stylus_length_m);
-    }
-    if (const pugi::xml_node n = h.child("needle")) p.needle = read_needle(r, n);
-    for (const pugi::xml_node e : h.child("effects").children()) {
-      const std::string type = e.name();
-      if (type == "SpringEffect") {
-        haptics::SpringEffect spring;
-        spring.position_m = r.get_vec(e, "position", spring.position_m);
-        spring.spring_constant_n_per_m = r.get(e, "springConstant", spring.spring_constant_n_per_m);
-        spring.start_distance_m = r.get(e, "startDistance", spring.start_distance_m);
-        spring.escape_distance_m = r.get(e, "escapeDistance", spring.escape_distance_m);
-        spring.damping_n_s_per_m = r.get(e, "damping", spring.damping_n_s_per_m);
-        p.effects.springs.push_back(spring);
-      } else if (type == "ViscosityEffect") {
-        haptics::ViscosityEffect viscosity;
-        viscosity.viscosity_pa_s = r.get(e, "viscosity", viscosity.viscosity_pa_s);
-        viscosity.radius_m = r.get(e, "radius", viscosity.radius_m);
-        viscosity.damping_factor = r.get(e, "dampingFactor", viscosity.damping_factor);
-        viscosity.enabled = r.get_bool(e, "enabled", viscosity.enabled);
-        p.effects.viscosities.push_back(viscosity);
-      } else if (type == "ForceField") {
-        p.effects.constants.push_back(haptics::ConstantForceEffect{r.get_vec(e, "force", Vec3::Zero())});
-      } else if (e.type() == pugi::node_element) {
-        r.fail(e, fmt::format("unknown force effect <{}> (SpringEffect, ViscosityEffect, ForceField)", type));
-      }
-    }
-    if (const pugi::xml_node s = h.child("safety")) {
-      p.safety.fade_in_s = r.get(s, "fadeIn", p.safety.fade_in_s);
-      p.safety.fade_out_s = r.get(s, "fadeOut", p.safety.fade_out_s);
-      p.safety.max_snapshot_age_s = r.get(s, "maxSnapshotAge", p.safety.max_snapshot_age_s);
-      p.safety.max_consecutive_overruns = r.get_count(s, "maxConsecutiveOverruns", p.safety.max_consecutive_overruns, 1, 1000000);
-      p.safety.max_force_n = r.get(s, "maxForce", p.safety.max_force_n);
-      if (!(p.safety.max_force_n >= 0.0)) r.fail(s, fmt::format("<safety> maxForce must be >= 0 N (0: the device's own limit), got {}", p.safety.max_force_n));
-    }
-  }
-  // The thesis' appendix project: <h3d><haptics><device filename="DeviceX.x3d"/>…
-  // <graphics><viewpoint filename="…x3d"/>. The device file gives the calibration and the
-  // renderer; the viewpoint file the camera. (Stylus and geometry files: the stylus is drawn
-  // by HoF, the touchable surface comes from the simulated body.)
-  if (const pugi::xml_node h3d = root.child("h3d")) {
-    const std::filesystem::path folder = path.parent_path();
-    if (const char* device = h3d.child("haptics").child("device").attribute("filename").as_string(nullptr)) {
-      auto x3d = read_x3d_scene(folder / device);
-      if (!x3d) return std::unexpected(x3d.error());
-      if (!x3d->devices.empty()) {
-        const X3dDevice& d = x3d->devices.front();
-        p.position_calibration = d.position_calibration;
-        if (d.renderer && d.renderer->kind) {
-          p.renderer = *d.renderer->kind;
-          p.proxy_radius_m = d.renderer->proxy_radius_m;
-        }
-      }
-    }
-    if (const char* viewpoint = h3d.child("graphics").child("viewpoint").attribute("filename").as_string(nullptr)) {
-      auto x3d = read_x3d_scene(folder / viewpoint);
-      if (!x3d) return std::unexpected(x3d.error());
-      if (!x3d->viewpoints.empty()) p.graphics.viewpoint_m = x3d->viewpoints.front().position;
-    }
-  }
-  // A value in [0, 1] (colours' parts, intensities, shininess), else an error naming it.
-  const auto unit_interval = [&](const pugi::xml_node& node, const char* name, double fallback) {
-    const double v = r.get(node, name, fallback);
-    if (!(v >= 0.0 && v <= 1.0)) {
-      r.fail(node, fmt::format("<{}> {} must be in [0, 1], got {}", node.name(), name, v));
-      return fallback;
-    }
-    return v;
-  };
-  if (const pugi::xml_node g = root.child("graphics")) {
-    p.graphics.viewpoint_m = r.get_vec(g, "viewpoint", p.graphics.viewpoint_m);
-    p.graphics.look_at_m = r.get_vec(g, "lookAt", p.graphics.look_at_m);
-    p.graphics.render_mode = g.attribute("renderMode").as_string(p.graphics.render_mode.c_str());
-    if (p.graphics.render_mode != "shaded" && p.graphics.render_mode != "wireframe" &&
-        p.graphics.render_mode != "shaded+wireframe" && p.graphics.render_mode != "points") {
-      r.fail(g, fmt::format("unknown renderMode \"{}\" (shaded, wireframe, shaded+wireframe, points)", p.graphics.render_mode));
-    }
-    p.graphics.color_by = g.attribute("colorBy").as_string(p.graphics.color_by.c_str());
-    if (p.graphics.color_by != "material" && p.graphics.color_by != "displacement" && p.graphics.color_by != "strain" &&
-        p.graphics.color_by != "stress") {
-      r.fail(g, fmt::format("unknown colorBy \"{}\" (material, displacement, strain, stress)", p.graphics.color_by));
-    }
-    if (const pugi::xml_node m = g.child("material")) {
-      const auto unit_colour = [&](const char* name, const Vec3& fallback) {
-        const Vec3 c = r.get_vec(m, name, fallback);
-        if (!((c.array() >= 0.0).all() && (c.array() <= 1.0).all())) {
-          r.fail(m, fmt::format("<material> {} must be three numbers in [0, 1]", name));
-          return fallback;
-        }
-        return c;
-      };
-      const auto unit_number = [&](const char* name, double fallback) { return unit_interval(m, name, fallback); };
-      p.graphics.diffuse_color = unit_colour("diffuseColor", p.graphics.diffuse_color);
-      p.graphics.specular_color = unit_colour("specularColor", p.graphics.specular_color);
-      p.graphics.shininess = unit_number("shininess", p.graphics.shininess);
-      p.graphics.transparency = unit_number("transparency", p.graphics.transparency);
-    }
-    if (const pugi::xml_node l = g.child("light")) {
-      const auto unit_number = [&](const char* name, double fallback) { return unit_interval(l, name, fallback); };
-      p.graphics.headlight = r.get_bool(l, "headlight", p.graphics.headlight);
-      p.graphics.headlight_intensity = unit_number("headlightIntensity", p.graphics.headlight_intensity);
-      p.graphics.light_direction = r.get_vec(l, "direction", p.graphics.light_direction);
-      if (!(p.graphics.light_direction.norm() > 0.0)) r.fail(l, "<light> direction must not be zero");
-      p.graphics.light_intensity = unit_number("intensity", p.graphics.light_intensity);
-      p.graphics.ambient_intensity = unit_number("ambientIntensity", p.graphics.ambient_intensity);
-    }
-  }
+  for (const pugi::xml_node node : mechanics.children("region")) p.regions.push_back(read_region(r, node));
+  read_bodies(r, root.child("bodies"), p);
+  if (const pugi::xml_node h = root.child("haptics")) read_haptics(r, h, p);
+  if (auto ok = read_h3d_files(root.child("h3d"), path, p); !ok) return std::unexpected(ok.error());
+  if (const pugi::xml_node g = root.child("graphics")) read_graphics(r, g, p);
   if (r.error) return std::unexpected(*r.error);
   if (!(p.haptic_rate_hz >= 100.0 && p.haptic_rate_hz <= 20000.0)) {
     return std::unexpected(r.at(root.child("haptics"), fmt::format("hapticRate must be in [100, 20000] Hz, got {}", p.haptic_rate_hz)));
@@ -789,11 +625,6 @@ Expected<HofProject> parse_project(const std::string& text, const std::filesyste
   return p;
 }
 
-Expected<void> write_project(const HofProject& project, const std::filesystem::path& path) {
-  // Temporary file, flushed, then renamed: a full disk, a crash or a folder removed mid-save
-  // leaves the previous project whole, never half a file.
-  return write_file_atomically(path, to_xml(project));
-}
 
 std::filesystem::path scene_file(const HofProject& project, const std::filesystem::path& project_file) {
   return project.mechanics_inline.empty() ? project_file.parent_path() / project.mechanics_scene : project_file;
