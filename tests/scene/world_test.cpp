@@ -253,12 +253,24 @@ TEST(World, X3dNothingToTouchNamesEachCause) {
   EXPECT_EQ(nothing_to_touch("empty.x3d", ""), "nothing to touch: no Shape, and no force effect");
 }
 
-TEST(World, X3dSettingsFragmentIsNotAScene) {
+// H3DViewer opens a settings file (its DeviceInfo becomes the device): HoF opens it too, with
+// nothing to touch; only a root that is no X3D node is not an X3D file.
+TEST(World, X3dSettingsFileOpensWithNothingToTouch) {
   const fs::path falcon = write("FalconDevice.x3d", "<DeviceInfo><FalconDevice><GodObjectRenderer/></FalconDevice></DeviceInfo>");
   auto world = build_world(falcon);
-  ASSERT_FALSE(world);
-  EXPECT_EQ(world.error().file, falcon.string());
-  EXPECT_EQ(world.error().message, "not an X3D scene: its root element is <DeviceInfo> (a scene starts with <X3D> or <Scene>)");
+  ASSERT_TRUE(world) << world.error().to_string();
+  EXPECT_TRUE(world->bodies.empty());
+  EXPECT_EQ(world->nothing_to_touch, "nothing to touch: no Shape, and no force effect");
+  EXPECT_EQ(world->project.renderer, haptics::RendererKind::kGodObject);  // the file's device settings hold
+  EXPECT_TRUE(std::ranges::any_of(world->warnings, [](const std::string& w) {
+    return w.find("the root element is <DeviceInfo>, not <X3D>: read as a scene") != std::string::npos;
+  }));
+  const fs::path svg = write("picture.x3d", "<svg><rect/></svg>");
+  auto refused = build_world(svg);
+  ASSERT_FALSE(refused);
+  EXPECT_EQ(refused.error().file, svg.string());
+  EXPECT_EQ(refused.error().message,
+            "not an X3D scene: its root element <svg> is not an X3D node (a scene starts with <X3D> or <Scene>)");
 }
 
 TEST(World, X3dGeometryGroupAndDebugOptionsScenesAreTouchable) {
@@ -535,11 +547,16 @@ TEST(World, X3dNodesOfAnotherFileAreNamedWithThatFile) {
       << world->skipped.size();
 }
 
-TEST(World, X3dRefusalOfAFragmentNamesTheLineOfItsRoot) {
-  const fs::path fragment = write("fragment.x3d", "<?xml version='1.0'?>\n<Group><Shape><Box/></Shape></Group>\n");
-  auto world = build_world(fragment);
-  ASSERT_FALSE(world);
-  EXPECT_EQ(world.error().line, 2);
+// H3D's bumpmap, ThreadExample, DynamicTransform examples: a <Group> root is a scene fragment,
+// opened and touched as H3DViewer does; a root that is no X3D node names its line.
+TEST(World, X3dGroupRootIsAScene) {
+  auto world = build_world(write("fragment.x3d", "<?xml version='1.0'?>\n<Group><Shape>" + kSurface +
+                                                     "<Sphere radius='0.05'/></Shape></Group>\n"));
+  ASSERT_TRUE(world) << world.error().to_string();
+  EXPECT_EQ(world->bodies.size(), 1u);
+  auto refused = build_world(write("not_x3d.x3d", "<?xml version='1.0'?>\n<html><body/></html>\n"));
+  ASSERT_FALSE(refused);
+  EXPECT_EQ(refused.error().line, 2);
 }
 
 TEST(World, X3dInlineOfAClassicVrmlFileIsNotShownAndTheSceneOpens) {

@@ -14,10 +14,14 @@ namespace hof::scene::detail {
 Expected<void> add_x3d(World& w, const std::filesystem::path& file) {
   auto x3d = read_x3d_scene(file);
   if (!x3d) return std::unexpected(x3d.error());
-  // A settings fragment (a DeviceInfo file, a stylus) is X3D, but not a scene to open.
-  if (x3d->root_element != "X3D" && x3d->root_element != "Scene") {
+  // Open what H3DViewer opens: a file whose root is an X3D node HoF reads — a scene fragment
+  // (<Group>, <Transform>), a settings file (<DeviceInfo>, a stylus) — is read as a scene (a
+  // settings file then has nothing to touch, and says so). A root that is no X3D node HoF
+  // knows (<svg>, <html>) is not an X3D file.
+  if (!x3d->root_known) {
     return make_error(ErrorCode::kParse,
-                      fmt::format("not an X3D scene: its root element is <{}> (a scene starts with <X3D> or <Scene>)",
+                      fmt::format("not an X3D scene: its root element <{}> is not an X3D node (a scene starts with "
+                                  "<X3D> or <Scene>)",
                                   x3d->root_element),
                       file.string(), x3d->root_line);
   }
@@ -116,6 +120,11 @@ Expected<void> add_x3d(World& w, const std::filesystem::path& file) {
   if (!x3d->viewpoints.empty()) w.project.graphics.viewpoint_m = x3d->viewpoints.front().position;
   w.skipped = x3d->unsupported;
   w.warnings = x3d->warnings;
+  if (x3d->root_element != "X3D" && x3d->root_element != "Scene") {
+    w.warnings.insert(w.warnings.begin(),
+                      fmt::format("{}:{}: the root element is <{}>, not <X3D>: read as a scene, as H3DViewer does",
+                                  file.string(), x3d->root_line, x3d->root_element));
+  }
   if (w.bodies.empty() && x3d->force_effects.empty()) {
     // Open what H3DViewer opens: a scene with nothing to touch is still shown. Why, once, naming
     // the real cause (shapes only seen, a surface on no triangles, haptic nodes not modelled).

@@ -63,6 +63,7 @@ X3dScene X3dReader::run(std::string text) {
   if (!root) source_.fail_at(scene_.file, 1, ErrorCode::kParse, "no root element");
   scene_.root_element = root.name();
   scene_.root_line = source_.line_of(root);
+  root_ = root;
   inline_stack_.push_back(source_.weakly_canonical(scene_.file));
   visit(root, Mat4::Identity());
   if (!scene_.unsupported.empty()) {
@@ -76,6 +77,7 @@ X3dScene X3dReader::run(std::string text) {
 }
 
 void X3dReader::unsupported(pugi::xml_node original, std::string_view extra, Slot slot) {
+  if (original == root_) scene_.root_known = false;
   const pugi::xml_node n = source_.resolve_use(original);
   std::string def = n.attribute("DEF").as_string();
   std::string entry = def.empty() ? std::string(n.name()) : fmt::format("{} '{}'", n.name(), def);

@@ -114,6 +114,7 @@ struct X3dScene {
   std::filesystem::path file;
   std::string root_element;               ///< "X3D" or "Scene" for a scene (a settings file: "DeviceInfo", ...)
   std::int64_t root_line{1};              ///< line of the root element
+  bool root_known{true};                  ///< the root is a node HoF reads (false: <svg>, <html>, ...)
   std::vector<X3dShape> shapes;
   std::vector<X3dDevice> devices;         ///< DeviceInfo.device, in order (= device index)
   std::optional<X3dGlobalSettings> global_settings;
