@@ -597,6 +597,12 @@ TEST_F(MeshIoTest, ExtensionIsCaseInsensitive) {
   EXPECT_EQ(r->mesh.tets.size(), 2u);
 }
 
+TEST_F(MeshIoTest, AMissingFileWithoutAnExtensionIsSaidToBeMissing) {
+  const auto r = read_mesh(file("no-such-folder/Shader"));
+  ASSERT_FALSE(r);
+  EXPECT_EQ(r.error().message, "no such file");
+}
+
 TEST_F(MeshIoTest, UnknownExtensionIsAClearError) {
   const auto r = read_mesh(write("mesh.xyz", "1 2 3\n"));
   ASSERT_FALSE(r);

@@ -150,6 +150,7 @@ std::unexpected<Error> unknown_extension(const std::filesystem::path& path) {
   if (std::filesystem::is_directory(path, ec)) {
     return make_error(ErrorCode::kIo, "is a folder, not a mesh file (.msh, .obj, .stl, .off or .vtu)", path.string());
   }
+
   const std::string ext = path.extension().string();
   return make_error(ErrorCode::kUnsupported,
                     (ext.empty() ? std::string("file has no extension")
@@ -169,6 +170,9 @@ Expected<ReadResult> read_mesh(const std::filesystem::path& path, const Progress
     case Format::kVtu: return read_vtu(path);
     case Format::kUnknown: break;
   }
+  // A mistyped path is said to be missing, not to have the wrong extension.
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) return make_error(ErrorCode::kIo, "no such file", path.string());
   return unknown_extension(path);
 }
 
