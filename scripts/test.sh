@@ -55,7 +55,9 @@ fi
 HOF_FUZZ_BUILD=build/asan scripts/fuzz.sh "${HOF_FUZZ_SECONDS:-$([[ $mode == all ]] && echo 60 || echo 3)}"
 
 stage "3/3 ThreadSanitizer on the threaded tests"
-tsan_tests=(haptics_test device_test sdk_device_test session_test world_session_test fault_injection_test command_seam_test)
+tsan_tests=(haptics_test replay_device_test scripted_device_test virtual_hand_device_test spacemouse_device_test
+            mouse_device_test open_device_test udp_device_test sdk_device_test session_test world_session_test
+            fault_injection_test command_seam_test)
 cmake --preset tsan >/dev/null
 cmake --build --preset tsan --target "${tsan_tests[@]}"
 # One CPU for oneTBB (it sizes its pool from the affinity mask): its workers synchronise in an
