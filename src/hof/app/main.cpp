@@ -76,7 +76,13 @@ void add_mesh_commands(CLI::App& app, int& status) {
   conv_cmd->callback([&] { status = hof::app::run_mesh_convert(conv); });
 }
 
-void add_run_commands(CLI::App& app, int& status) {
+// The choices of --keep-cpus-awake and of --pin-threads (`hof run` and `hof gui`).
+const std::map<std::string, hof::haptics::KeepAwake> kKeepAwakeModes{
+    {"auto", hof::haptics::KeepAwake::automatic}, {"on", hof::haptics::KeepAwake::on}, {"off", hof::haptics::KeepAwake::off}};
+const std::map<std::string, bool> kOnOff{{"on", true}, {"off", false}};
+
+// `hof run`: a session without a window.
+void add_run_command(CLI::App& app, int& status) {
   static hof::app::RunOptions run;
   static double seconds = 0.0;
   static long steps = 0;
@@ -93,17 +99,14 @@ void add_run_commands(CLI::App& app, int& status) {
   run_cmd->add_option("--out", out, "Folder for telemetry.csv, summary.json, the final state (.vtu) and plots");
   run_cmd->add_option("--telemetry-rate", run.telemetry_rate_hz, "Rows per second in telemetry.csv (0 = every haptic tick)");
   run_cmd->add_flag("-q,--quiet", run.quiet, "No progress output");
-  static const std::map<std::string, hof::haptics::KeepAwake> keep_awake_modes{
-      {"auto", hof::haptics::KeepAwake::automatic}, {"on", hof::haptics::KeepAwake::on}, {"off", hof::haptics::KeepAwake::off}};
   run_cmd->add_option("--keep-cpus-awake", run.keep_awake,
                       "auto|on|off: real time, keep the CPUs from halting so the haptic thread wakes on time (auto: on a "
                       "virtual machine; docs/reliability.md)")
-      ->transform(CLI::CheckedTransformer(keep_awake_modes, CLI::ignore_case))
+      ->transform(CLI::CheckedTransformer(kKeepAwakeModes, CLI::ignore_case))
       ->default_str("auto");
-  static const std::map<std::string, bool> on_off{{"on", true}, {"off", false}};
   run_cmd->add_option("--pin-threads", run.pin_threads,
                       "on|off: real time, the haptic loop on the last CPU, the simulation on the others (docs/performance.md)")
-      ->transform(CLI::CheckedTransformer(on_off, CLI::ignore_case))
+      ->transform(CLI::CheckedTransformer(kOnOff, CLI::ignore_case))
       ->default_str("on");
   run_cmd->add_option("--sim-threads", run.simulation_threads,
                       "Real time: the simulation's threads (0 = automatic: every core but one, left to the haptic loop)")
@@ -116,7 +119,10 @@ void add_run_commands(CLI::App& app, int& status) {
     if (!out.empty()) run.out = out;
     status = hof::app::run_session(run);
   });
+}
 
+// `hof bench`: the evaluation, or one scene timed with --scene.
+void add_bench_command(CLI::App& app, int& status) {
   static hof::app::BenchOptions bench;
   static hof::app::EvaluationOptions evaluation;
   CLI::App* bench_cmd = app.add_subcommand(
@@ -143,7 +149,10 @@ void add_run_commands(CLI::App& app, int& status) {
     if (out_opt->count()) evaluation.command_line += " --out " + evaluation.out.string();
     status = hof::app::run_evaluation(evaluation);
   });
+}
 
+// `hof gui`: the window.
+void add_gui_command(CLI::App& app, int& status) {
   static hof::app::GuiOptions gui;
   static std::string gui_file, gui_script, gui_size;
   CLI::App* gui_cmd = app.add_subcommand("gui", "The window: see, touch (the mouse is the stylus when no device is connected), tune, save");
@@ -154,11 +163,11 @@ void add_run_commands(CLI::App& app, int& status) {
   gui_cmd->add_flag("-q,--quiet", gui.quiet, "No messages on the terminal");
   gui_cmd->add_option("--keep-cpus-awake", gui.keep_awake,
                       "auto|on|off: keep the CPUs from halting so the haptic thread wakes on time (auto: on a virtual machine)")
-      ->transform(CLI::CheckedTransformer(keep_awake_modes, CLI::ignore_case))
+      ->transform(CLI::CheckedTransformer(kKeepAwakeModes, CLI::ignore_case))
       ->default_str("auto");
   gui_cmd->add_option("--pin-threads", gui.pin_threads,
                       "on|off: the haptic loop on the last CPU, the simulation on the others")
-      ->transform(CLI::CheckedTransformer(on_off, CLI::ignore_case))
+      ->transform(CLI::CheckedTransformer(kOnOff, CLI::ignore_case))
       ->default_str("on");
   gui_cmd->add_option("--sim-threads", gui.simulation_threads,
                       "The simulation's threads (0 = automatic: every core but one, left to the haptic loop and the window)")
@@ -179,12 +188,18 @@ void add_run_commands(CLI::App& app, int& status) {
     }
     status = hof::app::run_gui(gui);
   });
+}
 
+// `hof check`: a project, scene or mesh validated.
+void add_check_command(CLI::App& app, int& status) {
   static hof::app::CheckOptions check;
   CLI::App* check_cmd = app.add_subcommand("check", "Validate a project, scene or mesh and print every problem");
   check_cmd->add_option("file", check.file, "File to check")->required();
   check_cmd->callback([&] { status = hof::app::run_check(check); });
+}
 
+// `hof device`: the device tools.
+void add_device_commands(CLI::App& app, int& status) {
   CLI::App* device_cmd = app.add_subcommand("device", "Haptic device tools");
   device_cmd->require_subcommand(1);
   static std::string key_file;
@@ -200,6 +215,15 @@ void add_run_commands(CLI::App& app, int& status) {
     std::printf("wrote a new key to %s: copy it to the bridge's machine over a secure channel (scp)\n",
                 key_file.c_str());
   });
+}
+
+// The commands past `hof mesh`: run, bench, gui, check and device.
+void add_run_commands(CLI::App& app, int& status) {
+  add_run_command(app, status);
+  add_bench_command(app, status);
+  add_gui_command(app, status);
+  add_check_command(app, status);
+  add_device_commands(app, status);
 }
 
 }  // namespace

@@ -138,19 +138,67 @@ class StopOnSignals {
   struct sigaction previous_term_ {};
 };
 
+// A numeric option out of its range, in a sentence ("" when all are in range).
+std::string numeric_option_problem(const RunOptions& options) {
+  if (options.seconds && !(*options.seconds > 0.0 && *options.seconds <= 86400.0)) {
+    return fmt::format("--seconds must be in (0, 86400], got {}", *options.seconds);
+  }
+  if (options.steps && !(*options.steps > 0 && *options.steps <= 100000000)) {
+    return fmt::format("--steps must be in [1, 100000000], got {}", *options.steps);
+  }
+  if (!(options.telemetry_rate_hz >= 0.0 && options.telemetry_rate_hz <= 100000.0)) {
+    return fmt::format("--telemetry-rate must be in [0, 100000] rows/s (0 = every tick), got {}", options.telemetry_rate_hz);
+  }
+  return {};
+}
+
+// Locks every page of the process in memory (true when it did), only where the lock has no
+// ceiling (root, or an unlimited RLIMIT_MEMLOCK).
+bool lock_memory_without_ceiling() {
+  rlimit limit{};
+  const bool may_lock = ::geteuid() == 0 || (::getrlimit(RLIMIT_MEMLOCK, &limit) == 0 && limit.rlim_cur == RLIM_INFINITY);
+  return may_lock && ::mlockall(MCL_CURRENT | MCL_FUTURE) == 0;
+}
+
+// Writes the report of a run that has ended (summary first, then the other files, then the
+// terminal's) and returns the exit status that says how it ended.
+int write_run_report(const RunOptions& options, RunRecording& recording, const coupling::SessionReport& report,
+                     const RunConditions& conditions, int stop_signal) {
+  int report_status = 0;  // 3 when part of the report could not be written
+  if (options.out) {
+    // Written first and whole (atomically): whatever happens after, the session's results are
+    // on disk. The folder is made again if it was removed during the run. If even that fails
+    // (a full disk), the summary goes to the terminal rather than being lost.
+    std::error_code ec;
+    std::filesystem::create_directories(*options.out, ec);
+    const std::string text = recording.summary_json(report, conditions);
+    if (auto written = write_file_atomically(*options.out / "summary.json", text); !written) {
+      std::fprintf(stderr, "hof: %s\nhof: the session's summary follows, so that its results are not lost:\n%s",
+                   written.error().to_string().c_str(), text.c_str());
+      return 3;
+    }
+    const std::string& problem = conditions.telemetry_problem;
+    if (!problem.empty()) {
+      std::fprintf(stderr, "hof: warning: %s\n", problem.c_str());
+      if (problem.find("incomplete") != std::string::npos || problem.find("could not") != std::string::npos) report_status = 3;
+    }
+    if (!recording.write_report_files(*options.out, report, options.quiet)) report_status = 3;
+  }
+  if (!options.quiet) recording.print(report, options.deterministic, options.out);
+  recording.print_warnings(report, options.deterministic, options.quiet);
+  // Stopped by a signal: its report is whole; the exit status is the shell's for that signal.
+  if (stop_signal) return 128 + stop_signal;
+  if (report.diverged) return 2;
+  // The device failed: the run ended early (its report is written).
+  if (!report.device_failure.empty()) return 4;
+  return report_status;
+}
+
 }  // namespace
 
 int run_session(const RunOptions& options) {
   // Numeric options first: a clear refusal rather than an endless run or a huge file.
-  if (options.seconds && !(*options.seconds > 0.0 && *options.seconds <= 86400.0)) {
-    return fail(fmt::format("--seconds must be in (0, 86400], got {}", *options.seconds));
-  }
-  if (options.steps && !(*options.steps > 0 && *options.steps <= 100000000)) {
-    return fail(fmt::format("--steps must be in [1, 100000000], got {}", *options.steps));
-  }
-  if (!(options.telemetry_rate_hz >= 0.0 && options.telemetry_rate_hz <= 100000.0)) {
-    return fail(fmt::format("--telemetry-rate must be in [0, 100000] rows/s (0 = every tick), got {}", options.telemetry_rate_hz));
-  }
+  if (const std::string problem = numeric_option_problem(options); !problem.empty()) return fail(problem);
   auto world = scene::build_world(options.file, options.device.value_or(""));
   if (!world) return fail(world.error());
   if (!world->nothing_to_touch.empty()) {
@@ -201,13 +249,9 @@ int run_session(const RunOptions& options) {
   // for a page to come back from disk (where the system permits it; the report says which).
   // Only where the lock has no ceiling (root, or an unlimited RLIMIT_MEMLOCK): under a finite
   // ceiling MCL_FUTURE would turn the first allocation past it into a failure mid-run.
-  const bool may_lock = [] {
-    rlimit limit{};
-    return ::geteuid() == 0 || (::getrlimit(RLIMIT_MEMLOCK, &limit) == 0 && limit.rlim_cur == RLIM_INFINITY);
-  }();
   RunConditions conditions;
   conditions.deterministic = options.deterministic;
-  conditions.memory_locked = !options.deterministic && may_lock && ::mlockall(MCL_CURRENT | MCL_FUTURE) == 0;
+  conditions.memory_locked = !options.deterministic && lock_memory_without_ceiling();
   // Real time on a virtual machine: keep its CPUs from halting (cpu_keep_awake.h says why).
   std::optional<haptics::CpuKeepAwake> keep_awake;
   if (!options.deterministic) keep_awake.emplace(options.keep_awake);
@@ -237,34 +281,7 @@ int run_session(const RunOptions& options) {
     conditions.host_cpu_steal_s = *steal_after - *steal_before;
   }
 
-  int report_status = 0;  // 3 when part of the report could not be written
-  if (options.out) {
-    // Written first and whole (atomically): whatever happens after, the session's results are
-    // on disk. The folder is made again if it was removed during the run. If even that fails
-    // (a full disk), the summary goes to the terminal rather than being lost.
-    std::error_code ec;
-    std::filesystem::create_directories(*options.out, ec);
-    const std::string text = recording.summary_json(report, conditions);
-    if (auto written = write_file_atomically(*options.out / "summary.json", text); !written) {
-      std::fprintf(stderr, "hof: %s\nhof: the session's summary follows, so that its results are not lost:\n%s",
-                   written.error().to_string().c_str(), text.c_str());
-      return 3;
-    }
-    const std::string& problem = conditions.telemetry_problem;
-    if (!problem.empty()) {
-      std::fprintf(stderr, "hof: warning: %s\n", problem.c_str());
-      if (problem.find("incomplete") != std::string::npos || problem.find("could not") != std::string::npos) report_status = 3;
-    }
-    if (!recording.write_report_files(*options.out, report, options.quiet)) report_status = 3;
-  }
-  if (!options.quiet) recording.print(report, options.deterministic, options.out);
-  recording.print_warnings(report, options.deterministic, options.quiet);
-  // Stopped by a signal: its report is whole; the exit status is the shell's for that signal.
-  if (stop_signal) return 128 + stop_signal;
-  if (report.diverged) return 2;
-  // The device failed: the run ended early (its report is written).
-  if (!report.device_failure.empty()) return 4;
-  return report_status;
+  return write_run_report(options, recording, report, conditions, stop_signal);
 }
 
 int run_check(const CheckOptions& options) {

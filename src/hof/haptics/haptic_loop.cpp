@@ -190,6 +190,13 @@ bool HapticLoop::switch_device(Device& device) {
   return true;
 }
 
+// One function of ~165 lines on purpose: this is the haptic tick (1 kHz and more, never
+// allocating, locking or waiting), and its stages — take the settings and a switched device,
+// read and calibrate, render the layers, the tool and the effects, the safety filter, publish
+// — share a dozen stack arrays (contacts, layer forces, surfaces) sized kMaxLayers. Split
+// into functions they would pass those arrays by reference across calls the compiler may
+// not inline, and the tick's cost is a measured cell (`hof bench --only haptic_rate`) that
+// must not grow. The stages are marked by the comments below, in the order they run.
 void HapticLoop::tick_impl(double time_s, double period_s, bool overrun) {
   const double dt = period_s > 0.0 && std::isfinite(period_s) ? period_s : 1.0 / config_.rate_hz;
   take_settings();

@@ -34,6 +34,20 @@ class VtuReader {
   Expected<ReadResult> run();
 
  private:
+  // The cells' three DataArrays and their values.
+  struct Cells {
+    pugi::xml_node offsets_array, types_array, connectivity_array;
+    std::vector<std::int64_t> offsets, types, connectivity;
+  };
+  // The stages of run().
+  Expected<pugi::xml_node> find_piece(pugi::xml_document& doc) const;
+  Expected<void> read_points(const pugi::xml_node& piece, std::int64_t point_count, Mesh& mesh) const;
+  Expected<Cells> read_cells(const pugi::xml_node& piece, std::int64_t cell_count) const;
+  Expected<std::vector<std::int64_t>> read_regions(const pugi::xml_node& piece, std::int64_t cell_count) const;
+  Expected<void> read_normals(const pugi::xml_node& piece, std::int64_t point_count, Mesh& mesh) const;
+  Expected<void> keep_cells(const Cells& cells, const std::vector<std::int64_t>& regions, std::int64_t point_count,
+                            ReadResult& result) const;
+
   /// 1-based line of a byte offset in the original text (pugixml's offset_debug()).
   std::int64_t line_at(std::ptrdiff_t offset) const {
     if (offset < 0) return 0;
@@ -151,8 +165,41 @@ pugi::xml_node data_array(const pugi::xml_node& parent, const char* name) {
   return {};
 }
 
+// Reads the file in stages: the document down to its one <Piece>, the points, the cells'
+// arrays, the optional regions and normals, then the tetrahedra and triangles kept.
 Expected<ReadResult> VtuReader::run() {
   pugi::xml_document doc;
+  auto piece = find_piece(doc);
+  if (!piece) return std::unexpected(piece.error());
+  auto point_count = count_attribute(*piece, "NumberOfPoints");
+  if (!point_count) return std::unexpected(point_count.error());
+  auto cell_count = count_attribute(*piece, "NumberOfCells");
+  if (!cell_count) return std::unexpected(cell_count.error());
+  if (*point_count == 0 || *point_count > INT32_MAX) {
+    return fail_at(*piece, ErrorCode::kInvalidMesh,
+                   "NumberOfPoints=" + std::to_string(*point_count) + " is not usable");
+  }
+
+  ReadResult result;
+  result.report.format = "vtu";
+  if (auto ok = read_points(*piece, *point_count, result.mesh); !ok) return std::unexpected(ok.error());
+  auto cells = read_cells(*piece, *cell_count);
+  if (!cells) return std::unexpected(cells.error());
+  auto regions = read_regions(*piece, *cell_count);
+  if (!regions) return std::unexpected(regions.error());
+  if (auto ok = read_normals(*piece, *point_count, result.mesh); !ok) return std::unexpected(ok.error());
+  if (auto ok = keep_cells(*cells, *regions, *point_count, result); !ok) return std::unexpected(ok.error());
+  // The writer stores 0 for "no region"; all zeros means the mesh had none.
+  const auto all_zero = [](const std::vector<std::int32_t>& v) {
+    return std::all_of(v.begin(), v.end(), [](std::int32_t r) { return r == 0; });
+  };
+  if (all_zero(result.mesh.tet_regions)) result.mesh.tet_regions.clear();
+  if (all_zero(result.mesh.triangle_regions)) result.mesh.triangle_regions.clear();
+  return result;
+}
+
+// Parses the text into `doc` and finds its one <Piece> of an UnstructuredGrid.
+Expected<pugi::xml_node> VtuReader::find_piece(pugi::xml_document& doc) const {
   // Without parse_eol pugixml leaves the text bytes where they were, so offset_debug()
   // gives true positions for line numbers.
   const pugi::xml_parse_result parsed = doc.load_buffer(
@@ -181,66 +228,59 @@ Expected<ReadResult> VtuReader::run() {
   }
   const pugi::xml_node piece = grid.child("Piece");
   if (!piece) return fail_at(grid, ErrorCode::kParse, "no <Piece> element");
+  return piece;
+}
 
-  auto point_count = count_attribute(piece, "NumberOfPoints");
-  if (!point_count) return std::unexpected(point_count.error());
-  auto cell_count = count_attribute(piece, "NumberOfCells");
-  if (!cell_count) return std::unexpected(cell_count.error());
-  if (*point_count == 0 || *point_count > INT32_MAX) {
-    return fail_at(piece, ErrorCode::kInvalidMesh,
-                   "NumberOfPoints=" + std::to_string(*point_count) + " is not usable");
-  }
-
-  ReadResult result;
-  result.report.format = "vtu";
-  Mesh& mesh = result.mesh;
-  std::vector<double> reals;
-  std::vector<std::int64_t> ints;
-
-  // Points.
+Expected<void> VtuReader::read_points(const pugi::xml_node& piece, std::int64_t point_count, Mesh& mesh) const {
   const pugi::xml_node points = data_array(piece.child("Points"), "");
   if (!points) return fail_at(piece, ErrorCode::kParse, "no <Points> DataArray");
   if (points.attribute("NumberOfComponents").as_int(1) != 3) {
     return fail_at(points, ErrorCode::kUnsupported, "Points must have NumberOfComponents=\"3\"");
   }
-  if (auto ok = read_values(points, 3 * *point_count, false, reals, ints); !ok) {
-    return std::unexpected(ok.error());
-  }
-  mesh.nodes.resize(static_cast<std::size_t>(*point_count));
+  std::vector<double> reals;
+  std::vector<std::int64_t> ints;
+  if (auto ok = read_values(points, 3 * point_count, false, reals, ints); !ok) return ok;
+  mesh.nodes.resize(static_cast<std::size_t>(point_count));
   for (std::size_t i = 0; i < mesh.nodes.size(); ++i) {
     mesh.nodes[i] = Vec3(reals[3 * i], reals[3 * i + 1], reals[3 * i + 2]);
   }
+  return {};
+}
 
-  // Cells: offsets and types first, since connectivity's length is the last offset.
+// Offsets and types first, since connectivity's length is the last offset.
+Expected<VtuReader::Cells> VtuReader::read_cells(const pugi::xml_node& piece, std::int64_t cell_count) const {
   const pugi::xml_node cells = piece.child("Cells");
-  const pugi::xml_node offsets_array = data_array(cells, "offsets");
-  const pugi::xml_node types_array = data_array(cells, "types");
-  const pugi::xml_node connectivity_array = data_array(cells, "connectivity");
-  if (!offsets_array || !types_array || !connectivity_array) {
+  Cells out;
+  out.offsets_array = data_array(cells, "offsets");
+  out.types_array = data_array(cells, "types");
+  out.connectivity_array = data_array(cells, "connectivity");
+  if (!out.offsets_array || !out.types_array || !out.connectivity_array) {
     return fail_at(cells ? cells : piece, ErrorCode::kParse,
                    "<Cells> needs DataArrays 'connectivity', 'offsets' and 'types'");
   }
-  std::vector<std::int64_t> offsets;
-  std::vector<std::int64_t> types;
-  std::vector<std::int64_t> connectivity;
-  if (auto ok = read_values(offsets_array, *cell_count, true, reals, offsets); !ok) return std::unexpected(ok.error());
-  if (auto ok = read_values(types_array, *cell_count, true, reals, types); !ok) return std::unexpected(ok.error());
+  std::vector<double> reals;  // unused: the cells' arrays are integers
+  if (auto ok = read_values(out.offsets_array, cell_count, true, reals, out.offsets); !ok) return std::unexpected(ok.error());
+  if (auto ok = read_values(out.types_array, cell_count, true, reals, out.types); !ok) return std::unexpected(ok.error());
   std::int64_t previous = 0;
-  for (std::size_t c = 0; c < offsets.size(); ++c) {
-    if (offsets[c] < previous) {
-      return fail_at_value(offsets_array, static_cast<std::int64_t>(c), ErrorCode::kInvalidMesh,
+  for (std::size_t c = 0; c < out.offsets.size(); ++c) {
+    if (out.offsets[c] < previous) {
+      return fail_at_value(out.offsets_array, static_cast<std::int64_t>(c), ErrorCode::kInvalidMesh,
                            "offsets decrease at cell " + std::to_string(c));
     }
-    previous = offsets[c];
+    previous = out.offsets[c];
   }
-  if (auto ok = read_values(connectivity_array, previous, true, reals, connectivity); !ok) {
+  if (auto ok = read_values(out.connectivity_array, previous, true, reals, out.connectivity); !ok) {
     return std::unexpected(ok.error());
   }
+  return out;
+}
 
-  // Optional per-cell regions and per-point normals.
+// The optional per-cell regions (empty without a CellData "region" array).
+Expected<std::vector<std::int64_t>> VtuReader::read_regions(const pugi::xml_node& piece, std::int64_t cell_count) const {
   std::vector<std::int64_t> regions;
   if (const pugi::xml_node region_array = data_array(piece.child("CellData"), "region")) {
-    if (auto ok = read_values(region_array, *cell_count, true, reals, regions); !ok) {
+    std::vector<double> reals;  // unused: regions are integers
+    if (auto ok = read_values(region_array, cell_count, true, reals, regions); !ok) {
       return std::unexpected(ok.error());
     }
     for (const std::int64_t r : regions) {
@@ -251,39 +291,50 @@ Expected<ReadResult> VtuReader::run() {
       }
     }
   }
-  if (const pugi::xml_node normals_array = data_array(piece.child("PointData"), "normals")) {
-    if (normals_array.attribute("NumberOfComponents").as_int(1) != 3) {
-      return fail_at(normals_array, ErrorCode::kUnsupported, "normals must have NumberOfComponents=\"3\"");
-    }
-    reals.clear();
-    if (auto ok = read_values(normals_array, 3 * *point_count, false, reals, ints); !ok) {
-      return std::unexpected(ok.error());
-    }
-    mesh.normals.resize(mesh.nodes.size());
-    for (std::size_t i = 0; i < mesh.normals.size(); ++i) {
-      mesh.normals[i] = Vec3(reals[3 * i], reals[3 * i + 1], reals[3 * i + 2]);
-    }
-  }
+  return regions;
+}
 
+// The optional per-point normals (a PointData "normals" array).
+Expected<void> VtuReader::read_normals(const pugi::xml_node& piece, std::int64_t point_count, Mesh& mesh) const {
+  const pugi::xml_node normals_array = data_array(piece.child("PointData"), "normals");
+  if (!normals_array) return {};
+  if (normals_array.attribute("NumberOfComponents").as_int(1) != 3) {
+    return fail_at(normals_array, ErrorCode::kUnsupported, "normals must have NumberOfComponents=\"3\"");
+  }
+  std::vector<double> reals;
+  std::vector<std::int64_t> ints;
+  if (auto ok = read_values(normals_array, 3 * point_count, false, reals, ints); !ok) return ok;
+  mesh.normals.resize(mesh.nodes.size());
+  for (std::size_t i = 0; i < mesh.normals.size(); ++i) {
+    mesh.normals[i] = Vec3(reals[3 * i], reals[3 * i + 1], reals[3 * i + 2]);
+  }
+  return {};
+}
+
+// Keeps the tetrahedra and triangles (with their regions) and counts the cells of other
+// types, with a warning per type that is neither a point nor a line.
+Expected<void> VtuReader::keep_cells(const Cells& cells, const std::vector<std::int64_t>& regions, std::int64_t point_count,
+                                     ReadResult& result) const {
+  Mesh& mesh = result.mesh;
   std::map<std::int64_t, std::int64_t> other_types;
   std::int64_t begin = 0;
-  for (std::size_t c = 0; c < types.size(); ++c) {
-    const std::int64_t size = offsets[c] - begin;
-    const std::int64_t type = types[c];
+  for (std::size_t c = 0; c < cells.types.size(); ++c) {
+    const std::int64_t size = cells.offsets[c] - begin;
+    const std::int64_t type = cells.types[c];
     const std::int64_t expected_size = type == kVtkTetra ? 4 : type == kVtkTriangle ? 3 : -1;
     if (expected_size > 0 && size != expected_size) {
-      return fail_at_value(offsets_array, static_cast<std::int64_t>(c), ErrorCode::kInvalidMesh,
+      return fail_at_value(cells.offsets_array, static_cast<std::int64_t>(c), ErrorCode::kInvalidMesh,
                      "cell " + std::to_string(c) + " of type " + std::to_string(type) + " has " +
                          std::to_string(size) + " points instead of " + std::to_string(expected_size));
     }
     if (expected_size > 0) {
       std::array<NodeIndex, 4> v{};
       for (std::int64_t k = 0; k < size; ++k) {
-        const std::int64_t index = connectivity[static_cast<std::size_t>(begin + k)];
-        if (index < 0 || index >= *point_count) {
-          return fail_at_value(connectivity_array, begin + k, ErrorCode::kInvalidMesh,
+        const std::int64_t index = cells.connectivity[static_cast<std::size_t>(begin + k)];
+        if (index < 0 || index >= point_count) {
+          return fail_at_value(cells.connectivity_array, begin + k, ErrorCode::kInvalidMesh,
                          "cell " + std::to_string(c) + " refers to point " + std::to_string(index) +
-                             ", but there are " + std::to_string(*point_count) + " points");
+                             ", but there are " + std::to_string(point_count) + " points");
         }
         v[static_cast<std::size_t>(k)] = static_cast<NodeIndex>(index);
       }
@@ -303,20 +354,14 @@ Expected<ReadResult> VtuReader::run() {
       ++result.report.ignored_other;
       ++other_types[type];
     }
-    begin = offsets[c];
+    begin = cells.offsets[c];
   }
   for (const auto& [type, count] : other_types) {
-    result.report.warnings.push_back(file_ + ":" + std::to_string(line_at(types_array.offset_debug())) +
+    result.report.warnings.push_back(file_ + ":" + std::to_string(line_at(cells.types_array.offset_debug())) +
                                      ": ignored " + std::to_string(count) + " cell(s) of VTK type " +
                                      std::to_string(type) + "; only tetrahedra (10) and triangles (5) are kept");
   }
-  // The writer stores 0 for "no region"; all zeros means the mesh had none.
-  const auto all_zero = [](const std::vector<std::int32_t>& v) {
-    return std::all_of(v.begin(), v.end(), [](std::int32_t r) { return r == 0; });
-  };
-  if (all_zero(mesh.tet_regions)) mesh.tet_regions.clear();
-  if (all_zero(mesh.triangle_regions)) mesh.triangle_regions.clear();
-  return result;
+  return {};
 }
 
 void append_vectors(std::string& out, const std::vector<Vec3>& vectors) {

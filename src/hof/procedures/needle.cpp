@@ -127,116 +127,42 @@ void NeedleTool::disengage(NeedlePhase phase) {
   held_n_ = 0.0;
 }
 
+namespace {
+
+// The body the contact of layer `l` touches (the part's body, or the part itself when the
+// surface has no bodies), or -1 when the layer is not in contact.
+std::int32_t touched_body(const haptics::ToolTickInput& in, std::size_t l) {
+  if (l >= in.contacts.size() || l >= in.surfaces.size() || !in.surfaces[l]) return -1;
+  const haptics::ContactState& c = in.contacts[l];
+  if (!c.in_contact || c.triangle < 0) return -1;
+  const std::int32_t part = in.surfaces[l]->part_of(c.triangle);
+  if (part < 0) return -1;
+  const std::int32_t body = in.surfaces[l]->parts[static_cast<std::size_t>(part)].body;
+  return body >= 0 ? body : part;
+}
+
+}  // namespace
+
+// The tick in stages: filter the tip's velocity, re-enter or re-arm after a withdrawal,
+// engage on a first contact, then the axial force of the phase the needle is in and the
+// lateral hold of the tissue. No stage allocates (the tick runs in the haptic loop).
 Vec3 NeedleTool::tick(const haptics::ToolTickInput& in, std::span<Vec3> layer_forces, haptics::ToolState& st) {
   settings_.acquire();
   const Resolved& settings = settings_.read();
   const double to_m = metres_per_unit_;
-  const auto body_of = [&](std::size_t l) -> std::int32_t {
-    if (l >= in.contacts.size() || l >= in.surfaces.size() || !in.surfaces[l]) return -1;
-    const haptics::ContactState& c = in.contacts[l];
-    if (!c.in_contact || c.triangle < 0) return -1;
-    const std::int32_t part = in.surfaces[l]->part_of(c.triangle);
-    if (part < 0) return -1;
-    const std::int32_t body = in.surfaces[l]->parts[static_cast<std::size_t>(part)].body;
-    return body >= 0 ? body : part;
-  };
-  // The tip's velocity, low-pass filtered (first order, time constant velocity_filter_s).
-  if (!have_velocity_ || !(settings.velocity_filter_s > 0.0)) {
-    velocity_ = in.velocity;
-    have_velocity_ = true;
-  } else {
-    velocity_ += (1.0 - std::exp(-in.dt_s / settings.velocity_filter_s)) * (in.velocity - velocity_);
-  }
-
-  if (!engaged_ && !rearmed_) {
-    // Just withdrawn: the stylus is still at the surface, which stays force-free (the tissue
-    // dragged out with the needle has the tip under its surface: it must not spring the hand
-    // back). Pushed back in there, the needle re-enters the hole it made; once the stylus has
-    // left the surface, the next contact starts a new insertion.
-    bool touching = false;
-    for (std::size_t l = 0; l < in.contacts.size(); ++l) {
-      if (body_of(l) != withdrawn_from_) continue;
-      touching = true;
-      layer_forces[l].setZero();
-    }
-    if ((in.position - entry_).dot(axis_) > 0.0 && touching) {
-      engaged_ = true;
-      broken_ = true;
-      body_ = withdrawn_from_;
-      layer_ = withdrawn_layer_;
-      phase_ = NeedlePhase::kPunctured;
-      held_n_ = 0.0;
-      rearmed_ = true;
-    } else {
-      rearmed_ = !touching;
-    }
-  }
-  if (!engaged_ && rearmed_) {
-    // First contact with a body the needle can enter: the entry point and the axis are fixed.
-    for (std::size_t l = 0; l < in.contacts.size(); ++l) {
-      const std::int32_t b = body_of(l);
-      if (b < 0 || static_cast<std::size_t>(b) >= settings.bodies.size() || !settings.bodies[static_cast<std::size_t>(b)].pierceable) {
-        continue;
-      }
-      const haptics::ContactState& c = in.contacts[l];
-      const TissueNeedleParameters& p = settings.bodies[static_cast<std::size_t>(b)];
-      const double still = std::max(1e-9, 0.5 * p.friction.velocity_band_m_per_s) / to_m;  // world units/s
-      normal_ = c.normal.norm() > 0.0 ? c.normal.normalized() : Vec3(0.0, 0.0, 1.0);
-      const Vec3 inward = -normal_;
-      axis_ = inward;
-      if (settings.axis == NeedleAxis::kMotion) {
-        const double speed = velocity_.norm();
-        if (speed > still && velocity_.dot(inward) > 0.2 * speed) axis_ = velocity_ / speed;
-      } else if (settings.axis == NeedleAxis::kStylus) {
-        const Vec3 stylus = in.orientation * Vec3(0.0, 0.0, -1.0);
-        if (stylus.dot(inward) > 0.0) axis_ = stylus.normalized();
-      }
-      entry_ = c.point;
-      engaged_ = true;
-      broken_ = false;
-      body_ = b;
-      layer_ = static_cast<std::int32_t>(l);
-      phase_ = NeedlePhase::kTouching;
-      held_n_ = 0.0;
-      max_depth_m_ = 0.0;
-      break;
-    }
-  }
-
-  const auto publish = [&](double depth_m, double v_m, double f, const Vec3& force) {
-    st.phase = static_cast<std::uint8_t>(phase_);
-    st.touched = engaged_;
-    st.broken = broken_;
-    st.body = engaged_ ? body_ : -1;
-    st.layer = engaged_ ? layer_ : -1;
-    st.depth_m = depth_m;
-    st.axial_force_n = f;
-    st.axial_velocity_m_per_s = v_m;
-    st.tip = in.position;
-    st.entry = entry_;
-    st.axis = axis_;
-    st.normal = normal_;
-    st.force = force;
-    return force;
-  };
-  if (!engaged_) return publish(0.0, 0.0, 0.0, Vec3::Zero());
+  filter_velocity(in, settings);
+  if (!engaged_ && !rearmed_) reenter_or_rearm(in, layer_forces);
+  if (!engaged_ && rearmed_) engage(in, settings);
+  if (!engaged_) return publish(in, st, 0.0, 0.0, 0.0, Vec3::Zero());
 
   const TissueNeedleParameters& p = settings.bodies[static_cast<std::size_t>(body_)];
-  const double still = std::max(1e-9, 0.5 * p.friction.velocity_band_m_per_s);
   // Depth and axial velocity in SI (the model's units), whatever the world's.
   double d = (in.position - entry_).dot(axis_) * to_m;
   const double v = velocity_.dot(axis_) * to_m;
   Vec3 off_axis = (in.position - entry_) - (d / to_m) * axis_;
   // The zero-force surface: the pierced body's surface lets the tip pass.
-  const bool on_surface = body_of(static_cast<std::size_t>(layer_)) == body_;
+  const bool on_surface = touched_body(in, static_cast<std::size_t>(layer_)) == body_;
   if (on_surface) layer_forces[static_cast<std::size_t>(layer_)].setZero();
-  const auto withdraw = [&] {
-    withdrawn_from_ = body_;
-    withdrawn_layer_ = layer_;
-    disengage(NeedlePhase::kOut);
-    rearmed_ = false;
-    return publish(0.0, v, 0.0, Vec3::Zero());
-  };
 
   double f = 0.0;
   if (!broken_) {
@@ -244,49 +170,22 @@ Vec3 NeedleTool::tick(const haptics::ToolTickInput& in, std::span<Vec3> layer_fo
     // lateral hold before the puncture).
     entry_ += off_axis;
     off_axis.setZero();
-    if (d <= 0.0) {
-      if (!on_surface) {
-        disengage(NeedlePhase::kFree);
-        return publish(0.0, v, 0.0, Vec3::Zero());
-      }
-      phase_ = NeedlePhase::kTouching;
-    } else {
-      f = pre_puncture_force(p, d);
-      if (d >= p.capsule_m || f >= p.puncture_force_n) {
-        broken_ = true;  // the capsule gives way: the post-puncture model from this tick on
-        phase_ = NeedlePhase::kPunctured;
-        max_depth_m_ = d;
-        f = post_puncture_force(p, d, v, held_n_);
-      } else {
-        phase_ = NeedlePhase::kPrePuncture;
-      }
+    if (d <= 0.0 && !on_surface) {
+      disengage(NeedlePhase::kFree);
+      return publish(in, st, 0.0, v, 0.0, Vec3::Zero());
     }
+    f = capsule_force(p, d, v);
   } else {
     // Out past the entry, or torn sideways out of the path (a rigid needle cannot cross the
     // tissue): withdrawn.
-    if (d <= 0.0 || off_axis.norm() * to_m > p.path_tolerance_m) return withdraw();
-    NeedlePhase next = phase_;
-    if (v >= still) {
-      next = NeedlePhase::kPunctured;
-    } else if (v <= -still) {
-      next = NeedlePhase::kExtraction;
-    } else if (phase_ == NeedlePhase::kPunctured) {
-      next = NeedlePhase::kRelaxation;  // stopped while inserting; a stop while withdrawing sticks
+    if (d <= 0.0 || off_axis.norm() * to_m > p.path_tolerance_m) {
+      withdrawn_from_ = body_;
+      withdrawn_layer_ = layer_;
+      disengage(NeedlePhase::kOut);
+      rearmed_ = false;
+      return publish(in, st, 0.0, v, 0.0, Vec3::Zero());
     }
-    if (next == NeedlePhase::kRelaxation && phase_ != NeedlePhase::kRelaxation) {
-      relax_start_s_ = in.time_s;
-      relax_force_n_ = held_n_;
-    }
-    phase_ = next;
-    switch (phase_) {
-      case NeedlePhase::kRelaxation: f = relaxation_force(p, relax_force_n_, in.time_s - relax_start_s_); break;
-      case NeedlePhase::kExtraction: f = extraction_force(p, d, v, held_n_); break;
-      default:
-        // New tissue is cut beyond the deepest point so far; before it the path exists.
-        f = d >= max_depth_m_ ? post_puncture_force(p, d, v, held_n_) : reinsertion_force(p, d, v, held_n_);
-        max_depth_m_ = std::max(max_depth_m_, d);
-        break;
-    }
+    f = inserted_force(p, d, v, in.time_s);
   }
   held_n_ = f;
 
@@ -298,7 +197,139 @@ Vec3 NeedleTool::tick(const haptics::ToolTickInput& in, std::span<Vec3> layer_fo
     lateral = -k * off_axis - p.lateral_damping_n_s_per_m * to_m * lateral_velocity;
   }
   d = std::max(0.0, d);
-  return publish(d, v, f, -f * axis_ + lateral);
+  return publish(in, st, d, v, f, -f * axis_ + lateral);
+}
+
+// The tip's velocity, low-pass filtered (first order, time constant velocity_filter_s).
+void NeedleTool::filter_velocity(const haptics::ToolTickInput& in, const Resolved& settings) {
+  if (!have_velocity_ || !(settings.velocity_filter_s > 0.0)) {
+    velocity_ = in.velocity;
+    have_velocity_ = true;
+  } else {
+    velocity_ += (1.0 - std::exp(-in.dt_s / settings.velocity_filter_s)) * (in.velocity - velocity_);
+  }
+}
+
+// Just withdrawn: the stylus is still at the surface, which stays force-free (the tissue
+// dragged out with the needle has the tip under its surface: it must not spring the hand
+// back). Pushed back in there, the needle re-enters the hole it made; once the stylus has
+// left the surface, the next contact starts a new insertion.
+void NeedleTool::reenter_or_rearm(const haptics::ToolTickInput& in, std::span<Vec3> layer_forces) {
+  bool touching = false;
+  for (std::size_t l = 0; l < in.contacts.size(); ++l) {
+    if (touched_body(in, l) != withdrawn_from_) continue;
+    touching = true;
+    layer_forces[l].setZero();
+  }
+  if ((in.position - entry_).dot(axis_) > 0.0 && touching) {
+    engaged_ = true;
+    broken_ = true;
+    body_ = withdrawn_from_;
+    layer_ = withdrawn_layer_;
+    phase_ = NeedlePhase::kPunctured;
+    held_n_ = 0.0;
+    rearmed_ = true;
+  } else {
+    rearmed_ = !touching;
+  }
+}
+
+// First contact with a body the needle can enter: the entry point and the axis are fixed.
+void NeedleTool::engage(const haptics::ToolTickInput& in, const Resolved& settings) {
+  for (std::size_t l = 0; l < in.contacts.size(); ++l) {
+    const std::int32_t b = touched_body(in, l);
+    if (b < 0 || static_cast<std::size_t>(b) >= settings.bodies.size() || !settings.bodies[static_cast<std::size_t>(b)].pierceable) {
+      continue;
+    }
+    const haptics::ContactState& c = in.contacts[l];
+    const TissueNeedleParameters& p = settings.bodies[static_cast<std::size_t>(b)];
+    const double still = std::max(1e-9, 0.5 * p.friction.velocity_band_m_per_s) / metres_per_unit_;  // world units/s
+    normal_ = c.normal.norm() > 0.0 ? c.normal.normalized() : Vec3(0.0, 0.0, 1.0);
+    const Vec3 inward = -normal_;
+    axis_ = inward;
+    if (settings.axis == NeedleAxis::kMotion) {
+      const double speed = velocity_.norm();
+      if (speed > still && velocity_.dot(inward) > 0.2 * speed) axis_ = velocity_ / speed;
+    } else if (settings.axis == NeedleAxis::kStylus) {
+      const Vec3 stylus = in.orientation * Vec3(0.0, 0.0, -1.0);
+      if (stylus.dot(inward) > 0.0) axis_ = stylus.normalized();
+    }
+    entry_ = c.point;
+    engaged_ = true;
+    broken_ = false;
+    body_ = b;
+    layer_ = static_cast<std::int32_t>(l);
+    phase_ = NeedlePhase::kTouching;
+    held_n_ = 0.0;
+    max_depth_m_ = 0.0;
+    break;
+  }
+}
+
+// The axial force while the capsule holds (depth d, axial velocity v, SI): touching at or
+// above the entry, pressing the capsule in, or puncturing it this tick.
+double NeedleTool::capsule_force(const TissueNeedleParameters& p, double d, double v) {
+  if (d <= 0.0) {
+    phase_ = NeedlePhase::kTouching;
+    return 0.0;
+  }
+  const double f = pre_puncture_force(p, d);
+  if (d >= p.capsule_m || f >= p.puncture_force_n) {
+    broken_ = true;  // the capsule gives way: the post-puncture model from this tick on
+    phase_ = NeedlePhase::kPunctured;
+    max_depth_m_ = d;
+    return post_puncture_force(p, d, v, held_n_);
+  }
+  phase_ = NeedlePhase::kPrePuncture;
+  return f;
+}
+
+// The axial force once through the capsule: the phase follows the axial velocity (inserting,
+// withdrawing, or stopped and relaxing), and each phase has its law.
+double NeedleTool::inserted_force(const TissueNeedleParameters& p, double d, double v, double time_s) {
+  const double still = std::max(1e-9, 0.5 * p.friction.velocity_band_m_per_s);
+  NeedlePhase next = phase_;
+  if (v >= still) {
+    next = NeedlePhase::kPunctured;
+  } else if (v <= -still) {
+    next = NeedlePhase::kExtraction;
+  } else if (phase_ == NeedlePhase::kPunctured) {
+    next = NeedlePhase::kRelaxation;  // stopped while inserting; a stop while withdrawing sticks
+  }
+  if (next == NeedlePhase::kRelaxation && phase_ != NeedlePhase::kRelaxation) {
+    relax_start_s_ = time_s;
+    relax_force_n_ = held_n_;
+  }
+  phase_ = next;
+  switch (phase_) {
+    case NeedlePhase::kRelaxation: return relaxation_force(p, relax_force_n_, time_s - relax_start_s_);
+    case NeedlePhase::kExtraction: return extraction_force(p, d, v, held_n_);
+    default: {
+      // New tissue is cut beyond the deepest point so far; before it the path exists.
+      const double f = d >= max_depth_m_ ? post_puncture_force(p, d, v, held_n_) : reinsertion_force(p, d, v, held_n_);
+      max_depth_m_ = std::max(max_depth_m_, d);
+      return f;
+    }
+  }
+}
+
+// Writes the tick's state for the rest of the loop and returns the force on the hand.
+Vec3 NeedleTool::publish(const haptics::ToolTickInput& in, haptics::ToolState& st, double depth_m, double v_m, double f,
+                         const Vec3& force) const {
+  st.phase = static_cast<std::uint8_t>(phase_);
+  st.touched = engaged_;
+  st.broken = broken_;
+  st.body = engaged_ ? body_ : -1;
+  st.layer = engaged_ ? layer_ : -1;
+  st.depth_m = depth_m;
+  st.axial_force_n = f;
+  st.axial_velocity_m_per_s = v_m;
+  st.tip = in.position;
+  st.entry = entry_;
+  st.axis = axis_;
+  st.normal = normal_;
+  st.force = force;
+  return force;
 }
 
 // ---- The reaction in the tissue

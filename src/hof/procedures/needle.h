@@ -113,6 +113,13 @@ class NeedleTool final : public haptics::Tool {
   };
   void disengage(NeedlePhase phase);
   void resolve();
+  // The stages of tick().
+  void filter_velocity(const haptics::ToolTickInput& in, const Resolved& settings);
+  void reenter_or_rearm(const haptics::ToolTickInput& in, std::span<Vec3> layer_forces);
+  void engage(const haptics::ToolTickInput& in, const Resolved& settings);
+  double capsule_force(const TissueNeedleParameters& p, double d, double v);
+  double inserted_force(const TissueNeedleParameters& p, double d, double v, double time_s);
+  Vec3 publish(const haptics::ToolTickInput& in, haptics::ToolState& st, double depth_m, double v_m, double f, const Vec3& force) const;
 
   NeedleConfig config_;                 // producer side
   std::vector<std::string> body_names_;

@@ -161,11 +161,22 @@ class Reader {
   // Models.
   Expected<void> collect_models(SceneNode& node);
   Expected<SofaSceneModel> make_model(SceneNode& node, Component* state);
+  // The stages of make_model().
+  Expected<void> read_geometry(SceneNode& node, Component* state, SofaSceneModel& out);
+  Expected<void> apply_solvers(SceneNode& node, ModelConfig& m);
+  Expected<void> apply_components(SceneNode& node, ModelConfig& m);
   Expected<std::optional<SofaSceneObstacle>> make_obstacle(SceneNode& node, Component* state);
   Expected<void> apply_ode(Component& c, ModelConfig& m, bool& cg_embedded);
   Expected<void> apply_linear(Component& c, ModelConfig& m);
   Expected<void> apply_mass(Component& c, ModelConfig& m, std::size_t n);
   Expected<void> apply_force_field(Component& c, ModelConfig& m);
+  // The config of each kind of force field apply_force_field() reads.
+  Expected<mechanics::TetrahedronFemConfig> tetrahedron_fem_config(Component& c, const ModelConfig& m);
+  Expected<mechanics::NeoHookeanConfig> neo_hookean_config(Component& c);
+  Expected<mechanics::HexahedronFemConfig> hexahedron_fem_config(Component& c, const ModelConfig& m);
+  Expected<mechanics::TriangleFemConfig> triangle_fem_config(Component& c, const ModelConfig& m);
+  Expected<mechanics::MeshSpringConfig> mesh_springs_config(Component& c);
+  Expected<mechanics::ConstantForceConfig> constant_force_config(Component& c, const ModelConfig& m);
   /// A RegularGridTopology or SparseGridTopology as the model's nodes and hexahedra.
   Expected<void> apply_grid(Component& grid, SofaSceneModel& out);
   Expected<void> elastic_lists(Component& c, double default_young, double default_poisson, std::size_t elements,
