@@ -110,6 +110,10 @@ Expected<coupling::SessionBody> make_deformable(const mechanics::ModelConfig& co
 
 }  // namespace detail
 
+Expected<coupling::SessionBody> deformable_body(const mechanics::ModelConfig& config) {
+  return detail::make_deformable(config, std::nullopt, false);
+}
+
 namespace {
 
 using detail::add_x3d;

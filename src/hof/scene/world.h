@@ -97,6 +97,12 @@ struct World {
 [[nodiscard]] Expected<World> build_world(const HofProject& project, const std::filesystem::path& file,
                                           const std::string& device_override = {});
 
+/// A model as a deformable body, made as the builder makes every body of a world: the
+/// boundary of its volume elements (a hexahedral grid's, or itself for a surface model) as
+/// its touchable surface, mapped to its nodes. For those who hold a model configuration
+/// without a file (`hof bench`'s cells), so that their bodies are the ones `hof run` makes.
+[[nodiscard]] Expected<coupling::SessionBody> deformable_body(const mechanics::ModelConfig& config);
+
 /// Writes what a session changed through its command seam into `project` (parameters as
 /// <set> elements, replacing an earlier value of the same parameter; surfaces in <bodies>),
 /// so that the next save holds them.

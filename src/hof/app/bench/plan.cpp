@@ -30,6 +30,21 @@ struct BodyLookup {
     cell.triangles = (*b)->surface_triangles;
     return *b;
   }
+  // A cell's run on body `mesh`: the body looked up (its sizes into the cell), then `measure`
+  // of it — nothing when it cannot be made.
+  template <class Measure>
+  std::function<void(Cell&)> on(std::string mesh_name, Measure measure_body) const {
+    return [lookup = *this, mesh = std::move(mesh_name), measure = std::move(measure_body)](Cell& cell) {
+      if (const Body* b = lookup(mesh, cell)) measure(*b, cell);
+    };
+  }
+  // ... and `measure` of the physiological co-rotational liver of `setup` on that body.
+  template <class Measure>
+  std::function<void(Cell&)> on_corotational(std::string mesh_name, const CorotationalSetup& setup, Measure measure_model) const {
+    return on(std::move(mesh_name), [setup, measure = std::move(measure_model)](const Body& b, Cell& cell) {
+      measure(b, corotational_config(b, setup), cell);
+    });
+  }
 };
 
 // What every section of the plan reads.
@@ -42,17 +57,24 @@ struct PlanContext {
   std::filesystem::path out;
 };
 
-// A cell's description for a corotational_config set-up.
-Cell corotational_cell(std::string section, std::string name, const std::string& mesh, const CorotationalSetup& s) {
+// A cell's description for a body_config + set_solver recipe.
+Cell recipe_cell(std::string section, std::string name, const std::string& mesh, Field f, Settings s, Solver sv, double dt_s, int iterations) {
   Cell c;
   c.section = std::move(section);
   c.name = std::move(name);
   c.mesh = mesh;
-  c.field = field_name(Field::kLarge);
-  c.settings = settings_name(Settings::kPhysiological);
-  c.solver = solver_name(Solver::kImplicitCg);
-  c.dt_s = s.dt_s;
-  c.iterations = s.haptic_rate_cg ? kHapticRateCgIterations : s.iterations;
+  c.field = field_name(f);
+  c.settings = settings_name(s);
+  c.solver = solver_name(sv);
+  c.dt_s = dt_s;
+  c.iterations = iterations;
+  return c;
+}
+
+// A cell's description for a corotational_config set-up.
+Cell corotational_cell(std::string section, std::string name, const std::string& mesh, const CorotationalSetup& s) {
+  Cell c = recipe_cell(std::move(section), std::move(name), mesh, Field::kLarge, Settings::kPhysiological, Solver::kImplicitCg, s.dt_s,
+                       s.haptic_rate_cg ? kHapticRateCgIterations : s.iterations);
   c.warm_start = s.haptic_rate_cg;
   c.coarse_correction = s.haptic_rate_cg;
   // iterations (haptic-rate CG) and matrix_reuse: set when the cell runs, from the model.
@@ -82,22 +104,13 @@ void plan_force_fields(const PlanContext& ctx, std::vector<PlannedCell>& cells) 
       const bool grid = m == "sparse-grid";
       for (Field f : grid ? std::vector<Field>{Field::kHexahedra}
                           : std::vector<Field>{Field::kSprings, Field::kSmall, Field::kLarge, Field::kNeoHookean}) {
-        Cell c;
-        c.section = "force_fields";
-        c.name = fmt::format("force_fields/{}/{}/{}", settings_name(s), m, field_name(f));
-        c.mesh = m;
-        c.field = field_name(f);
-        c.settings = settings_name(s);
-        c.solver = solver_name(Solver::kImplicitCg);
-        c.dt_s = 0.02;
-        c.iterations = 25;
-        cells.push_back({c, [with_body, m, f, s, budget](Cell& cell) {
-                           const Body* b = with_body(m, cell);
-                           if (!b) return;
-                           ModelConfig config = body_config(*b, f, s);
+        const Cell c = recipe_cell("force_fields", fmt::format("force_fields/{}/{}/{}", settings_name(s), m, field_name(f)), m, f, s,
+                                   Solver::kImplicitCg, 0.02, 25);
+        cells.push_back({c, with_body.on(m, [f, s, budget](const Body& b, Cell& cell) {
+                           ModelConfig config = body_config(b, f, s);
                            set_solver(config, Solver::kImplicitCg, 0.02);
                            time_cell(config, budget, cell);
-                         }});
+                         })});
       }
     }
   }
@@ -112,22 +125,13 @@ void plan_solvers(const PlanContext& ctx, std::vector<PlannedCell>& cells) {
     for (const std::string& m : livers) {
       for (Solver sv : {Solver::kExplicitEuler, Solver::kSymplecticEuler, Solver::kRungeKutta4, Solver::kStatic,
                         Solver::kImplicitCg, Solver::kImplicitLdlt}) {
-        Cell c;
-        c.section = "solvers";
-        c.name = fmt::format("solvers/{}/{}/{}", dt_label(dt), m, solver_name(sv));
-        c.mesh = m;
-        c.field = field_name(Field::kSprings);
-        c.settings = settings_name(Settings::kThesis);
-        c.solver = solver_name(sv);
-        c.dt_s = dt;
-        c.iterations = sv == Solver::kImplicitCg || sv == Solver::kStatic ? 25 : 0;
-        cells.push_back({c, [with_body, m, sv, dt, budget](Cell& cell) {
-                           const Body* b = with_body(m, cell);
-                           if (!b) return;
-                           ModelConfig config = body_config(*b, Field::kSprings, Settings::kThesis);
+        const Cell c = recipe_cell("solvers", fmt::format("solvers/{}/{}/{}", dt_label(dt), m, solver_name(sv)), m, Field::kSprings,
+                                   Settings::kThesis, sv, dt, sv == Solver::kImplicitCg || sv == Solver::kStatic ? 25 : 0);
+        cells.push_back({c, with_body.on(m, [sv, dt, budget](const Body& b, Cell& cell) {
+                           ModelConfig config = body_config(b, Field::kSprings, Settings::kThesis);
                            set_solver(config, sv, dt);
                            time_cell(config, budget, cell);
-                         }});
+                         })});
       }
     }
   }
@@ -143,13 +147,10 @@ void plan_threads(const PlanContext& ctx, std::vector<PlannedCell>& cells) {
       const CorotationalSetup setup{0.02};
       Cell c = corotational_cell("threads", fmt::format("threads/{}/corotational-fem/threads{}", m, threads), m, setup);
       c.threads = threads;
-      cells.push_back({c, [with_body, m, setup, threads, budget](Cell& cell) {
-                         const Body* b = with_body(m, cell);
-                         if (!b) return;
-                         ModelConfig config = corotational_config(*b, setup);
+      cells.push_back({c, with_body.on_corotational(m, setup, [threads, budget](const Body&, ModelConfig config, Cell& cell) {
                          config.threads = threads;
                          time_cell(config, budget, cell);
-                       }});
+                       })});
     }
   }
 }
@@ -169,11 +170,9 @@ void plan_renderers(const PlanContext& ctx, std::vector<PlannedCell>& cells) {
         c.mesh = m;
         c.renderer = renderer;
         c.bound_tree = tree;
-        cells.push_back({c, [with_body, m, kind, tree, budget](Cell& cell) {
-                           const Body* b = with_body(m, cell);
-                           if (!b) return;
-                           time_renderer(b->surface, kind, tree, budget, cell);
-                         }});
+        cells.push_back({c, with_body.on(m, [kind, tree, budget](const Body& b, Cell& cell) {
+                           time_renderer(b.surface, kind, tree, budget, cell);
+                         })});
       }
     }
   }
@@ -190,24 +189,15 @@ void plan_cg_iterations(const PlanContext& ctx, std::vector<PlannedCell>& cells)
   for (Solver sv : {Solver::kStatic, Solver::kImplicitCg}) {
     for (auto [f, s] : {std::pair{Field::kSprings, Settings::kThesis}, std::pair{Field::kLarge, Settings::kPhysiological}}) {
       for (int k : counts) {
-        Cell c;
-        c.section = "cg_iterations";
-        c.name = fmt::format("cg_iterations/{}/{}/{}/{}/cg{}", solver_name(sv), cg_mesh, field_name(f), settings_name(s), k);
-        c.mesh = cg_mesh;
-        c.field = field_name(f);
-        c.settings = settings_name(s);
-        c.solver = solver_name(sv);
-        c.dt_s = 0.02;
-        c.iterations = k;
-        cells.push_back({c, [with_body, cg_mesh, sv, f, s, k, budget](Cell& cell) {
-                           const Body* b = with_body(cg_mesh, cell);
-                           if (!b) return;
-                           ModelConfig config = body_config(*b, f, s);
+        const Cell c = recipe_cell("cg_iterations", fmt::format("cg_iterations/{}/{}/{}/{}/cg{}", solver_name(sv), cg_mesh, field_name(f), settings_name(s), k),
+                                   cg_mesh, f, s, sv, 0.02, k);
+        cells.push_back({c, with_body.on(cg_mesh, [sv, f, s, k, budget](const Body& b, Cell& cell) {
+                           ModelConfig config = body_config(b, f, s);
                            set_solver(config, sv, 0.02);
                            config.linear.iterations = k;
                            time_cell(config, budget, cell);
                            if (cell.stable) cell.step_error = step_error(config, budget);
-                         }});
+                         })});
       }
     }
   }
@@ -228,15 +218,12 @@ void plan_haptic_rate(const PlanContext& ctx, std::vector<PlannedCell>& cells) {
         Cell c = corotational_cell("haptic_rate", "", m, setup);
         c.name = fmt::format("haptic_rate/{}/{}/threads{}", m, warm ? std::string(kHapticRateCell) : fmt::format("cg{}", c.iterations), threads);
         c.threads = threads;
-        cells.push_back({c, [with_body, m, setup, threads, budget](Cell& cell) {
-                           const Body* b = with_body(m, cell);
-                           if (!b) return;
-                           ModelConfig config = corotational_config(*b, setup);
+        cells.push_back({c, with_body.on_corotational(m, setup, [threads, budget](const Body&, ModelConfig config, Cell& cell) {
                            config.threads = threads;
                            time_cell(config, budget, cell);
                            // The error does not depend on the thread count: measured once.
                            if (cell.stable && threads == 1) cell.step_error = step_error(config, budget);
-                         }});
+                         })});
       }
     }
   }
@@ -255,13 +242,11 @@ void plan_framework(const PlanContext& ctx, std::vector<PlannedCell>& cells) {
       Cell c = corotational_cell("framework", fmt::format("framework/{}/{}", m, haptic_rate ? "haptic-rate-fem-reaction" : "dt10ms-barycentric"),
                                  m, setup);
       c.renderer = haptic_rate ? "ruspini, fem-reaction" : "ruspini, barycentric";
-      cells.push_back({c, [with_body, m, setup, haptic_rate, framework_s](Cell& cell) {
-                         const Body* b = with_body(m, cell);
-                         if (!b) return;
-                         time_framework(*b, corotational_config(*b, setup),
+      cells.push_back({c, with_body.on_corotational(m, setup, [haptic_rate, framework_s](const Body& b, ModelConfig config, Cell& cell) {
+                         time_framework(b, config,
                                         haptic_rate ? coupling::ContactCoupling::kFemReaction : coupling::ContactCoupling::kBarycentric, framework_s,
                                         cell);
-                       }});
+                       })});
     }
   }
   // ... and with the window open, at the haptic rate on the mesh of the real-time goal.
@@ -270,11 +255,9 @@ void plan_framework(const PlanContext& ctx, std::vector<PlannedCell>& cells) {
     const CorotationalSetup setup{0.001, 25, true, false};
     Cell c = corotational_cell("framework", fmt::format("framework/{}/haptic-rate-fem-reaction/window", m), m, setup);
     c.renderer = "ruspini, fem-reaction, window";
-    cells.push_back({c, [with_body, m, setup, framework_s, out](Cell& cell) {
-                       const Body* b = with_body(m, cell);
-                       if (!b) return;
-                       time_framework_window(*b, corotational_config(*b, setup), out, framework_s, cell);
-                     }});
+    cells.push_back({c, with_body.on_corotational(m, setup, [framework_s, out](const Body& b, ModelConfig config, Cell& cell) {
+                       time_framework_window(b, config, out, framework_s, cell);
+                     })});
   }
 }
 
@@ -289,11 +272,9 @@ void plan_bodies(const PlanContext& ctx, std::vector<PlannedCell>& cells) {
       const CorotationalSetup setup{0.01, 25, false, false};
       Cell c = corotational_cell("bodies", fmt::format("bodies/{}/livers{}", m, count), m, setup);
       c.bodies = count;
-      cells.push_back({c, [with_body, m, setup, count, seconds](Cell& cell) {
-                         const Body* b = with_body(m, cell);
-                         if (!b) return;
-                         time_bodies(*b, corotational_config(*b, setup), count, seconds, cell);
-                       }});
+      cells.push_back({c, with_body.on_corotational(m, setup, [count, seconds](const Body& b, ModelConfig config, Cell& cell) {
+                         time_bodies(b, config, count, seconds, cell);
+                       })});
     }
   }
 }
@@ -315,17 +296,15 @@ void plan_coupling(const PlanContext& ctx, std::vector<PlannedCell>& cells) {
       Cell c = corotational_cell("coupling", fmt::format("coupling/{}/{}", m, label), m,
                                  CorotationalSetup{haptic_rate ? 0.001 : 0.02, 100, haptic_rate, false});
       c.renderer = fmt::format("god-object, {}", label);
-      cells.push_back({c, [with_body, m, mode, reference](Cell& cell) {
-                         const Body* b = with_body(m, cell);
-                         if (!b) return;
-                         if (!reference->has_value()) *reference = coupling_reference(*b);
+      cells.push_back({c, with_body.on(m, [mode, reference](const Body& b, Cell& cell) {
+                         if (!reference->has_value()) *reference = coupling_reference(b);
                          if (!**reference) {
                            cell.stable = false;
                            cell.failure = (**reference).error().to_string();
                            return;
                          }
-                         time_coupling(*b, ***reference, mode, cell);
-                       }});
+                         time_coupling(b, ***reference, mode, cell);
+                       })});
     }
   }
 }

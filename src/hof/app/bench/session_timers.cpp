@@ -12,6 +12,7 @@
 #include "hof/core/file_write.h"
 #include "hof/mechanics/step.h"
 #include "hof/mesh/mesh_io.h"
+#include "hof/scene/world.h"
 
 namespace hof::app::bench {
 
@@ -36,6 +37,48 @@ void fill_framework_cell(const coupling::SessionReport& report, Cell& cell) {
   cell.measured = report.simulation_steps > 0;
 }
 
+// The figures of a run in virtual time, whose rate is the machine's: steps per wall second.
+void fill_virtual_cell(const coupling::SessionReport& report, double wall_s, Cell& cell) {
+  cell.stable = !report.diverged;
+  cell.failure = report.divergence;
+  cell.steps = report.simulation_steps;
+  cell.simulated_s = report.simulated_s;
+  cell.wall_s = wall_s;
+  cell.median = cell.min = cell.max = static_cast<double>(report.simulation_steps) / std::max(wall_s, 1e-9);
+  cell.measured = report.simulation_steps > 0;
+}
+
+// A cell that could not be set up: unstable, with the reason.
+void fail_cell(const Error& error, Cell& cell) {
+  cell.stable = false;
+  cell.failure = error.to_string();
+}
+
+// A session of `bodies` pressed by a scripted hand moving as `motion`, or null (the cell
+// failed) when it cannot be made.
+std::unique_ptr<coupling::Session> pressed_session(std::vector<coupling::SessionBody> bodies, const haptics::MotionConfig& motion,
+                                                   const std::optional<haptics::DeviceSpec>& spec,
+                                                   const coupling::SessionConfig& config, Cell& cell) {
+  auto scripted = haptics::ScriptedMotion::make(motion);
+  if (!scripted) {
+    fail_cell(scripted.error(), cell);
+    return nullptr;
+  }
+  auto device = spec ? std::make_unique<haptics::ScriptedDevice>(*scripted, *spec) : std::make_unique<haptics::ScriptedDevice>(*scripted);
+  auto session = coupling::Session::make(std::move(bodies), std::move(device), config);
+  if (!session) {
+    fail_cell(session.error(), cell);
+    return nullptr;
+  }
+  return std::move(*session);
+}
+
+// The press of the framework cells on the liver `b`: onto the top of its surface.
+haptics::MotionConfig framework_press_on(const Body& b) {
+  const mesh::BoundarySurface boundary = mesh::extract_boundary(b.nodes, b.tets);
+  return framework_press(boundary.surface.vertices[pressed_vertex(b, boundary)]);
+}
+
 }  // namespace
 
 // The whole framework (thesis Figure 34): a real-time session, the haptic loop and the
@@ -43,28 +86,12 @@ void fill_framework_cell(const coupling::SessionReport& report, Cell& cell) {
 // (contact after about 0.5 s, then held). Its rates, and the haptic period's p50/p99/max.
 void time_framework(const Body& b, const ModelConfig& config, coupling::ContactCoupling mode, double seconds, Cell& cell) {
   cell.matrix_reuse = config.ode.matrix_reuse_steps;  // as the model runs (it depends on the mesh)
-  const mesh::BoundarySurface boundary = mesh::extract_boundary(b.nodes, b.tets);
-  auto model = build_model(config);
-  auto mapping = coupling::SurfaceMapping::by_index(b.nodes, boundary.surface.vertices, boundary.surface_to_volume);
-  if (!model || !mapping) {
-    cell.stable = false;
-    cell.failure = !model ? model.error().to_string() : mapping.error().to_string();
-    return;
-  }
-  auto scripted = haptics::ScriptedMotion::make(framework_press(boundary.surface.vertices[pressed_vertex(b, boundary)]));
-  if (!scripted) {
-    cell.stable = false;
-    cell.failure = scripted.error().to_string();
-    return;
-  }
-  auto session = coupling::Session::make(coupling::SessionBody{"liver", std::move(*model), boundary.surface, std::move(*mapping), {}, {}},
-                                         std::make_unique<haptics::ScriptedDevice>(*scripted), framework_session_config(mode));
-  if (!session) {
-    cell.stable = false;
-    cell.failure = session.error().to_string();
-    return;
-  }
-  fill_framework_cell((*session)->run_realtime(seconds, {}), cell);
+  auto body = scene::deformable_body(config);
+  if (!body) return fail_cell(body.error(), cell);
+  std::vector<coupling::SessionBody> bodies;
+  bodies.push_back(std::move(*body));
+  auto session = pressed_session(std::move(bodies), framework_press_on(b), std::nullopt, framework_session_config(mode), cell);
+  if (session) fill_framework_cell(session->run_realtime(seconds, {}), cell);
 }
 
 // The framework with the window open (thesis Figure 34 was a window): the haptic-rate press
@@ -104,8 +131,7 @@ void time_framework_window(const Body& b, const ModelConfig& config, const std::
       "    <FixedProjectiveConstraint name=\"base\" indices=\"{}\"/>\n  </Node>\n</Node>\n",
       config.dt_s, config.ode.rayleigh_stiffness, config.ode.rayleigh_mass, config.linear.iterations,
       config.linear.warm_start ? "true" : "false", config.linear.coarse_correction ? "true" : "false", config.mass.mass_density_kg_per_m3, fem.young_modulus_pa, fem.poisson_ratio, fixed);
-  const mesh::BoundarySurface boundary = mesh::extract_boundary(b.nodes, b.tets);
-  const haptics::MotionConfig press = framework_press(boundary.surface.vertices[pressed_vertex(b, boundary)]);
+  const haptics::MotionConfig press = framework_press_on(b);
   const std::string device = fmt::format("scripted:poke,start={};{};{},direction=0;0;-1,approach={},depth={},speed={},hold={}", press.start_m.x(),
                                          press.start_m.y(), press.start_m.z(), press.approach_m, press.depth_m, press.speed_m_per_s, press.hold_s);
   const std::string project = fmt::format(
@@ -143,48 +169,24 @@ void time_framework_window(const Body& b, const ModelConfig& config, const std::
 // bodies of a world step in parallel, each with its own threads.
 void time_bodies(const Body& b, const ModelConfig& config, int count, double seconds, Cell& cell) {
   cell.matrix_reuse = config.ode.matrix_reuse_steps;  // as the model runs (it depends on the mesh)
-  const mesh::BoundarySurface boundary = mesh::extract_boundary(b.nodes, b.tets);
   std::vector<coupling::SessionBody> bodies;
   for (int i = 0; i < count; ++i) {
     const Vec3 offset(0.25 * i, 0.0, 0.0);
     ModelConfig c = config;
     for (Vec3& p : c.positions) p += offset;
-    mesh::TriMesh surface = boundary.surface;
-    for (Vec3& v : surface.vertices) v += offset;
-    auto model = build_model(c);
-    auto mapping = coupling::SurfaceMapping::by_index(c.positions, surface.vertices, boundary.surface_to_volume);
-    if (!model || !mapping) {
-      cell.stable = false;
-      cell.failure = !model ? model.error().to_string() : mapping.error().to_string();
-      return;
-    }
-    bodies.push_back(coupling::SessionBody{fmt::format("liver{}", i + 1), std::move(*model), std::move(surface), std::move(*mapping), {}, {}});
-  }
-  auto scripted = haptics::ScriptedMotion::make(framework_press(boundary.surface.vertices[pressed_vertex(b, boundary)]));
-  if (!scripted) {
-    cell.stable = false;
-    cell.failure = scripted.error().to_string();
-    return;
+    auto body = scene::deformable_body(c);
+    if (!body) return fail_cell(body.error(), cell);
+    body->name = fmt::format("liver{}", i + 1);
+    bodies.push_back(std::move(*body));
   }
   coupling::SessionConfig session_config = framework_session_config(coupling::ContactCoupling::kBarycentric);
   session_config.haptics.realtime_priority = false;
-  auto session = coupling::Session::make(std::move(bodies), std::make_unique<haptics::ScriptedDevice>(*scripted), session_config);
-  if (!session) {
-    cell.stable = false;
-    cell.failure = session.error().to_string();
-    return;
-  }
+  auto session = pressed_session(std::move(bodies), framework_press_on(b), std::nullopt, session_config, cell);
+  if (!session) return;
   const auto t0 = Clock::now();
-  const coupling::SessionReport report = (*session)->run_virtual(seconds, {});
-  const double wall = seconds_since(t0);
-  cell.stable = !report.diverged;
-  cell.failure = report.divergence;
-  cell.steps = report.simulation_steps;
-  cell.simulated_s = report.simulated_s;
-  cell.wall_s = wall;
-  cell.median = cell.min = cell.max = static_cast<double>(report.simulation_steps) / std::max(wall, 1e-9);
+  const coupling::SessionReport report = session->run_virtual(seconds, {});
+  fill_virtual_cell(report, seconds_since(t0), cell);
   cell.contact_fraction = report.contact_time_s / std::max(report.simulated_s, 1e-9);
-  cell.measured = report.simulation_steps > 0;
 }
 
 // The coupling schemes against the static FEM reaction (the set-up of
@@ -222,28 +224,18 @@ Expected<CouplingReference> coupling_reference(const Body& b) {
 }
 
 void time_coupling(const Body& b, const CouplingReference& ref, coupling::ContactCoupling mode, Cell& cell) {
-  const mesh::BoundarySurface boundary = mesh::extract_boundary(b.nodes, b.tets);
   ModelConfig config = coupling_press_config(b);
   if (mode == coupling::ContactCoupling::kFemReaction) {
     config.dt_s = 0.001;
     use_haptic_rate_cg(config);
   }
   cell.matrix_reuse = config.ode.matrix_reuse_steps;
-  auto model = build_model(config);
-  auto mapping = coupling::SurfaceMapping::by_index(b.nodes, boundary.surface.vertices, boundary.surface_to_volume);
-  if (!model || !mapping) {
-    cell.stable = false;
-    cell.failure = !model ? model.error().to_string() : mapping.error().to_string();
-    return;
-  }
+  auto body = scene::deformable_body(config);
+  if (!body) return fail_cell(body.error(), cell);
+  std::vector<coupling::SessionBody> bodies;
+  bodies.push_back(std::move(*body));
   // Held 1 s: the run ends 0.6 s into the hold.
   const haptics::MotionConfig motion = haptics::MotionConfig::poke(ref.top + Vec3(0, 0, 0.004), Vec3(0, 0, -1), 0.004, 0.004, 0.004, 1.0);
-  auto scripted = haptics::ScriptedMotion::make(motion);
-  if (!scripted) {
-    cell.stable = false;
-    cell.failure = scripted.error().to_string();
-    return;
-  }
   haptics::DeviceSpec spec;
   spec.max_force_n = 50.0;
   spec.max_stiffness_n_per_m = 2000.0;
@@ -253,20 +245,15 @@ void time_coupling(const Body& b, const CouplingReference& ref, coupling::Contac
   session_config.haptics.material.stiffness = 1.0;  // the device's stiffest: 2,000 N/m
   session_config.haptics.safety.fade_in_s = 0.0;
   session_config.haptics.realtime_priority = false;
-  auto session = coupling::Session::make(coupling::SessionBody{"liver", std::move(*model), boundary.surface, std::move(*mapping), {}, {}},
-                                         std::make_unique<haptics::ScriptedDevice>(*scripted, spec), session_config);
-  if (!session) {
-    cell.stable = false;
-    cell.failure = session.error().to_string();
-    return;
-  }
+  auto session = pressed_session(std::move(bodies), motion, spec, session_config, cell);
+  if (!session) return;
   // The samples nearest each reference depth, in contact, after the approach.
   std::vector<haptics::HapticSample> nearest(ref.depths.size());
   std::vector<double> distance(ref.depths.size(), std::numeric_limits<double>::infinity());
   const auto t0 = Clock::now();
   haptics::HapticSample settled;
   bool have_settled = false;
-  const coupling::SessionReport report = (*session)->run_virtual(2.6, [&](const haptics::HapticSample& s) {
+  const coupling::SessionReport report = session->run_virtual(2.6, [&](const haptics::HapticSample& s) {
     if (!s.contact || s.time_s < 0.5) return;
     settled = s;  // the last in contact: 0.6 s into the hold at 4 mm
     have_settled = true;
@@ -278,14 +265,7 @@ void time_coupling(const Body& b, const CouplingReference& ref, coupling::Contac
       }
     }
   });
-  const double wall = seconds_since(t0);
-  cell.stable = !report.diverged;
-  cell.failure = report.divergence;
-  cell.steps = report.simulation_steps;
-  cell.simulated_s = report.simulated_s;
-  cell.wall_s = wall;
-  cell.median = cell.min = cell.max = static_cast<double>(report.simulation_steps) / std::max(wall, 1e-9);
-  cell.measured = report.simulation_steps > 0;
+  fill_virtual_cell(report, seconds_since(t0), cell);
   double worst = 0.0;
   for (std::size_t k = 0; k < ref.depths.size(); ++k) {
     if (!std::isfinite(distance[k])) {
