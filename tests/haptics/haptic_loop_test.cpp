@@ -238,46 +238,6 @@ TEST(RealTime, RunsWithAConcurrentProducerAndStopsCleanly) {
   EXPECT_GT(loop.period_stats().count(), 0u);
 }
 
-struct Stamped {
-  std::uint64_t a{0};
-  std::array<std::uint64_t, 64> payload{};
-  std::uint64_t b{0};
-};
-
-TEST(TripleBuffer, ConsumerNeverSeesATornValue) {
-  TripleBuffer<Stamped> buffer;
-  std::atomic<bool> done{false};
-  std::thread producer([&] {
-    for (std::uint64_t k = 1; k < 200000; ++k) {
-      Stamped& s = buffer.write_slot();
-      s.a = k;
-      s.payload.fill(k);
-      s.b = k;
-      buffer.publish();
-    }
-    done.store(true);
-  });
-  std::uint64_t last = 0, torn = 0, backwards = 0, reads = 0;
-  for (;;) {
-    const bool finished = done.load();
-    if (!buffer.acquire()) {
-      if (finished) break;
-      continue;
-    }
-    const Stamped& s = buffer.read();
-    ++reads;
-    bool consistent = s.a == s.b;
-    for (std::uint64_t v : s.payload) consistent = consistent && v == s.a;
-    if (!consistent) ++torn;
-    if (s.a < last) ++backwards;
-    last = s.a;
-  }
-  producer.join();
-  EXPECT_EQ(torn, 0u);
-  EXPECT_EQ(backwards, 0u);
-  EXPECT_GT(reads, 0u);
-}
-
 TEST(HapticTick, AllocatesNothing) {
   HOF_SKIP_UNLESS_COUNTING_ALLOCATIONS();
   testing::ProgrammedDevice device([](double t) { return Vec3(0.03 * std::sin(5 * t), 0.0, 0.002 - 0.01 * std::min(t, 0.5)); });

@@ -12,8 +12,8 @@
 namespace hof::haptics {
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr double kNotANumber = std::numeric_limits<double>::quiet_NaN();
+constexpr double kInfinite = std::numeric_limits<double>::infinity();
 
 TEST(SurfaceMaterial, StiffnessIsAFractionOfTheDevicesUnlessAbsolute) {
   SurfaceMaterial m;  // H3D: 0.5, relative
@@ -62,13 +62,13 @@ TEST(SurfaceMaterial, EachBadFieldIsNamedWithItsRange) {
   };
   const Case cases[] = {
       {[](SurfaceMaterial& m) { m.stiffness = -1.0; }, "stiffness must be >= 0, got -1"},
-      {[](SurfaceMaterial& m) { m.stiffness = kNaN; }, "stiffness must be >= 0"},
-      {[](SurfaceMaterial& m) { m.stiffness = kInf; }, "stiffness must be >= 0, got inf"},
+      {[](SurfaceMaterial& m) { m.stiffness = kNotANumber; }, "stiffness must be >= 0"},
+      {[](SurfaceMaterial& m) { m.stiffness = kInfinite; }, "stiffness must be >= 0, got inf"},
       {[](SurfaceMaterial& m) { m.damping_n_s_per_m = -0.5; }, "damping must be >= 0, got -0.5"},
       {[](SurfaceMaterial& m) { m.static_friction = 1.5; }, "staticFriction must be in [0, 1], got 1.5"},
       {[](SurfaceMaterial& m) { m.dynamic_friction = -0.1; }, "dynamicFriction must be in [0, 1], got -0.1"},
-      {[](SurfaceMaterial& m) { m.dynamic_friction = kNaN; }, "dynamicFriction must be in [0, 1]"},
-      {[](SurfaceMaterial& m) { m.snap_distance_m = kInf; }, "snapDistance must be >= 0 m"},
+      {[](SurfaceMaterial& m) { m.dynamic_friction = kNotANumber; }, "dynamicFriction must be in [0, 1]"},
+      {[](SurfaceMaterial& m) { m.snap_distance_m = kInfinite; }, "snapDistance must be >= 0 m"},
   };
   for (const Case& c : cases) {
     SurfaceMaterial m;
