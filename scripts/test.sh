@@ -13,7 +13,7 @@
 #               sanitize); in CI also without the few that take minutes there (listed below);
 #               then every libFuzzer target from the same build, HOF_FUZZ_SECONDS each
 #               (3 in CI, 60 with --all)
-#   3. tsan     clang 16, ThreadSanitizer on the threaded tests (haptic loop, UDP device, sessions
+#   3. tsan     clang 16, ThreadSanitizer on the threaded tests (lock-free queues, haptic loop, UDP device, sessions
 #               with their simulation thread, several bodies, fault injection)
 #
 # The sanitizer trees are unity builds (CMAKE_UNITY_BUILD in their presets): Eigen's headers,
@@ -47,15 +47,16 @@ cmake --build --preset asan
 # Minutes each under the sanitizers (every example run end to end, the LDLT reference solves of
 # the medium liver (compliance coupling, the haptic-rate CG), the allocation count over every model): --all runs them, CI does not.
 slow='^(cli\.run_examples|ComplianceCoupling\.|TumourPalpation\.|NoAllocation\.|HapticRateFem\.WarmStartedCg)'
+# The OpenGL tests (the window, gl_renderer_test: Mesa under Xvfb) stay out of the sanitizer runs.
 if [[ $mode == all ]]; then
-  ctest --preset asan -E '^GuiWindow\.|^install\.'
+  ctest --preset asan -E '^GuiWindow\.|^GlRendererTest\.|^install\.'
 else
-  ctest --preset asan -E "^GuiWindow\.|^install\.|$slow"
+  ctest --preset asan -E "^GuiWindow\.|^GlRendererTest\.|^install\.|$slow"
 fi
 HOF_FUZZ_BUILD=build/asan scripts/fuzz.sh "${HOF_FUZZ_SECONDS:-$([[ $mode == all ]] && echo 60 || echo 3)}"
 
 stage "3/3 ThreadSanitizer on the threaded tests"
-tsan_tests=(haptics_test replay_device_test scripted_device_test virtual_hand_device_test spacemouse_device_test
+tsan_tests=(lock_free_test haptics_test replay_device_test scripted_device_test virtual_hand_device_test spacemouse_device_test
             mouse_device_test open_device_test udp_device_test sdk_device_test session_test world_session_test
             fault_injection_test command_seam_test)
 cmake --preset tsan >/dev/null

@@ -97,4 +97,11 @@ inline double winding_number(const std::vector<Vec3>& vertices, const std::vecto
   return total / (4.0 * std::numbers::pi);
 }
 
+/// A static floor: the top face (z = 0) of a 0.4 m × 0.4 m × 0.1 m box.
+inline SurfaceSnapshot floor_snapshot() {
+  SurfaceSnapshot s = make_snapshot(box_surface(Vec3(-0.2, -0.2, -0.1), Vec3(0.2, 0.2, 0.0)));
+  s.is_static = true;
+  return s;
+}
+
 }  // namespace hof::haptics::testing

@@ -24,33 +24,9 @@
 namespace hof::mechanics {
 namespace {
 
-mesh::HexGrid box_grid(std::array<int, 3> n, const Vec3& size) {
-  auto grid = mesh::regular_grid(n, Vec3::Zero(), size);
-  EXPECT_TRUE(grid) << grid.error().to_string();
-  return *grid;
-}
-
-// Moves the interior nodes of a grid by up to `fraction` of a cell, deterministically: the
-// hexahedra become general (non-parallel faces, non-planar sides).
-void distort_interior(mesh::HexGrid& grid, double fraction) {
-  std::mt19937 random(7);
-  std::uniform_real_distribution<double> uniform(-fraction, fraction);
-  const Vec3 h = grid.cell_size();
-  for (Vec3& p : grid.nodes) {
-    const bool interior = ((p.array() > grid.min.array() + 1e-12) && (p.array() < grid.max.array() - 1e-12)).all();
-    if (interior) p += Vec3(uniform(random) * h.x(), uniform(random) * h.y(), uniform(random) * h.z());
-  }
-}
-
-ForceFieldConfig hex_field(FemMethod method, double young, double poisson) {
-  ForceFieldConfig f;
-  f.name = "FEM";
-  f.hexahedron_fem = HexahedronFemConfig{};
-  f.hexahedron_fem->young_modulus_pa = young;
-  f.hexahedron_fem->poisson_ratio = poisson;
-  f.hexahedron_fem->method = method;
-  return f;
-}
+using testing::box_grid;
+using testing::distort_interior;
+using testing::hex_field;
 
 ModelConfig static_config(const mesh::HexGrid& grid, FemMethod method, double young = 1000.0, double poisson = 0.3) {
   ModelConfig c;

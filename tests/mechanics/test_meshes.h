@@ -1,8 +1,16 @@
 #pragma once
-// Structured tetrahedral meshes for analytic tests.
+// Structured meshes for analytic tests: tetrahedral boxes, and hexahedral grids (regular or with
+// their interior distorted) with the hexahedral FEM configuration the mechanics and coupling
+// tests share.
 
+#include <gtest/gtest.h>
+
+#include <array>
+#include <random>
 #include <vector>
 
+#include "hof/mechanics/mechanical_model.h"
+#include "hof/mesh/hex_grid.h"
 #include "hof/mesh/mesh.h"
 #include "hof/mesh/tet_geometry.h"
 
@@ -45,6 +53,35 @@ inline BoxMesh box_mesh(int nx, int ny, int nz, const Vec3& size) {
     }
   }
   return m;
+}
+
+/// A regular grid of n[0]·n[1]·n[2] nodes over the box [0, size].
+inline mesh::HexGrid box_grid(std::array<int, 3> n, const Vec3& size) {
+  auto grid = mesh::regular_grid(n, Vec3::Zero(), size);
+  EXPECT_TRUE(grid) << grid.error().to_string();
+  return *grid;
+}
+
+// Moves the interior nodes of a grid by up to `fraction` of a cell, deterministically: the
+// hexahedra become general (non-parallel faces, non-planar sides).
+inline void distort_interior(mesh::HexGrid& grid, double fraction) {
+  std::mt19937 random(7);
+  std::uniform_real_distribution<double> uniform(-fraction, fraction);
+  const Vec3 h = grid.cell_size();
+  for (Vec3& p : grid.nodes) {
+    const bool interior = ((p.array() > grid.min.array() + 1e-12) && (p.array() < grid.max.array() - 1e-12)).all();
+    if (interior) p += Vec3(uniform(random) * h.x(), uniform(random) * h.y(), uniform(random) * h.z());
+  }
+}
+
+inline ForceFieldConfig hex_field(FemMethod method, double young, double poisson) {
+  ForceFieldConfig f;
+  f.name = "FEM";
+  f.hexahedron_fem = HexahedronFemConfig{};
+  f.hexahedron_fem->young_modulus_pa = young;
+  f.hexahedron_fem->poisson_ratio = poisson;
+  f.hexahedron_fem->method = method;
+  return f;
 }
 
 }  // namespace hof::mechanics::testing

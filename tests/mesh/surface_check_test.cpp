@@ -1,5 +1,4 @@
 #include "hof/mesh/surface_check.h"
-#include "hof/mesh/surface_strain.h"
 
 #include <gtest/gtest.h>
 
@@ -96,27 +95,5 @@ TEST(SurfaceCheck, CountsComponentsAndDegenerateTriangles) {
 }
 
 }  // namespace
-TEST(SurfaceStrain, MatchesTheAnalyticGreenStrainOfStretchesAndIsZeroForRigidMotions) {
-  const Vec3 a(0, 0, 0), b(1, 0, 0), c(0, 1, 0);
-  // A stretch by 1.2 along x: E_xx = (1.2² − 1) / 2 = 0.22 (the larger principal strain).
-  EXPECT_NEAR(triangle_green_strain(a, b, c, a, Vec3(1.2, 0, 0), c), 0.22, 1e-12);
-  // Compression by 0.9 along y: E_yy = (0.81 − 1) / 2 = −0.095, signed.
-  EXPECT_NEAR(triangle_green_strain(a, b, c, a, b, Vec3(0, 0.9, 0)), -0.095, 1e-12);
-  // Rotated and moved, not deformed: no strain.
-  const Eigen::Matrix3d r = Eigen::AngleAxisd(0.7, Vec3(1, 2, 3).normalized()).toRotationMatrix();
-  const Vec3 t(0.3, -2, 5);
-  EXPECT_NEAR(triangle_green_strain(a, b, c, r * a + t, r * b + t, r * c + t), 0.0, 1e-12);
-  // A degenerate rest triangle gives 0, not NaN.
-  EXPECT_EQ(triangle_green_strain(a, b, Vec3(2, 0, 0), a, b, c), 0.0);
-  // Per vertex: the mean of its triangles' magnitudes.
-  const std::vector<Vec3> rest{a, b, c, Vec3(1, 1, 0)};
-  std::vector<Vec3> now = rest;
-  now[1].x() = 1.2;
-  std::vector<double> strain;
-  vertex_strain_magnitude(rest, now, std::vector<Tri>{{0, 1, 2}, {1, 3, 2}}, strain);
-  ASSERT_EQ(strain.size(), 4u);
-  EXPECT_NEAR(strain[0], 0.22, 1e-12);
-  EXPECT_GT(strain[3], 0.0);
-}
 
 }  // namespace hof::mesh

@@ -17,6 +17,7 @@ namespace hof::haptics {
 namespace {
 
 using testing::box_surface;
+using testing::floor_snapshot;
 using testing::sphere_surface;
 using testing::winding_number;
 
@@ -302,6 +303,43 @@ TEST(MovingSurface, WavingSheetKeepsTheProxyOnTop) {
     }
     EXPECT_EQ(below, 0) << "renderer " << static_cast<int>(kind);
   }
+}
+
+TEST(MagneticSurface, HoldsTheProxyWithinTheSnapDistance) {
+  const SurfaceSnapshot s = floor_snapshot();
+  SurfaceMaterial m;
+  m.kind = SurfaceKind::kMagnetic;
+  m.stiffness = 1.0;
+  m.static_friction = m.dynamic_friction = 0.0;
+  m.snap_distance_m = 0.005;
+  RendererConfig c;
+  c.kind = RendererKind::kGodObject;
+  HapticRenderer r(c, m, 1000.0);
+  r.reset(Vec3(0, 0, 0.01));
+  r.update(Vec3(0, 0, -0.002), Vec3::Zero(), s, false, 1e-3);
+  ASSERT_TRUE(r.update(Vec3(0, 0, -0.002), Vec3::Zero(), s, false, 1e-3).in_contact);
+  // Lifted 3 mm off the surface: still held, pulled back down.
+  const ContactState& held = r.update(Vec3(0, 0, 0.003), Vec3::Zero(), s, false, 1e-3);
+  EXPECT_TRUE(held.in_contact);
+  EXPECT_NEAR(held.force.z(), -1000.0 * 0.003, 0.01);
+  // Beyond the snap distance: released.
+  EXPECT_FALSE(r.update(Vec3(0, 0, 0.008), Vec3::Zero(), s, false, 1e-3).in_contact);
+}
+
+TEST(ZeroForceSurface, TracksTheSurfaceWithoutForce) {
+  const SurfaceSnapshot s = floor_snapshot();
+  SurfaceMaterial m;
+  m.kind = SurfaceKind::kZeroForce;
+  RendererConfig c;
+  c.kind = RendererKind::kGodObject;
+  HapticRenderer r(c, m, 1000.0);
+  r.reset(Vec3(0, 0, 0.01));
+  r.update(Vec3(0, 0, -0.004), Vec3::Zero(), s, false, 1e-3);
+  const ContactState& contact = r.update(Vec3(0, 0, -0.004), Vec3::Zero(), s, false, 1e-3);
+  EXPECT_TRUE(contact.in_contact);
+  EXPECT_EQ(contact.force, Vec3::Zero());
+  EXPECT_NEAR(contact.penetration_m, 0.004, 1e-5);  // the needle's depth
+  EXPECT_NEAR(contact.proxy.z(), 0.0, 1e-5);
 }
 
 }  // namespace
