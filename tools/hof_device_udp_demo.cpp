@@ -28,6 +28,7 @@
 
 #include "hof/haptics/device.h"
 #include "hof/haptics/device_backends/udp_device.h"
+#include "hof/scene/device_config.h"
 
 namespace {
 
@@ -110,7 +111,7 @@ udp::HelloPacket hello_for(const hof::haptics::DeviceSpec& spec) {
 int run(const Options& o) {
   // The simulated stylus: "scripted:" is implied unless the motion names a backend.
   const std::string spec = o.motion.find(':') == std::string::npos ? "scripted:" + o.motion : o.motion;
-  auto device = hof::haptics::open_device(spec);
+  auto device = hof::scene::open_device(spec);
   if (!device) {
     fmt::print(stderr, "hof-device-udp-demo: {}\n", device.error().to_string());
     return 1;

@@ -1,4 +1,4 @@
-// Text from users' files made valid UTF-8.
+// Text from users' files made valid UTF-8; how far a mistyped name is from a known one.
 
 #include "hof/core/text.h"
 
@@ -14,6 +14,19 @@ TEST(ValidUtf8, KeepsValidTextAndReplacesEachBadByte) {
   EXPECT_EQ(valid_utf8("end\xE2\x82"), "end\xEF\xBF\xBD\xEF\xBF\xBD");          // cut short
   EXPECT_EQ(valid_utf8("\xF0\x9F\x98\x80"), "\xF0\x9F\x98\x80");                 // four bytes
   EXPECT_EQ(valid_utf8(""), "");
+}
+
+TEST(EditDistance, CountsInsertionsDeletionsAndSubstitutionsIgnoringCase) {
+  EXPECT_EQ(edit_distance("", ""), 0U);
+  EXPECT_EQ(edit_distance("dt", ""), 2U);
+  EXPECT_EQ(edit_distance("", "dt"), 2U);
+  EXPECT_EQ(edit_distance("youngModulus", "youngModulus"), 0U);
+  EXPECT_EQ(edit_distance("youngmodulus", "YoungModulus"), 0U) << "case is ignored";
+  EXPECT_EQ(edit_distance("youngModulu", "youngModulus"), 1U);   // a letter left out
+  EXPECT_EQ(edit_distance("stiffnes", "stiffness"), 1U);
+  EXPECT_EQ(edit_distance("damping", "dampign"), 2U);            // two letters swapped: two substitutions
+  EXPECT_EQ(edit_distance("kitten", "sitting"), 3U);
+  EXPECT_EQ(edit_distance("MeshSpringForceField", "MeshSpringForceFeild"), edit_distance("MeshSpringForceFeild", "MeshSpringForceField"));
 }
 
 }  // namespace

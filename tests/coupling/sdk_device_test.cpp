@@ -15,6 +15,7 @@
 
 #include "hof/coupling/session.h"
 #include "hof/haptics/device.h"
+#include "hof/haptics/device_config.h"
 #include "hof/haptics/device_backends/dhd_device.h"
 #include "hof/haptics/device_backends/openhaptics_device.h"
 #include "hof/haptics/haptic_loop.h"
@@ -55,28 +56,31 @@ struct Dhd {
   int (*open)() = lib.get<int()>("standin_dhd_open");
 };
 
-const std::string kDhdSpec = std::string("dhd,library=") + HOF_DHD_STANDIN;
-const std::string kHdSpec = std::string("openhaptics,library=") + HOF_HD_STANDIN;
+// The stand-ins' configurations (spec strings are scene/'s: `dhd,library=...`).
+const DhdConfig kDhd{0, HOF_DHD_STANDIN, std::nullopt};
+const OpenHapticsConfig kHd{"", HOF_HD_STANDIN, std::nullopt};
 
 TEST(SdkDevices, AMissingSdkIsAClearErrorNamingTheFileAndWhereItWasLookedFor) {
-  for (const std::string spec : {"dhd,library=/nowhere/libdhd.so", "openhaptics,library=/nowhere/libHD.so"}) {
-    auto device = open_device(spec);
+  for (const DeviceConfig& config : {DeviceConfig(DhdConfig{0, "/nowhere/libdhd.so", std::nullopt}),
+                                    DeviceConfig(OpenHapticsConfig{"", "/nowhere/libHD.so", std::nullopt})}) {
+    const bool dhd = std::holds_alternative<DhdConfig>(config);
+    auto device = open_device(config);
     ASSERT_FALSE(device);
     const std::string m = device.error().to_string();
     EXPECT_NE(m.find("/nowhere/lib"), std::string::npos) << m;
     EXPECT_NE(m.find("LD_LIBRARY_PATH"), std::string::npos) << m;
     EXPECT_NE(m.find("docs/devices.md"), std::string::npos) << m;
-    EXPECT_NE(m.find(spec.starts_with("dhd") ? "Force Dimension SDK" : "OpenHaptics"), std::string::npos) << m;
+    EXPECT_NE(m.find(dhd ? "Force Dimension SDK" : "OpenHaptics"), std::string::npos) << m;
   }
   // By default the loader's own search: this machine has neither SDK.
   ::unsetenv("HOF_DHD_LIBRARY");
-  auto device = open_device("dhd");
+  auto device = open_device(DhdConfig{});
   ASSERT_FALSE(device);
   EXPECT_NE(device.error().message.find("libdhd.so"), std::string::npos) << device.error().message;
 }
 
 TEST(SdkDevices, AnSdkWithoutAFunctionHoFNeedsIsAClearErrorNamingIt) {
-  auto device = open_device(std::string("dhd,library=") + HOF_DHD_STANDIN_WITHOUT_SET_FORCE);
+  auto device = open_device(DhdConfig{0, HOF_DHD_STANDIN_WITHOUT_SET_FORCE, std::nullopt});
   ASSERT_FALSE(device);
   const std::string m = device.error().to_string();
   EXPECT_NE(m.find("'dhdSetForce'"), std::string::npos) << m;
@@ -86,11 +90,11 @@ TEST(SdkDevices, AnSdkWithoutAFunctionHoFNeedsIsAClearErrorNamingIt) {
 TEST(SdkDevices, NoDeviceOrAnIndexPastTheDevicesIsAClearError) {
   Dhd dhd;
   dhd.reset(0, 33, -1.0);
-  auto none = open_device(kDhdSpec);
+  auto none = open_device(kDhd);
   ASSERT_FALSE(none);
   EXPECT_NE(none.error().message.find("no device found by the Force Dimension SDK"), std::string::npos) << none.error().message;
   dhd.reset(1, 33, -1.0);
-  auto past = open_device(kDhdSpec + ",index=2");
+  auto past = open_device(DhdConfig{2, HOF_DHD_STANDIN, std::nullopt});
   ASSERT_FALSE(past);
   EXPECT_NE(past.error().message.find("found 1 device"), std::string::npos) << past.error().message;
   EXPECT_EQ(dhd.open(), 0);
@@ -100,13 +104,13 @@ TEST(SdkDevices, ForceDimensionPositionsArriveInMetresInHoFsFrameWithTheSdksLimi
   Dhd dhd;
   dhd.reset(1, 60, -1.0);  // a Falcon, no limit reported by the SDK: the table's
   {
-    auto device = open_device(kDhdSpec);
+    auto device = open_device(kDhd);
     ASSERT_TRUE(device) << device.error().to_string();
     EXPECT_EQ((*device)->spec().max_force_n, 8.0);
     EXPECT_EQ((*device)->spec().workspace_radius_m, 0.04);
   }
   dhd.reset(1, 33, 5.0);  // an omega.3 whose SDK says 5 N
-  auto device = open_device(kDhdSpec);
+  auto device = open_device(kDhd);
   ASSERT_TRUE(device) << device.error().to_string();
   Device& d = **device;
   EXPECT_EQ(d.spec().model, "omega.3 (stand-in)");
@@ -150,7 +154,7 @@ coupling::SessionConfig press_config() {
 TEST(SdkDevices, ForcesReachAForceDimensionDeviceClampedToItsLimitAndInItsFrame) {
   Dhd dhd;
   dhd.reset(1, 33, 5.0);
-  auto device = open_device(kDhdSpec);
+  auto device = open_device(kDhd);
   ASSERT_TRUE(device) << device.error().to_string();
   auto session = coupling::Session::make(box_world(), std::move(*device), press_config());
   ASSERT_TRUE(session) << session.error().to_string();
@@ -175,7 +179,7 @@ void expect_the_run_ends_on_a_fault(int kind, const std::string& why) {
   Dhd dhd;
   dhd.reset(1, 33, -1.0);
   dhd.hand(0.0, 0.0, -0.003, 0, 0, 0);
-  auto device = open_device(kDhdSpec);
+  auto device = open_device(kDhd);
   ASSERT_TRUE(device) << device.error().to_string();
   auto session = coupling::Session::make(box_world(), std::move(*device), press_config());
   ASSERT_TRUE(session) << session.error().to_string();
@@ -213,7 +217,7 @@ TEST(SdkDevices, AForceDimensionDeviceThatStallsIsWaitedForAndTheRunGoesOn) {
   Dhd dhd;
   dhd.reset(1, 33, 5.0);
   dhd.hand(0.0, 0.0, 0.01, 0, 0, 0);
-  auto device = open_device(kDhdSpec);
+  auto device = open_device(kDhd);
   ASSERT_TRUE(device) << device.error().to_string();
   auto session = coupling::Session::make(box_world(), std::move(*device), press_config());
   ASSERT_TRUE(session) << session.error().to_string();
@@ -238,7 +242,7 @@ TEST(SdkDevices, TheTickThroughAnSdkDeviceAllocatesNothing) {
   Dhd dhd;
   dhd.reset(1, 33, -1.0);
   dhd.hand(0.0, 0.0, -0.002, 0, 0, 0);
-  auto device = open_device(kDhdSpec);
+  auto device = open_device(kDhd);
   ASSERT_TRUE(device) << device.error().to_string();
   auto session = coupling::Session::make(box_world(), std::move(*device), press_config());
   ASSERT_TRUE(session) << session.error().to_string();
@@ -270,7 +274,7 @@ struct Hd {
 TEST(SdkDevices, OpenHapticsLimitsAndCalibrationComeFromTheDevice) {
   Hd hd;
   hd.calibration(0x5002);  // needs manual input
-  auto device = open_device(kHdSpec);
+  auto device = open_device(kHd);
   ASSERT_TRUE(device) << device.error().to_string();
   const DeviceSpec& spec = (*device)->spec();
   EXPECT_EQ(spec.model, "Touch (stand-in)");
@@ -278,7 +282,7 @@ TEST(SdkDevices, OpenHapticsLimitsAndCalibrationComeFromTheDevice) {
   EXPECT_NEAR(spec.max_stiffness_n_per_m, 1260.0, 1e-9);  // N/mm → N/m
   EXPECT_NEAR(spec.workspace_radius_m, 0.035, 1e-12);     // the usable box's smallest half-extent
   EXPECT_NE(openhaptics_calibration(**device).find("manual input"), std::string::npos);
-  auto unknown = open_device(kHdSpec + ",device=Phantom Premium 9");
+  auto unknown = open_device(OpenHapticsConfig{"Phantom Premium 9", HOF_HD_STANDIN, std::nullopt});
   ASSERT_FALSE(unknown);
   EXPECT_NE(unknown.error().message.find("Device fault (stand-in)"), std::string::npos) << unknown.error().message;
 }
@@ -287,7 +291,7 @@ TEST(SdkDevices, OpenHapticsServoFramesDriveOneTickEachWithMillimetresConvertedO
   Hd hd;
   hd.calibration(0x5000);
   hd.hand_mm(5.0, 10.0, 3.0);  // above the box
-  auto device = open_device(kHdSpec);
+  auto device = open_device(kHd);
   ASSERT_TRUE(device) << device.error().to_string();
   auto session = coupling::Session::make(box_world(), std::move(*device), press_config());
   ASSERT_TRUE(session) << session.error().to_string();

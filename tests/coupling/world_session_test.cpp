@@ -597,11 +597,21 @@ TEST(CommandSeam, AnotherDeviceIsSwitchedToWithItsOwnForceLimit) {
                                config);
   ASSERT_TRUE(session);
   (*session)->run_virtual(0.1, {});
-  auto absent = (*session)->submit(command::SetDevice{"udp:notaport", nullptr});
+  // A device that is not there, and a motion that cannot be, are refused when submitted.
+  auto absent = (*session)->submit(command::SetDevice{haptics::ReplayConfig{"/nonexistent/hof-replay.csv", false, {}}, "replay", nullptr});
   ASSERT_FALSE(absent);
-  EXPECT_FALSE((*session)->submit(command::SetDevice{"scripted:nope", nullptr}));
-  ASSERT_TRUE((*session)->submit(command::SetDevice{
-      "scripted:poke,start=0;0.05;0,direction=0;-1;0,approach=0.05,depth=0.03,speed=0.1,hold=1,model=omni", nullptr}));
+  haptics::MotionConfig backwards;
+  backwards.speed_m_per_s = -1.0;
+  EXPECT_FALSE((*session)->submit(command::SetDevice{haptics::ScriptedConfig{backwards, {}}, "scripted:poke,speed=-1", nullptr}));
+  haptics::MotionConfig poke;  // scripted:poke,start=0;0.05;0,direction=0;-1;0,approach=0.05,depth=0.03,speed=0.1,hold=1
+  poke.start_m = Vec3(0.0, 0.05, 0.0);
+  poke.direction = Vec3(0.0, -1.0, 0.0);
+  poke.approach_m = 0.05;
+  poke.depth_m = 0.03;
+  poke.speed_m_per_s = 0.1;
+  poke.hold_s = 1.0;
+  const haptics::DeviceConfig omni = haptics::ScriptedConfig{poke, haptics::device_spec_for_model(haptics::DeviceModel::kOmni)};
+  ASSERT_TRUE((*session)->submit(command::SetDevice{omni, "scripted:poke (omni)", nullptr}));
   double largest = 0.0;
   int clamped = 0;
   const SessionReport report = (*session)->run_virtual(2.0, [&](const haptics::HapticSample& s) {

@@ -442,7 +442,11 @@ TEST(UdpDevice, HelloSetsTheSpecWhenOpenWaitsForIt) {
       std::this_thread::sleep_for(std::chrono::milliseconds(2));
     }
   });
-  auto device = open_device(fmt::format("udp:127.0.0.1:{},hello_wait=5", port));
+  UdpDeviceConfig greeted;
+  greeted.host = "127.0.0.1";
+  greeted.port = port;
+  greeted.hello_wait_s = 5.0;
+  auto device = UdpDevice::open(greeted);
   stop = true;
   greeter.join();
   ASSERT_TRUE(device) << device.error().to_string();
@@ -473,7 +477,9 @@ TEST(UdpDevice, CloseReturnsPromptlyAndSendsAFinalZeroForce) {
   // A port already taken cannot be opened twice.
   auto holder = open_udp();
   ASSERT_TRUE(holder);
-  auto second = open_device(fmt::format("udp:{}", holder->local_port()));
+  UdpDeviceConfig same_port;
+  same_port.port = holder->local_port();
+  auto second = UdpDevice::open(same_port);
   ASSERT_FALSE(second);
   EXPECT_NE(second.error().message.find("cannot bind the UDP port"), std::string::npos) << second.error().message;
 }
@@ -643,10 +649,6 @@ TEST(UdpDevice, ABridgeOnAnotherMachineNeedsAKey) {
   config.key = test_key(5);
   auto opened = UdpDevice::open(config);
   ASSERT_TRUE(opened) << opened.error().to_string();
-  // The same through the spec string: the key comes from a file.
-  auto spec = open_device("udp:192.0.2.10:0");
-  ASSERT_FALSE(spec);
-  EXPECT_NE(spec.error().message.find("key=FILE"), std::string::npos) << spec.error().message;
 }
 
 TEST(UdpKeyFile, KeygenWritesAPrivateKeyThatReadsBackAndBadFilesAreNamed) {
@@ -663,7 +665,10 @@ TEST(UdpKeyFile, KeygenWritesAPrivateKeyThatReadsBackAndBadFilesAreNamed) {
   EXPECT_NE(*key, udp::Key{});
   EXPECT_FALSE(udp::write_new_key_file(path)) << "an existing key was overwritten";
   EXPECT_EQ(*udp::read_key_file(path), *key);
-  auto device = open_device(fmt::format("udp:127.0.0.1:0,key={}", path));
+  UdpDeviceConfig keyed;
+  keyed.host = "127.0.0.1";
+  keyed.key = *key;
+  auto device = UdpDevice::open(keyed);
   EXPECT_TRUE(device) << device.error().to_string();
 
   const auto write = [&](const std::string& name, const std::string& text, unsigned mode) {

@@ -63,11 +63,11 @@ TEST(DeviceSpec, OpensTheSimulatedBackends) {
   EXPECT_EQ((*hand)->backend(), "virtual-hand");
   EXPECT_EQ(dynamic_cast<haptics::VirtualHandDevice&>(**hand).params().mass_kg, 0.2);
 
-  auto falcon = haptics::device_spec_for_model("falcon");
+  auto falcon = scene::device_spec_for_model("falcon");
   ASSERT_TRUE(falcon);
   EXPECT_EQ(falcon->max_force_n, 8.0);
   EXPECT_EQ(falcon->max_stiffness_n_per_m, 3000.0);
-  EXPECT_EQ(haptics::device_spec_for_model("touch")->max_stiffness_n_per_m, 400.0);
+  EXPECT_EQ(scene::device_spec_for_model("touch")->max_stiffness_n_per_m, 400.0);
 }
 
 TEST(DeviceSpec, OpensAReplayFile) {
@@ -214,6 +214,11 @@ TEST(DeviceSpec, ParsesEveryKeyIntoItsTypedField) {
 
   EXPECT_EQ(parsed<haptics::SpacemouseConfig>("spacemouse,scale=0.0001").scale_m_per_unit_s, 0.0001);
   EXPECT_EQ(parsed<haptics::MouseConfig>("mouse,model=omni").spec.max_force_n, 3.3);
+  // The mouse keeps its name under the virtual device's figures.
+  EXPECT_EQ(parsed<haptics::MouseConfig>("mouse").spec.model, "mouse");
+  EXPECT_EQ(parsed<haptics::MouseConfig>("mouse,model=virtual").spec.model, "mouse");
+  EXPECT_EQ(parsed<haptics::MouseConfig>("mouse,model=virtual").spec.max_force_n, haptics::DeviceSpec{}.max_force_n);
+  EXPECT_EQ(parsed<haptics::ReplayConfig>("replay:a.csv,model=virtual").spec.model, "virtual");
 
   const auto dhd = parsed<haptics::DhdConfig>("dhd,index=2,library=/opt/libdhd.so,model=falcon");
   EXPECT_EQ(dhd.index, 2);
@@ -236,6 +241,7 @@ TEST(DeviceSpec, ParseErrorsOfTheOtherBackends) {
   expect_error("scripted:palpate,count=2.5", "count=2.5");
   expect_error("replay:a.csv,model=phantom", "unknown device model 'phantom'");
   expect_error("udp:0,key=", "key needs a file");
+  expect_error("udp:192.0.2.10:0", "key=FILE");  // a remote bridge authenticates: its key from a file
   expect_error("udp:0,timeout", "key 'timeout' needs a number");
   expect_error("mouse:extra", "mouse takes no argument");
   expect_error("mouse,speed=2", "unknown key 'speed' for mouse (known: model)");

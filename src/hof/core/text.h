@@ -1,8 +1,10 @@
 #pragma once
 /// @file
 /// Text from users' files, made safe to write: names in a Latin-1 file (`Größe`) are not
-/// UTF-8, and JSON, XML and the terminal refuse or garble them.
+/// UTF-8, and JSON, XML and the terminal refuse or garble them; and how close a mistyped name
+/// is to a known one.
 
+#include <cstddef>
 #include <string>
 #include <string_view>
 
@@ -19,5 +21,9 @@ namespace hof {
   if (first == std::string_view::npos) return {};
   return text.substr(first, text.find_last_not_of(kWhitespace) - first + 1);
 }
+
+/// Edits (insert, delete or substitute a letter, ASCII case ignored) that turn `a` into `b`
+/// (Levenshtein distance): how close a mistyped name is to a known one.
+[[nodiscard]] std::size_t edit_distance(std::string_view a, std::string_view b);
 
 }  // namespace hof

@@ -118,7 +118,7 @@ Expected<void> CommandSeam::submit(const Command& submitted) {
   }
   if (auto* device = std::get_if<command::SetDevice>(&command); device && !device->opened) {
     // Opened here, on the caller's thread (a network device may wait for its first packet).
-    auto opened = haptics::open_device(device->spec);
+    auto opened = haptics::open_device(device->config);
     if (!opened) return std::unexpected(opened.error());
     device->opened = std::shared_ptr<haptics::Device>(std::move(*opened));
   }
@@ -450,7 +450,7 @@ bool CommandSeam::apply(const command::SetDevice& device, Applying& a) {
   // The previous switch has not reached a tick yet: this command waits for the next step.
   if (!a.world.loop->switch_device(*device.opened)) return false;
   a.world.switched_devices.push_back(device.opened);
-  a.log(fmt::format("device {}", device.spec));
+  a.log(fmt::format("device {}", device.label));
   return true;
 }
 

@@ -26,7 +26,7 @@
 
 #include "hof/core/error.h"
 #include "hof/core/spsc_ring.h"
-#include "hof/haptics/device.h"
+#include "hof/haptics/device_config.h"
 #include "hof/haptics/haptic_loop.h"
 #include "hof/mechanics/mechanical_model.h"
 
@@ -66,12 +66,15 @@ struct SetRenderer {
 struct SetForceLimit {
   double max_force_n{0.0};
 };
-/// Another device (a spec, see haptics::open_device): opened when submitted (a device that is
-/// not there is refused then), switched to between two ticks with its own force limit.
+/// Another device (a typed configuration, see haptics::open_device; users' spec strings are
+/// parsed by scene::parse_device_spec): opened when submitted (a device that is not there is
+/// refused then), switched to between two ticks with its own force limit.
 struct SetDevice {
-  std::string spec;
-  /// Filled by submit(); a caller that opened the device itself (to keep a handle on it,
-  /// as the window does for the mouse) passes it here.
+  haptics::DeviceConfig config;
+  /// How the applied-commands log names the device (the spec the user typed).
+  std::string label;
+  /// Filled by submit(); a caller that opened the device itself (to keep a handle on it, as
+  /// the window does for the mouse, or to name its spec in an error) passes it here.
   std::shared_ptr<haptics::Device> opened;
 };
 /// Another device calibration (device → world), e.g. the window's "fit the workspace to the

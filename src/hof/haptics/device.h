@@ -1,8 +1,8 @@
 #pragma once
 /// @file
 /// The haptic device interface: position, velocity, orientation and buttons in; force and
-/// torque out; a specification that the safety layer enforces. Backends are chosen by a spec
-/// string (see open_device). read() and write_force() are called from the haptic thread every
+/// torque out; a specification that the safety layer enforces. Backends are chosen by a typed
+/// configuration (device_config.h; users' spec strings are parsed in scene/device_config.h). read() and write_force() are called from the haptic thread every
 /// tick: they never allocate, lock a mutex, block or do I/O — backends that talk to hardware
 /// or a network do it on their own thread and exchange with the tick through atomics.
 ///
@@ -92,27 +92,13 @@ class Device {
   virtual void stop_servo() {}
 };
 
-/// Opens a device from a spec string (transitional: callers above coupling use
-/// scene::open_device; this stays while coupling's SetDevice carries a spec string):
-///   replay:PATH.csv[,loop]                       recorded trajectory (docs/device-protocol.md)
-///   scripted:poke[,key=value...]                 built-in motions: poke, press-and-slide, palpate, circle
-///   virtual-hand:MOTION[,key=value...]           compliant hand following a scripted motion
-///   udp:[HOST:]PORT[,timeout=S]                  datagram bridge (docs/device-protocol.md)
-///   spacemouse[,scale=M]                         3Dconnexion SpaceMouse via spacenavd (input only)
-///   mouse                                        the window's cursor (hof gui; input only)
-///   dhd[,index=N][,library=PATH]                 a Force Dimension device (libdhd, loaded at run time)
-///   openhaptics[,device=NAME][,library=PATH]     a 3D Systems Touch / Phantom (OpenHaptics' libHD)
-/// Every backend also takes model=virtual|falcon|omni|touch (device_spec_for_model(); for
-/// udp, a hello packet received within hello_wait=S overrides it). Keys and motions are listed
-/// in docs/device-protocol.md ("Spec strings").
-/// Errors name the spec and what is wrong (unknown backend or key, bad value, missing file,
-/// absent device).
-[[nodiscard]] Expected<std::unique_ptr<Device>> open_device(std::string_view spec);
+/// The models whose figures HoF knows (a spec's `model=`, parsed in scene/device_config.h).
+enum class DeviceModel : std::uint8_t { kVirtual, kFalcon, kOmni, kTouch };
 
 /// The DeviceSpec of a known model, with CHAI3D's figures (reference/literature.md §4):
-/// "virtual" (the defaults above), "falcon" (Novint Falcon: 8 N, 3000 N/m, 20 N·s/m, 0.04 m),
-/// "omni" (PHANTOM Omni: 3.3 N, 700 N/m, 5 N·s/m, 0.10 m), "touch" (3D Systems Touch: 3.3 N,
-/// 400 N/m, 4 N·s/m, 0.075 m). kInvalidArgument for any other name.
-[[nodiscard]] Expected<DeviceSpec> device_spec_for_model(std::string_view model);
+/// kVirtual (the defaults above), kFalcon (Novint Falcon: 8 N, 3000 N/m, 20 N·s/m, 0.04 m),
+/// kOmni (PHANTOM Omni: 3.3 N, 700 N/m, 5 N·s/m, 0.10 m), kTouch (3D Systems Touch: 3.3 N,
+/// 400 N/m, 4 N·s/m, 0.075 m). DeviceSpec::model is the model's name ("falcon").
+[[nodiscard]] DeviceSpec device_spec_for_model(DeviceModel model);
 
 }  // namespace hof::haptics

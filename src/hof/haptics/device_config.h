@@ -8,7 +8,6 @@
 #include <filesystem>
 #include <memory>
 #include <optional>
-#include <string_view>
 #include <variant>
 
 #include "hof/core/error.h"
@@ -42,9 +41,10 @@ struct VirtualHandConfig {
   DeviceSpec spec{};
 };
 
-/// `mouse`: the window's cursor (input only).
+/// `mouse`: the window's cursor (input only); its figures are the virtual device's unless a
+/// model is given, under the name "mouse".
 struct MouseConfig {
-  DeviceSpec spec{};
+  DeviceSpec spec{.model = "mouse"};
 };
 
 using DeviceConfig = std::variant<ReplayConfig, ScriptedConfig, VirtualHandConfig, UdpDeviceConfig, SpacemouseConfig, MouseConfig,
@@ -54,10 +54,5 @@ using DeviceConfig = std::variant<ReplayConfig, ScriptedConfig, VirtualHandConfi
 /// invalid motion or hand, an absent device or SDK), without the spec string: the caller that
 /// had one names it.
 [[nodiscard]] Expected<std::unique_ptr<Device>> open_device(const DeviceConfig& config);
-
-/// Transitional, until coupling's SetDevice carries a DeviceConfig: the spec-string parser
-/// behind scene::parse_device_spec (scene/device_config.h, where callers parse specs). Then it
-/// moves to scene/ with its string comparisons.
-[[nodiscard]] Expected<DeviceConfig> parse_device_spec(std::string_view spec);
 
 }  // namespace hof::haptics

@@ -5,9 +5,10 @@
 
 #include <algorithm>
 #include <array>
-#include <cctype>
 #include <cmath>
 #include <limits>
+
+#include "hof/core/text.h"
 
 namespace hof::mechanics {
 
@@ -35,23 +36,6 @@ static_assert(static_cast<std::size_t>(ParameterId::kMassDensity) + 1 == kParame
 
 // A name that is no parameter's (its slot is looked up only to say what the component has).
 constexpr auto kNoId = static_cast<ParameterId>(0xff);
-
-// Edits (insert, delete, substitute a letter) from a to b: how close a mistyped name is.
-std::size_t edit_distance(std::string_view a, std::string_view b) {
-  std::vector<std::size_t> row(b.size() + 1);
-  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
-  for (std::size_t i = 1; i <= a.size(); ++i) {
-    std::size_t diagonal = row[0];
-    row[0] = i;
-    for (std::size_t j = 1; j <= b.size(); ++j) {
-      const std::size_t above = row[j];
-      const bool same = std::tolower(static_cast<unsigned char>(a[i - 1])) == std::tolower(static_cast<unsigned char>(b[j - 1]));
-      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (same ? 0 : 1)});
-      diagonal = above;
-    }
-  }
-  return row[b.size()];
-}
 
 // Finds the slot of (component, parameter) in a (mutable) config; nullopt-like Slot when absent.
 // `parameter` is the name asked for (in messages; `id` is kNoId when it names no parameter).

@@ -2,7 +2,8 @@
 
 #include <algorithm>
 #include <array>
-#include <cctype>
+
+#include "hof/core/text.h"
 
 // The data names of the components HoF reads (names only: facts about SOFA's scene format), the
 // initData()/addAlias() names of each class and its base classes in SOFA's repository
@@ -117,28 +118,6 @@ constexpr DataNames kData[] = {
     {"UniformMass", kDataUniformMass},
 };
 
-std::string lower_case(std::string_view s) {
-  std::string out(s);
-  std::ranges::transform(out, out.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return out;
-}
-
-// Levenshtein distance (insert, delete, substitute), one row at a time.
-std::size_t edit_distance(std::string_view a, std::string_view b) {
-  std::vector<std::size_t> row(b.size() + 1);
-  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
-  for (std::size_t i = 1; i <= a.size(); ++i) {
-    std::size_t diagonal = row[0];
-    row[0] = i;
-    for (std::size_t j = 1; j <= b.size(); ++j) {
-      const std::size_t above = row[j];
-      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
-      diagonal = above;
-    }
-  }
-  return row[b.size()];
-}
-
 }  // namespace
 
 bool is_known_sofa_component(std::string_view type) {
@@ -152,11 +131,10 @@ std::span<const std::string_view> sofa_data_names(std::string_view type) {
 }
 
 std::vector<std::string> closest_names(std::string_view name, std::span<const std::string_view> candidates, std::size_t count) {
-  const std::string wanted = lower_case(name);
-  const std::size_t limit = std::max<std::size_t>(2, wanted.size() / 3);
+  const std::size_t limit = std::max<std::size_t>(2, name.size() / 3);
   std::vector<std::pair<std::size_t, std::string_view>> scored;
   for (std::string_view c : candidates) {
-    const std::size_t d = edit_distance(wanted, lower_case(c));
+    const std::size_t d = edit_distance(name, c);
     if (d <= limit) scored.emplace_back(d, c);
   }
   std::ranges::sort(scored);

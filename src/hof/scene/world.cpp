@@ -507,8 +507,7 @@ Expected<World> finish_world(World w, bool sofa_scene, bool bare, const std::str
   w.file_calibration = w.project.position_calibration;
   std::string device = device_override.empty() ? (bare ? std::string("auto") : w.project.device) : device_override;
   if (device == "auto") {
-    const auto model_spec = haptics::device_spec_for_model("virtual");
-    const haptics::DeviceSpec spec = model_spec ? *model_spec : haptics::DeviceSpec{};
+    const haptics::DeviceSpec spec = haptics::device_spec_for_model(haptics::DeviceModel::kVirtual);
     const double k = w.project.surface.stiffness_n_per_m(spec.max_stiffness_n_per_m);
     // A calibration the file gives is kept; a bare scene gets the fitted one.
     const bool given = !identity(w.project.position_calibration);

@@ -7,6 +7,7 @@
 
 #include "hof/app/gui/detail/gui_window.h"
 #include "hof/haptics/device_backends/mouse_device.h"
+#include "hof/scene/device_config.h"
 
 namespace hof::app::gui {
 
@@ -76,11 +77,11 @@ Expected<void> GuiWindow::open(const std::filesystem::path& file, const scene::H
   // The builder's probe is for headless runs; here the user holds the stylus: the mouse, or
   // the project's own device when it names one.
   std::string spec = world->default_probe && options_.device.empty() ? std::string("mouse") : world->device;
-  auto device = haptics::open_device(spec);
+  auto device = scene::open_device(spec);
   if (!device && spec != "mouse") {
     report(fmt::format("device '{}' does not answer ({}): the mouse holds the stylus", spec, device.error().to_string()), true);
     spec = "mouse";
-    device = haptics::open_device(spec);
+    device = scene::open_device(spec);
   }
   if (!device) return std::unexpected(device.error());
   auto* mouse = dynamic_cast<haptics::MouseDevice*>(device->get());

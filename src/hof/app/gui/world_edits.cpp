@@ -11,6 +11,7 @@
 #include "hof/app/gui/detail/gui_window.h"
 #include "hof/haptics/device_backends/mouse_device.h"
 #include "hof/mechanics/model_parameters.h"
+#include "hof/scene/device_config.h"
 #include "hof/scene/sofa_scene_edit.h"
 
 namespace hof::app::gui {
@@ -91,10 +92,12 @@ Expected<void> GuiWindow::set_device(const scene::HofProject& next, const std::s
                                                            "loop: open the window with it (hof gui FILE --device {})",
                                                            name, spec));
   }
-  auto opened = haptics::open_device(spec);
+  auto config = scene::parse_device_spec(spec);
+  if (!config) return std::unexpected(config.error());
+  auto opened = scene::open_device(spec);
   if (!opened) return std::unexpected(opened.error());
   std::shared_ptr<haptics::Device> device(std::move(*opened));
-  if (auto ok = session_->submit(coupling::command::SetDevice{spec, device}); !ok) return ok;
+  if (auto ok = session_->submit(coupling::command::SetDevice{*config, spec, device}); !ok) return ok;
   mouse_ = dynamic_cast<haptics::MouseDevice*>(device.get());  // the session keeps the device alive
   if (mouse_) mouse_->place((mouse_calibration().position.inverse() * mouse_world_.homogeneous()).head<3>());
   device_spec_ = spec;

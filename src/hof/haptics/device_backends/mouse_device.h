@@ -17,7 +17,7 @@ namespace hof::haptics {
 
 class MouseDevice final : public Device {
  public:
-  explicit MouseDevice(const DeviceSpec& spec = {}, double smoothing_s = 0.02);
+  explicit MouseDevice(const DeviceSpec& spec = DeviceSpec{.model = "mouse"}, double smoothing_s = 0.02);
 
   [[nodiscard]] const DeviceSpec& spec() const override { return spec_; }
   [[nodiscard]] std::string_view backend() const override { return "mouse"; }

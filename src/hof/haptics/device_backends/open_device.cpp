@@ -1,6 +1,8 @@
-// open_device(const DeviceConfig&): one typed configuration, one backend. No string selects
-// anything here; the spec strings are parsed before (parse_device_spec).
+// open_device(const DeviceConfig&): one typed configuration, one backend, and the known
+// models' figures. No string selects anything here; users' spec strings are parsed before
+// (scene::parse_device_spec).
 
+#include <array>
 #include <memory>
 #include <type_traits>
 #include <utility>
@@ -10,6 +12,28 @@
 #include "hof/haptics/device_config.h"
 
 namespace hof::haptics {
+
+DeviceSpec device_spec_for_model(DeviceModel model) {
+  struct Figures {
+    const char* name;
+    double max_force_n, max_stiffness_n_per_m, max_damping_n_s_per_m, workspace_radius_m;
+  };
+  // In DeviceModel's order after kVirtual (whose figures are DeviceSpec's defaults).
+  static constexpr std::array<Figures, 3> kKnown{{
+      {"falcon", 8.0, 3000.0, 20.0, 0.04},
+      {"omni", 3.3, 700.0, 5.0, 0.10},
+      {"touch", 3.3, 400.0, 4.0, 0.075},
+  }};
+  DeviceSpec s;
+  if (model == DeviceModel::kVirtual) return s;
+  const Figures& f = kKnown[static_cast<std::size_t>(model) - 1];
+  s.model = f.name;
+  s.max_force_n = f.max_force_n;
+  s.max_stiffness_n_per_m = f.max_stiffness_n_per_m;
+  s.max_damping_n_s_per_m = f.max_damping_n_s_per_m;
+  s.workspace_radius_m = f.workspace_radius_m;
+  return s;
+}
 
 namespace {
 
