@@ -336,6 +336,28 @@ TEST(IncrementalTopologyChange, ABodyTheIncrementalPathDoesNotKnowIsRebuiltWhole
   EXPECT_EQ(report->elements_rebuilt, c.tets.size() - 1);
 }
 
+TEST(IncrementalTopologyChange, TrianglesAndSpringsGoWithTheRemovedNodesThroughTheFullRebuild) {
+  ModelConfig c = whole_beam(LinearSolverKind::kConjugateGradient);
+  c.triangles = {{6, 5, 13}, {0, 1, 7}};  // one on the end corner that goes, one on the held end
+  ForceFieldConfig springs;
+  springs.name = "springs";
+  springs.mesh_springs = MeshSpringConfig{};
+  springs.mesh_springs->stiffness_n_per_m = 100.0;
+  c.force_fields.push_back(springs);
+  auto model = build_model(c);
+  ASSERT_TRUE(model) << model.error().to_string();
+  MechanicalState state = make_state(*model);
+  ASSERT_TRUE(step(*model, state));
+  const TopologyChange change = tetrahedra_change(c, tets_around(c, 6));
+  ASSERT_EQ(change.config.triangles.size(), 1u);
+  EXPECT_EQ(change.config.triangles[0], (mesh::Tri{0, 1, 6}));  // renumbered: node 7 follows the removed 6
+  auto report = apply_topology_change(*model, state, change);
+  ASSERT_TRUE(report) << report.error().to_string();
+  EXPECT_FALSE(report->incremental);  // springs are not on the incremental path yet
+  EXPECT_EQ(model->triangles.size(), 1u);
+  for (int i = 0; i < 10; ++i) ASSERT_TRUE(step(*model, state)) << state.divergence.reason;
+}
+
 INSTANTIATE_TEST_SUITE_P(SolversAndMethods, IncrementalTopologyChangeTest,
                          ::testing::Values(IncrementalCase{LinearSolverKind::kConjugateGradient, FemMethod::kLarge},
                                            IncrementalCase{LinearSolverKind::kSparseLdlt, FemMethod::kLarge},
