@@ -6,6 +6,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "hof/mechanics/detail/tetrahedron_fem_force_field.h"
 #include "hof/mechanics/step.h"
 #include "hof/mechanics/von_mises_stress.h"
 #include "hof/mesh/boundary.h"

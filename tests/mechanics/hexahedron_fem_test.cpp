@@ -2,7 +2,7 @@
 // stiffness properties, patch tests, rigid-motion invariance, the Timoshenko cantilever, a
 // sparse-grid liver run with its fine surface mapped trilinearly, and the errors.
 
-#include "hof/mechanics/hexahedron_fem_force_field.h"
+#include "hof/mechanics/detail/hexahedron_fem_force_field.h"
 
 #include <gtest/gtest.h>
 

@@ -3,7 +3,7 @@
 // for every spring (HoF's own surface springs), and which element kind's values an edge
 // shared by a triangle and a tetrahedron takes (MeshSpringForceField::init: the first kind).
 
-#include "hof/mechanics/mesh_spring_force_field.h"
+#include "hof/mechanics/detail/mesh_spring_force_field.h"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,5 @@
-#include "hof/mechanics/neo_hookean_force_field.h"
+#include "hof/mechanics/detail/neo_hookean_force_field.h"
+#include "hof/mechanics/detail/tetrahedron_fem_force_field.h"
 
 #include <gtest/gtest.h>
 

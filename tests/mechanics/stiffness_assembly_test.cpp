@@ -8,8 +8,8 @@
 #include <memory>
 
 #include "hof/mechanics/block_sparse_matrix.h"
-#include "hof/mechanics/mesh_spring_force_field.h"
-#include "hof/mechanics/tetrahedron_fem_force_field.h"
+#include "hof/mechanics/detail/mesh_spring_force_field.h"
+#include "hof/mechanics/detail/tetrahedron_fem_force_field.h"
 #include "test_meshes.h"
 
 namespace hof::mechanics {

@@ -7,8 +7,8 @@
 #include <immintrin.h>
 #endif
 
-#include "hof/mechanics/parallel.h"
-#include "hof/mechanics/simd_lanes.h"
+#include "hof/mechanics/detail/parallel.h"
+#include "hof/mechanics/detail/simd_lanes.h"
 
 namespace hof::mechanics {
 

@@ -1,7 +1,7 @@
 #include "hof/mechanics/forces.h"
 #include "hof/mechanics/detail/solver_workspace.h"
 
-#include "hof/mechanics/parallel.h"
+#include "hof/mechanics/detail/parallel.h"
 #include "hof/mechanics/detail/vector_kernels.h"
 
 namespace hof::mechanics {

@@ -10,7 +10,12 @@
 #include "hof/mechanics/detail/workspace_setup.h"
 #include "hof/mechanics/detail/linear_solve.h"
 #include "hof/mechanics/mechanical_state.h"
-#include "hof/mechanics/neo_hookean_force_field.h"
+#include "hof/mechanics/detail/constant_force_field.h"
+#include "hof/mechanics/detail/hexahedron_fem_force_field.h"
+#include "hof/mechanics/detail/mesh_spring_force_field.h"
+#include "hof/mechanics/detail/neo_hookean_force_field.h"
+#include "hof/mechanics/detail/tetrahedron_fem_force_field.h"
+#include "hof/mechanics/detail/triangle_fem_force_field.h"
 #include "hof/mesh/hex_grid.h"
 #include "hof/mesh/tet_geometry.h"
 
@@ -154,17 +159,9 @@ Expected<std::vector<std::pair<Config, std::vector<mesh::Tet>>>> split_by_poisso
   return parts;
 }
 
-}  // namespace
-
-std::string MechanicalModel::element_summary() const {
-  if (!hexahedra.empty()) return fmt::format("{} hexahedra", hexahedra.size());
-  if (!tets.empty() || triangles.empty()) return fmt::format("{} tetrahedra", tets.size());
-  return fmt::format("{} triangles", triangles.size());
-}
-
-double MechanicalModel::total_mass_kg() const { return std::accumulate(node_mass_kg.begin(), node_mass_kg.end(), 0.0); }
-
-Expected<MechanicalModel> build_model(const ModelConfig& c) {
+// What build_model checks before it builds anything: nodes, element corners in range, the
+// step and the solvers' settings.
+Expected<void> check_config(const ModelConfig& c) {
   const std::size_t n = c.positions.size();
   if (n == 0) return make_error(ErrorCode::kInvalidArgument, fmt::format("model '{}': no nodes", c.name));
   for (std::size_t i = 0; i < n; ++i) {
@@ -202,7 +199,6 @@ Expected<MechanicalModel> build_model(const ModelConfig& c) {
   if (!c.gravity_m_per_s2.allFinite()) {
     return make_error(ErrorCode::kInvalidArgument, fmt::format("model '{}': gravity is not finite", c.name));
   }
-  const std::string ode_who = fmt::format("solver '{}'", c.ode.name);
   if (c.ode.rayleigh_mass < 0.0 || c.ode.rayleigh_stiffness < 0.0) {
     return make_error(ErrorCode::kInvalidArgument,
                       fmt::format("EulerImplicitSolver '{}': rayleighStiffness and rayleighMass must be >= 0", c.ode.name));
@@ -215,27 +211,13 @@ Expected<MechanicalModel> build_model(const ModelConfig& c) {
     return make_error(ErrorCode::kInvalidArgument,
                       fmt::format("CGLinearSolver '{}': iterations must be >= 1, tolerance and threshold >= 0", c.linear.name));
   }
-  (void)ode_who;
 
-  MechanicalModel m;
-  m.name = c.name;
-  m.rest_positions = c.positions;
-  m.tets = c.tets;
-  m.hexahedra = c.hexahedra;
-  m.triangles = c.triangles;
-  m.mass_name = c.mass.name;
-  m.ode = c.ode;
-  m.linear = c.linear;
-  m.gravity_m_per_s2 = c.gravity_m_per_s2;
-  m.dt_s = c.dt_s;
-  m.max_speed_m_per_s = c.max_speed_m_per_s;
-  m.threads = c.threads;
-  m.needs_matrix = c.ode.kind == OdeSolverKind::kEulerImplicit || c.ode.kind == OdeSolverKind::kStatic;
+  return {};
+}
 
-  auto masses = build_masses(c);
-  if (!masses) return std::unexpected(masses.error());
-  m.node_mass_kg = std::move(*masses);
-
+// The force fields of the config, each made from the rest shape (its element precomputation).
+Expected<void> build_force_fields(const ModelConfig& c, MechanicalModel& m) {
+  const std::size_t n = c.positions.size();
   for (const ForceFieldConfig& f : c.force_fields) {
     if (f.tetrahedron_fem) {
       auto parts = split_by_poisson_ratio(*f.tetrahedron_fem, c.tets, fmt::format("TetrahedronFEMForceField '{}'", f.name));
@@ -287,7 +269,12 @@ Expected<MechanicalModel> build_model(const ModelConfig& c) {
     }
   }
 
-  // Fixed nodes from indices and boxes (projective constraints).
+  return {};
+}
+
+// The fixed degrees of freedom, from indices and boxes (projective constraints).
+Expected<void> build_supports(const ModelConfig& c, MechanicalModel& m) {
+  const std::size_t n = c.positions.size();
   m.fixed_dof_mask.assign(3 * n, 0);
   for (const FixedConstraintConfig& fixed : c.fixed) {
     auto hold = [&](std::size_t node) {
@@ -329,6 +316,43 @@ Expected<MechanicalModel> build_model(const ModelConfig& c) {
     if (m.fixed_dof_mask[d]) m.fixed_dofs.push_back(static_cast<std::int32_t>(d));
   }
 
+  return {};
+}
+
+}  // namespace
+
+std::string MechanicalModel::element_summary() const {
+  if (!hexahedra.empty()) return fmt::format("{} hexahedra", hexahedra.size());
+  if (!tets.empty() || triangles.empty()) return fmt::format("{} tetrahedra", tets.size());
+  return fmt::format("{} triangles", triangles.size());
+}
+
+double MechanicalModel::total_mass_kg() const { return std::accumulate(node_mass_kg.begin(), node_mass_kg.end(), 0.0); }
+
+Expected<MechanicalModel> build_model(const ModelConfig& c) {
+  if (auto checked = check_config(c); !checked) return std::unexpected(checked.error());
+  const std::size_t n = c.positions.size();
+  MechanicalModel m;
+  m.name = c.name;
+  m.rest_positions = c.positions;
+  m.tets = c.tets;
+  m.hexahedra = c.hexahedra;
+  m.triangles = c.triangles;
+  m.mass_name = c.mass.name;
+  m.ode = c.ode;
+  m.linear = c.linear;
+  m.gravity_m_per_s2 = c.gravity_m_per_s2;
+  m.dt_s = c.dt_s;
+  m.max_speed_m_per_s = c.max_speed_m_per_s;
+  m.threads = c.threads;
+  m.needs_matrix = c.ode.kind == OdeSolverKind::kEulerImplicit || c.ode.kind == OdeSolverKind::kStatic;
+
+  auto masses = build_masses(c);
+  if (!masses) return std::unexpected(masses.error());
+  m.node_mass_kg = std::move(*masses);
+
+  if (auto fields = build_force_fields(c, m); !fields) return std::unexpected(fields.error());
+  if (auto supports = build_supports(c, m); !supports) return std::unexpected(supports.error());
   std::vector<std::pair<std::int32_t, std::int32_t>> pairs;
   for (const auto& field : m.force_fields) field->collect_couplings(pairs);
   m.pattern = BlockSparseMatrix::from_pairs(static_cast<std::int32_t>(n), pairs);

@@ -15,12 +15,9 @@
 
 #include "hof/core/error.h"
 #include "hof/mechanics/block_sparse_matrix.h"
-#include "hof/mechanics/constant_force_field.h"
 #include "hof/mechanics/force_field.h"
-#include "hof/mechanics/hexahedron_fem_force_field.h"
-#include "hof/mechanics/mesh_spring_force_field.h"
-#include "hof/mechanics/tetrahedron_fem_force_field.h"
-#include "hof/mechanics/triangle_fem_force_field.h"
+#include "hof/mechanics/force_field_config.h"
+#include "hof/mesh/hex_grid.h"
 #include "hof/mesh/mesh.h"
 
 namespace hof::mechanics {

@@ -5,10 +5,12 @@
 /// rest positions, elements, materials, supports) and where each of its nodes was before.
 /// apply_topology_change() swaps the model for the changed one and carries the motion over:
 /// surviving nodes keep their positions, velocities and coupling input; added nodes start at
-/// their rest position, at rest. What it rebuilds is listed in docs/architecture.md
-/// ("Topology changes"); in short, the physical state is mapped, the force fields, masses and
-/// matrix pattern are those of the new mesh, and the solver's workspace (its symbolic
-/// factorisation above all) is kept when the pattern did not change.
+/// their rest position, at rest. When the change also says where each tetrahedron was
+/// (`old_tet`) and the body is one the incremental path knows (tetrahedral FEM, lumped or
+/// uniform mass), only what the change touched is rebuilt: the new elements' rest data and
+/// the masses of the nodes they or the removed ones touch; every other element keeps its
+/// precomputed data. Otherwise the model is rebuilt from the config. What each path rebuilds
+/// is listed in docs/architecture.md ("Topology changes").
 
 #include <cstdint>
 #include <vector>
@@ -25,6 +27,10 @@ struct TopologyChange {
   ModelConfig config;
   /// (new N) the node's id before the change, or −1 for a node the change added.
   std::vector<std::int32_t> old_node;
+  /// Empty (the whole model is rebuilt), or (new tets) the tetrahedron's id before the change,
+  /// −1 for one the change added (a split's pieces). A kept tetrahedron has the same corners,
+  /// in the same order, renumbered by old_node, and the same material.
+  std::vector<std::int32_t> old_tet;
 };
 
 /// What apply_topology_change() kept and rebuilt, for tests and reports.
@@ -33,7 +39,25 @@ struct TopologyChangeReport {
   std::size_t added_nodes{0};
   std::size_t removed_nodes{0};
   bool pattern_changed{true};  ///< false: the system matrix and its factorisation were reused
+  /// True: only what the change touched was rebuilt (TopologyChange::old_tet); false: the
+  /// whole model was built from the config.
+  bool incremental{false};
+  /// Elements whose rest data (gradients, volumes, frames) was computed: the added ones on the
+  /// incremental path, every element of every field on a full rebuild.
+  std::size_t elements_rebuilt{0};
+  std::size_t nodes_remassed{0};  ///< nodes whose lumped mass was summed anew (incremental path)
 };
+
+/// The topology change that removes the tetrahedra `removed` (ids in config.tets) from the
+/// body `before`, with the nodes only they used, and adds `added_nodes` (rest positions) and
+/// `added_tets` (over the nodes before the change, and node N + k for added node k, N the node
+/// count before): config, old_node and old_tet filled, so that apply_topology_change can take
+/// the incremental path. Per-element lists of the config (moduli, densities, regions) follow
+/// the kept elements; an added element gets the config's default (0 in the lists). Fixed
+/// constraints given by index are renumbered (a removed node's is dropped).
+[[nodiscard]] TopologyChange tetrahedra_change(const ModelConfig& before, const std::vector<std::int32_t>& removed,
+                                               const std::vector<Vec3>& added_nodes = {},
+                                               const std::vector<mesh::Tet>& added_tets = {});
 
 /// The old→new node map of a change that keeps some of the nodes and removes the others
 /// (`kept[i]`: node i survives), in their order: new node j is the j-th surviving old node.

@@ -5,7 +5,7 @@
 #include <cmath>
 
 #include "hof/mechanics/detail/tet_rest_geometry.h"
-#include "hof/mechanics/tetrahedron_fem_force_field.h"
+#include "hof/mechanics/detail/tetrahedron_fem_force_field.h"
 
 namespace hof::mechanics {
 

@@ -1,6 +1,6 @@
 #include "hof/mechanics/detail/cg_kernels.h"
 
-#include "hof/mechanics/simd_lanes.h"
+#include "hof/mechanics/detail/simd_lanes.h"
 
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wpsabi"

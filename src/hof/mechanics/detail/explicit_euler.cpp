@@ -1,6 +1,6 @@
 #include "hof/mechanics/detail/integrators.h"
 #include "hof/mechanics/detail/solver_workspace.h"
-#include "hof/mechanics/parallel.h"
+#include "hof/mechanics/detail/parallel.h"
 #include "hof/mechanics/detail/vector_kernels.h"
 
 namespace hof::mechanics::detail {

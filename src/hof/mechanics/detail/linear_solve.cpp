@@ -11,7 +11,7 @@
 
 #include "hof/mechanics/detail/cg_kernels.h"
 #include "hof/mechanics/detail/coarse_correction.h"
-#include "hof/mechanics/parallel.h"
+#include "hof/mechanics/detail/parallel.h"
 #include "hof/mechanics/detail/vector_kernels.h"
 
 namespace hof::mechanics::detail {
@@ -351,6 +351,60 @@ bool solve_direct(MechanicalState& state, const Eigen::VectorXd& b, Eigen::Vecto
   return x.allFinite();
 }
 
+// The two-level preconditioner's coarse matrix, formed again every few steps.
+void refresh_coarse_space(const MechanicalModel& model, MechanicalState& state) {
+  const LinearSolverConfig& cfg = model.linear;
+  const CoarseSpace& coarse = state.work->coarse;
+  if (cfg.coarse_correction && coarse.aggregates > 0 &&
+      (coarse.built_step < 0 || state.steps < coarse.built_step || state.steps - coarse.built_step >= cfg.coarse_refresh_steps)) {
+    build_coarse_space(model, state);
+  }
+}
+
+// Ax₀ for a warm start from x₀ = `guess`, into `product` (with mixed precision through the
+// single-precision copy of x₀ in `guess_single`).
+void warm_start_product(const BlockSparseMatrix& a, bool single, const Eigen::VectorXd& guess, float* guess_single,
+                        Eigen::VectorXd& product) {
+  if (single) {
+    const auto nodes = static_cast<std::size_t>(a.block_rows());
+    parallel_chunks(nodes, 1024, [&](std::size_t n0, std::size_t n1) {
+      BlockSparseMatrix::round_to_single(guess.data(), guess_single, n0, n1);
+    });
+    a.multiply_single(guess_single, product);
+  } else {
+    a.multiply(guess, product);
+  }
+}
+
+// The inverse diagonal of A's rows [n0, n1) (the two-level preconditioner's fine part).
+void invert_diagonal(const BlockSparseMatrix& a, bool single, std::size_t n0, std::size_t n1, double* diagonal_inverse) {
+  for (std::size_t n = n0; n < n1; ++n) {
+    const std::int64_t slot = a.diagonal_slot(static_cast<std::int32_t>(n));
+    for (int q = 0; q < 3; ++q) {
+      const double entry = single ? static_cast<double>(a.single_block(slot)[BlockSparseMatrix::kSingleColumnStride * q + q])
+                                  : a.block(slot)(q, q);
+      diagonal_inverse[3 * n + static_cast<std::size_t>(q)] = 1.0 / entry;
+    }
+  }
+}
+
+// The inverse 3x3 diagonal blocks of A's rows [n0, n1) (block Jacobi).
+void invert_diagonal_blocks(const BlockSparseMatrix& a, bool single, std::size_t n0, std::size_t n1, Mat3* jacobi) {
+  for (std::size_t n = n0; n < n1; ++n) {
+    const std::int64_t slot = a.diagonal_slot(static_cast<std::int32_t>(n));
+    if (single) {
+      const float* block = a.single_block(slot);
+      Mat3 diagonal;
+      for (int q = 0; q < 3; ++q) {
+        for (int i = 0; i < 3; ++i) diagonal(i, q) = block[BlockSparseMatrix::kSingleColumnStride * q + i];
+      }
+      jacobi[n] = diagonal.inverse();
+    } else {
+      jacobi[n] = a.block(slot).inverse();
+    }
+  }
+}
+
 // Conjugate gradients with SOFA's CGLinearSolver stopping rules: stop when |r|²/|b|² falls
 // below `tolerance`, or when the curvature pᵀAp falls below `threshold` (relative, see
 // below), or after `iterations`. Optional block-Jacobi preconditioning (inverse 3x3 diagonal
@@ -368,17 +422,20 @@ bool solve_direct(MechanicalState& state, const Eigen::VectorXd& b, Eigen::Vecto
 // team is faster by a few microseconds per pass on an idle machine but stalls at every
 // barrier when the machine is oversubscribed and one of its threads is descheduled, while a
 // task loop lets the running threads take over the waiting chunks.
+//
+// Why this function stays long (~190 lines): its stages (the first residual, the two-level
+// correction, the direction pass, the solution pass) are lambdas over one set of a dozen raw
+// pointers and three partial-sum arrays, and each runs as the body of a task loop. As
+// lambdas they are inlined into those bodies, and the fused passes share their loads; as
+// separate functions each would take the whole set as arguments. What does not share them
+// (the coarse refresh, the warm start's product, the diagonal inversions) is outside.
 bool solve_cg(const MechanicalModel& model, MechanicalState& state, const Eigen::VectorXd& b, Eigen::VectorXd& x) {
   SolverWorkspace& w = *state.work;
   const LinearSolverConfig& cfg = model.linear;
   const BlockSparseMatrix& a = w.system;
   const std::size_t nodes = model.node_count();
-  // The two-level preconditioner's coarse matrix, formed again every few steps.
+  refresh_coarse_space(model, state);
   CoarseSpace& coarse = w.coarse;
-  if (cfg.coarse_correction && coarse.aggregates > 0 &&
-      (coarse.built_step < 0 || state.steps < coarse.built_step || state.steps - coarse.built_step >= cfg.coarse_refresh_steps)) {
-    build_coarse_space(model, state);
-  }
   const bool two_level = cfg.coarse_correction && coarse.usable;
   const bool precondition = cfg.block_jacobi || two_level;
   // The two-level preconditioner's fine part is plain Jacobi, taken once per assembled matrix
@@ -472,16 +529,7 @@ bool solve_cg(const MechanicalModel& model, MechanicalState& state, const Eigen:
   // (into Ap, which the first direction pass overwrites), made as the iterations make theirs.
   const bool warm = cfg.warm_start && w.cg_previous.size() == x.size();
   const double* guess = w.cg_previous.data();
-  if (warm) {
-    if (single) {
-      parallel_chunks(nodes, 1024, [&](std::size_t n0, std::size_t n1) {
-        BlockSparseMatrix::round_to_single(guess, z_single, n0, n1);
-      });
-      a.multiply_single(z_single, w.ap);
-    } else {
-      a.multiply(w.cg_previous, w.ap);
-    }
-  }
+  if (warm) warm_start_product(a, single, w.cg_previous, z_single, w.ap);
 
   // r = b − A x₀, z = M⁻¹ r, x = x₀ (0 unless warm); |b|², rᵀz and |r|².
   over_chunks([&](std::size_t c, std::size_t d0, std::size_t d1) {
@@ -491,31 +539,10 @@ bool solve_cg(const MechanicalModel& model, MechanicalState& state, const Eigen:
     }
     const double bb = dot_range(bs, bs, d0, d1);
     if (two_level) {
-      if (fresh_diagonal) {
-        for (std::size_t n = d0 / 3; n < d1 / 3; ++n) {
-          const std::int64_t slot = a.diagonal_slot(static_cast<std::int32_t>(n));
-          for (int q = 0; q < 3; ++q) {
-            const double entry = single ? static_cast<double>(a.single_block(slot)[BlockSparseMatrix::kSingleColumnStride * q + q])
-                                        : a.block(slot)(q, q);
-            diagonal_inverse[3 * n + static_cast<std::size_t>(q)] = 1.0 / entry;
-          }
-        }
-      }
+      if (fresh_diagonal) invert_diagonal(a, single, d0 / 3, d1 / 3, diagonal_inverse);
       restrict_chunk(c, d0, d1);
     } else if (precondition) {
-      for (std::size_t n = d0 / 3; n < d1 / 3; ++n) {
-        const std::int64_t slot = a.diagonal_slot(static_cast<std::int32_t>(n));
-        if (single) {
-          const float* block = a.single_block(slot);
-          Mat3 diagonal;
-          for (int q = 0; q < 3; ++q) {
-            for (int i = 0; i < 3; ++i) diagonal(i, q) = block[BlockSparseMatrix::kSingleColumnStride * q + i];
-          }
-          jacobi[n] = diagonal.inverse();
-        } else {
-          jacobi[n] = a.block(slot).inverse();
-        }
-      }
+      invert_diagonal_blocks(a, single, d0 / 3, d1 / 3, jacobi);
       apply_preconditioner(d0, d1);
     }
     part0[c] = bb;

@@ -1,7 +1,7 @@
 #include "hof/mechanics/detail/vector_kernels.h"
 
-#include "hof/mechanics/parallel.h"
-#include "hof/mechanics/simd_lanes.h"
+#include "hof/mechanics/detail/parallel.h"
+#include "hof/mechanics/detail/simd_lanes.h"
 
 namespace hof::mechanics::detail {
 

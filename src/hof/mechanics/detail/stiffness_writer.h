@@ -7,7 +7,7 @@
 #include <cstdint>
 
 #include "hof/mechanics/block_sparse_matrix.h"
-#include "hof/mechanics/simd_lanes.h"
+#include "hof/mechanics/detail/simd_lanes.h"
 
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wpsabi"

@@ -1,8 +1,9 @@
-#include "hof/mechanics/neo_hookean_force_field.h"
+#include "hof/mechanics/detail/neo_hookean_force_field.h"
 
 #include <fmt/format.h>
 
 #include "hof/mechanics/detail/tet_rest_geometry.h"
+#include "hof/mechanics/detail/tetrahedron_fem_force_field.h"
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/SVD>

@@ -1,4 +1,4 @@
-#include "hof/mechanics/triangle_fem_force_field.h"
+#include "hof/mechanics/detail/triangle_fem_force_field.h"
 
 #include <Eigen/Eigenvalues>
 #include <fmt/format.h>

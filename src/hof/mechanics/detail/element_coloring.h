@@ -11,7 +11,7 @@
 #include <span>
 #include <vector>
 
-#include "hof/mechanics/parallel.h"
+#include "hof/mechanics/detail/parallel.h"
 
 namespace hof::mechanics {
 

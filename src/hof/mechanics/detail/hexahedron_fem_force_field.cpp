@@ -1,4 +1,4 @@
-#include "hof/mechanics/hexahedron_fem_force_field.h"
+#include "hof/mechanics/detail/hexahedron_fem_force_field.h"
 
 #include <fmt/format.h>
 
@@ -11,8 +11,8 @@
 #include <map>
 #include <span>
 
-#include "hof/mechanics/parallel.h"
-#include "hof/mechanics/simd_lanes.h"
+#include "hof/mechanics/detail/parallel.h"
+#include "hof/mechanics/detail/simd_lanes.h"
 
 namespace hof::mechanics {
 

@@ -17,7 +17,7 @@
 #include <vector>
 
 #include "hof/core/error.h"
-#include "hof/mechanics/element_coloring.h"
+#include "hof/mechanics/detail/element_coloring.h"
 #include "hof/mechanics/force_field.h"
 #include "hof/mechanics/mechanical_model.h"
 #include "hof/mesh/mesh.h"

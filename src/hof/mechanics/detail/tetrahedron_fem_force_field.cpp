@@ -1,4 +1,4 @@
-#include "hof/mechanics/tetrahedron_fem_force_field.h"
+#include "hof/mechanics/detail/tetrahedron_fem_force_field.h"
 
 #include <fmt/format.h>
 
@@ -9,8 +9,8 @@
 #include <cmath>
 #include <tuple>
 
-#include "hof/mechanics/parallel.h"
-#include "hof/mechanics/simd_lanes.h"
+#include "hof/mechanics/detail/parallel.h"
+#include "hof/mechanics/detail/simd_lanes.h"
 
 namespace hof::mechanics {
 
@@ -88,31 +88,46 @@ Expected<std::unique_ptr<TetrahedronFemForceField>> TetrahedronFemForceField::ma
   if (!weights) return std::unexpected(weights.error());
   field->elements_.reserve(tets.size());
   for (std::size_t t = 0; t < tets.size(); ++t) {
-    auto rest = tet_rest_geometry(rest_positions, tets[t], t, who);
-    if (!rest) return std::unexpected(rest.error());
-    Element e{};
-    e.nodes = rest->nodes;
-    // The element's modulus as a weight on its volume (see element_modulus_weights).
-    e.volume = rest->volume * (*weights)[t];
-    e.gradients = rest->gradients;
-    e.rest_frame_transposed =
-        triangle_frame(rest_positions[e.nodes[0]], rest_positions[e.nodes[1]], rest_positions[e.nodes[2]]).transpose();
-    field->elements_.push_back(e);
+    auto element = make_element(rest_positions, tets[t], t, (*weights)[t], who);
+    if (!element) return std::unexpected(element.error());
+    field->elements_.push_back(*element);
   }
+  field->index_elements(rest_positions.size());
+  return field;
+}
+
+Expected<TetrahedronFemForceField::Element> TetrahedronFemForceField::make_element(const std::vector<Vec3>& rest_positions,
+                                                                                const mesh::Tet& tet, std::size_t index,
+                                                                                double modulus_weight, const std::string& who) {
+  auto rest = tet_rest_geometry(rest_positions, tet, index, who);
+  if (!rest) return std::unexpected(rest.error());
+  Element e{};
+  e.nodes = rest->nodes;
+  // The element's modulus as a weight on its volume (see element_modulus_weights).
+  e.volume = rest->volume * modulus_weight;
+  e.gradients = rest->gradients;
+  e.rest_frame_transposed =
+      triangle_frame(rest_positions[e.nodes[0]], rest_positions[e.nodes[1]], rest_positions[e.nodes[2]]).transpose();
+  return e;
+}
+
+// What follows from the elements' list alone (node ids, no geometry): the per-node incidence,
+// the SIMD groups (a repacking of the elements' rest data) and the coupled node pairs.
+void TetrahedronFemForceField::index_elements(std::size_t node_count) {
   std::vector<std::array<std::int32_t, 4>> node_lists;
-  node_lists.reserve(field->elements_.size());
-  for (const Element& e : field->elements_) node_lists.push_back(e.nodes);
-  field->incidence_ = make_node_incidence<4>(node_lists, rest_positions.size());
+  node_lists.reserve(elements_.size());
+  for (const Element& e : elements_) node_lists.push_back(e.nodes);
+  incidence_ = make_node_incidence<4>(node_lists, node_count);
 
   // Element groups for the `large` pass.
-  const std::size_t element_count = field->elements_.size();
-  field->groups_.resize((element_count + simd::kLanes - 1) / simd::kLanes);
-  for (std::size_t g = 0; g < field->groups_.size(); ++g) {
-    ElementGroup& group = field->groups_[g];
+  const std::size_t element_count = elements_.size();
+  groups_.resize((element_count + simd::kLanes - 1) / simd::kLanes);
+  for (std::size_t g = 0; g < groups_.size(); ++g) {
+    ElementGroup& group = groups_[g];
     for (int lane = 0; lane < simd::kLanes; ++lane) {
       const std::size_t index = simd::kLanes * g + static_cast<std::size_t>(lane);
       const bool padding = index >= element_count;
-      const Element& e = field->elements_[padding ? 0 : index];
+      const Element& e = elements_[padding ? 0 : index];
       for (int c = 0; c < 4; ++c) group.nodes[c][lane] = e.nodes[c];
       for (int j = 1; j < 4; ++j) {
         const Vec3 local = e.rest_frame_transposed * e.gradients[j];
@@ -130,7 +145,7 @@ Expected<std::unique_ptr<TetrahedronFemForceField>> TetrahedronFemForceField::ma
   std::vector<Term> terms;
   terms.reserve(6 * element_count);
   for (std::size_t e = 0; e < element_count; ++e) {
-    const auto& n = field->elements_[e].nodes;
+    const auto& n = elements_[e].nodes;
     const auto base = static_cast<std::int32_t>(4 * e);
     for (int i = 0; i < 4; ++i) {
       for (int j = i + 1; j < 4; ++j) {
@@ -142,15 +157,44 @@ Expected<std::unique_ptr<TetrahedronFemForceField>> TetrahedronFemForceField::ma
   std::sort(terms.begin(), terms.end(), [](const Term& a, const Term& b) {
     return std::tie(a.row, a.col, a.entry_row) < std::tie(b.row, b.col, b.entry_row);
   });
-  field->edge_terms_.reserve(terms.size());
+  edge_terms_.reserve(terms.size());
   for (std::size_t t = 0; t < terms.size(); ++t) {
     if (t == 0 || terms[t].row != terms[t - 1].row || terms[t].col != terms[t - 1].col) {
       const auto at = static_cast<std::int32_t>(t);
-      field->edges_.push_back({-1, -1, at, at});
+      edges_.push_back({-1, -1, at, at});
     }
-    field->edge_terms_.push_back({terms[t].entry_row, terms[t].entry_col});
-    ++field->edges_.back().last;
+    edge_terms_.push_back({terms[t].entry_row, terms[t].entry_col});
+    ++edges_.back().last;
   }
+}
+
+Expected<std::unique_ptr<TetrahedronFemForceField>> TetrahedronFemForceField::remade(
+    const std::vector<Vec3>& rest_positions, const std::vector<mesh::Tet>& tets,
+    const std::vector<std::int32_t>& old_element, const std::vector<std::int32_t>& new_of_old_node,
+    const TetrahedronFemConfig& config, std::size_t& rebuilt) const {
+  const std::string who = fmt::format("TetrahedronFEMForceField '{}'", name());
+  if (tets.empty()) return make_error(ErrorCode::kInvalidArgument, fmt::format("{}: the topology has no tetrahedra", who));
+  const auto weights = element_modulus_weights(config.element_young_modulus_pa, config.young_modulus_pa, tets.size(), who);
+  if (!weights) return std::unexpected(weights.error());
+  auto field = std::unique_ptr<TetrahedronFemForceField>(new TetrahedronFemForceField());
+  field->set_name(name());
+  field->config_ = config;
+  field->lame_ = lame_;
+  field->elements_.reserve(tets.size());
+  for (std::size_t t = 0; t < tets.size(); ++t) {
+    if (const std::int32_t o = old_element[t]; o >= 0) {
+      // Kept: its rest data as it was, its nodes renumbered.
+      Element e = elements_[static_cast<std::size_t>(o)];
+      for (std::int32_t& n : e.nodes) n = new_of_old_node[static_cast<std::size_t>(n)];
+      field->elements_.push_back(e);
+      continue;
+    }
+    auto element = make_element(rest_positions, tets[t], t, (*weights)[t], who);
+    if (!element) return std::unexpected(element.error());
+    field->elements_.push_back(*element);
+    ++rebuilt;
+  }
+  field->index_elements(rest_positions.size());
   return field;
 }
 

@@ -12,33 +12,17 @@
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "hof/core/error.h"
-#include "hof/mechanics/node_incidence.h"
+#include "hof/mechanics/detail/node_incidence.h"
 #include "hof/mechanics/force_field.h"
-#include "hof/mechanics/stiffness_writer.h"
+#include "hof/mechanics/force_field_config.h"
+#include "hof/mechanics/detail/stiffness_writer.h"
 #include "hof/mesh/mesh.h"
 
 namespace hof::mechanics {
-
-/// How the element rotation is obtained.
-enum class FemMethod : std::uint8_t {
-  kSmall,  ///< no rotation: linear FEM (not invariant to rotations)
-  kLarge,  ///< co-rotational, rotation from the QR frame of the first edges
-  kPolar,  ///< co-rotational, rotation from the polar decomposition of F
-};
-
-struct TetrahedronFemConfig {
-  double young_modulus_pa{5000.0};  ///< SOFA default 5000
-  double poisson_ratio{0.45};       ///< SOFA default 0.45; must be in (−1, 0.5)
-  FemMethod method{FemMethod::kLarge};
-  /// Per tetrahedron (Pa; 0: youngModulus), or empty: material regions, SOFA's vector form.
-  std::vector<double> element_young_modulus_pa;
-  /// Per tetrahedron (0: poissonRatio), or empty. build_model gives each distinct ratio its own
-  /// field over its elements (the assembly shares one λ/μ ratio per field).
-  std::vector<double> element_poisson_ratio;
-};
 
 /// Lamé parameters from E and ν: λ = Eν/((1+ν)(1−2ν)), μ = E/(2(1+ν)).
 struct Lame {
@@ -55,6 +39,20 @@ class TetrahedronFemForceField final : public ForceField {
                                                                   const std::vector<mesh::Tet>& tets,
                                                                   const TetrahedronFemConfig& config,
                                                                   std::string name);
+
+  /// The field over a changed mesh (topology_change.h), rebuilding only what the change
+  /// touched: element t of the result is element old_element[t] of this one — its rest data
+  /// (gradients, volume, frame) kept, its nodes renumbered by new_of_old_node — or, where
+  /// old_element[t] is −1, tets[t] built anew from rest_positions (counted in `rebuilt`). The
+  /// index structures (incidence, SIMD groups, coupled pairs) are redone from the elements'
+  /// node ids. `config` is the field's configuration over the new mesh (its per-element
+  /// moduli are read for the new elements only: a kept element keeps its material).
+  [[nodiscard]] Expected<std::unique_ptr<TetrahedronFemForceField>> remade(const std::vector<Vec3>& rest_positions,
+                                                                           const std::vector<mesh::Tet>& tets,
+                                                                           const std::vector<std::int32_t>& old_element,
+                                                                           const std::vector<std::int32_t>& new_of_old_node,
+                                                                           const TetrahedronFemConfig& config,
+                                                                           std::size_t& rebuilt) const;
 
   [[nodiscard]] std::string_view type_name() const override { return "TetrahedronFEMForceField"; }
   [[nodiscard]] ForceFieldState make_state() const override;
@@ -100,6 +98,12 @@ class TetrahedronFemForceField final : public ForceField {
   };
 
   TetrahedronFemForceField() = default;
+  // One element's rest data (tet `index` of the mesh, for messages), its volume weighted by
+  // its modulus (element_modulus_weights).
+  static Expected<Element> make_element(const std::vector<Vec3>& rest_positions, const mesh::Tet& tet, std::size_t index,
+                                        double modulus_weight, const std::string& who);
+  // The structures that follow from the elements' node ids (incidence, groups, edges).
+  void index_elements(std::size_t node_count);
   // Rotation of element e at positions x (identity for `small`).
   Mat3 rotation(const Element& e, const Mat3& deformation_gradient, const Eigen::VectorXd& x) const;
   // The element's nodal-force map −V R σ at x (f_i = map · b_i), and its rotation R.

@@ -1,12 +1,12 @@
-#include "hof/mechanics/mesh_spring_force_field.h"
+#include "hof/mechanics/detail/mesh_spring_force_field.h"
 
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
 
-#include "hof/mechanics/parallel.h"
-#include "hof/mechanics/simd_lanes.h"
+#include "hof/mechanics/detail/parallel.h"
+#include "hof/mechanics/detail/simd_lanes.h"
 
 #include "hof/mesh/boundary.h"
 

@@ -1,4 +1,4 @@
-#include "hof/mechanics/constant_force_field.h"
+#include "hof/mechanics/detail/constant_force_field.h"
 
 #include <fmt/format.h>
 

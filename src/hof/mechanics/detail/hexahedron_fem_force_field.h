@@ -21,24 +21,15 @@
 #include <vector>
 
 #include "hof/core/error.h"
-#include "hof/mechanics/element_coloring.h"
+#include "hof/mechanics/detail/element_coloring.h"
 #include "hof/mechanics/force_field.h"
-#include "hof/mechanics/node_incidence.h"
-#include "hof/mechanics/stiffness_writer.h"
-#include "hof/mechanics/tetrahedron_fem_force_field.h"
+#include "hof/mechanics/force_field_config.h"
+#include "hof/mechanics/detail/node_incidence.h"
+#include "hof/mechanics/detail/stiffness_writer.h"
+#include "hof/mechanics/detail/tetrahedron_fem_force_field.h"
 #include "hof/mesh/hex_grid.h"
 
 namespace hof::mechanics {
-
-struct HexahedronFemConfig {
-  double young_modulus_pa{5000.0};  ///< SOFA default 5000
-  double poisson_ratio{0.45};       ///< SOFA default 0.45; must be in (−1, 0.5)
-  FemMethod method{FemMethod::kLarge};
-  /// Per hexahedron (Pa; 0: youngModulus), or empty: material regions, SOFA's vector form.
-  std::vector<double> element_young_modulus_pa;
-  /// Per hexahedron (0: poissonRatio; others in (−1, 0.5)), or empty.
-  std::vector<double> element_poisson_ratio;
-};
 
 class HexahedronFemForceField final : public ForceField {
  public:

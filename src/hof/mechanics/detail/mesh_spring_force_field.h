@@ -11,67 +11,13 @@
 #include <vector>
 
 #include "hof/core/error.h"
-#include "hof/mechanics/node_incidence.h"
+#include "hof/mechanics/detail/node_incidence.h"
 #include "hof/mechanics/force_field.h"
-#include "hof/mechanics/stiffness_writer.h"
+#include "hof/mechanics/force_field_config.h"
+#include "hof/mechanics/detail/stiffness_writer.h"
 #include "hof/mesh/mesh.h"
 
 namespace hof::mechanics {
-
-/// How a spring's own stiffness and damping follow from the configured values.
-enum class SpringStiffnessRule {
-  /// Every spring gets the configured values: k in N/m, c in N·s/m (the thesis' surface
-  /// springs, an X3D DeformableShape).
-  kSameForEverySpring,
-  /// SOFA's MeshSpringForceField: the configured values are per unit strain, each spring gets
-  /// k/l0 (N/m) and c/l0 (N·s/m) with l0 its rest length — a short edge is stiffer, as a short
-  /// bar of the same section is (MeshSpringForceField::addSpring, which passes `stiffness / l`
-  /// and `damping / l` to the spring it adds).
-  kDividedByRestLength,
-};
-
-/// The stiffness matrix a spring adds to the implicit system (its force is the same either way).
-/// With f the spring's tension, l its length and u its direction, −∂f_i/∂x_i =
-/// k u uᵀ + (f/l)(I − u uᵀ): the transverse term f/l is negative for a compressed spring.
-enum class SpringTangent {
-  /// The transverse term without the damper's tension, clamped at zero (Choi & Ko, "Stable but
-  /// responsive cloth", SIGGRAPH 2002): the matrix stays positive semi-definite for CG.
-  kClampedTransverse,
-  /// SOFA's (SpringForceField::computeSpringForce, StiffSpringForceField): (k − f/l) u uᵀ +
-  /// (f/l) I with f including the damper's tension, never clamped. An implicit step with it
-  /// is SOFA's step; a strongly compressed mesh can make the system indefinite.
-  kExact,
-};
-
-/// Stiffness and damping of the springs of one element kind (SOFA's `trianglesStiffness`
-/// `trianglesDamping`, `tetrahedraStiffness` `tetrahedraDamping`). Units as MeshSpringConfig's.
-struct SpringValues {
-  double stiffness{0.0};
-  double damping{0.0};
-};
-
-struct MeshSpringConfig {
-  /// SOFA `stiffness` (all element kinds). N/m per spring (kSameForEverySpring) or N per unit
-  /// strain (kDividedByRestLength).
-  double stiffness_n_per_m{0.0};
-  double damping_n_s_per_m{0.0};  ///< SOFA `damping`; N·s/m, or N·s per unit strain rate
-  /// Rest length of each spring as a fraction of its length in the given shape: below 1 the
-  /// springs start in tension (a drum skin, whose tension gives a flat sheet the stiffness
-  /// across its plane that untensioned springs lack). 1 = SOFA's behaviour.
-  double rest_length_scale{1.0};
-  /// kSameForEverySpring keeps HoF's own models as they were; a SOFA scene's springs are
-  /// kDividedByRestLength.
-  SpringStiffnessRule rule{SpringStiffnessRule::kSameForEverySpring};
-  /// kClampedTransverse keeps HoF's own models as they were; a SOFA scene's springs are kExact.
-  SpringTangent tangent{SpringTangent::kClampedTransverse};
-  /// Per element kind, replacing (stiffness, damping) for the edges of that kind. As SOFA's
-  /// MeshSpringForceField::init, the kinds are taken in the order triangles, tetrahedra; an
-  /// edge shared by both gets one spring, with the values of the first kind that has it; a
-  /// kind whose stiffness and damping are both 0 adds no springs (its edges take the next
-  /// kind's values).
-  std::optional<SpringValues> triangles{};
-  std::optional<SpringValues> tetrahedra{};
-};
 
 class MeshSpringForceField final : public ForceField {
  public:

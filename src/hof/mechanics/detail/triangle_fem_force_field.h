@@ -22,29 +22,11 @@
 
 #include "hof/core/error.h"
 #include "hof/mechanics/force_field.h"
-#include "hof/mechanics/tetrahedron_fem_force_field.h"
+#include "hof/mechanics/force_field_config.h"
+#include "hof/mechanics/detail/tetrahedron_fem_force_field.h"
 #include "hof/mesh/mesh.h"
 
 namespace hof::mechanics {
-
-struct TriangleFemConfig {
-  /// SOFA component type this field stands for: "TriangleFEMForceField" (defaults E = 1000 Pa,
-  /// ν = 0.3) or "TriangularFEMForceField" (E = 5000 Pa, ν = 0.45); both: method large,
-  /// thickness 1.
-  std::string sofa_type{"TriangleFEMForceField"};
-  double young_modulus_pa{1000.0};
-  double poisson_ratio{0.3};   ///< must be in (−1, 0.5)
-  double thickness_m{1.0};     ///< SOFA default 1: stiffness per area is E·thickness
-  bool plane_strain{false};    ///< SOFA `planeStrain`: plane strain instead of plane stress
-  FemMethod method{FemMethod::kLarge};  ///< small or large (polar is taken as large)
-  /// Rest shape as a fraction of the given one (SOFA TriangularFEMForceFieldOptim `restScale`):
-  /// below 1 the membrane starts in tension — a drum skin, which a flat sheet needs to resist
-  /// a press across its plane.
-  double rest_scale{1.0};
-  /// Per triangle (0 = the uniform value), or empty: SOFA's vector forms; tissue regions fill them.
-  std::vector<double> element_young_modulus_pa;
-  std::vector<double> element_poisson_ratio;
-};
 
 class TriangleFemForceField final : public ForceField {
  public:

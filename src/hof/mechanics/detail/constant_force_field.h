@@ -9,14 +9,9 @@
 
 #include "hof/core/error.h"
 #include "hof/mechanics/force_field.h"
+#include "hof/mechanics/force_field_config.h"
 
 namespace hof::mechanics {
-
-struct ConstantForceConfig {
-  std::vector<std::int32_t> indices;   ///< nodes the forces act on
-  std::vector<Vec3> forces;            ///< N, one per index (or one for all)
-  std::optional<Vec3> total_force;     ///< N, split equally over `indices` (overrides `forces`)
-};
 
 class ConstantForceField final : public ForceField {
  public:
