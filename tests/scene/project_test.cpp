@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <cmath>
 #include <regex>
 #include <sstream>
 #include <map>
@@ -414,6 +415,15 @@ TEST(ProjectEdit, EachKindOfErrorNamesTheSettingAndWhatIsKnown) {
   EXPECT_TRUE(has(message("haptics/needle", "tipLength", "1"), "needle"));
   EXPECT_TRUE(has(message("haptics/needle/tissue[2]", "body", ""), "<tissue body=\"\">: name the body"));
   EXPECT_TRUE(has(message("haptics", "hapticRate", "50"), "hapticRate must be in [100, 20000] Hz, got 50"));
+  // A typed graphics edit is checked by the same rule, in the same words.
+  GraphicsSetup g = p.graphics;
+  g.transparency = 1.5;
+  ASSERT_FALSE(check_graphics(g));
+  EXPECT_EQ(check_graphics(g).error().message, "<material> transparency must be in [0, 1], got 1.5");
+  EXPECT_TRUE(has(message("graphics/material", "transparency", "1.5"), check_graphics(g).error().message));
+  g = p.graphics;
+  g.viewpoint_m.x() = std::nan("");
+  EXPECT_FALSE(check_graphics(g));
   auto refused = set_project_attribute(p, "memory.hof", "haptics/surface", "stiffness", "-1");
   ASSERT_FALSE(refused);
   EXPECT_EQ(refused.error().file, "memory.hof");  // a value refused names the project, as a file's error does

@@ -126,21 +126,11 @@ procedures::NeedleConfig read_needle(ProjectReader& r, const pugi::xml_node& nod
 }  // namespace
 
 Expected<void> check_graphics(const GraphicsSetup& g) {
-  const auto fail = [](std::string message) -> Expected<void> { return make_error(ErrorCode::kInvalidArgument, std::move(message)); };
-  // The render mode and the colouring are enums: known by their type.
-  if (!g.viewpoint_m.allFinite() || !g.look_at_m.allFinite()) return fail("<graphics> viewpoint and lookAt must be three numbers");
-  const auto unit_colour = [](const Vec3& c) { return c.allFinite() && (c.array() >= 0.0).all() && (c.array() <= 1.0).all(); };
-  if (!unit_colour(g.diffuse_color)) return fail("<material> diffuseColor must be three numbers in [0, 1]");
-  if (!unit_colour(g.specular_color)) return fail("<material> specularColor must be three numbers in [0, 1]");
-  const std::pair<const char*, double> units[] = {{"<material> shininess", g.shininess},
-                                                   {"<material> transparency", g.transparency},
-                                                   {"<light> headlightIntensity", g.headlight_intensity},
-                                                   {"<light> intensity", g.light_intensity},
-                                                   {"<light> ambientIntensity", g.ambient_intensity}};
-  for (const auto& [name, v] : units) {
-    if (!(v >= 0.0 && v <= 1.0)) return fail(fmt::format("{} must be in [0, 1], got {}", name, v));
+  // By the reader's own checks of <graphics>, <material> and <light> (detail/project_fields.h).
+  for (const auto& [fields, element] : {std::pair{&detail::graphics_fields(), "graphics"}, std::pair{&detail::material_fields(), "material"},
+                                        std::pair{&detail::light_fields(), "light"}}) {
+    if (auto problem = detail::check_fields(*fields, element, g)) return make_error(ErrorCode::kInvalidArgument, std::move(*problem));
   }
-  if (!g.light_direction.allFinite() || !(g.light_direction.norm() > 0.0)) return fail("<light> direction must not be zero");
   return {};
 }
 

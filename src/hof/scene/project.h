@@ -148,9 +148,10 @@ struct HofProject {
 [[nodiscard]] Expected<void> set_project_attribute(HofProject& project, const std::filesystem::path& path,
                                                    std::string_view element, std::string_view attribute,
                                                    std::string_view value);
-/// Checks graphics settings as a project file's <graphics> is checked (render mode and
-/// colouring known, colours and intensities in [0, 1], a light direction): a typed edit of
-/// `HofProject::graphics` goes through it. The error names the attribute as the file does.
+/// Checks graphics settings by the checks the reader applies to a file's <graphics>,
+/// <material> and <light> (colours and intensities in [0, 1], a light direction, finite
+/// numbers): a typed edit of `HofProject::graphics` goes through it. The error names the
+/// attribute as the file's reader does.
 [[nodiscard]] Expected<void> check_graphics(const GraphicsSetup& graphics);
 /// The canonical XML text of a project.
 [[nodiscard]] std::string to_xml(const HofProject& project);

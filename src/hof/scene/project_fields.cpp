@@ -57,7 +57,12 @@ Field<T> number(std::string_view name, Get get, Check check) {
             get(into) = v;
             return std::nullopt;
           },
-          [get](const T& from) { return number_text(get(from)); }};
+          [get](const T& from) { return number_text(get(from)); },
+          [name, get, check](const T& from, std::string_view element) -> Problem {
+            const double v = get(from);
+            if (!std::isfinite(v)) return fmt::format("<{}> {}=\"{}\" is not a number", element, name, number_text(v));
+            return check(v, element);
+          }};
 }
 template <class T, class Get>
 Field<T> number(std::string_view name, Get get) {
@@ -87,7 +92,11 @@ Field<T> count(std::string_view name, Get get, int lo, int hi) {
             get(into) = static_cast<int>(v);
             return std::nullopt;
           },
-          [get](const T& from) { return fmt::format("{}", get(from)); }};
+          [get](const T& from) { return fmt::format("{}", get(from)); },
+          [name, get, lo, hi](const T& from, std::string_view element) -> Problem {
+            if (get(from) >= lo && get(from) <= hi) return std::nullopt;
+            return fmt::format("<{}> {}=\"{}\" must be a whole number from {} to {}", element, name, get(from), lo, hi);
+          }};
 }
 
 template <class T, class Get>
@@ -99,7 +108,8 @@ Field<T> boolean(std::string_view name, Get get) {
             else return fmt::format("<{}> {}=\"{}\" must be true or false", element, name, text);
             return std::nullopt;
           },
-          [get](const T& from) { return std::string(get(from) ? "true" : "false"); }};
+          [get](const T& from) { return std::string(get(from) ? "true" : "false"); },
+          [](const T&, std::string_view) -> Problem { return std::nullopt; }};
 }
 
 // Three numbers (more text after them is not read); `check` refuses a vector out of range.
@@ -116,7 +126,12 @@ Field<T> vector(std::string_view name, Get get, Check check) {
             get(into) = v;
             return std::nullopt;
           },
-          [get](const T& from) { return vec_text(get(from)); }};
+          [get](const T& from) { return vec_text(get(from)); },
+          [name, get, check](const T& from, std::string_view element) -> Problem {
+            const Vec3& v = get(from);
+            if (!v.allFinite()) return fmt::format("<{}> {}=\"{}\" must be three numbers", element, name, vec_text(v));
+            return check(v, element);
+          }};
 }
 template <class T, class Get>
 Field<T> vector(std::string_view name, Get get) {
@@ -151,6 +166,12 @@ Field<T> numbers(std::string_view name, std::string_view meaning, ToArray to_arr
             std::string out;
             for (const double v : to_array(from)) out += (out.empty() ? "" : " ") + number_text(v);
             return out;
+          },
+          [name, meaning, to_array](const T& from, std::string_view element) -> Problem {
+            for (const double v : to_array(from)) {
+              if (!std::isfinite(v)) return fmt::format("<{}> {} must be {} numbers ({})", element, name, N, meaning);
+            }
+            return std::nullopt;
           }};
 }
 
@@ -172,7 +193,8 @@ Field<T> choice(std::string_view name, Get get, std::vector<std::pair<std::strin
               if (value == get(from)) return std::string(n);
             }
             return std::string(table.front().first);
-          }};
+          },
+          [](const T&, std::string_view) -> Problem { return std::nullopt; }};  // an enum: one of them
 }
 
 template <class T, class Get>
@@ -182,7 +204,8 @@ Field<T> string_field(std::string_view name, Get get) {
             get(into) = std::string(text);
             return std::nullopt;
           },
-          [get](const T& from) { return std::string(get(from)); }};
+          [get](const T& from) { return std::string(get(from)); },
+          [](const T&, std::string_view) -> Problem { return std::nullopt; }};
 }
 
 constexpr std::pair<std::string_view, RenderMode> kRenderModes[] = {{"shaded", RenderMode::kShaded},
@@ -260,6 +283,12 @@ const Fields<HofProject>& calibration_fields() {
          std::string out;
          for (std::size_t i = 0; i < 16; ++i) out += (i ? " " : "") + number_text(from.position_calibration[i]);
          return out;
+       },
+       [](const HofProject& from, std::string_view) -> Problem {
+         for (const double v : from.position_calibration) {
+           if (!std::isfinite(v)) return std::string("positionCalibration must be 16 numbers (a row-major 4x4 matrix)");
+         }
+         return std::nullopt;
        }},
   };
   return fields;

@@ -190,12 +190,13 @@ Expected<void> GuiWindow::set_graphics(const action::SetGraphics& edit) {
   // A typed edit of the project in memory: checked as a file's <graphics> is, drawn by the
   // window only (nothing for the session).
   if (!session_) return make_error(ErrorCode::kInvalidArgument, "no world is open");
+  const std::string name = edit.settings.empty() ? std::string("graphics") : edit.settings.front();
   if (auto ok = scene::check_graphics(edit.graphics); !ok) {
     Error e = ok.error();
-    e.message = fmt::format("'{}': {}", edit.settings.empty() ? std::string("graphics") : edit.settings.front(), e.message);
+    e.message = fmt::format("'{}': {}", name, e.message);
     return std::unexpected(e);
   }
-  project_.graphics = edit.graphics;
+  if (auto ok = apply_project_edit(scene::project_edit::Graphics{edit.graphics}, name); !ok) return ok;
   note_settings(edit.settings);
   return {};
 }
@@ -204,18 +205,13 @@ Expected<void> GuiWindow::set_surface(const action::SetSurface& edit) {
   // A typed edit of the project in memory; the bodies without a surface of their own take it
   // through the seam.
   if (!session_) return make_error(ErrorCode::kInvalidArgument, "no world is open");
+  const std::string name = edit.settings.empty() ? std::string("haptics/surface") : edit.settings.front();
   if (auto ok = haptics::validate(edit.surface); !ok) {
     Error e = ok.error();
-    e.message = fmt::format("'{}': {}", edit.settings.empty() ? std::string("haptics/surface") : edit.settings.front(), e.message);
+    e.message = fmt::format("'{}': {}", name, e.message);
     return std::unexpected(e);
   }
-  for (const BodyView& b : bodies_) {
-    const bool own = std::any_of(project_.bodies.begin(), project_.bodies.end(), [&](const auto& s) { return s.name == b.name && s.surface; }) ||
-                     std::any_of(project_.obstacles.begin(), project_.obstacles.end(), [&](const auto& o) { return o.name == b.name && o.surface; });
-    if (own) continue;
-    if (auto ok = session_->submit(coupling::command::SetMaterial{b.name, edit.surface}); !ok) return ok;
-  }
-  project_.surface = edit.surface;
+  if (auto ok = apply_project_edit(scene::project_edit::Surface{edit.surface}, name); !ok) return ok;
   note_settings(edit.settings);
   return {};
 }
@@ -226,13 +222,9 @@ Expected<void> GuiWindow::set_rendering(const action::SetRendering& edit) {
   if (!std::isfinite(edit.rendering.proxy_radius_m)) {
     return make_error(ErrorCode::kInvalidArgument, fmt::format("'haptics@proxyRadius': {} is not a number", edit.rendering.proxy_radius_m));
   }
-  scene::HofProject next = project_;
-  next.renderer = edit.rendering.renderer;
-  next.proxy_radius_m = edit.rendering.proxy_radius_m;
-  next.force_shading = edit.rendering.force_shading;
-  next.touchable_face = edit.rendering.touchable_face;
-  if (auto ok = session_->submit(coupling::command::SetRenderer{scene::session_config(next).haptics.renderer}); !ok) return ok;
-  project_ = std::move(next);
+  const action::Rendering& r = edit.rendering;
+  const scene::project_edit::Rendering rendering{r.renderer, r.proxy_radius_m, r.force_shading, r.touchable_face};
+  if (auto ok = apply_project_edit(rendering, edit.settings.empty() ? std::string("haptics") : edit.settings.front()); !ok) return ok;
   note_settings(edit.settings);
   return {};
 }
@@ -320,8 +312,7 @@ Expected<void> GuiWindow::add_region_at_stylus(const action::AddRegionAtStylus& 
 Expected<void> GuiWindow::set_effects(const haptics::ForceEffects& effects) {
   // Adding or removing an effect changes the list as a whole (one command).
   if (!session_) return {};
-  if (auto ok = session_->submit(coupling::command::SetEffects{effects}); !ok) return ok;
-  project_.effects = effects;
+  if (auto ok = apply_project_edit(scene::project_edit::Effects{effects}, "haptics/effects"); !ok) return ok;
   dirty_ = true;
   return {};
 }

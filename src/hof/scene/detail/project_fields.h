@@ -27,6 +27,9 @@ struct Field {
   std::function<std::optional<std::string>(T& into, std::string_view element, std::string_view text)> read;
   /// The attribute's value as the writer writes it (shortest round-trip numbers).
   std::function<std::string(const T& from)> write;
+  /// Checks the value `from` holds as `read` checks one it reads (a typed edit made in memory,
+  /// not read from text, goes through it); the error as `read` words it.
+  std::function<std::optional<std::string>(const T& from, std::string_view element)> check;
 };
 
 template <class T>
@@ -43,6 +46,15 @@ std::optional<std::string> read_fields(const Fields<T>& fields, std::string_view
     if (auto error = f.read(into, element, *text); error && !first) first = std::move(error);
   }
   return first;
+}
+
+/// The first of `fields`' checks that `value` fails.
+template <class T>
+std::optional<std::string> check_fields(const Fields<T>& fields, std::string_view element, const T& value) {
+  for (const Field<T>& f : fields) {
+    if (auto problem = f.check(value, element)) return problem;
+  }
+  return std::nullopt;
 }
 
 /// `name="value"` of every field, separated by spaces, values escaped for XML.
