@@ -1,4 +1,5 @@
 #include "hof/scene/project.h"
+#include "hof/scene/project_edit.h"
 #include "hof/scene/sofa_scene.h"
 
 #include <gtest/gtest.h>
@@ -6,6 +7,10 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <cmath>
+#include <regex>
+#include <sstream>
+#include <map>
 
 namespace hof::scene {
 namespace {
@@ -240,6 +245,189 @@ TEST(ProjectAttribute, SetsByTheFilesOwnNamesAndChecksAsTheReaderDoes) {
   e = set_project_attribute(p, file, "haptics/surface", "stiffness", "a lot");
   ASSERT_FALSE(e);
   EXPECT_EQ(to_xml(p), before);
+}
+
+// A project that writes every element of <haptics> and <graphics>: a needle with a body's own
+// tissue set, force effects of each kind, settings away from the defaults.
+HofProject rich_project() {
+  HofProject p;
+  p.name = "rich";
+  p.mechanics_scene = "liver.scn";
+  p.device = "mouse";
+  p.haptic_rate_hz = 2000.0;
+  p.renderer = haptics::RendererKind::kGodObject;
+  p.touchable_face = collision::TouchableFace::kFrontAndBack;
+  p.coupling = coupling::ContactCoupling::kCompliance;
+  p.position_calibration[3] = 0.125;
+  p.surface.kind = haptics::SurfaceKind::kFrictional;
+  p.surface.stiffness = 0.7;
+  p.safety.max_force_n = 2.5;
+  p.use_bound_tree = false;
+  p.max_triangles_in_leaf = 4;
+  p.needle = procedures::NeedleConfig{};
+  p.needle->axis = procedures::NeedleAxis::kNormal;
+  p.needle->tissue.model = procedures::NeedleForceModel::kSimoneOkamura;
+  p.needle->bodies.emplace_back("Liver", procedures::TissueNeedleParameters{});
+  p.needle->bodies.back().second.capsule_m = 0.015;
+  p.effects.springs.resize(2);
+  p.effects.springs[1].position_m = Vec3(0.01, 0.02, 0.03);
+  p.effects.viscosities.resize(1);
+  p.effects.constants.push_back(haptics::ConstantForceEffect{Vec3(0.0, 0.0, -0.5)});
+  p.graphics.render_mode = RenderMode::kShadedWireframe;
+  p.graphics.color_by = ColorBy::kStrain;
+  p.graphics.headlight = false;
+  return p;
+}
+
+// The written file's elements under <haptics> and <graphics>, each as the edit path names it
+// (haptics/effects/SpringEffect[2]) with its attributes: the writer writes one element a line.
+std::vector<std::pair<std::string, std::vector<std::pair<std::string, std::string>>>> written_settings(const std::string& xml) {
+  std::vector<std::pair<std::string, std::vector<std::pair<std::string, std::string>>>> out;
+  std::vector<std::string> path;                   // the open elements' names, with [n]
+  std::vector<std::map<std::string, int>> counts{{}};  // children seen per open element
+  std::istringstream lines(xml);
+  const std::regex open_tag(R"(^(\s*)<([A-Za-z]+)(.*?)(/?)>$)");
+  const std::regex attribute(R"re(([A-Za-z]+)="([^"]*)")re");
+  for (std::string line; std::getline(lines, line);) {
+    std::smatch m;
+    if (line.find("</") != std::string::npos || line.starts_with("<?")) {
+      if (line.find("</") != std::string::npos && !path.empty()) {
+        path.pop_back();
+        counts.pop_back();
+      }
+      continue;
+    }
+    if (!std::regex_match(line, m, open_tag)) continue;  // an inline scene's text
+    const std::string name = m[2];
+    const int n = ++counts.back()[name];
+    const std::string part = n > 1 ? name + "[" + std::to_string(n) + "]" : name;
+    std::string element;
+    for (std::size_t i = 1; i < path.size(); ++i) element += path[i] + "/";  // path[0]: hof
+    element += part;
+    const std::string attributes = m[3];
+    std::vector<std::pair<std::string, std::string>> values;
+    for (std::sregex_iterator a(attributes.begin(), attributes.end(), attribute), end; a != end; ++a) values.emplace_back((*a)[1], (*a)[2]);
+    if (!path.empty() && (element.starts_with("haptics") || element.starts_with("graphics"))) out.emplace_back(element, values);
+    if (m[4] != "/") {
+      path.push_back(part);
+      counts.emplace_back();
+    }
+  }
+  return out;
+}
+
+TEST(ProjectEdit, EveryWrittenAttributeSetToItsValueLeavesTheProjectUnchanged) {
+  const HofProject p = rich_project();
+  const std::string xml = to_xml(p);
+  const auto settings = written_settings(xml);
+  std::size_t checked = 0;
+  for (const auto& [element, attributes] : settings) {
+    for (const auto& [attribute, value] : attributes) {
+      HofProject q = p;
+      auto ok = set_project_attribute(q, "memory.hof", element, attribute, value);
+      ASSERT_TRUE(ok) << element << "@" << attribute << ": " << ok.error().message;
+      EXPECT_EQ(to_xml(q), xml) << element << "@" << attribute;
+      ++checked;
+    }
+  }
+  // <haptics> 7, calibration 1, surface 7, safety 5, options 2, stylus 2, needle 8, two tissue
+  // sets 16 + 17 (body), 2 springs 10, viscosity 4, force 1, graphics 4, material 4, light 5.
+  EXPECT_EQ(checked, 7u + 1 + 7 + 5 + 2 + 2 + 8 + 16 + 17 + 10 + 4 + 1 + 4 + 4 + 5);
+  // Saved, read and saved again: the same bytes.
+  auto read = parse_project(xml, "memory.hof");
+  ASSERT_TRUE(read) << read.error().to_string();
+  EXPECT_EQ(to_xml(*read), xml);
+}
+
+TEST(ProjectEdit, IsTypedByWhatTheSettingBelongsTo) {
+  const HofProject p = rich_project();
+  const auto edit = [&](std::string_view element, std::string_view attribute, std::string_view value) {
+    auto e = parse_project_edit(p, "memory.hof", element, attribute, value);
+    EXPECT_TRUE(e) << element << "@" << attribute;
+    return e.value_or(ProjectEdit{});
+  };
+  EXPECT_TRUE(std::holds_alternative<project_edit::Rendering>(edit("haptics", "renderer", "PenaltyRenderer")));
+  EXPECT_EQ(std::get<project_edit::Rendering>(edit("haptics", "renderer", "PenaltyRenderer")).renderer, haptics::RendererKind::kPenalty);
+  EXPECT_TRUE(std::holds_alternative<project_edit::Device>(edit("haptics", "device", "falcon")));
+  EXPECT_TRUE(std::holds_alternative<project_edit::ForceLimit>(edit("haptics/safety", "maxForce", "3")));
+  EXPECT_EQ(std::get<project_edit::ForceLimit>(edit("haptics/safety", "maxForce", "3")).max_force_n, 3.0);
+  EXPECT_TRUE(std::holds_alternative<project_edit::Safety>(edit("haptics/safety", "fadeIn", "1")));
+  EXPECT_TRUE(std::holds_alternative<project_edit::Calibration>(edit("haptics/calibration", "positionCalibration",
+                                                                     "2 0 0 0 0 2 0 0 0 0 2 0 0 0 0 1")));
+  const auto effects = edit("haptics/effects/ForceField", "force", "1 2 3");
+  ASSERT_TRUE(std::holds_alternative<project_edit::Effects>(effects));
+  EXPECT_EQ(std::get<project_edit::Effects>(effects).effects.constants[0].force_n, Vec3(1.0, 2.0, 3.0));
+  const auto tissue = edit("haptics/needle/tissue[2]", "capsule", "0.01");
+  ASSERT_TRUE(std::holds_alternative<project_edit::Needle>(tissue));
+  EXPECT_EQ(std::get<project_edit::Needle>(tissue).needle.bodies[0].second.capsule_m, 0.01);
+  EXPECT_EQ(std::get<project_edit::Needle>(tissue).needle.tissue, p.needle->tissue);
+  const auto graphics = edit("graphics", "renderMode", "points");
+  ASSERT_TRUE(std::holds_alternative<project_edit::Graphics>(graphics));
+  EXPECT_EQ(std::get<project_edit::Graphics>(graphics).graphics.render_mode, RenderMode::kPoints);
+  EXPECT_EQ(render_mode_name(RenderMode::kShadedWireframe), "shaded+wireframe");
+  EXPECT_EQ(color_by_name(ColorBy::kStress), "stress");
+}
+
+TEST(ProjectEdit, EachKindOfErrorNamesTheSettingAndWhatIsKnown) {
+  HofProject p = rich_project();
+  const std::string before = to_xml(p);
+  const auto message = [&](std::string_view element, std::string_view attribute, std::string_view value) {
+    auto e = set_project_attribute(p, "memory.hof", element, attribute, value);
+    EXPECT_FALSE(e) << element << "@" << attribute;
+    return e ? std::string() : e.error().message;
+  };
+  const auto has = [](const std::string& text, std::string_view part) { return text.find(part) != std::string::npos; };
+  // A path: NAME[n] malformed; past the count; no such element (the known listed); a section
+  // not set by name.
+  EXPECT_TRUE(has(message("haptics/effects/SpringEffect[0]", "damping", "1"), "is not NAME[n] with n >= 1"));
+  EXPECT_TRUE(has(message("haptics/needle/tissue[3]", "capsule", "1"), "<hof/haptics/needle> has 2 <tissue>, not 3"));
+  EXPECT_TRUE(has(message("haptics/effects/SpringEffect[2]/x", "a", "1"), "no element <x> in <hof/haptics/effects/SpringEffect[2]> (it has: none)"));
+  EXPECT_TRUE(has(message("haptic", "renderer", "PenaltyRenderer"), "no element <haptic> in <hof> (it has: haptics, graphics)"));
+  EXPECT_TRUE(has(message("bodies", "name", "Liver"), "<bodies> is not set by name here"));
+  HofProject no_needle = p;
+  no_needle.needle.reset();
+  auto e = set_project_attribute(no_needle, "memory.hof", "haptics/needle", "axis", "motion");
+  ASSERT_FALSE(e);
+  EXPECT_TRUE(has(e.error().message, "no element <needle> in <hof/haptics> (it has: calibration, surface, safety, options, stylus, effects)"))
+      << e.error().message;
+  // An attribute the element does not have (its attributes listed; a body's tissue set has body).
+  EXPECT_TRUE(has(message("haptics/safety", "maxforce", "1"),
+                  "<hof/haptics/safety> has no attribute 'maxforce' (it has: fadeIn, fadeOut, maxSnapshotAge, maxConsecutiveOverruns, maxForce)"));
+  EXPECT_TRUE(has(message("haptics/needle/tissue[2]", "bodyName", "x"), "(it has: body, pierceable, model,"));
+  EXPECT_TRUE(has(message("haptics/effects", "springConstant", "1"), "<hof/haptics/effects> has no attribute 'springConstant' (it has: none)"));
+  // A value the reader refuses: not a number, not a choice, out of range, and the checks of the
+  // whole element (the surface, a tissue set, the needle, the haptic rate) — each as the file's
+  // reader says it, after the setting and its value.
+  EXPECT_TRUE(has(message("haptics/stylus", "radius", "wide"), "'haptics/stylus@radius' = 'wide': <stylus> radius=\"wide\" is not a number"));
+  EXPECT_TRUE(has(message("haptics", "touchableFace", "SIDE"), "unknown touchableFace \"SIDE\" (FRONT, BACK, FRONT_AND_BACK)"));
+  EXPECT_TRUE(has(message("graphics", "colorBy", "heat"), "unknown colorBy \"heat\" (material, displacement, strain, stress)"));
+  EXPECT_TRUE(has(message("haptics/options", "maxTrianglesInLeaf", "0.5"), "must be a whole number from 1 to 1000000"));
+  EXPECT_TRUE(has(message("haptics/light", "x", "1"), "no element <light> in <hof/haptics>"));
+  EXPECT_TRUE(has(message("graphics/light", "useless", "1"), "has no attribute 'useless'"));
+  EXPECT_TRUE(has(message("graphics/light", "headlight", "maybe"), "<light> headlight=\"maybe\" must be true or false"));
+  EXPECT_TRUE(has(message("graphics/material", "diffuseColor", "1 2 3"), "<material> diffuseColor must be three numbers in [0, 1]"));
+  EXPECT_TRUE(has(message("haptics/effects/SpringEffect[2]", "position", "1 2"), "must be three numbers"));
+  EXPECT_TRUE(has(message("haptics/needle/tissue", "fungPre", "1 2 3"), "must be 4 numbers (a 1/m, b N, d0 m, F0 N)"));
+  EXPECT_TRUE(has(message("haptics/calibration", "positionCalibration", "1 0 0"), "positionCalibration must be 16 numbers"));
+  EXPECT_TRUE(has(message("haptics/surface", "staticFriction", "2"), "surface: staticFriction must be in [0, 1], got 2"));
+  EXPECT_TRUE(has(message("haptics/safety", "maxForce", "-1"), "<safety> maxForce must be >= 0 N"));
+  EXPECT_TRUE(has(message("haptics/needle", "velocityFilter", "2"), "<needle> velocityFilter must be in [0, 1] s, got 2"));
+  EXPECT_TRUE(has(message("haptics/needle", "tipLength", "1"), "needle"));
+  EXPECT_TRUE(has(message("haptics/needle/tissue[2]", "body", ""), "<tissue body=\"\">: name the body"));
+  EXPECT_TRUE(has(message("haptics", "hapticRate", "50"), "hapticRate must be in [100, 20000] Hz, got 50"));
+  // A typed graphics edit is checked by the same rule, in the same words.
+  GraphicsSetup g = p.graphics;
+  g.transparency = 1.5;
+  ASSERT_FALSE(check_graphics(g));
+  EXPECT_EQ(check_graphics(g).error().message, "<material> transparency must be in [0, 1], got 1.5");
+  EXPECT_TRUE(has(message("graphics/material", "transparency", "1.5"), check_graphics(g).error().message));
+  g = p.graphics;
+  g.viewpoint_m.x() = std::nan("");
+  EXPECT_FALSE(check_graphics(g));
+  auto refused = set_project_attribute(p, "memory.hof", "haptics/surface", "stiffness", "-1");
+  ASSERT_FALSE(refused);
+  EXPECT_EQ(refused.error().file, "memory.hof");  // a value refused names the project, as a file's error does
+  EXPECT_EQ(to_xml(p), before);  // nothing changed
 }
 
 }  // namespace

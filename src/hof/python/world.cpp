@@ -19,6 +19,7 @@
 #include "hof/python/run_report.h"
 #include "hof/scene/device_config.h"
 #include "hof/scene/project.h"
+#include "hof/scene/project_edit.h"
 #include "hof/scene/world.h"
 
 namespace hof::python {
@@ -216,13 +217,15 @@ class PyWorld {
       world_->project.device = text;
       return;
     }
-    scene::HofProject next = world_->project;
-    if (auto ok = scene::set_project_attribute(next, world_->file, element, attribute, text); !ok) {
-      Error e = ok.error();
+    auto edit = scene::parse_project_edit(world_->project, world_->file, element, attribute, text);
+    if (!edit) {
+      Error e = edit.error();
       e.code = ErrorCode::kInvalidArgument;  // a value the caller gave, not a file that does not parse
       raise(e);
     }
-    const auto commands = scene::live_commands(next, element, attribute, body_names());
+    scene::HofProject next = world_->project;
+    scene::apply_edit(next, *edit);
+    const auto commands = scene::live_commands(next, *edit, body_names());
     for (const coupling::Command& c : commands.value_or(std::vector<coupling::Command>{})) ok_or_raise(session_->submit(c));
     world_->project = std::move(next);
     if (!commands) {

@@ -24,12 +24,21 @@
 
 namespace hof::scene {
 
+/// How the deformable bodies are drawn (the file's renderMode: shaded, wireframe,
+/// shaded+wireframe, points).
+enum class RenderMode : std::uint8_t { kShaded, kWireframe, kShadedWireframe, kPoints };
+/// What colours the deformable bodies (the file's colorBy): their material, their
+/// displacement from rest, their surface Green strain, their von Mises stress.
+enum class ColorBy : std::uint8_t { kMaterial, kDisplacement, kStrain, kStress };
+/// The file's names of a render mode ("shaded", ...) and a colouring ("material", ...).
+[[nodiscard]] std::string_view render_mode_name(RenderMode mode);
+[[nodiscard]] std::string_view color_by_name(ColorBy colouring);
+
 struct GraphicsSetup {
   Vec3 viewpoint_m{0.0, -0.45, 0.25};
   Vec3 look_at_m{0.0, 0.0, 0.0};
-  std::string render_mode{"shaded"};  ///< shaded | wireframe | shaded+wireframe | points
-  /// What colours the deformable bodies: their material, or their displacement from rest.
-  std::string color_by{"material"};   ///< material | displacement | strain (surface Green strain) | stress (von Mises)
+  RenderMode render_mode{RenderMode::kShaded};
+  ColorBy color_by{ColorBy::kMaterial};
   /// X3D Material of the deformable bodies; the default is the thesis' liver (§ appearance).
   Vec3 diffuse_color{0.36, 0.11, 0.04};
   Vec3 specular_color{0.7, 0.7, 0.7};
@@ -130,17 +139,19 @@ struct HofProject {
 [[nodiscard]] Expected<HofProject> read_project(const std::filesystem::path& path);
 /// A project from its XML text; `path` names it in errors and anchors relative files.
 [[nodiscard]] Expected<HofProject> parse_project(const std::string& text, const std::filesystem::path& path);
-/// Sets one attribute by the file's own names, e.g. ("haptics/surface", "stiffness", "0.4"),
-/// ("haptics", "renderer", "GodObjectRenderer"), ("graphics", "renderMode", "wireframe"),
-/// ("haptics/effects/SpringEffect[2]", "springConstant", "200") (the n-th such element): the
-/// value is checked as when the file is read. Errors name the element and attribute and list
-/// the known ones; `project` is unchanged on error.
+/// Sets one attribute of <haptics> or <graphics> by the file's own names, e.g.
+/// ("haptics/surface", "stiffness", "0.4"), ("haptics", "renderer", "GodObjectRenderer"),
+/// ("graphics", "renderMode", "wireframe"), ("haptics/effects/SpringEffect[2]",
+/// "springConstant", "200") (the n-th such element): parse_project_edit then apply_edit
+/// (scene/project_edit.h), the value checked as when the file is read. Errors name the
+/// element and attribute and list the known ones; `project` is unchanged on error.
 [[nodiscard]] Expected<void> set_project_attribute(HofProject& project, const std::filesystem::path& path,
                                                    std::string_view element, std::string_view attribute,
                                                    std::string_view value);
-/// Checks graphics settings as a project file's <graphics> is checked (render mode and
-/// colouring known, colours and intensities in [0, 1], a light direction): a typed edit of
-/// `HofProject::graphics` goes through it. The error names the attribute as the file does.
+/// Checks graphics settings by the checks the reader applies to a file's <graphics>,
+/// <material> and <light> (colours and intensities in [0, 1], a light direction, finite
+/// numbers): a typed edit of `HofProject::graphics` goes through it. The error names the
+/// attribute as the file's reader does.
 [[nodiscard]] Expected<void> check_graphics(const GraphicsSetup& graphics);
 /// The canonical XML text of a project.
 [[nodiscard]] std::string to_xml(const HofProject& project);

@@ -556,26 +556,25 @@ Expected<World> finish_world(World w, bool sofa_scene, bool bare, const std::str
 
 }  // namespace
 
-std::optional<std::vector<coupling::Command>> live_commands(const HofProject& next, std::string_view element,
-                                                           std::string_view attribute, const std::vector<std::string>& bodies) {
+std::optional<std::vector<coupling::Command>> live_commands(const HofProject& next, const ProjectEdit& edit,
+                                                           const std::vector<std::string>& bodies) {
   const coupling::SessionConfig config = session_config(next);
   std::vector<coupling::Command> commands;
-  if (element == "haptics/surface") {
+  if (std::holds_alternative<project_edit::Surface>(edit)) {
     for (const std::string& body : bodies) {
       const bool own = std::any_of(next.bodies.begin(), next.bodies.end(), [&](const auto& b) { return b.name == body && b.surface; }) ||
                        std::any_of(next.obstacles.begin(), next.obstacles.end(), [&](const auto& o) { return o.name == body && o.surface; });
       if (!own) commands.emplace_back(coupling::command::SetMaterial{body, next.surface});
     }
-  } else if (element == "haptics" &&
-             (attribute == "renderer" || attribute == "proxyRadius" || attribute == "forceShading" || attribute == "touchableFace")) {
+  } else if (std::holds_alternative<project_edit::Rendering>(edit)) {
     commands.emplace_back(coupling::command::SetRenderer{config.haptics.renderer});
-  } else if (element.starts_with("haptics/effects")) {
+  } else if (std::holds_alternative<project_edit::Effects>(edit)) {
     commands.emplace_back(coupling::command::SetEffects{config.effects});
-  } else if (element == "haptics/calibration") {
+  } else if (std::holds_alternative<project_edit::Calibration>(edit)) {
     commands.emplace_back(coupling::command::SetCalibration{config.haptics.calibration});
-  } else if (element == "haptics/safety" && attribute == "maxForce") {
+  } else if (std::holds_alternative<project_edit::ForceLimit>(edit)) {
     commands.emplace_back(coupling::command::SetForceLimit{next.safety.max_force_n});
-  } else if (element == "graphics" || element.starts_with("graphics/") || element == "haptics/stylus") {
+  } else if (std::holds_alternative<project_edit::Graphics>(edit) || std::holds_alternative<project_edit::Stylus>(edit)) {
     // Drawn by the window only.
   } else {
     return std::nullopt;

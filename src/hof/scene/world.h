@@ -30,6 +30,7 @@
 #include "hof/core/error.h"
 #include "hof/coupling/session.h"
 #include "hof/scene/project.h"
+#include "hof/scene/project_edit.h"
 
 namespace hof::scene {
 
@@ -110,15 +111,13 @@ void record_changes(HofProject& project, const coupling::Session& session);
 /// The parameter part of record_changes(): each change as a <set>, replacing an earlier value.
 void record_parameters(HofProject& project, const std::vector<coupling::ParameterChange>& changes);
 
-/// The commands that carry a changed project attribute (`element`, `attribute`, by the file's
-/// own names, as set_project_attribute takes them; `next` is the project with the change) to
-/// a running session of the world's `bodies`: the surface material of every body without one
+/// The commands that carry a project edit (`next` is the project with `edit` made) to a
+/// running session of the world's `bodies`: the surface material of every body without one
 /// of its own, the renderer, the force effects, the calibration, the force limit. An empty
-/// list: the change needs no command (the graphics, drawn by the window). nullopt: it cannot
-/// be made live (it takes effect when the project is read again). The device and the needle
-/// are the caller's (they hold handles on them).
-[[nodiscard]] std::optional<std::vector<coupling::Command>> live_commands(const HofProject& next, std::string_view element,
-                                                                          std::string_view attribute,
+/// list: the change needs no command (the graphics and the stylus, drawn by the window).
+/// nullopt: it cannot be made live (it takes effect when the project is read again). The
+/// device and the needle are the caller's (they hold handles on them).
+[[nodiscard]] std::optional<std::vector<coupling::Command>> live_commands(const HofProject& next, const ProjectEdit& edit,
                                                                           const std::vector<std::string>& bodies);
 
 /// Gives the tetrahedra of `config` whose centroid lies in `region` the region's Young's

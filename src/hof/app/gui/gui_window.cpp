@@ -263,10 +263,10 @@ void GuiWindow::draw_panels() {
 }
 
 void GuiWindow::draw_legend() {
-  const std::string& by = project_.graphics.color_by;
-  if ((by != "displacement" && by != "strain" && by != "stress") || layers_.empty()) return;
-  const bool strain = by == "strain";
-  const bool stress = by == "stress";
+  const scene::ColorBy by = project_.graphics.color_by;
+  if (by == scene::ColorBy::kMaterial || layers_.empty()) return;
+  const bool strain = by == scene::ColorBy::kStrain;
+  const bool stress = by == scene::ColorBy::kStress;
   double range = 0.0;
   for (const LayerView& l : layers_) range = std::max(range, strain ? l.max_strain : stress ? l.max_stress_pa : l.max_displacement_m);
   range = std::max(range, strain ? 0.01 : stress ? 1e-6 : 0.01 * scene_size());

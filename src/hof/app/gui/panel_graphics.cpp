@@ -39,17 +39,23 @@ GuiCommands graphics_panel(const WorldView& w, ViewOptions& view) {
     apply(edit->graphics);
     edit->settings.push_back(fmt::format("{}@{} {}", element, attribute, value));
   };
-  const char* modes[] = {"shaded", "wireframe", "shaded+wireframe", "points"};
-  int mode = static_cast<int>(std::find(std::begin(modes), std::end(modes), g.render_mode) - std::begin(modes));
+  // The combos list the enums' values in their order, by the file's names (views of string
+  // literals: null-terminated).
+  const char* modes[4];
+  for (int i = 0; i < 4; ++i) modes[i] = scene::render_mode_name(static_cast<scene::RenderMode>(i)).data();
+  int mode = static_cast<int>(g.render_mode);
   ImGui::SetNextItemWidth(200);
   if (ImGui::Combo("renderMode", &mode, modes, 4)) {
-    change("graphics", "renderMode", modes[mode], [&](scene::GraphicsSetup& n) { n.render_mode = modes[mode]; });
+    const auto chosen = static_cast<scene::RenderMode>(mode);
+    change("graphics", "renderMode", std::string(scene::render_mode_name(chosen)), [&](scene::GraphicsSetup& n) { n.render_mode = chosen; });
   }
-  const char* colourings[] = {"material", "displacement", "strain", "stress"};
-  int colouring = g.color_by == "displacement" ? 1 : g.color_by == "strain" ? 2 : g.color_by == "stress" ? 3 : 0;
+  const char* colourings[4];
+  for (int i = 0; i < 4; ++i) colourings[i] = scene::color_by_name(static_cast<scene::ColorBy>(i)).data();
+  int colouring = static_cast<int>(g.color_by);
   ImGui::SetNextItemWidth(200);
   if (ImGui::Combo("colorBy", &colouring, colourings, 4)) {
-    change("graphics", "colorBy", colourings[colouring], [&](scene::GraphicsSetup& n) { n.color_by = colourings[colouring]; });
+    const auto chosen = static_cast<scene::ColorBy>(colouring);
+    change("graphics", "colorBy", std::string(scene::color_by_name(chosen)), [&](scene::GraphicsSetup& n) { n.color_by = chosen; });
   }
   float diffuse[3] = {static_cast<float>(g.diffuse_color.x()), static_cast<float>(g.diffuse_color.y()), static_cast<float>(g.diffuse_color.z())};
   if (ImGui::ColorEdit3("diffuseColor", diffuse)) {

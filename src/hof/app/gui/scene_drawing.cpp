@@ -11,10 +11,14 @@ namespace hof::app::gui {
 
 namespace {
 
-render::RenderMode render_mode_of(const std::string& mode) {
-  if (mode == "wireframe") return render::RenderMode::kWireframe;
-  if (mode == "points") return render::RenderMode::kPoints;
-  if (mode == "shaded+wireframe") return render::RenderMode::kShadedWireframe;
+// The project's render mode as the renderer's (scene/ does not depend on render/).
+render::RenderMode render_mode_of(scene::RenderMode mode) {
+  switch (mode) {
+    case scene::RenderMode::kShaded: return render::RenderMode::kShaded;
+    case scene::RenderMode::kWireframe: return render::RenderMode::kWireframe;
+    case scene::RenderMode::kShadedWireframe: return render::RenderMode::kShadedWireframe;
+    case scene::RenderMode::kPoints: return render::RenderMode::kPoints;
+  }
   return render::RenderMode::kShaded;
 }
 

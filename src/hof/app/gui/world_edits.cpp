@@ -21,39 +21,44 @@ Expected<void> GuiWindow::apply_set(const std::string& element, const std::strin
   const std::string name = element + "@" + attribute;
   // mechanics/BODY/COMPONENT@PARAMETER (or mechanics/BODY@PARAMETER for the model's own).
   if (element == "mechanics" || element.starts_with("mechanics/")) return set_mechanics_parameter(element, attribute, value);
+  // The text parsed once, by the project file's names and checks, into a typed edit.
+  auto edit = scene::parse_project_edit(project_, file_, element, attribute, value);
+  if (!edit) return std::unexpected(edit.error());
+  if (auto ok = apply_project_edit(*edit, name); !ok) return ok;
+  if (recording_) recording_->events.push_back(fmt::format("{:.3f}: set {} {}", recording_->seconds(), name, value));
+  dirty_ = true;
+  return {};
+}
+
+Expected<void> GuiWindow::apply_project_edit(const scene::ProjectEdit& edit, const std::string& name) {
   scene::HofProject next = project_;
-  if (auto ok = scene::set_project_attribute(next, file_, element, attribute, value); !ok) return ok;
-  const coupling::SessionConfig config = scene::session_config(next);
-  if (element == "haptics/calibration") {
-    const haptics::Calibration calibration = config.haptics.calibration;
+  scene::apply_edit(next, edit);
+  if (std::holds_alternative<scene::project_edit::Calibration>(edit)) {
+    const haptics::Calibration c = scene::session_config(next).haptics.calibration;
     if (!calibration_pending_) pending_calibration_ = calibration_;  // in force until the loop has the new one
-    if (auto ok = session_->submit(coupling::command::SetCalibration{calibration}); !ok) return ok;
-    calibration_ = calibration;
+    if (auto ok = session_->submit(coupling::command::SetCalibration{c}); !ok) return ok;
+    calibration_ = c;
     // The mouse stylus stays where it is in the world: its device position follows once the
     // haptic loop has the new calibration (before that, a new device position read through the
     // old one would put the stylus elsewhere for a few ticks).
     calibrations_submitted_ += 1;
     calibration_pending_ = true;
-  } else if (element == "haptics" && attribute == "device") {
+  } else if (std::holds_alternative<scene::project_edit::Device>(edit)) {
     if (auto ok = set_device(next, name); !ok) return ok;
-  } else if (element.starts_with("haptics/needle")) {
+  } else if (const auto* needle = std::get_if<scene::project_edit::Needle>(&edit)) {
     // Taken by the needle's next tick: it keeps its place and phase.
-    if (!needle_ || !next.needle) {
-      return make_error(ErrorCode::kInvalidArgument, fmt::format("'{}': no needle is mounted (script: needle on)", name));
-    }
-    if (auto ok = needle_->configure(*next.needle); !ok) return ok;
+    if (!needle_) return make_error(ErrorCode::kInvalidArgument, fmt::format("'{}': no needle is mounted (script: needle on)", name));
+    if (auto ok = needle_->configure(needle->needle); !ok) return ok;
   } else {
     std::vector<std::string> names;
     for (const BodyView& b : bodies_) names.push_back(b.name);
-    const auto commands = scene::live_commands(next, element, attribute, names);
+    const auto commands = scene::live_commands(next, edit, names);
     if (!commands) report(fmt::format("'{}' is saved; it takes effect when the project is reopened", name), false);
     for (const coupling::Command& c : commands.value_or(std::vector<coupling::Command>{})) {
       if (auto ok = session_->submit(c); !ok) return ok;
     }
   }
   project_ = std::move(next);
-  if (recording_) recording_->events.push_back(fmt::format("{:.3f}: set {} {}", recording_->seconds(), name, value));
-  dirty_ = true;
   return {};
 }
 
@@ -188,12 +193,13 @@ Expected<void> GuiWindow::set_graphics(const action::SetGraphics& edit) {
   // A typed edit of the project in memory: checked as a file's <graphics> is, drawn by the
   // window only (nothing for the session).
   if (!session_) return make_error(ErrorCode::kInvalidArgument, "no world is open");
+  const std::string name = edit.settings.empty() ? std::string("graphics") : edit.settings.front();
   if (auto ok = scene::check_graphics(edit.graphics); !ok) {
     Error e = ok.error();
-    e.message = fmt::format("'{}': {}", edit.settings.empty() ? std::string("graphics") : edit.settings.front(), e.message);
+    e.message = fmt::format("'{}': {}", name, e.message);
     return std::unexpected(e);
   }
-  project_.graphics = edit.graphics;
+  if (auto ok = apply_project_edit(scene::project_edit::Graphics{edit.graphics}, name); !ok) return ok;
   note_settings(edit.settings);
   return {};
 }
@@ -202,18 +208,13 @@ Expected<void> GuiWindow::set_surface(const action::SetSurface& edit) {
   // A typed edit of the project in memory; the bodies without a surface of their own take it
   // through the seam.
   if (!session_) return make_error(ErrorCode::kInvalidArgument, "no world is open");
+  const std::string name = edit.settings.empty() ? std::string("haptics/surface") : edit.settings.front();
   if (auto ok = haptics::validate(edit.surface); !ok) {
     Error e = ok.error();
-    e.message = fmt::format("'{}': {}", edit.settings.empty() ? std::string("haptics/surface") : edit.settings.front(), e.message);
+    e.message = fmt::format("'{}': {}", name, e.message);
     return std::unexpected(e);
   }
-  for (const BodyView& b : bodies_) {
-    const bool own = std::any_of(project_.bodies.begin(), project_.bodies.end(), [&](const auto& s) { return s.name == b.name && s.surface; }) ||
-                     std::any_of(project_.obstacles.begin(), project_.obstacles.end(), [&](const auto& o) { return o.name == b.name && o.surface; });
-    if (own) continue;
-    if (auto ok = session_->submit(coupling::command::SetMaterial{b.name, edit.surface}); !ok) return ok;
-  }
-  project_.surface = edit.surface;
+  if (auto ok = apply_project_edit(scene::project_edit::Surface{edit.surface}, name); !ok) return ok;
   note_settings(edit.settings);
   return {};
 }
@@ -224,13 +225,9 @@ Expected<void> GuiWindow::set_rendering(const action::SetRendering& edit) {
   if (!std::isfinite(edit.rendering.proxy_radius_m)) {
     return make_error(ErrorCode::kInvalidArgument, fmt::format("'haptics@proxyRadius': {} is not a number", edit.rendering.proxy_radius_m));
   }
-  scene::HofProject next = project_;
-  next.renderer = edit.rendering.renderer;
-  next.proxy_radius_m = edit.rendering.proxy_radius_m;
-  next.force_shading = edit.rendering.force_shading;
-  next.touchable_face = edit.rendering.touchable_face;
-  if (auto ok = session_->submit(coupling::command::SetRenderer{scene::session_config(next).haptics.renderer}); !ok) return ok;
-  project_ = std::move(next);
+  const action::Rendering& r = edit.rendering;
+  const scene::project_edit::Rendering rendering{r.renderer, r.proxy_radius_m, r.force_shading, r.touchable_face};
+  if (auto ok = apply_project_edit(rendering, edit.settings.empty() ? std::string("haptics") : edit.settings.front()); !ok) return ok;
   note_settings(edit.settings);
   return {};
 }
@@ -318,8 +315,7 @@ Expected<void> GuiWindow::add_region_at_stylus(const action::AddRegionAtStylus& 
 Expected<void> GuiWindow::set_effects(const haptics::ForceEffects& effects) {
   // Adding or removing an effect changes the list as a whole (one command).
   if (!session_) return {};
-  if (auto ok = session_->submit(coupling::command::SetEffects{effects}); !ok) return ok;
-  project_.effects = effects;
+  if (auto ok = apply_project_edit(scene::project_edit::Effects{effects}, "haptics/effects"); !ok) return ok;
   dirty_ = true;
   return {};
 }

@@ -122,16 +122,17 @@ void GuiWindow::upload_layer(LayerView& layer, const haptics::SurfaceSnapshot& s
   if (layer.rest.size() == s.vertices.size()) {
     for (std::size_t i = 0; i < s.vertices.size(); ++i) layer.max_displacement_m = std::max(layer.max_displacement_m, (s.vertices[i] - layer.rest[i]).norm());
   }
-  const std::string& by = project_.graphics.color_by;
-  if ((by != "displacement" && by != "strain" && by != "stress") || layer.rest.size() != s.vertices.size() ||
-      (by == "stress" && layer.stress.size() != s.vertices.size())) {
+  using scene::ColorBy;
+  const ColorBy by = project_.graphics.color_by;
+  if (by == ColorBy::kMaterial || layer.rest.size() != s.vertices.size() ||
+      (by == ColorBy::kStress && layer.stress.size() != s.vertices.size())) {
     if (layer.mesh.has_colours()) layer.mesh.set_colours({});
     return;
   }
   // A scale that grows with the field and has a floor (1 % of the scene; 1 % strain), so that a
   // still body does not flicker through the colour map.
   layer.colours.resize(s.vertices.size());
-  if (by == "strain") {
+  if (by == ColorBy::kStrain) {
     mesh::vertex_strain_magnitude(layer.rest, s.vertices, s.triangles, layer.strain);
     // The scale: the 98th percentile, not the maximum — a point load strains the triangles
     // under it far more than the rest, which would leave the whole body one colour.
@@ -140,11 +141,11 @@ void GuiWindow::upload_layer(LayerView& layer, const haptics::SurfaceSnapshot& s
     std::nth_element(layer.ranked.begin(), at, layer.ranked.end());
     layer.max_strain = layer.ranked.empty() ? 0.0 : *at;
   }
-  const double range = by == "strain"   ? std::max(layer.max_strain, 0.01)
-                       : by == "stress" ? std::max(layer.max_stress_pa, 1e-6)
+  const double range = by == ColorBy::kStrain   ? std::max(layer.max_strain, 0.01)
+                       : by == ColorBy::kStress ? std::max(layer.max_stress_pa, 1e-6)
                                         : std::max(layer.max_displacement_m, 0.01 * scene_size());
   for (std::size_t i = 0; i < s.vertices.size(); ++i) {
-    const double value = by == "strain" ? layer.strain[i] : by == "stress" ? layer.stress[i] : (s.vertices[i] - layer.rest[i]).norm();
+    const double value = by == ColorBy::kStrain ? layer.strain[i] : by == ColorBy::kStress ? layer.stress[i] : (s.vertices[i] - layer.rest[i]).norm();
     const Eigen::Vector3f c = render::viridis(static_cast<float>(value / range));
     layer.colours[i] = render::Rgba(c.x(), c.y(), c.z(), 1.0f);
   }
@@ -153,7 +154,7 @@ void GuiWindow::upload_layer(LayerView& layer, const haptics::SurfaceSnapshot& s
 
 void GuiWindow::update_stress() {
   // Von Mises stress from the bodies' node positions, on this thread, ten times a second.
-  if (project_.graphics.color_by != "stress" || !session_) return;
+  if (project_.graphics.color_by != scene::ColorBy::kStress || !session_) return;
   auto& states = session_->graphics_states();
   const auto now = Clock::now();
   if (now < next_stress_) return;

@@ -75,7 +75,12 @@ class GuiWindow {
   /// Mounts (or takes off) the needle: the world is opened again from the project in memory.
   Expected<void> mount_needle(bool on);
   // Edits (world_edits.cpp).
+  /// A setting by the project file's names (a script's `set`, a panel's SetAttribute): parsed
+  /// into a typed edit at scene/'s edge, then applied.
   Expected<void> apply_set(const std::string& element, const std::string& attribute, const std::string& value);
+  /// A typed edit of the project made, with the session's commands that carry it (`name`:
+  /// element@attribute, for messages).
+  Expected<void> apply_project_edit(const scene::ProjectEdit& edit, const std::string& name);
   Expected<void> set_mechanics_parameter(const std::string& element, const std::string& attribute, const std::string& value);
   Expected<void> set_device(const scene::HofProject& next, const std::string& name);
   /// A structural change (the scene made inline in the project and edited; and/or the material
