@@ -5,8 +5,10 @@
 /// ones, the solvers, the haptic-rate CG). Every timer builds its model from these, so a cell
 /// means the same model wherever it is timed.
 
+#include <array>
 #include <cstddef>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -27,7 +29,12 @@ struct Body {
   std::vector<mesh::Hex> hexes;
   std::size_t surface_triangles{0};
   mesh::TriMesh surface;
+  /// The sparse grid's: the closed surface it fills (the medium liver's).
+  std::optional<mesh::TriMesh> filled_surface;
 };
+
+/// The sparse grid's nodes per axis: cells of about 1 cm over the medium liver.
+inline constexpr std::array<int, 3> kSparseGridNodes{24, 16, 10};
 
 /// The bodies, each generated once on first use (the fine liver takes seconds).
 class Bodies {
@@ -51,7 +58,11 @@ enum class Solver { kExplicitEuler, kSymplecticEuler, kRungeKutta4, kStatic, kIm
 [[nodiscard]] std::string dt_label(double dt);
 
 /// The body with a force field and settings, implicit Euler + CG 25 at dt 0.02 s, resting on
-/// its lowest 4 mm.
+/// its lowest 4 mm, as a SOFA scene (the mesh inline; the springs with HoF's rule, a HoF
+/// extension of MeshSpringForceField).
+[[nodiscard]] std::string body_scene(const Body& b, Field field, Settings s);
+/// body_scene() read by the builder's SOFA reader (scene::read_sofa_scene_text), as `hof run`
+/// reads a scene, with what a scene cannot say set after (see the definition).
 [[nodiscard]] mechanics::ModelConfig body_config(const Body& b, Field field, Settings s);
 /// Switches the ODE (and linear) solver of `c` and sets its step.
 void set_solver(mechanics::ModelConfig& c, Solver s, double dt_s);
