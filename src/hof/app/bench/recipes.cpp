@@ -188,9 +188,10 @@ ModelConfig body_config(const Body& b, Field field, Settings s) {
   HOF_CHECK(scene && scene->models.size() == 1, "the bench's own scene reads as one body");
   ModelConfig c = std::move(scene->models.front().config);
   // What the scene cannot say. Neo-Hookean: SOFA's component takes (μ, k), which the reader
-  // turns into E and ν by a formula that may round the last bit; HoF's field is defined by E
-  // and ν, which the cells state exactly. Newton iterations: only SOFA's StaticSolver has
-  // them (the static cells' count, set_solver keeps it).
+  // turns into E and ν by a formula that rounds (5 kPa, 0.45 read back as E =
+  // 5000.0000000000009 Pa); HoF's field is defined by E and ν, which the cells state exactly.
+  // Newton iterations: only SOFA's StaticSolver has them (the static cells' count, which
+  // set_solver keeps). Threads: a scene has none; 0 (all cores) is the reader's as the bench's.
   if (field == Field::kNeoHookean) {
     auto& neo = *c.force_fields.front().neo_hookean;
     neo.young_modulus_pa = s == Settings::kThesis ? 100.0 : 5000.0;

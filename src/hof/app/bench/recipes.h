@@ -3,7 +3,9 @@
 /// The bench's model recipes: the four standard livers and a hexahedral sparse grid over the
 /// medium one, and the mechanics settings of each cell (the thesis' and the physiological
 /// ones, the solvers, the haptic-rate CG). Every timer builds its model from these, so a cell
-/// means the same model wherever it is timed.
+/// means the same model wherever it is timed. Each model is a SOFA scene (body_scene) read by
+/// the builder's reader, as `hof run` reads a user's scene, and its body is made by
+/// scene::deformable_body: the bench times the models `hof run` would simulate.
 
 #include <array>
 #include <cstddef>
