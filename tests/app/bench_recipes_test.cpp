@@ -212,7 +212,11 @@ TEST(BenchRecipes, SolverAndSetUpsAreTheHandMadeRecipes) {
     set_solver(made, sv, 0.002);
     expect_same(built, made);
   }
-  for (const CorotationalSetup& setup : {CorotationalSetup{0.001, 2, true, false}, CorotationalSetup{0.02}}) {
+  // The plan's set-ups (plan.cpp).
+  for (const CorotationalSetup& setup : {CorotationalSetup{0.02}, CorotationalSetup{0.001, 25, false}, CorotationalSetup{0.001, 25, true},
+                                         CorotationalSetup{0.001, 25, true, false}, CorotationalSetup{0.01, 25, false, false},
+                                         CorotationalSetup{0.02, 100, false, false}, CorotationalSetup{0.001, 100, true, false}}) {
+    SCOPED_TRACE(testing::Message() << setup.dt_s << " " << setup.iterations << " " << setup.haptic_rate_cg << " " << setup.gravity);
     ModelConfig made = hand_made(b, Field::kLarge, Settings::kPhysiological);
     set_solver(made, Solver::kImplicitCg, setup.dt_s);
     made.linear.iterations = setup.iterations;

@@ -167,13 +167,15 @@ std::string table_text(const Body& b) {
 // gravity points along −z (the thesis' liver was y-up). Both rest on their lowest 4 mm (a
 // table under the organ), which keeps every model's motion bounded under gravity.
 // The CG's iteration count is what is measured: no early stop on the residual (1e-12).
-std::string body_scene(const Body& b, Field field, Settings s) {
+std::string body_scene(const Body& b, Field field, Settings s, const ImplicitCgScene& solver) {
   const bool thesis = s == Settings::kThesis;
   const double young = thesis ? 100.0 : 5000.0;
   const double poisson = thesis ? 0.4 : 0.45;
-  std::string text = fmt::format("<Node name=\"root\" dt=\"0.02\" gravity=\"0 0 {}\">\n  <Node name=\"liver\">\n", thesis ? -9.8 : -9.81);
-  text += "    <EulerImplicitSolver name=\"odesolver\" rayleighMass=\"0.1\" rayleighStiffness=\"0.1\"/>\n";
-  text += "    <CGLinearSolver name=\"linearsolver\" iterations=\"25\" tolerance=\"1e-12\" threshold=\"1e-12\"/>\n";
+  std::string text = fmt::format("<Node name=\"root\" dt=\"{}\" gravity=\"0 0 {}\">\n  <Node name=\"liver\">\n", solver.dt_s,
+                                 !solver.gravity ? 0.0 : thesis ? -9.8 : -9.81);
+  text += fmt::format("    <EulerImplicitSolver name=\"odesolver\" rayleighMass=\"{}\" rayleighStiffness=\"0.1\"/>\n", solver.rayleigh_mass);
+  text += fmt::format("    <CGLinearSolver name=\"linearsolver\" iterations=\"{}\" tolerance=\"{}\" threshold=\"{}\"/>\n", solver.iterations,
+                      solver.tolerance, solver.tolerance);
   text += geometry_text(b);
   text += thesis ? "    <UniformMass name=\"mass\" totalMass=\"1\"/>\n" : "    <DiagonalMass name=\"mass\" massDensity=\"1060\"/>\n";
   text += force_field_text(b, field, thesis, young, poisson);
@@ -182,9 +184,9 @@ std::string body_scene(const Body& b, Field field, Settings s) {
   return text;
 }
 
-ModelConfig body_config(const Body& b, Field field, Settings s) {
+ModelConfig body_config(const Body& b, Field field, Settings s, const ImplicitCgScene& solver) {
   // Built as `hof run` builds a scene's body: the SOFA reader makes the ModelConfig.
-  auto scene = scene::read_sofa_scene_text(body_scene(b, field, s), std::filesystem::path("hof-bench") / (b.name + ".scn"));
+  auto scene = scene::read_sofa_scene_text(body_scene(b, field, s, solver), std::filesystem::path("hof-bench") / (b.name + ".scn"));
   HOF_CHECK(scene && scene->models.size() == 1, "the bench's own scene reads as one body");
   ModelConfig c = std::move(scene->models.front().config);
   // What the scene cannot say. Neo-Hookean: SOFA's component takes (μ, k), which the reader
@@ -223,25 +225,20 @@ void set_solver(ModelConfig& c, Solver s, double dt_s) {
 
 void use_haptic_rate_cg(ModelConfig& c) { use_haptic_rate_solver(c.linear, c.ode, c.positions.size()); }
 
+// The haptic-rate CG stays mechanics' own typed mode (use_haptic_rate_solver), as `hof run`
+// applies it: its iterations follow the body's size.
 ModelConfig corotational_config(const Body& b, const CorotationalSetup& s) {
-  ModelConfig config = body_config(b, Field::kLarge, Settings::kPhysiological);
-  set_solver(config, Solver::kImplicitCg, s.dt_s);
-  config.linear.iterations = s.iterations;
+  ModelConfig config = body_config(b, Field::kLarge, Settings::kPhysiological, {.dt_s = s.dt_s, .iterations = s.iterations, .gravity = s.gravity});
   if (s.haptic_rate_cg) use_haptic_rate_cg(config);
-  if (!s.gravity) config.gravity_m_per_s2 = Vec3::Zero();
   return config;
 }
 
 std::string dt_label(double dt) { return fmt::format("dt{:g}", dt); }
 
+// Strongly damped (Rayleigh mass 1): the press is quasi-static.
 ModelConfig coupling_press_config(const Body& b) {
-  ModelConfig c = body_config(b, Field::kLarge, Settings::kPhysiological);
-  c.gravity_m_per_s2 = Vec3::Zero();
-  c.ode.rayleigh_mass = 1.0;  // strongly damped: the press is quasi-static
-  c.ode.rayleigh_stiffness = 0.1;
-  c.linear.iterations = 100;
-  c.linear.tolerance = c.linear.threshold = 1e-9;
-  return c;
+  return body_config(b, Field::kLarge, Settings::kPhysiological,
+                     {.iterations = 100, .tolerance = 1e-9, .rayleigh_mass = 1.0, .gravity = false});
 }
 
 std::size_t pressed_vertex(const Body& b, const mesh::BoundarySurface& boundary) {

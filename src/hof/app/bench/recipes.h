@@ -59,13 +59,23 @@ enum class Solver { kExplicitEuler, kSymplecticEuler, kRungeKutta4, kStatic, kIm
 [[nodiscard]] const char* solver_name(Solver s);
 [[nodiscard]] std::string dt_label(double dt);
 
-/// The body with a force field and settings, implicit Euler + CG 25 at dt 0.02 s, resting on
-/// its lowest 4 mm, as a SOFA scene (the mesh inline; the springs with HoF's rule, a HoF
-/// extension of MeshSpringForceField).
-[[nodiscard]] std::string body_scene(const Body& b, Field field, Settings s);
+/// The implicit Euler + CG a recipe's scene states; the defaults are the bench's own (CG 25
+/// with no early stop at dt 0.02 s, Rayleigh 0.1 and 0.1, gravity on).
+struct ImplicitCgScene {
+  double dt_s{0.02};
+  int iterations{25};
+  double tolerance{1e-12};  ///< CG's tolerance and threshold
+  double rayleigh_mass{0.1};
+  bool gravity{true};
+};
+
+/// The body with a force field and settings, implicit Euler + CG, resting on its lowest 4 mm,
+/// as a SOFA scene (the mesh inline; the springs with HoF's rule, a HoF extension of
+/// MeshSpringForceField).
+[[nodiscard]] std::string body_scene(const Body& b, Field field, Settings s, const ImplicitCgScene& solver = {});
 /// body_scene() read by the builder's SOFA reader (scene::read_sofa_scene_text), as `hof run`
 /// reads a scene, with what a scene cannot say set after (see the definition).
-[[nodiscard]] mechanics::ModelConfig body_config(const Body& b, Field field, Settings s);
+[[nodiscard]] mechanics::ModelConfig body_config(const Body& b, Field field, Settings s, const ImplicitCgScene& solver = {});
 /// Switches the ODE (and linear) solver of `c` and sets its step.
 void set_solver(mechanics::ModelConfig& c, Solver s, double dt_s);
 
