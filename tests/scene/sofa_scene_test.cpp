@@ -681,5 +681,28 @@ TEST_F(SofaSceneFiles, CgImplicitOf2008IsImplicitEulerWithCg) {
   EXPECT_TRUE(contains(s->warnings, "Rayleigh defaults"));
 }
 
+// HoF's extensions of MeshSpringForceField: its own spring rule (the same stiffness for every
+// spring, the clamped tangent) read without a warning; a value outside the two is named.
+TEST(SofaScene, SpringsTakeHofsRuleAsAnExtension) {
+  auto scene = [](const std::string& extra) {
+    return "<Node name=\"root\">\n  <EulerImplicitSolver/>\n  <CGLinearSolver/>\n"
+           "  <MechanicalObject position=\"0 0 0 1 0 0 0 1 0 0 0 1\"/>\n  <MeshTopology tetrahedra=\"0 1 2 3\"/>\n"
+           "  <UniformMass/>\n  <MeshSpringForceField stiffness=\"10\" " + extra + "/>\n</Node>\n";
+  };
+  auto hof = read_sofa_scene_text(scene("stiffnessRule=\"sameForEverySpring\" tangent=\"clampedTransverse\""), "hof.scn");
+  ASSERT_TRUE(hof.has_value()) << hof.error().to_string();
+  EXPECT_TRUE(hof->warnings.empty());
+  const mechanics::MeshSpringConfig& springs = *hof->models.at(0).config.force_fields.at(0).mesh_springs;
+  EXPECT_EQ(springs.rule, mechanics::SpringStiffnessRule::kSameForEverySpring);
+  EXPECT_EQ(springs.tangent, mechanics::SpringTangent::kClampedTransverse);
+  auto sofa = read_sofa_scene_text(scene("stiffnessRule=\"dividedByRestLength\" tangent=\"exact\""), "sofa.scn");
+  ASSERT_TRUE(sofa.has_value()) << sofa.error().to_string();
+  EXPECT_EQ(sofa->models.at(0).config.force_fields.at(0).mesh_springs->rule, mechanics::SpringStiffnessRule::kDividedByRestLength);
+  EXPECT_EQ(sofa->models.at(0).config.force_fields.at(0).mesh_springs->tangent, mechanics::SpringTangent::kExact);
+  auto bad = read_sofa_scene_text(scene("stiffnessRule=\"perSpring\""), "bad.scn");
+  ASSERT_FALSE(bad.has_value());
+  EXPECT_NE(bad.error().message.find("stiffnessRule: 'perSpring'"), std::string::npos) << bad.error().message;
+}
+
 }  // namespace
 }  // namespace hof::scene

@@ -60,8 +60,9 @@ constexpr std::string_view kDataMeshSpringForceField[] = {
     "indices1", "indices2", "length", "lengths", "linesDamping", "linesStiffness", "listening", "localRange",
     "mechanicalStates", "name", "noCompression", "object1", "object2", "printLog", "quadsDamping",
     "quadsStiffness", "rayleighStiffness", "showArrowSize", "spring", "springsIndices1", "springsIndices2",
-    "stiffness", "tags", "tetrahedraDamping", "tetrahedraStiffness", "tetrasDamping", "tetrasStiffness",
-    "topology", "trianglesDamping", "trianglesStiffness",
+    "stiffness", "stiffnessRule", "tags", "tangent", "tetrahedraDamping", "tetrahedraStiffness", "tetrasDamping",
+    "tetrasStiffness", "topology", "trianglesDamping", "trianglesStiffness",
+    // stiffnessRule and tangent: HoF extensions (HoF's own spring rule), not SOFA data.
 };
 constexpr std::string_view kDataSpringForceField[] = {
     "bbox", "componentState", "damping", "drawMode", "elongationOnly", "enabled", "fileSprings", "indices1",

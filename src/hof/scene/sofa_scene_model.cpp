@@ -719,7 +719,27 @@ Expected<mechanics::MeshSpringConfig> Reader::mesh_springs_config(Component& c) 
   }
   if (s.stiffness_n_per_m == 0.0 && s.damping_n_s_per_m == 0.0 && !s.triangles && !s.tetrahedra)
     warn(c.line, fmt::format("{}: no stiffness set (SOFA's default 0): the springs hold nothing", c.label()));
+  if (auto r = spring_rule_extensions(c, s); !r) return std::unexpected(r.error());
   return s;
+}
+
+// HoF extensions (docs/mechanics.md): HoF's own spring rule — the same stiffness for every
+// spring, the transverse tangent clamped — which its generated bodies (X3D DeformableShape,
+// `hof bench`'s spring cells) use. SOFA's rule stays the default.
+Expected<void> Reader::spring_rule_extensions(Component& c, mechanics::MeshSpringConfig& s) {
+  if (const std::string* rule = c.attr("stiffnessRule")) {
+    const std::string v(trim(*rule));
+    if (v == "sameForEverySpring") s.rule = mechanics::SpringStiffnessRule::kSameForEverySpring;
+    else if (v == "dividedByRestLength") s.rule = mechanics::SpringStiffnessRule::kDividedByRestLength;
+    else return fail(c, fmt::format("attribute stiffnessRule: '{}' is not dividedByRestLength or sameForEverySpring", v));
+  }
+  if (const std::string* tangent = c.attr("tangent")) {
+    const std::string v(trim(*tangent));
+    if (v == "clampedTransverse") s.tangent = mechanics::SpringTangent::kClampedTransverse;
+    else if (v == "exact") s.tangent = mechanics::SpringTangent::kExact;
+    else return fail(c, fmt::format("attribute tangent: '{}' is not exact or clampedTransverse", v));
+  }
+  return {};
 }
 
 // ConstantForceField: forces on some nodes (all by default), or a total spread over them.

@@ -176,6 +176,8 @@ class Reader {
   Expected<mechanics::HexahedronFemConfig> hexahedron_fem_config(Component& c, const ModelConfig& m);
   Expected<mechanics::TriangleFemConfig> triangle_fem_config(Component& c, const ModelConfig& m);
   Expected<mechanics::MeshSpringConfig> mesh_springs_config(Component& c);
+  /// MeshSpringForceField's HoF extensions: `stiffnessRule`, `tangent`.
+  Expected<void> spring_rule_extensions(Component& c, mechanics::MeshSpringConfig& s);
   Expected<mechanics::ConstantForceConfig> constant_force_config(Component& c, const ModelConfig& m);
   /// A RegularGridTopology or SparseGridTopology as the model's nodes and hexahedra.
   Expected<void> apply_grid(Component& grid, SofaSceneModel& out);

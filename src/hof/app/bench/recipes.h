@@ -3,10 +3,14 @@
 /// The bench's model recipes: the four standard livers and a hexahedral sparse grid over the
 /// medium one, and the mechanics settings of each cell (the thesis' and the physiological
 /// ones, the solvers, the haptic-rate CG). Every timer builds its model from these, so a cell
-/// means the same model wherever it is timed.
+/// means the same model wherever it is timed. Each model is a SOFA scene (body_scene) read by
+/// the builder's reader, as `hof run` reads a user's scene, and its body is made by
+/// scene::deformable_body: the bench times the models `hof run` would simulate.
 
+#include <array>
 #include <cstddef>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -27,7 +31,12 @@ struct Body {
   std::vector<mesh::Hex> hexes;
   std::size_t surface_triangles{0};
   mesh::TriMesh surface;
+  /// The sparse grid's: the closed surface it fills (the medium liver's).
+  std::optional<mesh::TriMesh> filled_surface;
 };
+
+/// The sparse grid's nodes per axis: cells of about 1 cm over the medium liver.
+inline constexpr std::array<int, 3> kSparseGridNodes{24, 16, 10};
 
 /// The bodies, each generated once on first use (the fine liver takes seconds).
 class Bodies {
@@ -50,9 +59,23 @@ enum class Solver { kExplicitEuler, kSymplecticEuler, kRungeKutta4, kStatic, kIm
 [[nodiscard]] const char* solver_name(Solver s);
 [[nodiscard]] std::string dt_label(double dt);
 
-/// The body with a force field and settings, implicit Euler + CG 25 at dt 0.02 s, resting on
-/// its lowest 4 mm.
-[[nodiscard]] mechanics::ModelConfig body_config(const Body& b, Field field, Settings s);
+/// The implicit Euler + CG a recipe's scene states; the defaults are the bench's own (CG 25
+/// with no early stop at dt 0.02 s, Rayleigh 0.1 and 0.1, gravity on).
+struct ImplicitCgScene {
+  double dt_s{0.02};
+  int iterations{25};
+  double tolerance{1e-12};  ///< CG's tolerance and threshold
+  double rayleigh_mass{0.1};
+  bool gravity{true};
+};
+
+/// The body with a force field and settings, implicit Euler + CG, resting on its lowest 4 mm,
+/// as a SOFA scene (the mesh inline; the springs with HoF's rule, a HoF extension of
+/// MeshSpringForceField).
+[[nodiscard]] std::string body_scene(const Body& b, Field field, Settings s, const ImplicitCgScene& solver = {});
+/// body_scene() read by the builder's SOFA reader (scene::read_sofa_scene_text), as `hof run`
+/// reads a scene, with what a scene cannot say set after (see the definition).
+[[nodiscard]] mechanics::ModelConfig body_config(const Body& b, Field field, Settings s, const ImplicitCgScene& solver = {});
 /// Switches the ODE (and linear) solver of `c` and sets its step.
 void set_solver(mechanics::ModelConfig& c, Solver s, double dt_s);
 
