@@ -20,6 +20,7 @@
 #include <hof/coupling/session.h>
 #include <hof/haptics/device.h>
 #include <hof/haptics/tool.h>
+#include <hof/scene/device_config.h>
 #include <hof/scene/world.h>
 
 namespace {
@@ -65,7 +66,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "vibrating_probe: %s\n", world.error().to_string().c_str());
     return 1;
   }
-  auto device = hof::haptics::open_device(world->device);
+  auto device = hof::scene::open_device(world->device);  // the spec parsed into a typed DeviceConfig, then opened
   if (!device) {
     std::fprintf(stderr, "vibrating_probe: %s\n", device.error().to_string().c_str());
     return 1;
