@@ -94,23 +94,35 @@ std::string CommandSeam::body_names() const {
 
 // ---- Submitting (any thread but the simulation's)
 
-Expected<double> CommandSeam::parameter(std::string_view body, std::string_view component, std::string_view parameter) const {
+Expected<double> CommandSeam::parameter(std::string_view body, mechanics::ParameterRef parameter) const {
   std::lock_guard lock(mutex_);
   take_reports();
   for (std::size_t i = 0; i < names_.size(); ++i) {
     if (names_[i] != body) continue;
     if (!has_mechanics_[i]) return make_error(ErrorCode::kInvalidArgument, fmt::format("body '{}' has no mechanics (a rigid shape)", body));
-    return mechanics::get_parameter(validated_configs_[i], component, parameter);
+    return mechanics::get_parameter(validated_configs_[i], parameter);
   }
   std::string names;
   for (const std::string& name : names_) names += (names.empty() ? "" : ", ") + name;
   return make_error(ErrorCode::kInvalidArgument, fmt::format("no body '{}' (the bodies: {})", body, names));
 }
 
+Expected<mechanics::ModelConfig> CommandSeam::body_config(std::string_view body) const {
+  std::lock_guard lock(mutex_);
+  take_reports();
+  const std::int32_t i = find_body(body);
+  if (i < 0) return make_error(ErrorCode::kInvalidArgument, fmt::format("no body '{}' (bodies: {})", body, body_names()));
+  if (!has_mechanics_[static_cast<std::size_t>(i)]) {
+    return make_error(ErrorCode::kInvalidArgument, fmt::format("body '{}' is rigid: it has no mechanical parameters", body));
+  }
+  return validated_configs_[static_cast<std::size_t>(i)];
+}
+
 Expected<void> CommandSeam::submit(const Command& submitted) {
   Command command = submitted;
   if (const auto* set = std::get_if<command::SetParameter>(&command);
-      set && fem_reaction_ && set->component.empty() && mechanics::parameter_id(set->parameter) == mechanics::ParameterId::kDt &&
+      set && fem_reaction_ &&
+      set->parameter == mechanics::ParameterRef{{mechanics::ComponentKind::kModel, 0}, mechanics::ParameterId::kDt} &&
       !detail::fem_reaction_step_fits(set->value, haptic_rate_hz_)) {
     return make_error(ErrorCode::kInvalidArgument,
                       fmt::format("body '{}': dt {:g} s: coupling fem-reaction needs dt equal to the haptic period, {:g} s", set->body,
@@ -149,7 +161,12 @@ Expected<void> CommandSeam::submit(const Command& submitted) {
   if (auto ok = std::visit([this](auto& c) { return validate(c); }, command); !ok) return ok;
   const std::uint64_t ticket = next_ticket_++;
   if (const auto* set = std::get_if<command::SetParameter>(&command)) {
-    accepted_.push_back(Accepted{ticket, ParameterChange{set->body, set->component, set->parameter, set->value}, false});
+    // Named as the body's configuration names it now (validate found the body).
+    const mechanics::ModelConfig& config = validated_configs_[static_cast<std::size_t>(find_body(set->body))];
+    accepted_.push_back(Accepted{ticket,
+                                 ParameterChange{set->body, std::string(mechanics::component_name(config, set->parameter.component)),
+                                                 std::string(mechanics::parameter_name(set->parameter.id)), set->value},
+                                 false});
   }
   auto* queued = new Queued{ticket, std::move(command)};
   if (!queue_.push(queued)) {  // not reached: the room was checked above, under the same lock
@@ -199,7 +216,7 @@ Expected<void> CommandSeam::validate(command::SetParameter& set) {
     return make_error(ErrorCode::kInvalidArgument, fmt::format("body '{}' is rigid: it has no mechanical parameters", set.body));
   }
   mechanics::ModelConfig& config = validated_configs_[static_cast<std::size_t>(i)];
-  if (auto ok = mechanics::set_parameter(config, set.component, set.parameter, set.value); !ok) {
+  if (auto ok = mechanics::set_parameter(config, set.parameter, set.value); !ok) {
     return make_error(ErrorCode::kInvalidArgument, fmt::format("body '{}': {}", set.body, ok.error().message));
   }
   // Recorded as a change (to be saved) once the simulation has applied it.
@@ -339,12 +356,12 @@ bool CommandSeam::apply(const command::SetParameter& set, Applying& a) {
   for (BodyRuntime& r : a.world.bodies) {
     if (r.body.name != set.body || !r.body.config) continue;
     mechanics::ModelConfig config = *r.body.config;
-    // Validated when submitted: the name is a parameter's, and the typed id sets it.
-    const auto id = mechanics::parameter_id(set.parameter);
-    auto ok = id ? mechanics::set_parameter(config, set.component, *id, set.value) : Expected<void>(std::unexpected(id.error()));
+    // The log names the parameter as the running configuration does.
+    const std::string_view component = mechanics::component_name(config, set.parameter.component);
+    const std::string what = fmt::format("{}/{}{}{} = {}", set.body, component, component.empty() ? "" : "/",
+                                         mechanics::parameter_name(set.parameter.id), set.value);
+    auto ok = mechanics::set_parameter(config, set.parameter, set.value);
     auto model = ok ? mechanics::build_model(config) : Expected<mechanics::MechanicalModel>(std::unexpected(ok.error()));
-    const std::string what =
-        fmt::format("{}/{}{}{} = {}", set.body, set.component, set.component.empty() ? "" : "/", set.parameter, set.value);
     const auto body = static_cast<std::uint32_t>(&r - a.world.bodies.data());
     if (!model) {
       a.log(fmt::format("{} refused: {}", what, model.error().message));

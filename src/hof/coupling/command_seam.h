@@ -29,6 +29,7 @@
 #include "hof/haptics/device_config.h"
 #include "hof/haptics/haptic_loop.h"
 #include "hof/mechanics/mechanical_model.h"
+#include "hof/mechanics/model_parameters.h"
 
 namespace hof::coupling {
 
@@ -38,11 +39,10 @@ struct World;
 }
 
 namespace command {
-/// A named parameter of a body's component (mechanics::set_parameter names).
+/// A parameter of a body's component (scene::resolve_parameter maps a scene's names to it).
 struct SetParameter {
   std::string body;
-  std::string component;  ///< "" for the model itself (dt, ...)
-  std::string parameter;
+  mechanics::ParameterRef parameter;
   double value{0.0};
 };
 struct Pause {};
@@ -98,7 +98,8 @@ using Command = std::variant<command::SetParameter, command::Pause, command::Res
                              command::SetMaterial, command::SetEffects, command::SetRenderer, command::SetForceLimit,
                              command::SetDevice, command::SetModel, command::SetCalibration>;
 
-/// A parameter changed through the seam, as a project saves it.
+/// A parameter changed through the seam, as a project saves it (named by the body's
+/// configuration when the change was submitted; "" for the model's own parameters).
 struct ParameterChange {
   std::string body, component, parameter;
   double value{0.0};
@@ -134,7 +135,8 @@ class CommandSeam {
   /// Applies the queued commands, in order, to `world` (simulation thread, between steps).
   void apply(detail::World& world, SessionReport& report);
 
-  [[nodiscard]] Expected<double> parameter(std::string_view body, std::string_view component, std::string_view parameter) const;
+  [[nodiscard]] Expected<double> parameter(std::string_view body, mechanics::ParameterRef parameter) const;
+  [[nodiscard]] Expected<mechanics::ModelConfig> body_config(std::string_view body) const;
   [[nodiscard]] std::vector<ParameterChange> parameter_changes(bool with_queued) const;
   [[nodiscard]] std::vector<std::pair<std::string, haptics::SurfaceMaterial>> material_changes() const;
   [[nodiscard]] haptics::Calibration calibration() const;
