@@ -408,6 +408,9 @@ TEST(World, ChangesThroughTheCommandSeamAreInTheNextSavedProject) {
   (*session)->run_virtual(0.05, {});
   ASSERT_TRUE((*session)->submit(*parameter_command(**session, "Liver", "FEM", "youngModulus", 7000.0)));
   ASSERT_FALSE((*session)->submit(*parameter_command(**session, "Liver", "FEM", "youngModulus", -7000.0)));
+  auto nobody = parameter_command(**session, "Spleen", "FEM", "youngModulus", 1.0);
+  ASSERT_FALSE(nobody);
+  EXPECT_NE(nobody.error().message.find("no body 'Spleen' (bodies: "), std::string::npos) << nobody.error().message;
   haptics::SurfaceMaterial magnetic;
   magnetic.kind = haptics::SurfaceKind::kMagnetic;
   ASSERT_TRUE((*session)->submit(coupling::command::SetMaterial{"Liver", magnetic}));

@@ -125,22 +125,35 @@ Expected<double> get_parameter(const mechanics::ModelConfig& config, std::string
   return mechanics::get_parameter(config, *ref);
 }
 
+Expected<coupling::BodyId> body_id(const coupling::Session& session, std::string_view body) {
+  std::string names;
+  for (std::size_t i = 0; i < session.body_count(); ++i) {
+    if (session.body(i).name == body) return static_cast<coupling::BodyId>(i);
+    names += (names.empty() ? "" : ", ") + session.body(i).name;
+  }
+  return make_error(ErrorCode::kInvalidArgument, fmt::format("no body '{}' (bodies: {})", body, names.empty() ? "none" : names));
+}
+
 Expected<coupling::command::SetParameter> parameter_command(const coupling::Session& session, std::string_view body,
                                                            std::string_view component, std::string_view parameter, double value) {
-  const auto config = session.body_config(body);
+  const auto id = body_id(session, body);
+  if (!id) return std::unexpected(id.error());
+  const auto config = session.body_config(*id);
   if (!config) return std::unexpected(config.error());
   const auto ref = resolve_parameter(*config, component, parameter);
   if (!ref) return make_error(ErrorCode::kInvalidArgument, fmt::format("body '{}': {}", body, ref.error().message));
-  return coupling::command::SetParameter{std::string(body), *ref, value};
+  return coupling::command::SetParameter{*id, *ref, value};
 }
 
 Expected<double> session_parameter(const coupling::Session& session, std::string_view body, std::string_view component,
                                    std::string_view parameter) {
-  const auto config = session.body_config(body);
+  const auto id = body_id(session, body);
+  if (!id) return std::unexpected(id.error());
+  const auto config = session.body_config(*id);
   if (!config) return std::unexpected(config.error());
   const auto ref = resolve_parameter(*config, component, parameter);
   if (!ref) return std::unexpected(ref.error());
-  return session.parameter(body, *ref);
+  return session.parameter(*id, *ref);
 }
 
 }  // namespace hof::scene

@@ -54,6 +54,9 @@ namespace hof::scene {
 [[nodiscard]] Expected<double> get_parameter(const mechanics::ModelConfig& config, std::string_view component,
                                              std::string_view parameter);
 
+/// The body of a session by its scene name; an unknown name is an error naming the bodies.
+[[nodiscard]] Expected<coupling::BodyId> body_id(const coupling::Session& session, std::string_view body);
+
 /// The command that sets a parameter of a session's body by its scene names, resolved against
 /// the body's configuration as the commands accepted so far leave it. Errors: no such body, a
 /// rigid body, then "body 'NAME': " and resolve_parameter's.

@@ -125,7 +125,9 @@ GuiCommands mechanics_panel(const WorldView& w, MechanicsPanelState& ui) {
         const std::string parameter = p.substr(prefix.size());
         // The value as the accepted commands leave it: the session's.
         const auto ref = scene::resolve_parameter(*b.structure, component, parameter);
-        const auto value = ref ? w.session->parameter(b.name, *ref) : Expected<double>(std::unexpected(ref.error()));
+        const auto body = scene::body_id(*w.session, b.name);
+        if (!ref || !body) continue;
+        const auto value = w.session->parameter(*body, *ref);
         if (!value) continue;
         double v = *value;
         ImGui::SetNextItemWidth(130);

@@ -142,7 +142,9 @@ Expected<void> GuiWindow::change_structure(const std::optional<scene::SceneEdit>
   }
   for (const coupling::SessionBody& b : world->bodies) {
     if (!b.config) continue;
-    if (auto ok = session_->submit(coupling::command::SetModel{b.name, *b.config, nullptr}); !ok) {
+    const auto id = scene::body_id(*session_, b.name);
+    if (auto ok = id ? session_->submit(coupling::command::SetModel{*id, *b.config, nullptr}) : Expected<void>(std::unexpected(id.error()));
+        !ok) {
       Error e = ok.error();
       e.message = "the change is not made: " + e.message;
       return std::unexpected(e);
