@@ -1,15 +1,16 @@
 #pragma once
 /// @file
 /// Parameters of a model's components, addressed by typed references (scene/ maps a scene's
-/// names, SOFA's data names, to them), so that a setting can be changed — by the command seam while a session runs, and by a
-/// project's overrides when it is loaded — with one validation:
-///   component = a force field's name:  stiffness, damping, restLengthScale (mesh springs);
+/// names, SOFA's data names, to them: scene/model_parameters.h), so that a setting can be
+/// changed — by the command seam while a session runs, and by a project's overrides when it is
+/// loaded — with one validation:
+///   a force field (kForceField, index): stiffness, damping, restLengthScale (mesh springs);
 ///                                      youngModulus, poissonRatio (FEM, Neo-Hookean, membrane),
-///                                      thickness (membrane)
-///   component = the ODE solver's name: rayleighStiffness, rayleighMass
-///   component = the linear solver's:   iterations, tolerance, threshold
-///   component = the mass's name:       totalMass, massDensity
-///   component = "" (the model itself): dt, maxSpeed, gravityX, gravityY, gravityZ
+///                                      thickness, restScale (membrane)
+///   the ODE solver (kOdeSolver):       rayleighStiffness, rayleighMass, matrixReuseSteps
+///   the linear solver (kLinearSolver): iterations, tolerance, threshold, warmStart, ...
+///   the mass (kMass):                  totalMass, massDensity
+///   the model itself (kModel):         dt, maxSpeed, gravityX, gravityY, gravityZ
 /// Values are SI (N/m, Pa, s, kg, kg/m³).
 
 #include <cstdint>
