@@ -56,10 +56,10 @@ TEST(CommandSeam, AWrongCommandIsAClearErrorAndChangesNothing) {
   auto nobody = session->submit(command::SetMaterial{"spleen", {}});
   ASSERT_FALSE(nobody);
   EXPECT_NE(nobody.error().message.find("no body 'spleen' (bodies: box)"), std::string::npos) << nobody.error().message;
-  auto rigid = session->submit(command::SetParameter{"box", "", "dt", 0.001});
+  auto rigid = session->submit(command::SetParameter{BodyId{0}, {{mechanics::ComponentKind::kModel, 0}, mechanics::ParameterId::kDt}, 0.001});
   ASSERT_FALSE(rigid);
   EXPECT_NE(rigid.error().message.find("rigid"), std::string::npos) << rigid.error().message;
-  EXPECT_FALSE(session->parameter("box", "", "dt"));
+  EXPECT_FALSE(session->parameter(BodyId{0}, mechanics::ParameterRef{{mechanics::ComponentKind::kModel, 0}, mechanics::ParameterId::kDt}));
   const SessionReport report = session->run_virtual(0.05, {});
   EXPECT_TRUE(report.applied_commands.empty());
   EXPECT_TRUE(session->material_changes().empty());

@@ -237,7 +237,7 @@ TEST(FaultInjection, AnExplodingSimulationIsReportedAndItsForceFadesOutThenANewM
   ASSERT_FALSE(pressed.diverged) << pressed.divergence;
   ASSERT_GT(samples.back().force.norm(), 0.3) << "the stylus must be pressing when the model explodes";
 
-  ASSERT_TRUE(session.submit(command::SetModel{"Liver", exploding_liver(), nullptr}));
+  ASSERT_TRUE(session.submit(command::SetModel{BodyId{0}, exploding_liver(), nullptr}));
   const std::size_t before = samples.size();
   const SessionReport exploded = session.run_virtual(2.0, keep);
   ASSERT_TRUE(exploded.diverged);
@@ -266,7 +266,7 @@ TEST(FaultInjection, AnExplodingSimulationIsReportedAndItsForceFadesOutThenANewM
   EXPECT_TRUE(probe.last_force.isZero(0.0));
 
   // Recovery: a stable model again, from rest; the force comes back while the stylus presses.
-  ASSERT_TRUE(session.submit(command::SetModel{"Liver", stable_liver(), nullptr}));
+  ASSERT_TRUE(session.submit(command::SetModel{BodyId{0}, stable_liver(), nullptr}));
   ASSERT_TRUE(session.submit(command::Reset{}));
   const std::size_t recovered_from = samples.size();
   const SessionReport recovered = session.run_virtual(1.5, keep);
@@ -304,7 +304,7 @@ TEST(FaultInjection, AnExplodingSimulationInRealTimeEndsTheSimulationThreadAndTh
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
   ASSERT_TRUE(pushing_now()) << "never pressed";
-  ASSERT_TRUE(session.submit(command::SetModel{"Liver", exploding_liver(), nullptr}));
+  ASSERT_TRUE(session.submit(command::SetModel{BodyId{0}, exploding_liver(), nullptr}));
   while (!session.simulation_ended() && Clock::now() < deadline) {
     session.poll(keep);
     std::this_thread::sleep_for(std::chrono::milliseconds(5));

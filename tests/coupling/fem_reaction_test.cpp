@@ -180,7 +180,7 @@ TEST(FemReactionCoupling, NeedsOneSimulationStepPerHapticTick) {
   // And a running session refuses a dt that breaks it.
   Press press = make_press(liver, ContactCoupling::kFemReaction);
   ASSERT_TRUE(press.session);
-  auto refused = press.session->submit(command::SetParameter{"liver", "", "dt", 0.005});
+  auto refused = press.session->submit(command::SetParameter{BodyId{0}, {{mechanics::ComponentKind::kModel, 0}, mechanics::ParameterId::kDt}, 0.005});
   ASSERT_FALSE(refused);
   EXPECT_NE(refused.error().message.find("fem-reaction"), std::string::npos) << refused.error().message;
 }

@@ -299,6 +299,12 @@ TEST(WorldSession, EffectOnlyWorldRendersEachEffectsOwnFormulaAtEveryTick) {
 
 // ---- The command seam.
 
+// The liver's springs (its only force field), its linear solver and the model itself.
+constexpr BodyId kLiver{0};
+constexpr BodyId kNoBody{1};
+constexpr mechanics::ComponentRef kSprings{mechanics::ComponentKind::kForceField, 0};
+constexpr mechanics::ParameterRef kStiffness{kSprings, mechanics::ParameterId::kStiffness};
+
 std::unique_ptr<Session> springs_liver_session(std::unique_ptr<haptics::Device> device, int simulation_threads = 0,
                                                bool pin_threads = true) {
   const mesh::Mesh liver = *mesh::generate_liver(mesh::LiverResolution::kSimple);
@@ -325,15 +331,16 @@ std::unique_ptr<Session> springs_liver_session(std::unique_ptr<haptics::Device> 
 TEST(CommandSeam, ABadValueIsRefusedWithAMessageAndChangesNothing) {
   auto session = springs_liver_session(poke_device(Vec3(0.03, 0, 0.09), Vec3(0, 0, -1), 0.04, 0.01, 0.05, 0.3));
   for (double bad : {-5.0, std::nan(""), std::numeric_limits<double>::infinity()}) {
-    auto refused = session->submit(command::SetParameter{"Liver", "springs", "stiffness", bad});
+    auto refused = session->submit(command::SetParameter{kLiver, kStiffness, bad});
     ASSERT_FALSE(refused);
     EXPECT_NE(refused.error().message.find("springs/stiffness"), std::string::npos) << refused.error().message;
   }
-  EXPECT_FALSE(session->submit(command::SetParameter{"Spleen", "springs", "stiffness", 10.0}));
-  EXPECT_FALSE(session->submit(command::SetParameter{"Liver", "FEM", "youngModulus", 10.0}));
-  EXPECT_FALSE(session->submit(command::SetParameter{"Liver", "springs", "youngModulus", 10.0}));
-  EXPECT_FALSE(session->submit(command::SetParameter{"Liver", "cg", "iterations", 2.5}));
-  EXPECT_FALSE(session->submit(command::SetParameter{"Liver", "", "dt", 0.0}));
+  EXPECT_FALSE(session->submit(command::SetParameter{kNoBody, kStiffness, 10.0}));
+  using mechanics::ComponentKind, mechanics::ParameterId;
+  EXPECT_FALSE(session->submit(command::SetParameter{kLiver, {{ComponentKind::kForceField, 1}, ParameterId::kYoungModulus}, 10.0}));
+  EXPECT_FALSE(session->submit(command::SetParameter{kLiver, {kSprings, ParameterId::kYoungModulus}, 10.0}));
+  EXPECT_FALSE(session->submit(command::SetParameter{kLiver, {{ComponentKind::kLinearSolver, 0}, ParameterId::kIterations}, 2.5}));
+  EXPECT_FALSE(session->submit(command::SetParameter{kLiver, {{ComponentKind::kModel, 0}, ParameterId::kDt}, 0.0}));
   EXPECT_FALSE(session->submit(command::SingleStep{0}));
   haptics::SurfaceMaterial negative;
   negative.stiffness = -1.0;
@@ -355,7 +362,7 @@ TEST(CommandSeam, AStiffnessChangedInVirtualTimeActsAtTheNextStep) {
   b->run_virtual(1.0, {});
   ASSERT_GT(pressed.bodies.at(0).max_displacement_m, 1e-4) << "the probe must deform the liver before the change";
   ASSERT_TRUE(a->state().x.isApprox(b->state().x, 0.0));
-  ASSERT_TRUE(b->submit(command::SetParameter{"Liver", "springs", "stiffness", 500.0}));
+  ASSERT_TRUE(b->submit(command::SetParameter{kLiver, kStiffness, 500.0}));
   EXPECT_TRUE(b->parameter_changes().empty()) << "recorded once applied, not when submitted";
   const SessionReport rb = b->run_virtual(0.01, {});  // one step
   a->run_virtual(0.01, {});
@@ -374,7 +381,7 @@ TEST(CommandSeam, AModelSwitchedMidRunStartsFromTheCurrentShapeAndActsAtTheNextS
   auto b = springs_liver_session(poke_device(Vec3(0.03, 0, 0.09), Vec3(0, 0, -1), 0.04, 0.01, 0.05, 0.3));
   a->run_virtual(1.0, {});
   b->run_virtual(1.0, {});
-  ASSERT_TRUE(b->submit(command::SetParameter{"Liver", "springs", "stiffness", 80.0}));
+  ASSERT_TRUE(b->submit(command::SetParameter{kLiver, kStiffness, 80.0}));
   b->run_virtual(0.01, {});
   ASSERT_EQ(b->parameter_changes().size(), 1u);
   const Eigen::VectorXd before = b->state().x;
@@ -382,7 +389,7 @@ TEST(CommandSeam, AModelSwitchedMidRunStartsFromTheCurrentShapeAndActsAtTheNextS
   fem.force_fields[0] = mechanics::ForceFieldConfig{};
   fem.force_fields[0].name = "FEM";
   fem.force_fields[0].tetrahedron_fem = mechanics::TetrahedronFemConfig{3000.0, 0.45, mechanics::FemMethod::kLarge, {}, {}};
-  ASSERT_TRUE(b->submit(command::SetModel{"Liver", fem, nullptr}));
+  ASSERT_TRUE(b->submit(command::SetModel{kLiver, fem, nullptr}));
   const SessionReport rb = b->run_virtual(0.01, {});
   ASSERT_EQ(rb.applied_commands.size(), 1u);
   EXPECT_EQ(rb.applied_commands[0], "step 0: Liver has a new model");
@@ -399,15 +406,15 @@ TEST(CommandSeam, AModelSwitchedMidRunStartsFromTheCurrentShapeAndActsAtTheNextS
   // Another mesh, an unbuildable model, a rigid or unknown body: refused, nothing changes.
   mechanics::ModelConfig fewer = fem;
   fewer.positions.pop_back();
-  auto other_mesh = b->submit(command::SetModel{"Liver", fewer, nullptr});
+  auto other_mesh = b->submit(command::SetModel{kLiver, fewer, nullptr});
   ASSERT_FALSE(other_mesh);
   EXPECT_NE(other_mesh.error().message.find("another mesh"), std::string::npos) << other_mesh.error().message;
   mechanics::ModelConfig bad = fem;
   bad.force_fields[0].tetrahedron_fem->poisson_ratio = 0.7;
-  auto unbuildable = b->submit(command::SetModel{"Liver", bad, nullptr});
+  auto unbuildable = b->submit(command::SetModel{kLiver, bad, nullptr});
   ASSERT_FALSE(unbuildable);
   EXPECT_NE(unbuildable.error().message.find("poissonRatio"), std::string::npos) << unbuildable.error().message;
-  EXPECT_FALSE(b->submit(command::SetModel{"Spleen", fem, nullptr}));
+  EXPECT_FALSE(b->submit(command::SetModel{kNoBody, fem, nullptr}));
   EXPECT_TRUE(b->run_virtual(0.02, {}).applied_commands.empty());
 }
 
@@ -463,7 +470,7 @@ TEST(CommandSeam, CommandsDuringARealTimeRunAreAppliedBetweenSteps) {
   auto session = springs_liver_session(std::make_unique<haptics::ScriptedDevice>(*haptics::ScriptedMotion::make(hold)));
   session->start_realtime();
   EXPECT_TRUE(session->realtime_running());
-  ASSERT_TRUE(session->submit(command::SetParameter{"Liver", "springs", "stiffness", 80.0}));
+  ASSERT_TRUE(session->submit(command::SetParameter{kLiver, kStiffness, 80.0}));
   ASSERT_TRUE(session->submit(command::Pause{}));
   ASSERT_TRUE(session->submit(command::SingleStep{3}));
   ASSERT_TRUE(session->submit(command::Resume{}));
@@ -471,7 +478,7 @@ TEST(CommandSeam, CommandsDuringARealTimeRunAreAppliedBetweenSteps) {
   haptics::SurfaceMaterial frictional;
   frictional.kind = haptics::SurfaceKind::kFrictional;
   ASSERT_TRUE(session->submit(command::SetMaterial{"", frictional}));
-  EXPECT_FALSE(session->submit(command::SetParameter{"Liver", "springs", "stiffness", -1.0}));
+  EXPECT_FALSE(session->submit(command::SetParameter{kLiver, kStiffness, -1.0}));
   // Wait for the simulation to take them (no timing asserted: however long it takes).
   std::int64_t samples = 0;
   while (session->haptic_loop().ticks() < 300) {

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <tuple>
+#include <utility>
 
 #include "hof/mechanics/detail/assembly.h"
 #include "hof/mechanics/detail/solver_workspace.h"
@@ -194,22 +195,23 @@ TEST(CoarseCorrection, HeldAndTinyBodiesStillStep) {
 // Parameters like any other: named, range-checked, unchanged on a refusal.
 TEST(CoarseCorrection, TheTwoLevelPreconditionerAndItsRefreshAreParameters) {
   ModelConfig c = physiological_liver_config(*mesh::generate_liver(mesh::LiverResolution::kSimple));
-  ASSERT_TRUE(set_parameter(c, c.linear.name, "coarseCorrection", 1.0));
-  ASSERT_TRUE(set_parameter(c, c.linear.name, "coarseRefreshSteps", 50.0));
+  ASSERT_TRUE(set_parameter(c, ParameterRef{{ComponentKind::kLinearSolver, 0}, ParameterId::kCoarseCorrection}, 1.0));
+  ASSERT_TRUE(set_parameter(c, ParameterRef{{ComponentKind::kLinearSolver, 0}, ParameterId::kCoarseRefreshSteps}, 50.0));
   EXPECT_TRUE(c.linear.coarse_correction);
   EXPECT_EQ(c.linear.coarse_refresh_steps, 50);
-  EXPECT_EQ(*get_parameter(c, c.linear.name, "coarseCorrection"), 1.0);
-  EXPECT_EQ(*get_parameter(c, c.linear.name, "coarseRefreshSteps"), 50.0);
-  for (const auto& [parameter, value] : {std::tuple{"coarseCorrection", 0.5}, std::tuple{"coarseCorrection", 2.0},
-                                         std::tuple{"coarseRefreshSteps", 0.0}, std::tuple{"coarseRefreshSteps", 1.5}}) {
-    auto refused = set_parameter(c, c.linear.name, parameter, value);
+  EXPECT_EQ(*get_parameter(c, ParameterRef{{ComponentKind::kLinearSolver, 0}, ParameterId::kCoarseCorrection}), 1.0);
+  EXPECT_EQ(*get_parameter(c, ParameterRef{{ComponentKind::kLinearSolver, 0}, ParameterId::kCoarseRefreshSteps}), 50.0);
+  for (const auto& [id, value] : {std::pair{ParameterId::kCoarseCorrection, 0.5}, std::pair{ParameterId::kCoarseCorrection, 2.0},
+                                  std::pair{ParameterId::kCoarseRefreshSteps, 0.0}, std::pair{ParameterId::kCoarseRefreshSteps, 1.5}}) {
+    const std::string_view parameter = parameter_name(id);
+    auto refused = set_parameter(c, ParameterRef{{ComponentKind::kLinearSolver, 0}, id}, value);
     ASSERT_FALSE(refused) << parameter << " = " << value;
     EXPECT_NE(refused.error().message.find(parameter), std::string::npos) << refused.error().message;
     EXPECT_TRUE(c.linear.coarse_correction);
     EXPECT_EQ(c.linear.coarse_refresh_steps, 50);
   }
-  const auto names = parameter_names(c);
-  EXPECT_NE(std::ranges::find(names, c.linear.name + "/coarseCorrection"), names.end());
+  const auto refs = parameter_refs(c);
+  EXPECT_NE(std::ranges::find(refs, ParameterRef{{ComponentKind::kLinearSolver, 0}, ParameterId::kCoarseCorrection}), refs.end());
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <initializer_list>
 #include <tuple>
+#include <utility>
 
 #include "hof/mechanics/model_parameters.h"
 #include "hof/mechanics/step.h"
@@ -146,26 +147,27 @@ TEST(HapticRateFem, WarmStartConvergesToTheExactSolve) {
 // command seam): named, range-checked, and the config unchanged on a refusal.
 TEST(HapticRateFem, WarmStartAndMatrixReuseAreParameters) {
   ModelConfig c = haptic_rate_config(medium_liver());
-  ASSERT_TRUE(set_parameter(c, c.linear.name, "warmStart", 1.0));
-  ASSERT_TRUE(set_parameter(c, c.ode.name, "matrixReuseSteps", 3.0));
+  ASSERT_TRUE(set_parameter(c, ParameterRef{{ComponentKind::kLinearSolver, 0}, ParameterId::kWarmStart}, 1.0));
+  ASSERT_TRUE(set_parameter(c, ParameterRef{{ComponentKind::kOdeSolver, 0}, ParameterId::kMatrixReuseSteps}, 3.0));
   EXPECT_TRUE(c.linear.warm_start);
   EXPECT_EQ(c.ode.matrix_reuse_steps, 3);
-  EXPECT_EQ(*get_parameter(c, c.ode.name, "matrixReuseSteps"), 3.0);
-  EXPECT_EQ(*get_parameter(c, c.linear.name, "warmStart"), 1.0);
-  ASSERT_TRUE(set_parameter(c, c.linear.name, "iterations", 7.0));
+  EXPECT_EQ(*get_parameter(c, ParameterRef{{ComponentKind::kOdeSolver, 0}, ParameterId::kMatrixReuseSteps}), 3.0);
+  EXPECT_EQ(*get_parameter(c, ParameterRef{{ComponentKind::kLinearSolver, 0}, ParameterId::kWarmStart}), 1.0);
+  ASSERT_TRUE(set_parameter(c, ParameterRef{{ComponentKind::kLinearSolver, 0}, ParameterId::kIterations}, 7.0));
   EXPECT_EQ(c.linear.iterations, 7);
   EXPECT_EQ(c.ode.matrix_reuse_steps, 3);  // one integer parameter does not write another
-  for (const auto& [component, parameter, value] :
-       {std::tuple{c.ode.name, "matrixReuseSteps", 0.0}, std::tuple{c.ode.name, "matrixReuseSteps", 2.5},
-        std::tuple{c.linear.name, "warmStart", 2.0}, std::tuple{c.linear.name, "warmStart", 0.5}}) {
+  const ParameterRef reuse{{ComponentKind::kOdeSolver, 0}, ParameterId::kMatrixReuseSteps};
+  const ParameterRef warm{{ComponentKind::kLinearSolver, 0}, ParameterId::kWarmStart};
+  for (const auto& [ref, value] : {std::pair{reuse, 0.0}, std::pair{reuse, 2.5}, std::pair{warm, 2.0}, std::pair{warm, 0.5}}) {
     const ModelConfig before = c;
-    auto refused = set_parameter(c, component, parameter, value);
+    const std::string_view parameter = parameter_name(ref.id);
+    auto refused = set_parameter(c, ref, value);
     ASSERT_FALSE(refused) << parameter << " = " << value;
     EXPECT_NE(refused.error().message.find(parameter), std::string::npos) << refused.error().message;
     EXPECT_EQ(c.ode.matrix_reuse_steps, before.ode.matrix_reuse_steps);
     EXPECT_EQ(c.linear.warm_start, before.linear.warm_start);
   }
-  ASSERT_TRUE(set_parameter(c, c.linear.name, "warmStart", 0.0));
+  ASSERT_TRUE(set_parameter(c, ParameterRef{{ComponentKind::kLinearSolver, 0}, ParameterId::kWarmStart}, 0.0));
   EXPECT_FALSE(c.linear.warm_start);
 }
 

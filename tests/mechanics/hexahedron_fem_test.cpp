@@ -569,13 +569,14 @@ TEST(HexMass, TetrahedralDiagonalMassHonoursPerElementDensity) {
 
 TEST(HexParameters, YoungModulusAndPoissonRatioAreAddressable) {
   ModelConfig c = static_config(box_grid({2, 2, 2}, Vec3(0.1, 0.1, 0.1)), FemMethod::kLarge);
-  ASSERT_TRUE(set_parameter(c, "FEM", "youngModulus", 2500.0));
+  ASSERT_TRUE(set_parameter(c, ParameterRef{{ComponentKind::kForceField, 0}, ParameterId::kYoungModulus}, 2500.0));
   EXPECT_EQ(c.force_fields[0].hexahedron_fem->young_modulus_pa, 2500.0);
-  ASSERT_TRUE(set_parameter(c, "FEM", "poissonRatio", 0.2));
-  EXPECT_EQ(*get_parameter(c, "FEM", "poissonRatio"), 0.2);
-  EXPECT_FALSE(set_parameter(c, "FEM", "poissonRatio", 0.5));
-  const auto names = parameter_names(c);
-  EXPECT_NE(std::find(names.begin(), names.end(), "FEM/youngModulus"), names.end());
+  ASSERT_TRUE(set_parameter(c, ParameterRef{{ComponentKind::kForceField, 0}, ParameterId::kPoissonRatio}, 0.2));
+  EXPECT_EQ(*get_parameter(c, ParameterRef{{ComponentKind::kForceField, 0}, ParameterId::kPoissonRatio}), 0.2);
+  EXPECT_FALSE(set_parameter(c, ParameterRef{{ComponentKind::kForceField, 0}, ParameterId::kPoissonRatio}, 0.5));
+  EXPECT_EQ(component_name(c, {ComponentKind::kForceField, 0}), "FEM");
+  const auto refs = parameter_refs(c);
+  EXPECT_NE(std::find(refs.begin(), refs.end(), ParameterRef{{ComponentKind::kForceField, 0}, ParameterId::kYoungModulus}), refs.end());
 }
 
 }  // namespace

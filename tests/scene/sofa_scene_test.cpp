@@ -9,7 +9,7 @@
 #include <fstream>
 
 #include "hof/mechanics/step.h"
-#include "hof/mechanics/model_parameters.h"
+#include "hof/scene/model_parameters.h"
 #include "hof/scene/sofa_scene.h"
 
 namespace hof::scene {
@@ -416,7 +416,7 @@ TEST_F(SofaSceneFiles, HexahedralGridsAreReadWithTheirFineSurfaceAndTheirErrorsN
             static_cast<std::ptrdiff_t>(weighted.hexahedra.size()));
   // The fill scales whatever modulus the field gets later: a <set> halves there too.
   mechanics::ModelConfig changed = weighted;
-  ASSERT_TRUE(mechanics::set_parameter(changed, "FEM", "youngModulus", 1000.0));
+  ASSERT_TRUE(scene::set_parameter(changed, "FEM", "youngModulus", 1000.0));
   auto full = mechanics::build_model(changed);
   changed.element_fill.clear();
   auto unweighted = mechanics::build_model(changed);

@@ -12,7 +12,7 @@
 #include <fstream>
 
 #include "hof/haptics/device_backends/scripted_device.h"
-#include "hof/mechanics/model_parameters.h"
+#include "hof/scene/model_parameters.h"
 #include "hof/procedures/needle.h"
 
 namespace hof::scene {
@@ -344,7 +344,7 @@ TEST(World, ProjectParametersOverrideTheSceneAndRoundTrip) {
   auto world = build_world(file);
   ASSERT_TRUE(world) << world.error().to_string();
   ASSERT_EQ(world->bodies.size(), 1u);
-  EXPECT_EQ(*mechanics::get_parameter(*world->bodies[0].config, "FEM", "youngModulus"), 8000.0);
+  EXPECT_EQ(*scene::get_parameter(*world->bodies[0].config, "FEM", "youngModulus"), 8000.0);
   EXPECT_EQ(world->bodies[0].config->linear.iterations, 40);
   // A bad override is an error naming the project.
   p.parameters.push_back({"Liver", "FEM", "poissonRatio", 0.5});
@@ -406,8 +406,11 @@ TEST(World, ChangesThroughTheCommandSeamAreInTheNextSavedProject) {
   auto session = coupling::Session::make(std::move(world->bodies), std::move(*device), config);
   ASSERT_TRUE(session);
   (*session)->run_virtual(0.05, {});
-  ASSERT_TRUE((*session)->submit(coupling::command::SetParameter{"Liver", "FEM", "youngModulus", 7000.0}));
-  ASSERT_FALSE((*session)->submit(coupling::command::SetParameter{"Liver", "FEM", "youngModulus", -7000.0}));
+  ASSERT_TRUE((*session)->submit(*parameter_command(**session, "Liver", "FEM", "youngModulus", 7000.0)));
+  ASSERT_FALSE((*session)->submit(*parameter_command(**session, "Liver", "FEM", "youngModulus", -7000.0)));
+  auto nobody = parameter_command(**session, "Spleen", "FEM", "youngModulus", 1.0);
+  ASSERT_FALSE(nobody);
+  EXPECT_NE(nobody.error().message.find("no body 'Spleen' (bodies: "), std::string::npos) << nobody.error().message;
   haptics::SurfaceMaterial magnetic;
   magnetic.kind = haptics::SurfaceKind::kMagnetic;
   ASSERT_TRUE((*session)->submit(coupling::command::SetMaterial{"Liver", magnetic}));
@@ -420,7 +423,7 @@ TEST(World, ChangesThroughTheCommandSeamAreInTheNextSavedProject) {
       << saved;
   auto reloaded = build_world(file);
   ASSERT_TRUE(reloaded) << reloaded.error().to_string();
-  EXPECT_EQ(*mechanics::get_parameter(*reloaded->bodies[0].config, "FEM", "youngModulus"), 7000.0);
+  EXPECT_EQ(*scene::get_parameter(*reloaded->bodies[0].config, "FEM", "youngModulus"), 7000.0);
   ASSERT_TRUE(reloaded->bodies[0].material);
   EXPECT_EQ(reloaded->bodies[0].material->kind, haptics::SurfaceKind::kMagnetic);
   EXPECT_EQ(to_xml(reloaded->project), saved);

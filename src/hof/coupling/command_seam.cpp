@@ -94,26 +94,42 @@ std::string CommandSeam::body_names() const {
 
 // ---- Submitting (any thread but the simulation's)
 
-Expected<double> CommandSeam::parameter(std::string_view body, std::string_view component, std::string_view parameter) const {
+Expected<std::size_t> CommandSeam::deformable_body(BodyId body, std::string_view rigid) const {
+  const auto i = static_cast<std::size_t>(body);
+  if (i >= names_.size()) {
+    return make_error(ErrorCode::kInvalidArgument, fmt::format("no body #{} (bodies: {})", i, body_names()));
+  }
+  // Whether it has mechanics is fixed at construction (the simulation thread may be
+  // rebuilding the model right now: its optional is not read here).
+  if (!has_mechanics_[i]) return make_error(ErrorCode::kInvalidArgument, fmt::format("body '{}' is rigid: {}", names_[i], rigid));
+  return i;
+}
+
+Expected<double> CommandSeam::parameter(BodyId body, mechanics::ParameterRef parameter) const {
   std::lock_guard lock(mutex_);
   take_reports();
-  for (std::size_t i = 0; i < names_.size(); ++i) {
-    if (names_[i] != body) continue;
-    if (!has_mechanics_[i]) return make_error(ErrorCode::kInvalidArgument, fmt::format("body '{}' has no mechanics (a rigid shape)", body));
-    return mechanics::get_parameter(validated_configs_[i], component, parameter);
-  }
-  std::string names;
-  for (const std::string& name : names_) names += (names.empty() ? "" : ", ") + name;
-  return make_error(ErrorCode::kInvalidArgument, fmt::format("no body '{}' (the bodies: {})", body, names));
+  const auto i = deformable_body(body, "it has no mechanical parameters");
+  if (!i) return std::unexpected(i.error());
+  return mechanics::get_parameter(validated_configs_[*i], parameter);
+}
+
+Expected<mechanics::ModelConfig> CommandSeam::body_config(BodyId body) const {
+  std::lock_guard lock(mutex_);
+  take_reports();
+  const auto i = deformable_body(body, "it has no mechanical parameters");
+  if (!i) return std::unexpected(i.error());
+  return validated_configs_[*i];
 }
 
 Expected<void> CommandSeam::submit(const Command& submitted) {
   Command command = submitted;
   if (const auto* set = std::get_if<command::SetParameter>(&command);
-      set && fem_reaction_ && set->component.empty() && mechanics::parameter_id(set->parameter) == mechanics::ParameterId::kDt &&
+      set && fem_reaction_ &&
+      set->parameter == mechanics::ParameterRef{{mechanics::ComponentKind::kModel, 0}, mechanics::ParameterId::kDt} &&
       !detail::fem_reaction_step_fits(set->value, haptic_rate_hz_)) {
     return make_error(ErrorCode::kInvalidArgument,
-                      fmt::format("body '{}': dt {:g} s: coupling fem-reaction needs dt equal to the haptic period, {:g} s", set->body,
+                      fmt::format("body '{}': dt {:g} s: coupling fem-reaction needs dt equal to the haptic period, {:g} s",
+                                  static_cast<std::size_t>(set->body) < names_.size() ? names_[static_cast<std::size_t>(set->body)] : "?",
                                   set->value, 1.0 / haptic_rate_hz_));
   }
   if (auto* device = std::get_if<command::SetDevice>(&command); device && !device->opened) {
@@ -123,17 +139,18 @@ Expected<void> CommandSeam::submit(const Command& submitted) {
     device->opened = std::shared_ptr<haptics::Device>(std::move(*opened));
   }
   if (auto* model = std::get_if<command::SetModel>(&command)) {
+    std::string name;
     // Built here, outside the lock (the simulation thread takes it between steps); the cheap
     // checks come first so that their messages are the ones a user sees.
     {
       std::lock_guard lock(mutex_);
-      for (std::size_t i = 0; i < names_.size(); ++i) {
-        if (names_[i] != model->body || !has_mechanics_[i]) continue;
-        if (auto same = same_mesh(model->body, model->config, validated_configs_[i]); !same) return same;
-      }
+      const auto i = deformable_body(model->body, "it has no model to replace");
+      if (!i) return std::unexpected(i.error());
+      if (auto same = same_mesh(names_[*i], model->config, validated_configs_[*i]); !same) return same;
+      name = names_[*i];
     }
     auto built = mechanics::build_model(model->config);
-    if (!built) return make_error(ErrorCode::kInvalidArgument, fmt::format("body '{}': {}", model->body, built.error().message));
+    if (!built) return make_error(ErrorCode::kInvalidArgument, fmt::format("body '{}': {}", name, built.error().message));
     model->built = std::make_shared<mechanics::MechanicalModel>(std::move(*built));
   }
   std::lock_guard lock(mutex_);
@@ -149,7 +166,13 @@ Expected<void> CommandSeam::submit(const Command& submitted) {
   if (auto ok = std::visit([this](auto& c) { return validate(c); }, command); !ok) return ok;
   const std::uint64_t ticket = next_ticket_++;
   if (const auto* set = std::get_if<command::SetParameter>(&command)) {
-    accepted_.push_back(Accepted{ticket, ParameterChange{set->body, set->component, set->parameter, set->value}, false});
+    // Named as the body's configuration names it now (validate found the body).
+    const auto i = static_cast<std::size_t>(set->body);
+    const mechanics::ModelConfig& config = validated_configs_[i];
+    accepted_.push_back(Accepted{ticket,
+                                 ParameterChange{names_[i], std::string(mechanics::component_name(config, set->parameter.component)),
+                                                 std::string(mechanics::parameter_name(set->parameter.id)), set->value},
+                                 false});
   }
   auto* queued = new Queued{ticket, std::move(command)};
   if (!queue_.push(queued)) {  // not reached: the room was checked above, under the same lock
@@ -191,33 +214,25 @@ void CommandSeam::tell(const Report& r) {
 }
 
 Expected<void> CommandSeam::validate(command::SetParameter& set) {
-  const std::int32_t i = find_body(set.body);
-  if (i < 0) return make_error(ErrorCode::kInvalidArgument, fmt::format("no body '{}' (bodies: {})", set.body, body_names()));
-  // Whether it has mechanics is fixed at construction (the simulation thread may be
-  // rebuilding the model right now: its optional is not read here).
-  if (!has_mechanics_[static_cast<std::size_t>(i)]) {
-    return make_error(ErrorCode::kInvalidArgument, fmt::format("body '{}' is rigid: it has no mechanical parameters", set.body));
-  }
-  mechanics::ModelConfig& config = validated_configs_[static_cast<std::size_t>(i)];
-  if (auto ok = mechanics::set_parameter(config, set.component, set.parameter, set.value); !ok) {
-    return make_error(ErrorCode::kInvalidArgument, fmt::format("body '{}': {}", set.body, ok.error().message));
+  const auto i = deformable_body(set.body, "it has no mechanical parameters");
+  if (!i) return std::unexpected(i.error());
+  mechanics::ModelConfig& config = validated_configs_[*i];
+  if (auto ok = mechanics::set_parameter(config, set.parameter, set.value); !ok) {
+    return make_error(ErrorCode::kInvalidArgument, fmt::format("body '{}': {}", names_[*i], ok.error().message));
   }
   // Recorded as a change (to be saved) once the simulation has applied it.
   return {};
 }
 
 Expected<void> CommandSeam::validate(command::SetModel& model) {
-  const std::int32_t i = find_body(model.body);
-  if (i < 0) return make_error(ErrorCode::kInvalidArgument, fmt::format("no body '{}' (bodies: {})", model.body, body_names()));
-  if (!has_mechanics_[static_cast<std::size_t>(i)]) {
-    return make_error(ErrorCode::kInvalidArgument, fmt::format("body '{}' is rigid: it has no model to replace", model.body));
-  }
+  const auto i = deformable_body(model.body, "it has no model to replace");
+  if (!i) return std::unexpected(i.error());
   // Checked again under the lock (the body may have had another model submitted meanwhile).
-  if (auto same = same_mesh(model.body, model.config, validated_configs_[static_cast<std::size_t>(i)]); !same) return same;
-  validated_configs_[static_cast<std::size_t>(i)] = model.config;
+  if (auto same = same_mesh(names_[*i], model.config, validated_configs_[*i]); !same) return same;
+  validated_configs_[*i] = model.config;
   // The caller took the body's changes into `config`: from now on they are not changes
   // (erased again when applied, for a parameter command still queued before this one).
-  std::erase_if(accepted_, [&](const Accepted& a) { return a.applied && a.change.body == model.body; });
+  std::erase_if(accepted_, [&](const Accepted& a) { return a.applied && a.change.body == names_[*i]; });
   return {};
 }
 
@@ -337,14 +352,14 @@ void CommandSeam::apply(World& w, SessionReport& report) {
 
 bool CommandSeam::apply(const command::SetParameter& set, Applying& a) {
   for (BodyRuntime& r : a.world.bodies) {
-    if (r.body.name != set.body || !r.body.config) continue;
+    if (&r - a.world.bodies.data() != static_cast<std::ptrdiff_t>(set.body) || !r.body.config) continue;
     mechanics::ModelConfig config = *r.body.config;
-    // Validated when submitted: the name is a parameter's, and the typed id sets it.
-    const auto id = mechanics::parameter_id(set.parameter);
-    auto ok = id ? mechanics::set_parameter(config, set.component, *id, set.value) : Expected<void>(std::unexpected(id.error()));
+    // The log names the parameter as the running configuration does.
+    const std::string_view component = mechanics::component_name(config, set.parameter.component);
+    const std::string what = fmt::format("{}/{}{}{} = {}", r.body.name, component, component.empty() ? "" : "/",
+                                         mechanics::parameter_name(set.parameter.id), set.value);
+    auto ok = mechanics::set_parameter(config, set.parameter, set.value);
     auto model = ok ? mechanics::build_model(config) : Expected<mechanics::MechanicalModel>(std::unexpected(ok.error()));
-    const std::string what =
-        fmt::format("{}/{}{}{} = {}", set.body, set.component, set.component.empty() ? "" : "/", set.parameter, set.value);
     const auto body = static_cast<std::uint32_t>(&r - a.world.bodies.data());
     if (!model) {
       a.log(fmt::format("{} refused: {}", what, model.error().message));
@@ -361,9 +376,9 @@ bool CommandSeam::apply(const command::SetParameter& set, Applying& a) {
 
 bool CommandSeam::apply(const command::SetModel& model, Applying& a) {
   for (BodyRuntime& r : a.world.bodies) {
-    if (r.body.name != model.body || !r.body.config) continue;
+    if (&r - a.world.bodies.data() != static_cast<std::ptrdiff_t>(model.body) || !r.body.config) continue;
     swap_model(a.world, r, std::move(*model.built), model.config);
-    a.log(fmt::format("{} has a new model", model.body));
+    a.log(fmt::format("{} has a new model", r.body.name));
     tell(Report{applying_ticket_, Outcome::kModelSwapped, static_cast<std::uint32_t>(&r - a.world.bodies.data()), nullptr});
   }
   refresh_dt(a.world);

@@ -29,6 +29,7 @@
 #include "hof/haptics/device_config.h"
 #include "hof/haptics/haptic_loop.h"
 #include "hof/mechanics/mechanical_model.h"
+#include "hof/mechanics/model_parameters.h"
 
 namespace hof::coupling {
 
@@ -37,12 +38,15 @@ namespace detail {
 struct World;
 }
 
+/// A body of a session, by its index (Session::body(i)); scene::body_id maps a scene's name to
+/// it.
+enum class BodyId : std::uint32_t {};
+
 namespace command {
-/// A named parameter of a body's component (mechanics::set_parameter names).
+/// A parameter of a body's component (scene::resolve_parameter maps a scene's names to it).
 struct SetParameter {
-  std::string body;
-  std::string component;  ///< "" for the model itself (dt, ...)
-  std::string parameter;
+  BodyId body{};
+  mechanics::ParameterRef parameter;
   double value{0.0};
 };
 struct Pause {};
@@ -88,7 +92,7 @@ struct SetCalibration {
 /// steps, from the body's current shape and motion. The body's earlier parameter changes are
 /// taken as part of `config` (parameter_changes() forgets them).
 struct SetModel {
-  std::string body;
+  BodyId body{};
   mechanics::ModelConfig config;
   /// Filled by submit(): the model built from `config`.
   std::shared_ptr<mechanics::MechanicalModel> built;
@@ -98,7 +102,8 @@ using Command = std::variant<command::SetParameter, command::Pause, command::Res
                              command::SetMaterial, command::SetEffects, command::SetRenderer, command::SetForceLimit,
                              command::SetDevice, command::SetModel, command::SetCalibration>;
 
-/// A parameter changed through the seam, as a project saves it.
+/// A parameter changed through the seam, as a project saves it (named by the body's
+/// configuration when the change was submitted; "" for the model's own parameters).
 struct ParameterChange {
   std::string body, component, parameter;
   double value{0.0};
@@ -134,7 +139,8 @@ class CommandSeam {
   /// Applies the queued commands, in order, to `world` (simulation thread, between steps).
   void apply(detail::World& world, SessionReport& report);
 
-  [[nodiscard]] Expected<double> parameter(std::string_view body, std::string_view component, std::string_view parameter) const;
+  [[nodiscard]] Expected<double> parameter(BodyId body, mechanics::ParameterRef parameter) const;
+  [[nodiscard]] Expected<mechanics::ModelConfig> body_config(BodyId body) const;
   [[nodiscard]] std::vector<ParameterChange> parameter_changes(bool with_queued) const;
   [[nodiscard]] std::vector<std::pair<std::string, haptics::SurfaceMaterial>> material_changes() const;
   [[nodiscard]] haptics::Calibration calibration() const;
@@ -171,6 +177,8 @@ class CommandSeam {
   bool apply(const command::SetDevice& device, Applying& a);
   [[nodiscard]] std::int32_t find_body(std::string_view name) const;
   [[nodiscard]] std::string body_names() const;
+  // The index of a body that has mechanics; errors name the body (`rigid`: why a rigid body is refused).
+  [[nodiscard]] Expected<std::size_t> deformable_body(BodyId body, std::string_view rigid) const;
 
   std::vector<std::string> names_;   // the bodies' names (fixed)
   std::vector<char> has_mechanics_;  // per body, fixed: a model and its config

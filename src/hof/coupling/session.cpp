@@ -92,9 +92,10 @@ std::uint64_t Session::steps_taken() const { return world_->steps_taken.load(std
 // ---- The command seam (command_seam.cpp)
 
 Expected<void> Session::submit(const Command& command) { return seam_->submit(command); }
-Expected<double> Session::parameter(std::string_view body, std::string_view component, std::string_view parameter) const {
-  return seam_->parameter(body, component, parameter);
+Expected<double> Session::parameter(BodyId body, mechanics::ParameterRef parameter) const {
+  return seam_->parameter(body, parameter);
 }
+Expected<mechanics::ModelConfig> Session::body_config(BodyId body) const { return seam_->body_config(body); }
 std::vector<ParameterChange> Session::parameter_changes(bool with_queued) const { return seam_->parameter_changes(with_queued); }
 std::vector<std::pair<std::string, haptics::SurfaceMaterial>> Session::material_changes() const { return seam_->material_changes(); }
 haptics::Calibration Session::calibration() const { return seam_->calibration(); }

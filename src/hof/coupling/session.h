@@ -191,7 +191,10 @@ class Session {
   Expected<void> submit(const Command& command);
   /// A parameter's value as the commands accepted so far leave it (applied, or queued for the
   /// next step). Errors: no such body, a body without mechanics, no such parameter.
-  [[nodiscard]] Expected<double> parameter(std::string_view body, std::string_view component, std::string_view parameter) const;
+  [[nodiscard]] Expected<double> parameter(BodyId body, mechanics::ParameterRef parameter) const;
+  /// A deformable body's model configuration as the commands accepted so far leave it (to
+  /// resolve a scene's parameter names against). Errors: no such body, a rigid body.
+  [[nodiscard]] Expected<mechanics::ModelConfig> body_config(BodyId body) const;
   /// Asks a run in progress (run_virtual, run_realtime) to end after the current step; the
   /// run returns its report as far as it went. Any thread (a Ctrl-C handler, a supervisor).
   /// The next run clears it.

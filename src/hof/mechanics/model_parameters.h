@@ -1,15 +1,16 @@
 #pragma once
 /// @file
-/// Named parameters of a model's components, as a scene names them (SOFA's data names), so
-/// that a setting can be changed by name — by the command seam while a session runs, and by a
-/// project's overrides when it is loaded — with one validation:
-///   component = a force field's name:  stiffness, damping, restLengthScale (mesh springs);
+/// Parameters of a model's components, addressed by typed references (scene/ maps a scene's
+/// names, SOFA's data names, to them: scene/model_parameters.h), so that a setting can be
+/// changed — by the command seam while a session runs, and by a project's overrides when it is
+/// loaded — with one validation:
+///   a force field (kForceField, index): stiffness, damping, restLengthScale (mesh springs);
 ///                                      youngModulus, poissonRatio (FEM, Neo-Hookean, membrane),
-///                                      thickness (membrane)
-///   component = the ODE solver's name: rayleighStiffness, rayleighMass
-///   component = the linear solver's:   iterations, tolerance, threshold
-///   component = the mass's name:       totalMass, massDensity
-///   component = "" (the model itself): dt, maxSpeed, gravityX, gravityY, gravityZ
+///                                      thickness, restScale (membrane)
+///   the ODE solver (kOdeSolver):       rayleighStiffness, rayleighMass, matrixReuseSteps
+///   the linear solver (kLinearSolver): iterations, tolerance, threshold, warmStart, ...
+///   the mass (kMass):                  totalMass, massDensity
+///   the model itself (kModel):         dt, maxSpeed, gravityX, gravityY, gravityZ
 /// Values are SI (N/m, Pa, s, kg, kg/m³).
 
 #include <cstdint>
@@ -23,8 +24,7 @@
 namespace hof::mechanics {
 
 /// The parameters a component may have, by what they are; their names (SOFA's data names)
-/// are in one table (parameter_name, parameter_id). Which component has which is
-/// set_parameter's business.
+/// are in one table (parameter_name). Which component has which is set_parameter's business.
 enum class ParameterId : std::uint8_t {
   kDt, kMaxSpeed, kGravityX, kGravityY, kGravityZ,                          // the model itself
   kStiffness, kDamping, kRestLengthScale,                                   // mesh springs
@@ -35,31 +35,37 @@ enum class ParameterId : std::uint8_t {
 };
 inline constexpr std::size_t kParameterCount = 23;
 
-/// The scene's name of a parameter ("youngModulus").
+/// Which component of a model a parameter belongs to: the model itself, one of its force
+/// fields (by index in ModelConfig::force_fields), its ODE solver, linear solver or mass.
+/// Scenes name components; scene::resolve_parameter maps those names to these, once.
+enum class ComponentKind : std::uint8_t { kModel, kForceField, kOdeSolver, kLinearSolver, kMass };
+struct ComponentRef {
+  ComponentKind kind{ComponentKind::kModel};
+  std::uint32_t index{0};  ///< kForceField: the force field's index; else 0
+  friend bool operator==(const ComponentRef&, const ComponentRef&) = default;
+};
+/// One parameter of one component.
+struct ParameterRef {
+  ComponentRef component;
+  ParameterId id{ParameterId::kDt};
+  friend bool operator==(const ParameterRef&, const ParameterRef&) = default;
+};
+
+/// The scene's name of a parameter ("youngModulus"), for messages (names are mapped to ids in
+/// scene/, see scene::parameter_id).
 [[nodiscard]] std::string_view parameter_name(ParameterId id);
-/// The parameter of a scene's name, once, at the edge; an unknown name is an error naming the
-/// closest known names.
-[[nodiscard]] Expected<ParameterId> parameter_id(std::string_view name);
+/// The scene's name of a component of `config` ("" for the model itself), for messages.
+[[nodiscard]] std::string_view component_name(const ModelConfig& config, ComponentRef component);
 
-/// Sets parameter `id` of `component` in `config` to `value` after checking its range. Errors
+/// Sets `parameter` in `config` to `value` after checking its range. Errors
 /// (kInvalidArgument) name the component, the parameter and the allowed range, and leave
 /// `config` unchanged.
-[[nodiscard]] Expected<void> set_parameter(ModelConfig& config, std::string_view component, ParameterId id, double value);
-/// The current value of parameter `id` of `component`.
-[[nodiscard]] Expected<double> get_parameter(const ModelConfig& config, std::string_view component, ParameterId id);
+[[nodiscard]] Expected<void> set_parameter(ModelConfig& config, ParameterRef parameter, double value);
+/// The current value of `parameter`.
+[[nodiscard]] Expected<double> get_parameter(const ModelConfig& config, ParameterRef parameter);
 
-/// Sets `parameter` of `component` in `config` to `value` after checking its range. Errors
-/// (kInvalidArgument) name the component, the parameter and the allowed range, and leave
-/// `config` unchanged.
-[[nodiscard]] Expected<void> set_parameter(ModelConfig& config, std::string_view component, std::string_view parameter,
-                                           double value);
-
-/// The current value of a parameter by name (same names as set_parameter).
-[[nodiscard]] Expected<double> get_parameter(const ModelConfig& config, std::string_view component,
-                                             std::string_view parameter);
-
-/// "component/parameter" pairs that set_parameter accepts for this model (for help texts and
-/// the window's scene tree); the model's own parameters have an empty component ("/dt").
-[[nodiscard]] std::vector<std::string> parameter_names(const ModelConfig& config);
+/// The parameters set_parameter accepts for this model, in the order help texts list them
+/// (the model's own first, then each component's; see scene::parameter_names).
+[[nodiscard]] std::vector<ParameterRef> parameter_refs(const ModelConfig& config);
 
 }  // namespace hof::mechanics

@@ -12,7 +12,7 @@
 
 #include "hof/app/session_recording.h"
 #include "hof/coupling/session.h"
-#include "hof/mechanics/model_parameters.h"
+#include "hof/scene/model_parameters.h"
 #include "hof/python/bindings.h"
 #include "hof/python/common.h"
 #include "hof/python/function_device.h"
@@ -202,7 +202,8 @@ class PyWorld {
                                        py::repr(value).cast<std::string>()));
     }
     const auto [body, component] = split_target(target);
-    ok_or_raise(session_->submit(coupling::command::SetParameter{body, component, parameter, value.cast<double>()}));
+    const auto command = scene::parameter_command(*session_, body, component, parameter, value.cast<double>());
+    ok_or_raise(command ? session_->submit(*command) : Expected<void>(std::unexpected(command.error())));
   }
   // A setting of the project file (the window's panels): checked as when the file is read,
   // carried to the session by the commands the window sends, kept for save().
@@ -236,13 +237,13 @@ class PyWorld {
   }
   double get(const std::string& target, const std::string& parameter) const {
     const auto [body, component] = split_target(target);
-    return value_or_raise(session_->parameter(body, component, parameter));
+    return value_or_raise(scene::session_parameter(*session_, body, component, parameter));
   }
   std::vector<std::string> parameters(const py::object& body) const {
     const coupling::SessionBody& b = deformable(body);
     std::vector<std::string> names;
     if (b.config) {
-      for (const std::string& n : mechanics::parameter_names(*b.config)) names.push_back(b.name + "/" + n);
+      for (const std::string& n : scene::parameter_names(*b.config)) names.push_back(b.name + "/" + n);
     }
     return names;
   }

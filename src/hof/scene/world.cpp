@@ -7,7 +7,7 @@
 #include <array>
 #include <cmath>
 
-#include "hof/mechanics/model_parameters.h"
+#include "hof/scene/model_parameters.h"
 #include "hof/mechanics/step.h"
 #include "hof/mesh/boundary.h"
 #include "hof/mesh/hex_grid.h"
@@ -293,7 +293,7 @@ Expected<void> apply_parameters(World& w) {
                         w.file.string());
     }
     mechanics::ModelConfig config = *it->config;
-    if (auto ok = mechanics::set_parameter(config, change.component, change.parameter, change.value); !ok) {
+    if (auto ok = scene::set_parameter(config, change.component, change.parameter, change.value); !ok) {
       return make_error(ErrorCode::kInvalidArgument, fmt::format("<set body=\"{}\">: {}", change.body, ok.error().message),
                         w.file.string());
     }

@@ -8,7 +8,7 @@
 
 #include "hof/app/gui/detail/component_switch.h"
 #include "hof/app/gui/detail/panels.h"
-#include "hof/mechanics/model_parameters.h"
+#include "hof/scene/model_parameters.h"
 
 namespace hof::app::gui {
 
@@ -124,7 +124,10 @@ GuiCommands mechanics_panel(const WorldView& w, MechanicsPanelState& ui) {
         if (!p.starts_with(prefix)) continue;
         const std::string parameter = p.substr(prefix.size());
         // The value as the accepted commands leave it: the session's.
-        const auto value = w.session->parameter(b.name, component, parameter);
+        const auto ref = scene::resolve_parameter(*b.structure, component, parameter);
+        const auto body = scene::body_id(*w.session, b.name);
+        if (!ref || !body) continue;
+        const auto value = w.session->parameter(*body, *ref);
         if (!value) continue;
         double v = *value;
         ImGui::SetNextItemWidth(130);

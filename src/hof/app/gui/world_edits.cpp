@@ -10,7 +10,7 @@
 #include "hof/app/gui/detail/component_switch.h"
 #include "hof/app/gui/detail/gui_window.h"
 #include "hof/haptics/device_backends/mouse_device.h"
-#include "hof/mechanics/model_parameters.h"
+#include "hof/scene/model_parameters.h"
 #include "hof/scene/device_config.h"
 #include "hof/scene/sofa_scene_edit.h"
 
@@ -74,7 +74,8 @@ Expected<void> GuiWindow::set_mechanics_parameter(const std::string& element, co
   if (parsed.ec != std::errc() || parsed.ptr != value.data() + value.size() || !std::isfinite(v)) {
     return make_error(ErrorCode::kInvalidArgument, fmt::format("'{}': '{}' is not a number", name, value));
   }
-  if (auto ok = session_->submit(coupling::command::SetParameter{body, component, attribute, v}); !ok) {
+  auto command = scene::parameter_command(*session_, body, component, attribute, v);
+  if (auto ok = command ? session_->submit(*command) : Expected<void>(std::unexpected(command.error())); !ok) {
     Error e = ok.error();
     e.message = fmt::format("'{}': {}", name, e.message);
     return std::unexpected(e);
@@ -146,7 +147,9 @@ Expected<void> GuiWindow::change_structure(const std::optional<scene::SceneEdit>
   }
   for (const coupling::SessionBody& b : world->bodies) {
     if (!b.config) continue;
-    if (auto ok = session_->submit(coupling::command::SetModel{b.name, *b.config, nullptr}); !ok) {
+    const auto id = scene::body_id(*session_, b.name);
+    if (auto ok = id ? session_->submit(coupling::command::SetModel{*id, *b.config, nullptr}) : Expected<void>(std::unexpected(id.error()));
+        !ok) {
       Error e = ok.error();
       e.message = "the change is not made: " + e.message;
       return std::unexpected(e);
@@ -244,7 +247,7 @@ mechanics::ModelConfig GuiWindow::current_config(const BodyView& body) const {
   // session's seam): what the session's own configuration holds, derived when it is needed.
   mechanics::ModelConfig c = *body.structure;
   for (const coupling::ParameterChange& change : submitted_changes_) {
-    if (change.body == body.name) (void)mechanics::set_parameter(c, change.component, change.parameter, change.value);
+    if (change.body == body.name) (void)scene::set_parameter(c, change.component, change.parameter, change.value);
   }
   return c;
 }

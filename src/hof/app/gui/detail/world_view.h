@@ -18,7 +18,7 @@
 #include "hof/coupling/session.h"
 #include "hof/haptics/device_backends/replay_device.h"
 #include "hof/haptics/surface_snapshot.h"
-#include "hof/mechanics/model_parameters.h"
+#include "hof/scene/model_parameters.h"
 #include "hof/mechanics/von_mises_stress.h"
 #include "hof/procedures/needle.h"
 #include "hof/render/camera.h"
@@ -73,7 +73,7 @@ struct BodyView {
   /// What the panels show of a model just built.
   void set_structure(const mechanics::ModelConfig& c) {
     structure = std::make_shared<const mechanics::ModelConfig>(c);
-    parameters = mechanics::parameter_names(c);
+    parameters = scene::parameter_names(c);
     fixed_points.clear();
     for (const auto& f : c.fixed) {
       for (const std::int32_t i : f.indices) {
