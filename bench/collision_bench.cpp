@@ -29,7 +29,7 @@ using namespace hof::collision;
 using mesh::LiverResolution;
 
 constexpr int kQueries = 1024;
-constexpr double kMaxDistance = 0.01;  // m
+constexpr double kMaxDistance = 0.01;    // m
 constexpr double kProxyRadius = 0.0025;  // m
 
 const mesh::TriMesh& surface(LiverResolution r) {
@@ -74,9 +74,8 @@ Motions make_motions(const mesh::TriMesh& m) {
 void set_counters(benchmark::State& state, const mesh::TriMesh& m, std::int64_t per_iteration) {
   state.SetItemsProcessed(state.iterations() * per_iteration);
   state.counters["triangles"] = static_cast<double>(m.triangles.size());
-  state.counters["per_query"] = benchmark::Counter(static_cast<double>(per_iteration),
-                                                   benchmark::Counter::kIsIterationInvariantRate |
-                                                       benchmark::Counter::kInvert);
+  state.counters["per_query"] = benchmark::Counter(
+      static_cast<double>(per_iteration), benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
 }
 
 void bm_build(benchmark::State& state, LiverResolution r, int leaf) {
@@ -135,8 +134,8 @@ void bm_query(benchmark::State& state, LiverResolution r, Query query, bool use_
 }
 
 void register_all() {
-  const LiverResolution resolutions[] = {LiverResolution::kSimple, LiverResolution::kCoarse,
-                                         LiverResolution::kMedium, LiverResolution::kFine};
+  const LiverResolution resolutions[] = {LiverResolution::kSimple, LiverResolution::kCoarse, LiverResolution::kMedium,
+                                         LiverResolution::kFine};
   const std::pair<Query, const char*> queries[] = {{Query::kClosestPoint, "closest_point"},
                                                    {Query::kSegment, "first_hit_segment"},
                                                    {Query::kSweptSphere, "first_hit_swept_sphere"}};

@@ -147,6 +147,12 @@ BENCHMARK(BM_ClosestPointOneTree);
 BENCHMARK(BM_ClosestPointTreePerBody);
 
 // Resolutions: 1 = coarse, 2 = medium (mesh::LiverResolution order).
-BENCHMARK(BM_WorldStep)->Args({1, 2})->Args({2, 2})->Args({1, 1})->Args({2, 1})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_WorldStep)
+    ->Args({1, 2})
+    ->Args({2, 2})
+    ->Args({1, 1})
+    ->Args({2, 1})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 BENCHMARK_MAIN();

@@ -73,7 +73,9 @@ void BM_Tick(benchmark::State& state, mesh::LiverResolution r, RendererKind kind
     ++i;
   }
   std::sort(times.begin(), times.end());
-  auto q = [&](double f) { return times.empty() ? 0.0 : times[static_cast<std::size_t>(f * static_cast<double>(times.size() - 1))]; };
+  auto q = [&](double f) {
+    return times.empty() ? 0.0 : times[static_cast<std::size_t>(f * static_cast<double>(times.size() - 1))];
+  };
   state.counters["p50_us"] = q(0.5);
   state.counters["p99_us"] = q(0.99);
   state.counters["max_us"] = times.empty() ? 0.0 : times.back();
@@ -101,9 +103,11 @@ void register_all() {
   using R = mesh::LiverResolution;
   for (R r : {R::kSimple, R::kCoarse, R::kMedium, R::kFine}) {
     const std::string res(mesh::to_string(r));
-    for (const auto& [kind, name] : {std::pair{RendererKind::kPenalty, "Penalty"}, std::pair{RendererKind::kGodObject, "GodObject"},
-                                     std::pair{RendererKind::kRuspini, "Ruspini"}}) {
-      benchmark::RegisterBenchmark(("Tick/" + res + "/" + name).c_str(), BM_Tick, r, kind)->Unit(benchmark::kMicrosecond);
+    for (const auto& [kind, name] :
+         {std::pair{RendererKind::kPenalty, "Penalty"}, std::pair{RendererKind::kGodObject, "GodObject"},
+          std::pair{RendererKind::kRuspini, "Ruspini"}}) {
+      benchmark::RegisterBenchmark(("Tick/" + res + "/" + name).c_str(), BM_Tick, r, kind)
+          ->Unit(benchmark::kMicrosecond);
     }
     benchmark::RegisterBenchmark(("SnapshotUpdate/" + res).c_str(), BM_Refit, r)->Unit(benchmark::kMicrosecond);
   }

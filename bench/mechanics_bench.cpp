@@ -1,7 +1,8 @@
 // Mechanics step time: every force field × ODE solver on the four standard livers, implicit
 // Euler with the sparse direct solver (CHOLMOD) on three of them, SOFA's
-// liver demo with its own settings, and hexahedral FEM on sparse grids of the medium liver. Run: build/release/bin/hof_bench_mechanics
-// (filter with --benchmark_filter=REGEX; threads with HOF_THREADS, default all cores).
+// liver demo with its own settings, and hexahedral FEM on sparse grids of the medium liver. Run:
+// build/release/bin/hof_bench_mechanics (filter with --benchmark_filter=REGEX; threads with HOF_THREADS, default all
+// cores).
 //
 // Settings: liver material E = 30 kPa (ex vivo indentation range, literature.md §6; the softer
 // in vivo 5.4 kPa makes linear `small` elements invert under gravity), ν = 0.45, density
@@ -56,11 +57,21 @@ ForceFieldConfig field_config(Field f) {
   ForceFieldConfig c;
   c.name = "tissue";
   switch (f) {
-    case Field::kSprings: c.mesh_springs = MeshSpringConfig{5000.0, 25.0, 1.0}; break;  // the thesis' settings
-    case Field::kSmall: c.tetrahedron_fem = TetrahedronFemConfig{30000.0, 0.45, FemMethod::kSmall, {}, {}}; break;
-    case Field::kLarge: c.tetrahedron_fem = TetrahedronFemConfig{30000.0, 0.45, FemMethod::kLarge, {}, {}}; break;
-    case Field::kPolar: c.tetrahedron_fem = TetrahedronFemConfig{30000.0, 0.45, FemMethod::kPolar, {}, {}}; break;
-    case Field::kNeoHookean: c.neo_hookean = NeoHookeanConfig{30000.0, 0.45, {}, {}}; break;
+    case Field::kSprings:
+      c.mesh_springs = MeshSpringConfig{5000.0, 25.0, 1.0};
+      break;  // the thesis' settings
+    case Field::kSmall:
+      c.tetrahedron_fem = TetrahedronFemConfig{30000.0, 0.45, FemMethod::kSmall, {}, {}};
+      break;
+    case Field::kLarge:
+      c.tetrahedron_fem = TetrahedronFemConfig{30000.0, 0.45, FemMethod::kLarge, {}, {}};
+      break;
+    case Field::kPolar:
+      c.tetrahedron_fem = TetrahedronFemConfig{30000.0, 0.45, FemMethod::kPolar, {}, {}};
+      break;
+    case Field::kNeoHookean:
+      c.neo_hookean = NeoHookeanConfig{30000.0, 0.45, {}, {}};
+      break;
   }
   return c;
 }
@@ -210,7 +221,8 @@ void BM_MembraneLiver(benchmark::State& bench) {
     const Vec3 target = m.nodes[static_cast<std::size_t>(held)];
     std::int32_t best = 0;
     for (std::size_t i = 0; i < c.positions.size(); ++i) {
-      if ((c.positions[i] - target).norm() < (c.positions[static_cast<std::size_t>(best)] - target).norm()) best = static_cast<std::int32_t>(i);
+      if ((c.positions[i] - target).norm() < (c.positions[static_cast<std::size_t>(best)] - target).norm())
+        best = static_cast<std::int32_t>(i);
     }
     held = best;
   }
@@ -264,22 +276,30 @@ void register_all() {
   for (R r : {R::kSimple, R::kCoarse, R::kMedium, R::kFine}) {
     for (const auto& [field, field_name] : fields) {
       for (const auto& [solver, solver_name] : solvers) {
-        const std::string name = std::string("Liver/") + std::string(mesh::to_string(r)) + "/" + field_name + "/" + solver_name;
-        benchmark::RegisterBenchmark(name.c_str(), BM_Liver, r, field, solver)->Unit(benchmark::kMicrosecond)->MinTime(0.3);
+        const std::string name =
+            std::string("Liver/") + std::string(mesh::to_string(r)) + "/" + field_name + "/" + solver_name;
+        benchmark::RegisterBenchmark(name.c_str(), BM_Liver, r, field, solver)
+            ->Unit(benchmark::kMicrosecond)
+            ->MinTime(0.3);
       }
     }
   }
   for (R r : {R::kSimple, R::kMedium, R::kFine}) {
     for (const auto& [iterations, warm] : {std::pair{25, false}, std::pair{kHapticRateCgIterations, true}}) {
-      const std::string name = fmt::format("HapticRate/{}/FEMLarge/dt1ms/CG{}{}", mesh::to_string(r), iterations, warm ? "WarmTwoLevel" : "");
-      benchmark::RegisterBenchmark(name.c_str(), BM_HapticRateLiver, r, iterations, warm)->Unit(benchmark::kMicrosecond)->MinTime(0.5);
+      const std::string name = fmt::format("HapticRate/{}/FEMLarge/dt1ms/CG{}{}", mesh::to_string(r), iterations,
+                                           warm ? "WarmTwoLevel" : "");
+      benchmark::RegisterBenchmark(name.c_str(), BM_HapticRateLiver, r, iterations, warm)
+          ->Unit(benchmark::kMicrosecond)
+          ->MinTime(0.5);
     }
   }
   for (R r : {R::kCoarse, R::kMedium, R::kFine}) {
     const std::string name = fmt::format("Liver/{}/FEMLarge/ImplicitLDLT", mesh::to_string(r));
     benchmark::RegisterBenchmark(name.c_str(), BM_LiverDirect, r)->Unit(benchmark::kMillisecond)->MinTime(1.0);
   }
-  benchmark::RegisterBenchmark("SofaLiverScn/FEMLarge/ImplicitCG25", BM_SofaLiverScn)->Unit(benchmark::kMicrosecond)->MinTime(0.5);
+  benchmark::RegisterBenchmark("SofaLiverScn/FEMLarge/ImplicitCG25", BM_SofaLiverScn)
+      ->Unit(benchmark::kMicrosecond)
+      ->MinTime(0.5);
   benchmark::RegisterBenchmark("SparseGridLiver/medium/n24x16x10/HexFEMLarge/ImplicitCG25", BM_SparseGridLiver,
                                std::array<int, 3>{24, 16, 10})
       ->Unit(benchmark::kMicrosecond)

@@ -56,8 +56,10 @@ void read_file(benchmark::State& state, const char* name) {
   std::size_t tets = 0;
   for (auto _ : state) {
     auto r = read_mesh(path);
-    if (!r) state.SkipWithError(r.error().to_string().c_str());
-    else tets = r->mesh.tets.size();
+    if (!r)
+      state.SkipWithError(r.error().to_string().c_str());
+    else
+      tets = r->mesh.tets.size();
     benchmark::DoNotOptimize(tets);
   }
   state.counters["tets"] = static_cast<double>(tets);

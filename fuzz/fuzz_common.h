@@ -32,8 +32,8 @@ namespace hof::fuzz {
 inline const std::filesystem::path& scratch() {
   static const std::filesystem::path dir = [] {
     const char* tmp = std::getenv("TMPDIR");
-    std::filesystem::path d = std::filesystem::path(tmp && *tmp ? tmp : "/tmp") /
-                              ("hof-fuzz-" + std::to_string(::getpid()));
+    std::filesystem::path d =
+        std::filesystem::path(tmp && *tmp ? tmp : "/tmp") / ("hof-fuzz-" + std::to_string(::getpid()));
     std::filesystem::create_directories(d);
     std::atexit([] {
       std::error_code ec;
@@ -46,7 +46,8 @@ inline const std::filesystem::path& scratch() {
 
 inline void clear_scratch() {
   std::error_code ec;
-  for (const auto& entry : std::filesystem::directory_iterator(scratch(), ec)) std::filesystem::remove_all(entry.path(), ec);
+  for (const auto& entry : std::filesystem::directory_iterator(scratch(), ec))
+    std::filesystem::remove_all(entry.path(), ec);
 }
 
 inline void write_file(const std::filesystem::path& path, std::string_view bytes) {
@@ -64,7 +65,7 @@ inline std::filesystem::path write_input(const std::uint8_t* data, std::size_t s
 }
 
 struct ArchiveFile {
-  std::string name;   ///< relative path, "" when the archive did not name it
+  std::string name;  ///< relative path, "" when the archive did not name it
   std::string bytes;
 };
 
@@ -87,7 +88,8 @@ inline std::vector<ArchiveFile> split_archive(std::string_view in) {
   ArchiveFile current;
   if (in.starts_with(kMarker)) {
     const std::size_t eol = in.find('\n');
-    current.name = std::string(in.substr(kMarker.size(), eol == std::string_view::npos ? std::string_view::npos : eol - kMarker.size()));
+    current.name = std::string(
+        in.substr(kMarker.size(), eol == std::string_view::npos ? std::string_view::npos : eol - kMarker.size()));
     in = eol == std::string_view::npos ? std::string_view{} : in.substr(eol + 1);
   }
   for (;;) {

@@ -21,7 +21,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const std::string text = hof::scene::to_xml(*project);
   auto again = hof::scene::parse_project(text, path);
   if (!again) {
-    std::fprintf(stderr, "the canonical text of a project read does not read back: %s\n", again.error().to_string().c_str());
+    std::fprintf(stderr, "the canonical text of a project read does not read back: %s\n",
+                 again.error().to_string().c_str());
     std::abort();
   }
   if (hof::scene::to_xml(*again) != text) {

@@ -8,7 +8,7 @@ packages=(
   libeigen3-dev libtet1.5-dev libpugixml-dev libglfw3-dev libimgui-dev libepoxy-dev
   libfmt-dev nlohmann-json3-dev libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev libtbb-dev libsuitesparse-dev
   gnuplot-nox xvfb xauth libgl1-mesa-dri libspnav-dev libsodium-dev
-  clang-16 libclang-rt-16-dev
+  clang-16 libclang-rt-16-dev clang-format-14
   # The BLAS that CHOLMOD's supernodal factorisation runs on (Debian's alternatives select it
   # for libblas.so.3; with the reference BLAS the direct solver is 5× slower): serial, so that
   # it starts no threads beside TBB's. docs/performance.md, "The sparse direct solver".

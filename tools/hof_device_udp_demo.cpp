@@ -15,8 +15,8 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
-#include <CLI/CLI.hpp>
 #include <fmt/format.h>
+#include <CLI/CLI.hpp>
 
 #include <array>
 #include <chrono>
@@ -230,10 +230,13 @@ int main(int argc, char** argv) {
                  "or a full simulated spec ('virtual-hand:poke')")
       ->capture_default_str();
   app.add_option("--rate", o.rate_hz, "States per second")->check(CLI::Range(1.0, 20000.0))->capture_default_str();
-  app.add_option("--print-rate", o.print_hz, "Lines printed per second")->check(CLI::Range(0.1, 1000.0))->capture_default_str();
+  app.add_option("--print-rate", o.print_hz, "Lines printed per second")
+      ->check(CLI::Range(0.1, 1000.0))
+      ->capture_default_str();
   app.add_flag("--no-velocity", o.no_velocity, "Leave velocity out of the states (HoF then differentiates)");
-  app.add_option("--key", o.key_file,
-                 "Shared key file (hof device keygen): speak the authenticated protocol, as HoF's udp:HOST:PORT,key=FILE")
+  app.add_option(
+         "--key", o.key_file,
+         "Shared key file (hof device keygen): speak the authenticated protocol, as HoF's udp:HOST:PORT,key=FILE")
       ->check(CLI::ExistingFile);
   CLI11_PARSE(app, argc, argv);
   std::signal(SIGINT, on_interrupt);

@@ -58,8 +58,10 @@ int main(int argc, char** argv) {
   double seconds = 2.0;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
-    if (arg == "--seconds" && i + 1 < argc) seconds = std::atof(argv[++i]);
-    else file = arg;
+    if (arg == "--seconds" && i + 1 < argc)
+      seconds = std::atof(argv[++i]);
+    else
+      file = arg;
   }
   auto world = hof::scene::build_world(file);
   if (!world) {
@@ -81,13 +83,15 @@ int main(int argc, char** argv) {
   }
   double vibration_peak = 0.0;
   long touching = 0;
-  const hof::coupling::SessionReport report = (*session)->run_virtual(seconds, [&](const hof::haptics::HapticSample& s) {
-    if (!s.tool.touched) return;
-    ++touching;
-    vibration_peak = std::max(vibration_peak, s.tool.force.norm());
-  });
-  std::printf("HoF %s: '%s', %.2f s in virtual time: %lld haptic ticks, %lld simulation steps\n", hof::kVersion, name.c_str(),
-              report.simulated_s, static_cast<long long>(report.haptic_ticks), static_cast<long long>(report.simulation_steps));
+  const hof::coupling::SessionReport report =
+      (*session)->run_virtual(seconds, [&](const hof::haptics::HapticSample& s) {
+        if (!s.tool.touched) return;
+        ++touching;
+        vibration_peak = std::max(vibration_peak, s.tool.force.norm());
+      });
+  std::printf("HoF %s: '%s', %.2f s in virtual time: %lld haptic ticks, %lld simulation steps\n", hof::kVersion,
+              name.c_str(), report.simulated_s, static_cast<long long>(report.haptic_ticks),
+              static_cast<long long>(report.simulation_steps));
   std::printf("contact %.3f s, max force %.3f N; the probe vibrated on %ld ticks, peak %.3f N\n", report.contact_time_s,
               report.max_force_n, touching, vibration_peak);
   return touching > 0 && vibration_peak > 0.1 ? 0 : 2;

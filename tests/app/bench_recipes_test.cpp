@@ -43,16 +43,23 @@ ModelConfig hand_made(const Body& b, Field field, Settings s) {
       double stiffness = 10000.0, damping = 15.0;
       if (!thesis) {
         double length = 0.0;
-        for (const mesh::Tet& t : b.tets) length += (b.nodes[static_cast<std::size_t>(t[0])] - b.nodes[static_cast<std::size_t>(t[1])]).norm();
+        for (const mesh::Tet& t : b.tets)
+          length += (b.nodes[static_cast<std::size_t>(t[0])] - b.nodes[static_cast<std::size_t>(t[1])]).norm();
         stiffness = young * length / static_cast<double>(std::max<std::size_t>(b.tets.size(), 1));
         damping = 15.0 * stiffness / 10000.0;
       }
       f.mesh_springs = MeshSpringConfig{stiffness, damping, 1.0};
       break;
     }
-    case Field::kSmall: f.tetrahedron_fem = TetrahedronFemConfig{young, poisson, FemMethod::kSmall, {}, {}}; break;
-    case Field::kLarge: f.tetrahedron_fem = TetrahedronFemConfig{young, poisson, FemMethod::kLarge, {}, {}}; break;
-    case Field::kNeoHookean: f.neo_hookean = NeoHookeanConfig{young, poisson, {}, {}}; break;
+    case Field::kSmall:
+      f.tetrahedron_fem = TetrahedronFemConfig{young, poisson, FemMethod::kSmall, {}, {}};
+      break;
+    case Field::kLarge:
+      f.tetrahedron_fem = TetrahedronFemConfig{young, poisson, FemMethod::kLarge, {}, {}};
+      break;
+    case Field::kNeoHookean:
+      f.neo_hookean = NeoHookeanConfig{young, poisson, {}, {}};
+      break;
     case Field::kHexahedra: {
       HexahedronFemConfig h;
       h.young_modulus_pa = young;
@@ -134,7 +141,8 @@ void expect_same(const ModelConfig& built, const ModelConfig& made) {
   EXPECT_EQ(built.mass.element_mass_density_kg_per_m3, made.mass.element_mass_density_kg_per_m3);
 
   ASSERT_EQ(built.force_fields.size(), made.force_fields.size());
-  for (std::size_t i = 0; i < made.force_fields.size(); ++i) expect_same_field(built.force_fields[i], made.force_fields[i]);
+  for (std::size_t i = 0; i < made.force_fields.size(); ++i)
+    expect_same_field(built.force_fields[i], made.force_fields[i]);
 
   ASSERT_EQ(built.fixed.size(), made.fixed.size());
   for (std::size_t i = 0; i < made.fixed.size(); ++i) {
@@ -203,8 +211,8 @@ TEST(BenchRecipes, SparseGridConfigIsTheHandMadeRecipe) {
 
 TEST(BenchRecipes, SolverAndSetUpsAreTheHandMadeRecipes) {
   const Body& b = body("simple");
-  for (Solver sv : {Solver::kExplicitEuler, Solver::kSymplecticEuler, Solver::kRungeKutta4, Solver::kStatic, Solver::kImplicitCg,
-                    Solver::kImplicitLdlt}) {
+  for (Solver sv : {Solver::kExplicitEuler, Solver::kSymplecticEuler, Solver::kRungeKutta4, Solver::kStatic,
+                    Solver::kImplicitCg, Solver::kImplicitLdlt}) {
     SCOPED_TRACE(solver_name(sv));
     ModelConfig built = body_config(b, Field::kSprings, Settings::kThesis);
     ModelConfig made = hand_made(b, Field::kSprings, Settings::kThesis);
@@ -213,10 +221,12 @@ TEST(BenchRecipes, SolverAndSetUpsAreTheHandMadeRecipes) {
     expect_same(built, made);
   }
   // The plan's set-ups (plan.cpp).
-  for (const CorotationalSetup& setup : {CorotationalSetup{0.02}, CorotationalSetup{0.001, 25, false}, CorotationalSetup{0.001, 25, true},
-                                         CorotationalSetup{0.001, 25, true, false}, CorotationalSetup{0.01, 25, false, false},
-                                         CorotationalSetup{0.02, 100, false, false}, CorotationalSetup{0.001, 100, true, false}}) {
-    SCOPED_TRACE(testing::Message() << setup.dt_s << " " << setup.iterations << " " << setup.haptic_rate_cg << " " << setup.gravity);
+  for (const CorotationalSetup& setup :
+       {CorotationalSetup{0.02}, CorotationalSetup{0.001, 25, false}, CorotationalSetup{0.001, 25, true},
+        CorotationalSetup{0.001, 25, true, false}, CorotationalSetup{0.01, 25, false, false},
+        CorotationalSetup{0.02, 100, false, false}, CorotationalSetup{0.001, 100, true, false}}) {
+    SCOPED_TRACE(testing::Message() << setup.dt_s << " " << setup.iterations << " " << setup.haptic_rate_cg << " "
+                                    << setup.gravity);
     ModelConfig made = hand_made(b, Field::kLarge, Settings::kPhysiological);
     set_solver(made, Solver::kImplicitCg, setup.dt_s);
     made.linear.iterations = setup.iterations;
@@ -245,7 +255,8 @@ TEST(BenchRecipes, ScenesReadWithoutWarnings) {
     EXPECT_TRUE(scene->ignored.empty());
     EXPECT_EQ(scene->warnings.size(), f == Field::kNeoHookean ? 1U : 0U);
   }
-  auto grid = scene::read_sofa_scene_text(body_scene(body("sparse-grid"), Field::kHexahedra, Settings::kThesis), "bench.scn");
+  auto grid =
+      scene::read_sofa_scene_text(body_scene(body("sparse-grid"), Field::kHexahedra, Settings::kThesis), "bench.scn");
   ASSERT_TRUE(grid.has_value()) << grid.error().to_string();
   EXPECT_TRUE(grid->warnings.empty());
 }

@@ -129,7 +129,8 @@ TEST(GuiScript, ReadsEveryActionAndNamesTheLineOfAnError) {
   EXPECT_EQ((*ok)[7].line, 9);
 
   auto edits = hof::app::parse_script(
-      "replace mechanics/Liver/FEM TetrahedronHyperelasticityFEMForceField materialName=NeoHookean \"ParameterSet=1 2\"\n"
+      "replace mechanics/Liver/FEM TetrahedronHyperelasticityFEMForceField materialName=NeoHookean \"ParameterSet=1 "
+      "2\"\n"
       "add mechanics/Liver FixedProjectiveConstraint pin indices=\"1 2\"\nremove mechanics/Liver/pin\n"
       "region Liver box 0 0 0 0.1 0.1 0.1 9000\nregion clear\n",
       "edits.txt");
@@ -146,10 +147,12 @@ TEST(GuiScript, ReadsEveryActionAndNamesTheLineOfAnError) {
   EXPECT_EQ((*edits)[3].numbers.size(), 7u);
   EXPECT_TRUE((*edits)[4].numbers.empty());
 
-  for (const char* bad : {"wait\n", "wait -1\n", "animate maybe\n", "set stiffness 0.4\n", "mouse 1\n", "screenshot a.jpg\n",
-                          "save a.scn\n", "frobnicate\n", "step 0\n", "record a.txt\n", "record\n", "show toolbar\n",
-                          "replace mechanics/Liver TetrahedronFEMForceField\n", "add mechanics/Liver/FEM X y\n", "remove haptics/x\n",
-                          "replace mechanics/Liver/FEM T youngModulus\n", "region Liver sphere 0 0 0 1\n", "region Liver cube 0 0 0 1 2\n"}) {
+  for (const char* bad :
+       {"wait\n", "wait -1\n", "animate maybe\n", "set stiffness 0.4\n", "mouse 1\n", "screenshot a.jpg\n",
+        "save a.scn\n", "frobnicate\n", "step 0\n", "record a.txt\n", "record\n", "show toolbar\n",
+        "replace mechanics/Liver TetrahedronFEMForceField\n", "add mechanics/Liver/FEM X y\n", "remove haptics/x\n",
+        "replace mechanics/Liver/FEM T youngModulus\n", "region Liver sphere 0 0 0 1\n",
+        "region Liver cube 0 0 0 1 2\n"}) {
     auto e = hof::app::parse_script(std::string("wait 0\n") + bad, "s.txt");
     ASSERT_FALSE(e) << bad;
     EXPECT_EQ(e.error().line, 2) << bad;
@@ -170,9 +173,9 @@ TEST(GuiWindow, DrawsTheLiverAndTheMouseStylusPressesItVisibly) {
   EXPECT_LT(organ.share, 0.7) << "the liver fills the view: the camera is inside or too close";
   // 2. Press it with the mouse stylus 12 mm deep at its centre.
   const int x = static_cast<int>(organ.cx), y = static_cast<int>(organ.cy);
-  const GuiRun press = run_gui(dir, "wait 1\nscreenshot " + (dir / "rest.png").string() + "\nmouse " + std::to_string(x) + " " +
-                                     std::to_string(y) + " 0.012\nwait 2.5\nscreenshot " + (dir / "pressed.png").string() +
-                                     "\nquit\n");
+  const GuiRun press = run_gui(dir, "wait 1\nscreenshot " + (dir / "rest.png").string() + "\nmouse " +
+                                        std::to_string(x) + " " + std::to_string(y) + " 0.012\nwait 2.5\nscreenshot " +
+                                        (dir / "pressed.png").string() + "\nquit\n");
   ASSERT_EQ(press.status, 0) << press.output;
   auto rest = hof::render::read_png(dir / "rest.png");
   auto pressed = hof::render::read_png(dir / "pressed.png");
@@ -202,10 +205,16 @@ TEST(GuiWindow, TheNeedleIsMountedTunedInsertedThroughTheCapsuleAndSaved) {
   // Mount the needle, make the capsule 8 mm deep and the model Simone-Okamura, then push the
   // mouse stylus 25 mm into the liver at its centre, and out again.
   const std::string at = std::to_string(static_cast<int>(organ.cx)) + " " + std::to_string(static_cast<int>(organ.cy));
-  const GuiRun run = run_gui(dir, "needle on\nset haptics/needle/tissue@capsule 0.008\n"
-                                  "set haptics/needle/tissue@model simone-okamura\nwait 0.5\nmouse " + at + " -0.01\nwait 0.5\n"
-                                  "mouse " + at + " 0.025\nwait 2\nscreenshot " + (dir / "inserted.png").string() + "\n"
-                                  "mouse " + at + " -0.03\nwait 2\nsave " + saved.string() + "\nquit\n");
+  const GuiRun run = run_gui(dir,
+                             "needle on\nset haptics/needle/tissue@capsule 0.008\n"
+                             "set haptics/needle/tissue@model simone-okamura\nwait 0.5\nmouse " +
+                                 at +
+                                 " -0.01\nwait 0.5\n"
+                                 "mouse " +
+                                 at + " 0.025\nwait 2\nscreenshot " + (dir / "inserted.png").string() +
+                                 "\n"
+                                 "mouse " +
+                                 at + " -0.03\nwait 2\nsave " + saved.string() + "\nquit\n");
   ASSERT_EQ(run.status, 0) << run.output;
   // The window logged the insertion's events.
   EXPECT_NE(run.output.find("the needle is mounted"), std::string::npos) << run.output;
@@ -228,8 +237,9 @@ TEST(GuiWindow, ScriptChangesSettingsAndTheSavedProjectReloadsToExactlyThem) {
   const fs::path dir = scratch("save");
   const fs::path saved = dir / "tuned.hof";
   const GuiRun run = run_gui(dir,
-                          "set haptics/surface@stiffness 0.4\nset haptics@renderer GodObjectRenderer\n"
-                          "set mechanics/Liver/FEM@youngModulus 8000\nwait 0.3\nsave " + saved.string() + "\nquit\n");
+                             "set haptics/surface@stiffness 0.4\nset haptics@renderer GodObjectRenderer\n"
+                             "set mechanics/Liver/FEM@youngModulus 8000\nwait 0.3\nsave " +
+                                 saved.string() + "\nquit\n");
   ASSERT_EQ(run.status, 0) << run.output;
   auto original = hof::scene::read_project(kLiverProject);
   auto reloaded = hof::scene::read_project(saved);
@@ -242,7 +252,8 @@ TEST(GuiWindow, ScriptChangesSettingsAndTheSavedProjectReloadsToExactlyThem) {
   EXPECT_EQ(reloaded->parameters[0].parameter, "youngModulus");
   EXPECT_DOUBLE_EQ(reloaded->parameters[0].value, 8000.0);
   // The scene is the same file, referred to from where the project now is.
-  EXPECT_EQ(fs::canonical(hof::scene::scene_file(*reloaded, saved)), fs::canonical(hof::scene::scene_file(*original, kLiverProject)));
+  EXPECT_EQ(fs::canonical(hof::scene::scene_file(*reloaded, saved)),
+            fs::canonical(hof::scene::scene_file(*original, kLiverProject)));
   // Everything else is as it was.
   hof::scene::HofProject expected = *original;
   expected.surface.stiffness = 0.4;
@@ -263,13 +274,16 @@ TEST(GuiWindow, TheSceneTreeSwitchesTheForceFieldAddsARegionColoursByStressAndSa
   // Neo-Hookean with the liver's E = 5.4 kPa, ν = 0.45 (SOFA's ParameterSet μ k), a stiff
   // sphere in it, then a press with the colours by von Mises stress.
   const GuiRun run = run_gui(
-      dir, "set mechanics/Liver/FEM@youngModulus 8000\nwait 0.2\nset mechanics/Liver/solver@rayleighMass 0.3\n"
-           "replace mechanics/Liver/FEM TetrahedronHyperelasticityFEMForceField materialName=NeoHookean \"ParameterSet=1862.0689655172414 18000\"\n"
-           "region Liver sphere 0 0 0.04 0.025 54000\nset graphics@colorBy stress\nmouse " +
-               std::to_string(static_cast<int>(organ.cx)) + " " + std::to_string(static_cast<int>(organ.cy)) +
-               " 0.012\nwait 2\nscreenshot " + (dir / "stress.png").string() + "\nsave " + saved.string() + "\nquit\n");
+      dir,
+      "set mechanics/Liver/FEM@youngModulus 8000\nwait 0.2\nset mechanics/Liver/solver@rayleighMass 0.3\n"
+      "replace mechanics/Liver/FEM TetrahedronHyperelasticityFEMForceField materialName=NeoHookean "
+      "\"ParameterSet=1862.0689655172414 18000\"\n"
+      "region Liver sphere 0 0 0.04 0.025 54000\nset graphics@colorBy stress\nmouse " +
+          std::to_string(static_cast<int>(organ.cx)) + " " + std::to_string(static_cast<int>(organ.cy)) +
+          " 0.012\nwait 2\nscreenshot " + (dir / "stress.png").string() + "\nsave " + saved.string() + "\nquit\n");
   ASSERT_EQ(run.status, 0) << run.output;
-  EXPECT_NE(run.output.find("Liver/FEM is now TetrahedronHyperelasticityFEMForceField"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("Liver/FEM is now TetrahedronHyperelasticityFEMForceField"), std::string::npos)
+      << run.output;
   EXPECT_GT(number_after(run.output, "max surface displacement"), 1.0) << run.output;
 
   // The stress view: no tissue colour left; the hot end of the map where it is pressed.
@@ -279,7 +293,8 @@ TEST(GuiWindow, TheSceneTreeSwitchesTheForceFieldAddsARegionColoursByStressAndSa
   int hot = 0;
   for (int y = 0; y < stress->height; ++y) {
     for (int x = kPanelWidth; x < stress->width; ++x) {
-      const std::uint8_t* p = &stress->rgb[3 * (static_cast<std::size_t>(y) * static_cast<std::size_t>(stress->width) + static_cast<std::size_t>(x))];
+      const std::uint8_t* p = &stress->rgb[3 * (static_cast<std::size_t>(y) * static_cast<std::size_t>(stress->width) +
+                                                static_cast<std::size_t>(x))];
       if (p[0] > 170 && p[1] > 170 && p[2] < 110 && std::abs(x - organ.cx) < 150 && std::abs(y - organ.cy) < 150) ++hot;
     }
   }
@@ -306,7 +321,8 @@ TEST(GuiWindow, TheSceneTreeSwitchesTheForceFieldAddsARegionColoursByStressAndSa
   EXPECT_EQ(config.ode.rayleigh_mass, 0.3);
   EXPECT_NEAR(config.force_fields[0].neo_hookean->young_modulus_pa, 5400.0, 1.0);
   EXPECT_TRUE(std::any_of(config.force_fields[0].neo_hookean->element_young_modulus_pa.begin(),
-                          config.force_fields[0].neo_hookean->element_young_modulus_pa.end(), [](double e) { return e == 54000.0; }));
+                          config.force_fields[0].neo_hookean->element_young_modulus_pa.end(),
+                          [](double e) { return e == 54000.0; }));
 
   // An edit that names nothing stops the script with the names there are.
   const GuiRun refused = run_gui(dir, "remove mechanics/Liver/nothing\n");
@@ -320,7 +336,8 @@ TEST(GuiWindow, AScriptErrorNamesItsLineAndTheKnownNames) {
   const GuiRun unknown_name = run_gui(dir, "wait 0\nset haptics/surface@stifness 0.4\nquit\n");
   EXPECT_NE(unknown_name.status, 0);
   EXPECT_NE(unknown_name.output.find("actions.txt:2"), std::string::npos) << unknown_name.output;
-  EXPECT_NE(unknown_name.output.find("stiffness"), std::string::npos) << "the known attributes are listed: " << unknown_name.output;
+  EXPECT_NE(unknown_name.output.find("stiffness"), std::string::npos)
+      << "the known attributes are listed: " << unknown_name.output;
   const GuiRun bad_value = run_gui(dir, "set haptics@renderer FastRenderer\n");
   EXPECT_NE(bad_value.status, 0);
   EXPECT_NE(bad_value.output.find("RuspiniRenderer"), std::string::npos) << bad_value.output;
@@ -338,9 +355,10 @@ TEST(GuiWindow, ARecordedDemonstrationReplaysHeadless) {
   auto view = hof::render::read_png(dir / "view.png");
   ASSERT_TRUE(view);
   const Coverage organ = tissue_coverage(*view);
-  const GuiRun demo = run_gui(dir, "wait 0.3\nrecord " + csv.string() + "\nmouse " + std::to_string(static_cast<int>(organ.cx)) + " " +
-                                       std::to_string(static_cast<int>(organ.cy)) +
-                                       " 0.012\nwait 1.5\nset haptics/surface@stiffness 0.3\nwait 0.3\nrecord off\nquit\n");
+  const GuiRun demo =
+      run_gui(dir, "wait 0.3\nrecord " + csv.string() + "\nmouse " + std::to_string(static_cast<int>(organ.cx)) + " " +
+                       std::to_string(static_cast<int>(organ.cy)) +
+                       " 0.012\nwait 1.5\nset haptics/surface@stiffness 0.3\nwait 0.3\nrecord off\nquit\n");
   ASSERT_EQ(demo.status, 0) << demo.output;
   const double touched_live = number_after(demo.output, "contact");
   ASSERT_GT(touched_live, 1.0) << demo.output;
@@ -366,7 +384,8 @@ TEST(GuiWindow, ARecordedDemonstrationReplaysHeadless) {
                                  "'" + kLiverProject.string() + "' --device 'replay:" + csv.string() + "'"}) {
     const fs::path out = dir / "replay";
     fs::remove_all(out);
-    const std::string command = "'" + std::string(HOF_BIN) + "' run " + run + " --deterministic --seconds 2 --quiet --out '" + out.string() + "'";
+    const std::string command = "'" + std::string(HOF_BIN) + "' run " + run +
+                                " --deterministic --seconds 2 --quiet --out '" + out.string() + "'";
     ASSERT_EQ(std::system(command.c_str()), 0) << command;
     std::ifstream summary_file(out / "summary.json");
     const std::string summary((std::istreambuf_iterator<char>(summary_file)), std::istreambuf_iterator<char>());
@@ -381,11 +400,12 @@ TEST(GuiWindow, StartsEmptyOpensAFileAndAFileThatDoesNotLoadLeavesTheWorldAsItWa
   const fs::path dir = scratch("open");
   const fs::path broken = dir / "broken.hof";
   std::ofstream(broken) << "<hof><mechanics scene='missing.scn'/></hof>\n";
-  const GuiRun run = run_gui(dir,
-                             "wait 0.3\nscreenshot " + (dir / "empty.png").string() + "\nopen " + kLiverProject.string() +
-                                 "\nwait 0.5\nscreenshot " + (dir / "opened.png").string() + "\nopen " + broken.string() +
-                                 "\nopen /nonexistent/liver.hof\nwait 0.5\nscreenshot " + (dir / "after.png").string() + "\nquit\n",
-                             fs::path());
+  const GuiRun run =
+      run_gui(dir,
+              "wait 0.3\nscreenshot " + (dir / "empty.png").string() + "\nopen " + kLiverProject.string() +
+                  "\nwait 0.5\nscreenshot " + (dir / "opened.png").string() + "\nopen " + broken.string() +
+                  "\nopen /nonexistent/liver.hof\nwait 0.5\nscreenshot " + (dir / "after.png").string() + "\nquit\n",
+              fs::path());
   ASSERT_EQ(run.status, 0) << run.output;
   auto empty = hof::render::read_png(dir / "empty.png");
   auto opened = hof::render::read_png(dir / "opened.png");

@@ -21,7 +21,6 @@
 #include "hof/mesh/liver_generator.h"
 #include "hof/mesh/mesh_io.h"
 
-
 namespace hof::collision {
 namespace {
 
@@ -61,9 +60,7 @@ const TriMesh& triangle_soup() {
   return soup;
 }
 
-TriMesh single_triangle() {
-  return {{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)}, {mesh::Tri{0, 1, 2}}};
-}
+TriMesh single_triangle() { return {{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)}, {mesh::Tri{0, 1, 2}}}; }
 
 // Unit cube [0,1]³, two outward triangles per face (corners o, o+u, o+u+v, o+v with u×v out).
 TriMesh unit_cube() {
@@ -88,8 +85,7 @@ double segment_distance(const Vec3& p, const Vec3& a, const Vec3& b) {
 double reference_distance(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
   const Vec3 n = (b - a).cross(c - a);
   const Vec3 q = p - (p - a).dot(n) / n.squaredNorm() * n;
-  if ((b - a).cross(q - a).dot(n) >= 0 && (c - b).cross(q - b).dot(n) >= 0 &&
-      (a - c).cross(q - c).dot(n) >= 0) {
+  if ((b - a).cross(q - a).dot(n) >= 0 && (c - b).cross(q - b).dot(n) >= 0 && (a - c).cross(q - c).dot(n) >= 0) {
     return (p - q).norm();
   }
   return std::min({segment_distance(p, a, b), segment_distance(p, b, c), segment_distance(p, c, a)});
@@ -153,8 +149,7 @@ void expect_same(const SweepHit& x, const SweepHit& y) {
   EXPECT_EQ(x.front, y.front);
 }
 
-constexpr TouchableFace kFaces[] = {TouchableFace::kFront, TouchableFace::kBack,
-                                    TouchableFace::kFrontAndBack};
+constexpr TouchableFace kFaces[] = {TouchableFace::kFront, TouchableFace::kBack, TouchableFace::kFrontAndBack};
 
 // ---------------------------------------------------------------------------------------
 // Analytic cases
@@ -166,13 +161,13 @@ TEST(AabbTreeAnalytic, ClosestPointRegionsOfOneTriangle) {
     Vec3 p, point, barycentric;
   };
   const Case cases[] = {
-      {Vec3(0.2, 0.3, 0.5), Vec3(0.2, 0.3, 0), Vec3(0.5, 0.2, 0.3)},    // face
-      {Vec3(0.5, -1, 0.2), Vec3(0.5, 0, 0), Vec3(0.5, 0.5, 0)},         // edge ab
-      {Vec3(1, 1, 0), Vec3(0.5, 0.5, 0), Vec3(0, 0.5, 0.5)},            // edge bc
-      {Vec3(-1, 0.5, -0.3), Vec3(0, 0.5, 0), Vec3(0.5, 0, 0.5)},        // edge ca
-      {Vec3(-1, -1, -1), Vec3(0, 0, 0), Vec3(1, 0, 0)},                 // vertex a
-      {Vec3(2, -0.5, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)},                 // vertex b
-      {Vec3(-0.5, 3, 0.1), Vec3(0, 1, 0), Vec3(0, 0, 1)},               // vertex c
+      {Vec3(0.2, 0.3, 0.5), Vec3(0.2, 0.3, 0), Vec3(0.5, 0.2, 0.3)},  // face
+      {Vec3(0.5, -1, 0.2), Vec3(0.5, 0, 0), Vec3(0.5, 0.5, 0)},       // edge ab
+      {Vec3(1, 1, 0), Vec3(0.5, 0.5, 0), Vec3(0, 0.5, 0.5)},          // edge bc
+      {Vec3(-1, 0.5, -0.3), Vec3(0, 0.5, 0), Vec3(0.5, 0, 0.5)},      // edge ca
+      {Vec3(-1, -1, -1), Vec3(0, 0, 0), Vec3(1, 0, 0)},               // vertex a
+      {Vec3(2, -0.5, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)},               // vertex b
+      {Vec3(-0.5, 3, 0.1), Vec3(0, 1, 0), Vec3(0, 0, 1)},             // vertex c
   };
   for (const Case& c : cases) {
     const ClosestPoint r = tree.closest_point(view(m), c.p, kInf);
@@ -206,7 +201,9 @@ TEST(AabbTreeAnalytic, SegmentThroughUnitCube) {
   EXPECT_TRUE(h.front);
   EXPECT_NEAR((h.barycentric[0] * cube.vertices[cube.triangles[h.triangle][0]] +
                h.barycentric[1] * cube.vertices[cube.triangles[h.triangle][1]] +
-               h.barycentric[2] * cube.vertices[cube.triangles[h.triangle][2]] - h.point).norm(), 0, 1e-15);
+               h.barycentric[2] * cube.vertices[cube.triangles[h.triangle][2]] - h.point)
+                  .norm(),
+              0, 1e-15);
   // Oblique, through x = 0 at t = 1/4.
   h = tree.first_hit_segment(view(cube), Vec3(-1, 0.25, 0.3), Vec3(3, 0.75, 0.7));
   EXPECT_NEAR(h.t, 0.25, 1e-15);
@@ -235,8 +232,7 @@ TEST(AabbTreeAnalytic, TouchableFaceFiltersSegmentsFromInside) {
     EXPECT_LT((h.normal - Vec3(0, 0, -1)).norm(), 1e-15);  // toward the moving point
   }
   // From outside in: FRONT hits the top, BACK passes it and meets the bottom from inside.
-  EXPECT_NEAR(tree.first_hit_segment(view(cube), b, a - Vec3(0, 0, 2), TouchableFace::kFront).t,
-              1.0 / 3.5, 1e-15);
+  EXPECT_NEAR(tree.first_hit_segment(view(cube), b, a - Vec3(0, 0, 2), TouchableFace::kFront).t, 1.0 / 3.5, 1e-15);
   const SweepHit back = tree.first_hit_segment(view(cube), b, a - Vec3(0, 0, 2), TouchableFace::kBack);
   EXPECT_NEAR(back.t, 2.0 / 3.5, 1e-15);
   EXPECT_LT((back.point - Vec3(0.3, 0.6, 0)).norm(), 1e-15);
@@ -267,8 +263,9 @@ TEST(AabbTreeAnalytic, SphereTouchesFaceEdgeAndVertexAtAnalyticTime) {
   EXPECT_LT((h.barycentric - Vec3(0.5, 0.5, 0)).norm(), 1e-14);
   EXPECT_LT((h.normal - Vec3(0, -y, 0.05) / r).norm(), 1e-12);
   EXPECT_TRUE(h.front);
-  EXPECT_EQ(tree.first_hit_swept_sphere(view(m), Vec3(0.5, -1, 0.05), Vec3(0.5, 1, 0.05), r,
-                                        TouchableFace::kBack).triangle, -1);
+  EXPECT_EQ(
+      tree.first_hit_swept_sphere(view(m), Vec3(0.5, -1, 0.05), Vec3(0.5, 1, 0.05), r, TouchableFace::kBack).triangle,
+      -1);
   // Vertex a, approached along u = (−1, −1, 1)/√3 from 2u to −u: |c| = 2 − 3t = r.
   const Vec3 u = Vec3(-1, -1, 1).normalized();
   h = tree.first_hit_swept_sphere(view(m), 2 * u, -u, r);
@@ -443,12 +440,9 @@ TEST_P(LiverSurfaceTest, TrianglesNearIsASupersetOfTheTrianglesWithinTheRadius) 
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Surfaces, LiverSurfaceTest, ::testing::Values(0, 1, 2),
-                         [](const auto& param_info) {
-                           return param_info.param == 0   ? "SofaLiver"
-                                  : param_info.param == 1 ? "GeneratedLiver"
-                                                          : "TriangleSoup";
-                         });
+INSTANTIATE_TEST_SUITE_P(Surfaces, LiverSurfaceTest, ::testing::Values(0, 1, 2), [](const auto& param_info) {
+  return param_info.param == 0 ? "SofaLiver" : param_info.param == 1 ? "GeneratedLiver" : "TriangleSoup";
+});
 
 // ---------------------------------------------------------------------------------------
 // Refit, determinism, degenerate input
@@ -553,11 +547,11 @@ bool finite(const SweepHit& h) {
 TEST(AabbTreeDegenerate, DegenerateTrianglesAreSkippedWithoutNaN) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   TriMesh m;
-  m.vertices = {Vec3(0, 0, 0),   Vec3(1, 0, 0),   Vec3(0, 1, 0),    // 0: a good triangle
-                Vec3(0, 0, 0.5), Vec3(1, 0, 0.5), Vec3(2, 0, 0.5),  // 1: collinear
-                Vec3(0, 0, 1),   Vec3(0, 0, 1),   Vec3(1, 1, 1),    // 2: repeated vertex
-                Vec3(0.3, 0.3, 1.5),                                // 3: a point
-                Vec3(nan, 0, 0)};                                   // 4: not finite
+  m.vertices = {Vec3(0, 0, 0),       Vec3(1, 0, 0),   Vec3(0, 1, 0),    // 0: a good triangle
+                Vec3(0, 0, 0.5),     Vec3(1, 0, 0.5), Vec3(2, 0, 0.5),  // 1: collinear
+                Vec3(0, 0, 1),       Vec3(0, 0, 1),   Vec3(1, 1, 1),    // 2: repeated vertex
+                Vec3(0.3, 0.3, 1.5),                                    // 3: a point
+                Vec3(nan, 0, 0)};                                       // 4: not finite
   m.triangles = {{0, 1, 2}, {3, 4, 5}, {6, 7, 8}, {9, 9, 9}, {10, 1, 2}};
   for (bool use_tree : {true, false}) {
     const AabbTree tree = AabbTree::build(view(m), {.use_bound_tree = use_tree});
@@ -581,10 +575,13 @@ TEST(AabbTreeDegenerate, DegenerateTrianglesAreSkippedWithoutNaN) {
       }
     }
     // Motions straight through the degenerate ones.
-    EXPECT_EQ(tree.first_hit_segment(view(m), Vec3(0.5, -1, 0.5), Vec3(0.5, 1, 0.5),
-                                     TouchableFace::kFrontAndBack).triangle, -1);
-    EXPECT_EQ(tree.first_hit_swept_sphere(view(m), Vec3(0.3, 0.3, 2), Vec3(0.3, 0.3, 1.2), 0.1,
-                                          TouchableFace::kFrontAndBack).triangle, -1);
+    EXPECT_EQ(
+        tree.first_hit_segment(view(m), Vec3(0.5, -1, 0.5), Vec3(0.5, 1, 0.5), TouchableFace::kFrontAndBack).triangle,
+        -1);
+    EXPECT_EQ(
+        tree.first_hit_swept_sphere(view(m), Vec3(0.3, 0.3, 2), Vec3(0.3, 0.3, 1.2), 0.1, TouchableFace::kFrontAndBack)
+            .triangle,
+        -1);
     std::int32_t out[8];
     EXPECT_GE(tree.triangles_near(Vec3(0.2, 0.2, 0), 0.1, out), 1u);
   }
@@ -593,8 +590,9 @@ TEST(AabbTreeDegenerate, DegenerateTrianglesAreSkippedWithoutNaN) {
   only.triangles = {{3, 4, 5}, {6, 7, 8}, {9, 9, 9}, {10, 1, 2}};
   AabbTree tree = AabbTree::build(view(only));
   EXPECT_EQ(tree.closest_point(view(only), Vec3(0.2, 0.2, 0.2), kInf).triangle, -1);
-  EXPECT_EQ(tree.first_hit_swept_sphere(view(only), Vec3(0, 0, 3), Vec3(0, 0, -3), 0.5,
-                                        TouchableFace::kFrontAndBack).triangle, -1);
+  EXPECT_EQ(tree.first_hit_swept_sphere(view(only), Vec3(0, 0, 3), Vec3(0, 0, -3), 0.5, TouchableFace::kFrontAndBack)
+                .triangle,
+            -1);
   EXPECT_FALSE(tree.refit(view(only)));
 }
 

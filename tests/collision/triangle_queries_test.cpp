@@ -43,8 +43,8 @@ Vec3 closest_on_segment(const Vec3& p, const Vec3& a, const Vec3& b) {
 Vec3 brute_closest(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
   const Vec3 n = (b - a).cross(c - a);
   const Vec3 q = p - (p - a).dot(n) / n.squaredNorm() * n;
-  const bool inside = n.dot((b - a).cross(q - a)) >= 0 && n.dot((c - b).cross(q - b)) >= 0 &&
-                      n.dot((a - c).cross(q - c)) >= 0;
+  const bool inside =
+      n.dot((b - a).cross(q - a)) >= 0 && n.dot((c - b).cross(q - b)) >= 0 && n.dot((a - c).cross(q - c)) >= 0;
   if (inside) return q;
   Vec3 best = closest_on_segment(p, a, b);
   for (const Vec3& candidate : {closest_on_segment(p, b, c), closest_on_segment(p, c, a)}) {
@@ -70,9 +70,12 @@ TEST(ClosestPointOnTriangle, MatchesBruteForceInEveryVoronoiRegion) {
     ASSERT_GE(w.minCoeff(), -1e-12);
     ASSERT_LT((w[0] * kP0 + w[1] * kP1 + w[2] * kP2 - c).norm(), 1e-12);
     const int zeros = (w[0] == 0.0) + (w[1] == 0.0) + (w[2] == 0.0);
-    if (zeros == 2) ++seen[w[0] == 1.0 ? 0 : w[1] == 1.0 ? 1 : 2];
-    else if (zeros == 1) ++seen[w[2] == 0.0 ? 3 : w[1] == 0.0 ? 4 : 5];
-    else ++seen[6];
+    if (zeros == 2)
+      ++seen[w[0] == 1.0 ? 0 : w[1] == 1.0 ? 1 : 2];
+    else if (zeros == 1)
+      ++seen[w[2] == 0.0 ? 3 : w[1] == 0.0 ? 4 : 5];
+    else
+      ++seen[6];
   }
   for (int region = 0; region < 7; ++region) EXPECT_GT(seen[region], 100) << "region " << region;
 }
@@ -90,10 +93,10 @@ TEST(ClosestPointOnTriangle, ADegenerateTriangleNeverCrashesAndNeverCounts) {
   const Vec3 p(0.3, 0.4, 0.5);
   const Vec3 a(0, 0, 0), b(1, 1, 1);
   const std::array<std::array<Vec3, 3>, 4> degenerate{{
-      {a, b, Vec3(0.5, 0.5, 0.5)},           // collinear
-      {a, a, b},                             // a repeated vertex
-      {a, a, a},                             // a point
-      {a, b, Vec3(kNaN, 0, 0)},              // not a number
+      {a, b, Vec3(0.5, 0.5, 0.5)},  // collinear
+      {a, a, b},                    // a repeated vertex
+      {a, a, a},                    // a point
+      {a, b, Vec3(kNaN, 0, 0)},     // not a number
   }};
   for (const auto& t : degenerate) {
     Vec3 w;
@@ -143,11 +146,12 @@ TEST(SegmentTriangle, MissesBesideShortOfBehindAndParallel) {
   const Vec3 a(0, 0, 0), b(1, 0, 0), c(0, 1, 0);
   TriangleContact hit;
   const TouchableFace both = TouchableFace::kFrontAndBack;
-  EXPECT_FALSE(intersect_segment_triangle(Vec3(0.6, 0.6, 1), Vec3(0, 0, -2), a, b, c, both, hit));   // beside (u + v > 1)
-  EXPECT_FALSE(intersect_segment_triangle(Vec3(0.2, 0.2, 1), Vec3(0, 0, -0.5), a, b, c, both, hit)); // stops short
-  EXPECT_FALSE(intersect_segment_triangle(Vec3(0.2, 0.2, 1), Vec3(0, 0, 0.5), a, b, c, both, hit));  // moving away
-  EXPECT_FALSE(intersect_segment_triangle(Vec3(0.2, 0.2, 0), Vec3(0.1, 0.1, 0), a, b, c, both, hit)); // in the plane
-  EXPECT_FALSE(intersect_segment_triangle(Vec3(0.2, 0.2, 1), Vec3(1, 0, 0), a, b, c, both, hit));    // parallel
+  EXPECT_FALSE(
+      intersect_segment_triangle(Vec3(0.6, 0.6, 1), Vec3(0, 0, -2), a, b, c, both, hit));  // beside (u + v > 1)
+  EXPECT_FALSE(intersect_segment_triangle(Vec3(0.2, 0.2, 1), Vec3(0, 0, -0.5), a, b, c, both, hit));   // stops short
+  EXPECT_FALSE(intersect_segment_triangle(Vec3(0.2, 0.2, 1), Vec3(0, 0, 0.5), a, b, c, both, hit));    // moving away
+  EXPECT_FALSE(intersect_segment_triangle(Vec3(0.2, 0.2, 0), Vec3(0.1, 0.1, 0), a, b, c, both, hit));  // in the plane
+  EXPECT_FALSE(intersect_segment_triangle(Vec3(0.2, 0.2, 1), Vec3(1, 0, 0), a, b, c, both, hit));      // parallel
   // Both endpoints are inclusive.
   ASSERT_TRUE(intersect_segment_triangle(Vec3(0.2, 0.2, 1), Vec3(0, 0, -1), a, b, c, both, hit));
   EXPECT_EQ(hit.t, 1.0);
@@ -226,7 +230,8 @@ TEST(SweepSphereTriangle, FirstContactMatchesTheSampledDistance) {
     // The sampling cannot tell a graze from a near miss: leave out what passes within a hair.
     double closest = std::numeric_limits<double>::infinity();
     for (int k = 0; k <= kSamples; ++k) {
-      closest = std::min(closest, std::sqrt(point_triangle_distance_squared(a + (double(k) / kSamples) * d, kP0, kP1, kP2)));
+      closest =
+          std::min(closest, std::sqrt(point_triangle_distance_squared(a + (double(k) / kSamples) * d, kP0, kP1, kP2)));
     }
     if (std::abs(closest - r) < 1e-3 * d.norm()) continue;
     TriangleContact hit;
@@ -247,7 +252,8 @@ TEST(SweepSphereTriangle, FirstContactMatchesTheSampledDistance) {
     EXPECT_NEAR(std::sqrt(point_triangle_distance_squared(centre, kP0, kP1, kP2)), r, 1e-9);
     EXPECT_LT((hit.normal - (centre - hit.point) / r).norm(), 1e-7);
     EXPECT_LT(hit.normal.dot(d), 0.0);
-    EXPECT_LT((hit.barycentric[0] * kP0 + hit.barycentric[1] * kP1 + hit.barycentric[2] * kP2 - hit.point).norm(), 1e-12);
+    EXPECT_LT((hit.barycentric[0] * kP0 + hit.barycentric[1] * kP1 + hit.barycentric[2] * kP2 - hit.point).norm(),
+              1e-12);
   }
   EXPECT_GT(hits, 100);
   EXPECT_GT(misses, 100);
@@ -288,10 +294,10 @@ TEST(SweepSphereTriangle, NoContactForABadRadiusADegenerateTriangleOrAnOverlapTh
 TEST(BoxDistance, ZeroInsideAndTheSquaredGapOutside) {
   const Vec3 lo(-1, 0, 2), hi(1, 3, 4);
   EXPECT_EQ(box_distance_squared(Vec3(0, 1, 3), lo, hi), 0.0);
-  EXPECT_EQ(box_distance_squared(Vec3(1, 3, 4), lo, hi), 0.0);                // on a corner
-  EXPECT_DOUBLE_EQ(box_distance_squared(Vec3(0, 1, 6), lo, hi), 4.0);         // beside a face
-  EXPECT_DOUBLE_EQ(box_distance_squared(Vec3(3, 5, 3), lo, hi), 8.0);         // beside an edge
-  EXPECT_DOUBLE_EQ(box_distance_squared(Vec3(-2, -1, 1), lo, hi), 3.0);       // beyond a corner
+  EXPECT_EQ(box_distance_squared(Vec3(1, 3, 4), lo, hi), 0.0);           // on a corner
+  EXPECT_DOUBLE_EQ(box_distance_squared(Vec3(0, 1, 6), lo, hi), 4.0);    // beside a face
+  EXPECT_DOUBLE_EQ(box_distance_squared(Vec3(3, 5, 3), lo, hi), 8.0);    // beside an edge
+  EXPECT_DOUBLE_EQ(box_distance_squared(Vec3(-2, -1, 1), lo, hi), 3.0);  // beyond a corner
   EXPECT_TRUE(std::isnan(box_distance_squared(Vec3(kNaN, 0, 3), lo, hi)));
 }
 

@@ -27,12 +27,14 @@ std::unique_ptr<Session> box_session() {
   std::vector<SessionBody> bodies(1);
   bodies[0].name = "box";
   bodies[0].surface = hof::testing::box_surface(Vec3(-0.02, -0.04, -0.02), Vec3(0.02, 0.0, 0.02));
-  auto scripted = haptics::ScriptedMotion::make(haptics::MotionConfig::poke(Vec3(0, 0.05, 0), Vec3(0, -1, 0), 0.01, 0.0, 0.05, 0.1));
+  auto scripted = haptics::ScriptedMotion::make(
+      haptics::MotionConfig::poke(Vec3(0, 0.05, 0), Vec3(0, -1, 0), 0.01, 0.0, 0.05, 0.1));
   EXPECT_TRUE(scripted);
   SessionConfig config;
   config.haptics.realtime_priority = false;
   config.pin_threads = false;
-  auto session = Session::make(std::move(bodies), std::make_unique<haptics::ScriptedDevice>(*scripted, haptics::DeviceSpec{}), config);
+  auto session = Session::make(std::move(bodies),
+                               std::make_unique<haptics::ScriptedDevice>(*scripted, haptics::DeviceSpec{}), config);
   EXPECT_TRUE(session) << session.error().to_string();
   return std::move(*session);
 }
@@ -44,7 +46,8 @@ TEST(CommandSeam, CommandsAreAppliedInTheOrderTheyWereSubmitted) {
   ASSERT_TRUE(session->submit(command::SetForceLimit{3.0}));
   ASSERT_TRUE(session->submit(command::Resume{}));
   const SessionReport report = session->run_virtual(0.05, {});
-  const std::vector<std::string> expected{"step 0: pause", "step 0: single step x2", "step 0: force limit 3 N", "step 0: resume"};
+  const std::vector<std::string> expected{"step 0: pause", "step 0: single step x2", "step 0: force limit 3 N",
+                                          "step 0: resume"};
   EXPECT_EQ(report.applied_commands, expected);
 }
 
@@ -56,10 +59,12 @@ TEST(CommandSeam, AWrongCommandIsAClearErrorAndChangesNothing) {
   auto nobody = session->submit(command::SetMaterial{"spleen", {}});
   ASSERT_FALSE(nobody);
   EXPECT_NE(nobody.error().message.find("no body 'spleen' (bodies: box)"), std::string::npos) << nobody.error().message;
-  auto rigid = session->submit(command::SetParameter{BodyId{0}, {{mechanics::ComponentKind::kModel, 0}, mechanics::ParameterId::kDt}, 0.001});
+  auto rigid = session->submit(
+      command::SetParameter{BodyId{0}, {{mechanics::ComponentKind::kModel, 0}, mechanics::ParameterId::kDt}, 0.001});
   ASSERT_FALSE(rigid);
   EXPECT_NE(rigid.error().message.find("rigid"), std::string::npos) << rigid.error().message;
-  EXPECT_FALSE(session->parameter(BodyId{0}, mechanics::ParameterRef{{mechanics::ComponentKind::kModel, 0}, mechanics::ParameterId::kDt}));
+  EXPECT_FALSE(session->parameter(
+      BodyId{0}, mechanics::ParameterRef{{mechanics::ComponentKind::kModel, 0}, mechanics::ParameterId::kDt}));
   const SessionReport report = session->run_virtual(0.05, {});
   EXPECT_TRUE(report.applied_commands.empty());
   EXPECT_TRUE(session->material_changes().empty());
@@ -67,7 +72,8 @@ TEST(CommandSeam, AWrongCommandIsAClearErrorAndChangesNothing) {
 
 TEST(CommandSeam, AFullQueueIsAClearErrorNotAWait) {
   auto session = box_session();
-  for (std::size_t i = 0; i < kCommandQueueCapacity; ++i) ASSERT_TRUE(session->submit(command::SetForceLimit{1.0})) << i;
+  for (std::size_t i = 0; i < kCommandQueueCapacity; ++i)
+    ASSERT_TRUE(session->submit(command::SetForceLimit{1.0})) << i;
   auto full = session->submit(command::SetMaterial{"box", {}});
   ASSERT_FALSE(full);
   EXPECT_NE(full.error().message.find("queue is full"), std::string::npos) << full.error().message;

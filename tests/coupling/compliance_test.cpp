@@ -64,7 +64,8 @@ TEST(ComplianceCoupling, FeltForceMatchesTheStaticFemReactionWithinTenPercent) {
   auto mapping = SurfaceMapping::by_index(liver.nodes, b.surface.vertices, b.surface_to_volume);
   ASSERT_TRUE(mapping);
   // slow: 1 mm per 0.25 s
-  const haptics::MotionConfig motion = haptics::MotionConfig::poke(top + Vec3(0, 0, 0.004), Vec3(0, 0, -1), 0.004, 0.004, 0.004, 0.5);
+  const haptics::MotionConfig motion =
+      haptics::MotionConfig::poke(top + Vec3(0, 0, 0.004), Vec3(0, 0, -1), 0.004, 0.004, 0.004, 0.5);
   auto scripted = haptics::ScriptedMotion::make(motion);
   ASSERT_TRUE(scripted);
   haptics::DeviceSpec spec;
@@ -80,7 +81,8 @@ TEST(ComplianceCoupling, FeltForceMatchesTheStaticFemReactionWithinTenPercent) {
                                std::make_unique<haptics::ScriptedDevice>(*scripted, spec), config);
   ASSERT_TRUE(session) << session.error().to_string();
   std::vector<haptics::HapticSample> samples;
-  const SessionReport report = (*session)->run_virtual(2.6, [&](const haptics::HapticSample& s) { samples.push_back(s); });
+  const SessionReport report =
+      (*session)->run_virtual(2.6, [&](const haptics::HapticSample& s) { samples.push_back(s); });
   ASSERT_FALSE(report.diverged) << report.divergence;
   EXPECT_EQ(report.fall_through_events, 0);
 
@@ -100,8 +102,9 @@ TEST(ComplianceCoupling, FeltForceMatchesTheStaticFemReactionWithinTenPercent) {
     // the tilting surface, so the sideways part depends on the mesh's local shape (between 4%
     // and 11% of the force on the medium livers that different compilers once generated); the
     // whole vector is held to 20%, which still catches a force pointing the wrong way.
-    const std::string where = fmt::format("depth {}: felt ({:.4f} {:.4f} {:.4f}) N, static FEM ({:.4f} {:.4f} {:.4f}) N", depth,
-                                          felt.x(), felt.y(), felt.z(), expected.x(), expected.y(), expected.z());
+    const std::string where =
+        fmt::format("depth {}: felt ({:.4f} {:.4f} {:.4f}) N, static FEM ({:.4f} {:.4f} {:.4f}) N", depth, felt.x(),
+                    felt.y(), felt.z(), expected.x(), expected.y(), expected.z());
     EXPECT_LT(std::abs(felt.z() - expected.z()), 0.10 * std::abs(expected.z())) << where;
     EXPECT_LT(std::abs(felt.norm() - expected.norm()), 0.10 * expected.norm()) << where;
     EXPECT_LT((felt - expected).norm(), 0.20 * expected.norm()) << where;

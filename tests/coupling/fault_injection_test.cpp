@@ -83,11 +83,11 @@ Vec3 press(double t) { return Vec3(0.03, 0.0, 0.09 - 0.05 * std::clamp(t, 0.0, 1
 
 enum class Fault : std::uint8_t {
   kNone,
-  kSilent,            // no sample (valid = false), health kTimedOut
+  kSilent,  // no sample (valid = false), health kTimedOut
   kNanPosition,
   kInfPosition,
   kNanVelocity,
-  kZeroQuaternion,    // no rotation at all: garbage
+  kZeroQuaternion,  // no rotation at all: garbage
   kNanQuaternion,
   kScaledQuaternion,  // finite, |q| = 5: a rotation badly scaled, not garbage
   kJumpDown,          // 3 m straight through the body in one tick
@@ -115,15 +115,32 @@ class FaultyDevice final : public haptics::Device {
     r.valid = fault != Fault::kSilent;
     const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
     switch (fault) {
-      case Fault::kNanPosition: r.position_m.x() = nan; break;
-      case Fault::kInfPosition: r.position_m.z() = -inf; break;
-      case Fault::kNanVelocity: r.velocity_m_per_s.y() = nan; break;
-      case Fault::kZeroQuaternion: r.orientation.coeffs().setZero(); break;
-      case Fault::kNanQuaternion: r.orientation.coeffs() << nan, 0.0, 0.0, 1.0; break;
-      case Fault::kScaledQuaternion: r.orientation.coeffs() << 0.0, 0.0, 0.0, 5.0; break;
-      case Fault::kJumpDown: r.position_m += Vec3(0.0, 0.0, -3.0); break;
-      case Fault::kJumpAside: r.position_m += Vec3(3.0, 0.0, 0.0); break;
-      default: break;
+      case Fault::kNanPosition:
+        r.position_m.x() = nan;
+        break;
+      case Fault::kInfPosition:
+        r.position_m.z() = -inf;
+        break;
+      case Fault::kNanVelocity:
+        r.velocity_m_per_s.y() = nan;
+        break;
+      case Fault::kZeroQuaternion:
+        r.orientation.coeffs().setZero();
+        break;
+      case Fault::kNanQuaternion:
+        r.orientation.coeffs() << nan, 0.0, 0.0, 1.0;
+        break;
+      case Fault::kScaledQuaternion:
+        r.orientation.coeffs() << 0.0, 0.0, 0.0, 5.0;
+        break;
+      case Fault::kJumpDown:
+        r.position_m += Vec3(0.0, 0.0, -3.0);
+        break;
+      case Fault::kJumpAside:
+        r.position_m += Vec3(3.0, 0.0, 0.0);
+        break;
+      default:
+        break;
     }
     if (fault == Fault::kSilent) ++silent_reads;
     return r;
@@ -159,7 +176,8 @@ class StallField final : public mechanics::ForceField {
   [[nodiscard]] std::string_view type_name() const override { return "TestStallField"; }
   void collect_couplings(std::vector<std::pair<std::int32_t, std::int32_t>>&) const override {}
   void bind(const mechanics::BlockSparseMatrix&) override {}
-  void add_force(const Eigen::VectorXd&, const Eigen::VectorXd&, mechanics::ForceFieldState&, Eigen::VectorXd&) const override {
+  void add_force(const Eigen::VectorXd&, const Eigen::VectorXd&, mechanics::ForceFieldState&,
+                 Eigen::VectorXd&) const override {
     if (!control_->requested.load()) return;
     // A solver that stopped making progress (a page fault storm, a lock elsewhere, a debugger):
     // the step does not return until the test lets it.
@@ -170,7 +188,9 @@ class StallField final : public mechanics::ForceField {
   }
   void add_stiffness(const mechanics::ForceFieldState&, double, mechanics::BlockSparseMatrix&) const override {}
   [[nodiscard]] bool has_stiffness() const override { return false; }
-  [[nodiscard]] double potential_energy(const Eigen::VectorXd&, const mechanics::ForceFieldState&) const override { return 0.0; }
+  [[nodiscard]] double potential_energy(const Eigen::VectorXd&, const mechanics::ForceFieldState&) const override {
+    return 0.0;
+  }
 
  private:
   std::shared_ptr<StallControl> control_;
@@ -215,7 +235,8 @@ void expect_device_forces_safe(const FaultyDevice& device, Slew slew) {
     ASSERT_TRUE(device.forces[i].allFinite()) << "write " << i;
     ASSERT_LE(device.forces[i].norm(), spec.max_force_n) << "write " << i;
     if (slew == Slew::kChecked && i > 0) {
-      ASSERT_LE((device.forces[i] - device.forces[i - 1]).norm(), spec.max_force_rate_n_per_s * kTick + 1e-9) << "write " << i;
+      ASSERT_LE((device.forces[i] - device.forces[i - 1]).norm(), spec.max_force_rate_n_per_s * kTick + 1e-9)
+          << "write " << i;
     }
   }
 }
@@ -252,7 +273,8 @@ TEST(FaultInjection, AnExplodingSimulationIsReportedAndItsForceFadesOutThenANewM
   const std::size_t fade = after - ticks_to_failure;
   EXPECT_GE(fade, 1u);
   EXPECT_LE(static_cast<std::int64_t>(fade), fade_out_ticks(config.haptics.safety, probe.spec()));
-  EXPECT_GT(samples[before + ticks_to_failure - 1].force.norm(), 0.0) << "nothing to fade: the test would prove nothing";
+  EXPECT_GT(samples[before + ticks_to_failure - 1].force.norm(), 0.0)
+      << "nothing to fade: the test would prove nothing";
   EXPECT_TRUE(samples.back().force.isZero(0.0));
   EXPECT_TRUE(probe.last_force.isZero(0.0)) << "the run left the device pushing";
   EXPECT_GT(exploded.safety.watchdog, 0u);
@@ -273,7 +295,8 @@ TEST(FaultInjection, AnExplodingSimulationIsReportedAndItsForceFadesOutThenANewM
   EXPECT_FALSE(recovered.diverged) << recovered.divergence;
   EXPECT_GT(samples.back().force.norm(), 0.3) << "the force did not come back";
   EXPECT_EQ(recovered.fall_through_events, 0);
-  for (std::size_t i = recovered_from; i < samples.size(); ++i) ASSERT_LE(samples[i].force.norm(), probe.spec().max_force_n);
+  for (std::size_t i = recovered_from; i < samples.size(); ++i)
+    ASSERT_LE(samples[i].force.norm(), probe.spec().max_force_n);
   expect_every_force_safe(samples, probe.spec().max_force_n);
   expect_device_forces_safe(probe, Slew::kChecked);
 }
@@ -328,7 +351,8 @@ TEST(FaultInjection, AnExplodingSimulationInRealTimeEndsTheSimulationThreadAndTh
   EXPECT_LE(pushing, fade_out_ticks(config.haptics.safety, probe.spec()) + 10);
   for (std::size_t i = seen_at; i < samples.size(); ++i) {
     if (samples[i].force.isZero(0.0)) {
-      for (std::size_t j = i; j < samples.size(); ++j) ASSERT_TRUE(samples[j].force.isZero(0.0)) << "came back at tick " << j;
+      for (std::size_t j = i; j < samples.size(); ++j)
+        ASSERT_TRUE(samples[j].force.isZero(0.0)) << "came back at tick " << j;
       break;
     }
   }
@@ -395,8 +419,9 @@ TEST(FaultInjection, AStalledSimulationThreadFadesTheForceOutAndItComesBackWhenT
   const std::uint64_t frozen = samples.back().snapshot_sequence;
   // The haptic loop runs on without the simulation, and its watchdog takes the force to zero.
   const auto zero = [](const HapticSample& s) { return s.force.isZero(0.0); };
-  ASSERT_TRUE(poll_until(session, keep, [&] { return last_n(samples, 100, zero) && samples.size() > stalled_from + 100; }))
-      << "the force never faded out during the stall";
+  ASSERT_TRUE(poll_until(session, keep, [&] {
+    return last_n(samples, 100, zero) && samples.size() > stalled_from + 100;
+  })) << "the force never faded out during the stall";
   EXPECT_EQ(session.steps_taken(), steps_at_stall) << "the stall did not hold the simulation";
   EXPECT_TRUE(stall->inside.load());
   // Counted from the last snapshot that arrived: at most the watchdog's bound pushes (twice
@@ -412,8 +437,9 @@ TEST(FaultInjection, AStalledSimulationThreadFadesTheForceOutAndItComesBackWhenT
 
   // The stall ends: steps again, and the force fades back in.
   stall->requested.store(false);
-  ASSERT_TRUE(poll_until(session, keep, [&] { return session.steps_taken() > steps_at_stall + 10 && last_n(samples, 50, pushing); }))
-      << "the force did not come back after the stall";
+  ASSERT_TRUE(poll_until(session, keep, [&] {
+    return session.steps_taken() > steps_at_stall + 10 && last_n(samples, 50, pushing);
+  })) << "the force did not come back after the stall";
   const SessionReport report = session.stop_realtime(keep);
   EXPECT_FALSE(session.realtime_running());
   EXPECT_FALSE(report.diverged) << report.divergence;
@@ -578,12 +604,14 @@ TEST(FaultInjection, ASessionWhoseFirstStepNeverCompletesSendsNoForceAndStartsWh
   std::size_t counted = 0;
   std::int64_t asked = 0;
   ASSERT_TRUE(poll_until(session, keep, [&] {
-    for (; counted < samples.size(); ++counted) asked += samples[counted].contact && samples[counted].requested_force.norm() > 0.3 ? 1 : 0;
+    for (; counted < samples.size(); ++counted)
+      asked += samples[counted].contact && samples[counted].requested_force.norm() > 0.3 ? 1 : 0;
     return asked >= 200;
   })) << "the stylus never pressed the liver";
   EXPECT_EQ(session.steps_taken(), 0u);
   EXPECT_TRUE(stall->inside.load());
-  for (const HapticSample& s : samples) ASSERT_TRUE(s.force.isZero(0.0)) << "tick " << s.tick << " pushed on a never-stepped body";
+  for (const HapticSample& s : samples)
+    ASSERT_TRUE(s.force.isZero(0.0)) << "tick " << s.tick << " pushed on a never-stepped body";
 
   // The step completes: the simulation runs, and the force fades in.
   stall->requested.store(false);
@@ -604,7 +632,8 @@ TEST(FaultInjection, ASessionWhoseFirstStepNeverCompletesSendsNoForceAndStartsWh
 // A surface snapshot as published whole: every vertex finite, the normals those of these
 // positions (a slot half overwritten by the next step would not match its own normals).
 ::testing::AssertionResult whole(const haptics::SurfaceSnapshot& s, std::size_t vertex_count) {
-  if (s.vertices.size() != vertex_count || s.vertex_normals.size() != vertex_count) return ::testing::AssertionFailure() << "sizes";
+  if (s.vertices.size() != vertex_count || s.vertex_normals.size() != vertex_count)
+    return ::testing::AssertionFailure() << "sizes";
   std::vector<Vec3> normals(vertex_count, Vec3::Zero());
   for (const mesh::Tri& t : s.triangles) {
     const Vec3 n = (s.vertices[t[1]] - s.vertices[t[0]]).cross(s.vertices[t[2]] - s.vertices[t[0]]);
@@ -613,7 +642,8 @@ TEST(FaultInjection, ASessionWhoseFirstStepNeverCompletesSendsNoForceAndStartsWh
   for (std::size_t i = 0; i < vertex_count; ++i) {
     if (!s.vertices[i].allFinite()) return ::testing::AssertionFailure() << "vertex " << i << " not finite";
     const Vec3 n = normals[i].normalized();
-    if ((n - s.vertex_normals[i]).norm() > 1e-6) return ::testing::AssertionFailure() << "vertex " << i << ": normal of other positions";
+    if ((n - s.vertex_normals[i]).norm() > 1e-6)
+      return ::testing::AssertionFailure() << "vertex " << i << ": normal of other positions";
   }
   return ::testing::AssertionSuccess();
 }

@@ -52,7 +52,8 @@ Press make_press(const mesh::Mesh& liver, ContactCoupling coupling, double dt_s 
   EXPECT_TRUE(model) << model.error().to_string();
   auto mapping = SurfaceMapping::by_index(liver.nodes, p.boundary.surface.vertices, p.boundary.surface_to_volume);
   EXPECT_TRUE(mapping);
-  const haptics::MotionConfig motion = haptics::MotionConfig::poke(p.top + Vec3(0, 0, 0.003), Vec3(0, 0, -1), 0.003, depth_m, 0.02, 0.6);
+  const haptics::MotionConfig motion =
+      haptics::MotionConfig::poke(p.top + Vec3(0, 0, 0.003), Vec3(0, 0, -1), 0.003, depth_m, 0.02, 0.6);
   auto scripted = haptics::ScriptedMotion::make(motion);
   EXPECT_TRUE(scripted);
   haptics::DeviceSpec spec;
@@ -67,8 +68,10 @@ Press make_press(const mesh::Mesh& liver, ContactCoupling coupling, double dt_s 
   session_config.haptics.realtime_priority = false;
   auto session = Session::make(SessionBody{"liver", std::move(*model), p.boundary.surface, std::move(*mapping), {}, {}},
                                std::make_unique<haptics::ScriptedDevice>(*scripted, spec), session_config);
-  if (session) p.session = std::move(*session);
-  else ADD_FAILURE() << session.error().to_string();
+  if (session)
+    p.session = std::move(*session);
+  else
+    ADD_FAILURE() << session.error().to_string();
   return p;
 }
 
@@ -100,16 +103,19 @@ TEST(FemReactionCoupling, TheForceFeltAtEveryTickIsTheFemReactionOfTheStepBefore
       const mesh::Tri& tri = press.boundary.surface.triangles[static_cast<std::size_t>(previous.triangle)];
       const Eigen::VectorXd& x = session.state(0).x;
       auto at = [&](std::int32_t surface_vertex) {
-        return Vec3(x.segment<3>(3 * static_cast<Eigen::Index>(press.boundary.surface_to_volume[static_cast<std::size_t>(surface_vertex)])));
+        return Vec3(x.segment<3>(
+            3 * static_cast<Eigen::Index>(press.boundary.surface_to_volume[static_cast<std::size_t>(surface_vertex)])));
       };
-      const Vec3 point = previous.barycentric[0] * at(tri[0]) + previous.barycentric[1] * at(tri[1]) + previous.barycentric[2] * at(tri[2]);
+      const Vec3 point = previous.barycentric[0] * at(tri[0]) + previous.barycentric[1] * at(tri[1]) +
+                         previous.barycentric[2] * at(tri[2]);
       double longest = 0.0;
       for (int k = 0; k < 3; ++k) longest = std::max(longest, (at(tri[k]) - at(tri[(k + 1) % 3])).norm());
       const double radius = std::max(0.01, 2.0 * longest);
       std::vector<std::int32_t> nodes;
       for (std::size_t v = 0; v < press.boundary.surface.vertices.size(); ++v) {
         const std::int32_t node = press.boundary.surface_to_volume[v];
-        if ((at(static_cast<std::int32_t>(v)) - point).norm() <= radius && !reference->fixed_dof_mask[3 * static_cast<std::size_t>(node)]) {
+        if ((at(static_cast<std::int32_t>(v)) - point).norm() <= radius &&
+            !reference->fixed_dof_mask[3 * static_cast<std::size_t>(node)]) {
           nodes.push_back(node);
         }
       }
@@ -135,8 +141,8 @@ TEST(FemReactionCoupling, TheForceFeltAtEveryTickIsTheFemReactionOfTheStepBefore
     const Vec3 expected = e.reaction_before.dot(e.sample.contact_normal) > 0.0 ? e.reaction_before : Vec3::Zero();
     const Vec3 felt = e.sample.requested_force;
     EXPECT_LT((felt - expected).norm(), 1e-9 + 1e-9 * expected.norm())
-        << fmt::format("tick {}: felt ({:.6f} {:.6f} {:.6f}) N, FEM reaction ({:.6f} {:.6f} {:.6f}) N", e.sample.tick, felt.x(),
-                       felt.y(), felt.z(), expected.x(), expected.y(), expected.z());
+        << fmt::format("tick {}: felt ({:.6f} {:.6f} {:.6f}) N, FEM reaction ({:.6f} {:.6f} {:.6f}) N", e.sample.tick,
+                       felt.x(), felt.y(), felt.z(), expected.x(), expected.y(), expected.z());
     // The renderer's spring (stiffness × penetration) would be another force: the mode is on.
     const double spring = 1.0 * 2000.0 * e.sample.penetration_m;
     if (std::abs(felt.norm() - spring) > 0.05 * spring) ++differs_from_spring;
@@ -144,15 +150,17 @@ TEST(FemReactionCoupling, TheForceFeltAtEveryTickIsTheFemReactionOfTheStepBefore
     ++compared;
   }
   const Seen& last = seen[seen.size() - 2];  // the end of the hold (the press lasts 1 s)
-  std::printf("%d contact ticks compared; largest felt %.4f N; at the end of the hold: felt %.4f N, renderer spring %.4f N\n",
-              compared, largest, last.sample.requested_force.norm(), 2000.0 * last.sample.penetration_m);
+  std::printf(
+      "%d contact ticks compared; largest felt %.4f N; at the end of the hold: felt %.4f N, renderer spring %.4f N\n",
+      compared, largest, last.sample.requested_force.norm(), 2000.0 * last.sample.penetration_m);
   EXPECT_GT(compared, 500);
   // While the tissue moves, its reaction is not the spring's force (inertia, damping: the
   // mode is on)...
   EXPECT_GT(differs_from_spring, 100);
   // ... and once it has settled under the held tool, the two balance (Newton's third law).
   ASSERT_TRUE(last.sample.contact);
-  EXPECT_NEAR(last.sample.requested_force.norm(), 2000.0 * last.sample.penetration_m, 0.02 * last.sample.requested_force.norm());
+  EXPECT_NEAR(last.sample.requested_force.norm(), 2000.0 * last.sample.penetration_m,
+              0.02 * last.sample.requested_force.norm());
   // A 5 mm press into a 5.4 kPa liver pushes back with a force a hand feels.
   EXPECT_GT(largest, 0.05);
   EXPECT_LT(largest, 50.0);
@@ -172,15 +180,18 @@ TEST(FemReactionCoupling, NeedsOneSimulationStepPerHapticTick) {
   ASSERT_TRUE(scripted);
   SessionConfig session_config;
   session_config.coupling = ContactCoupling::kFemReaction;
-  auto session = Session::make(SessionBody{"liver", std::move(*model), b.surface, std::move(*mapping), {}, {}},
-                               std::make_unique<haptics::ScriptedDevice>(*scripted, haptics::DeviceSpec{}), session_config);
+  auto session =
+      Session::make(SessionBody{"liver", std::move(*model), b.surface, std::move(*mapping), {}, {}},
+                    std::make_unique<haptics::ScriptedDevice>(*scripted, haptics::DeviceSpec{}), session_config);
   ASSERT_FALSE(session);
-  EXPECT_NE(session.error().message.find("dt 0.01 s, the haptic period is 0.001 s"), std::string::npos) << session.error().message;
+  EXPECT_NE(session.error().message.find("dt 0.01 s, the haptic period is 0.001 s"), std::string::npos)
+      << session.error().message;
 
   // And a running session refuses a dt that breaks it.
   Press press = make_press(liver, ContactCoupling::kFemReaction);
   ASSERT_TRUE(press.session);
-  auto refused = press.session->submit(command::SetParameter{BodyId{0}, {{mechanics::ComponentKind::kModel, 0}, mechanics::ParameterId::kDt}, 0.005});
+  auto refused = press.session->submit(
+      command::SetParameter{BodyId{0}, {{mechanics::ComponentKind::kModel, 0}, mechanics::ParameterId::kDt}, 0.005});
   ASSERT_FALSE(refused);
   EXPECT_NE(refused.error().message.find("fem-reaction"), std::string::npos) << refused.error().message;
 }

@@ -15,9 +15,9 @@
 
 #include "hof/coupling/session.h"
 #include "hof/haptics/device.h"
-#include "hof/haptics/device_config.h"
 #include "hof/haptics/device_backends/dhd_device.h"
 #include "hof/haptics/device_backends/openhaptics_device.h"
+#include "hof/haptics/device_config.h"
 #include "hof/haptics/haptic_loop.h"
 #include "support/box_surface.h"
 
@@ -48,8 +48,8 @@ class Standin {
 struct Dhd {
   Standin lib{HOF_DHD_STANDIN};
   void (*reset)(int, int, double) = lib.get<void(int, int, double)>("standin_dhd_reset");
-  void (*hand)(double, double, double, double, double, double) =
-      lib.get<void(double, double, double, double, double, double)>("standin_dhd_set_hand");
+  void (*hand)(double, double, double, double, double,
+               double) = lib.get<void(double, double, double, double, double, double)>("standin_dhd_set_hand");
   void (*fault)(int, long, int) = lib.get<void(int, long, int)>("standin_dhd_set_fault");
   long (*forces)(double*, int*, double*) = lib.get<long(double*, int*, double*)>("standin_dhd_forces");
   long (*reads)() = lib.get<long()>("standin_dhd_reads");
@@ -62,7 +62,7 @@ const OpenHapticsConfig kHd{"", HOF_HD_STANDIN, std::nullopt};
 
 TEST(SdkDevices, AMissingSdkIsAClearErrorNamingTheFileAndWhereItWasLookedFor) {
   for (const DeviceConfig& config : {DeviceConfig(DhdConfig{0, "/nowhere/libdhd.so", std::nullopt}),
-                                    DeviceConfig(OpenHapticsConfig{"", "/nowhere/libHD.so", std::nullopt})}) {
+                                     DeviceConfig(OpenHapticsConfig{"", "/nowhere/libHD.so", std::nullopt})}) {
     const bool dhd = std::holds_alternative<DhdConfig>(config);
     auto device = open_device(config);
     ASSERT_FALSE(device);
@@ -92,7 +92,8 @@ TEST(SdkDevices, NoDeviceOrAnIndexPastTheDevicesIsAClearError) {
   dhd.reset(0, 33, -1.0);
   auto none = open_device(kDhd);
   ASSERT_FALSE(none);
-  EXPECT_NE(none.error().message.find("no device found by the Force Dimension SDK"), std::string::npos) << none.error().message;
+  EXPECT_NE(none.error().message.find("no device found by the Force Dimension SDK"), std::string::npos)
+      << none.error().message;
   dhd.reset(1, 33, -1.0);
   auto past = open_device(DhdConfig{2, HOF_DHD_STANDIN, std::nullopt});
   ASSERT_FALSE(past);

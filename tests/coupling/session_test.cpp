@@ -33,7 +33,8 @@ PokeRun poke(ContactCoupling coupling, haptics::RendererKind renderer, double se
   SessionBody body{"liver", std::move(*model), b.surface, std::move(*mapping), {}, {}};
 
   // straight down onto the right lobe's top, 1.5 cm deep
-  const haptics::MotionConfig motion = haptics::MotionConfig::poke(Vec3(0.03, 0.0, 0.09), Vec3(0, 0, -1), 0.04, 0.015, 0.05, 0.2);
+  const haptics::MotionConfig motion =
+      haptics::MotionConfig::poke(Vec3(0.03, 0.0, 0.09), Vec3(0, 0, -1), 0.04, 0.015, 0.05, 0.2);
   auto scripted = haptics::ScriptedMotion::make(motion);
   EXPECT_TRUE(scripted);
   haptics::DeviceSpec spec;

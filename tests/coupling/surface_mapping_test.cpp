@@ -55,8 +55,8 @@ TEST(TrilinearMapping, ReproducesAnAffineDeformationExactly) {
     const std::array<std::int32_t, 1> vertex{static_cast<std::int32_t>(i)};
     const std::array<double, 1> one{1.0};
     ASSERT_EQ(mapping->point_weights(vertex, one, nodes, weights), 8u);
-    EXPECT_NEAR(weights[0] + weights[1] + weights[2] + weights[3] + weights[4] + weights[5] + weights[6] + weights[7], 1.0,
-                1e-12);
+    EXPECT_NEAR(weights[0] + weights[1] + weights[2] + weights[3] + weights[4] + weights[5] + weights[6] + weights[7],
+                1.0, 1e-12);
     if (i < 200) {
       for (double w : weights) EXPECT_GE(w, -1e-9) << "point " << i << " is inside: no extrapolation";
     }
@@ -99,11 +99,15 @@ TEST(SparseGridLiver, RunsStablyAndItsFineSurfaceFollows) {
   c.dt_s = 0.02;
   auto model = build_model(c);
   ASSERT_TRUE(model) << model.error().to_string();
-  EXPECT_NEAR(model->total_mass_kg(), 1060.0 * [&] {
-    double v = 0.0;
-    for (const mesh::Hex& hex : grid->hexes) v += mesh::hex_volume(grid->nodes, hex);
-    return v;
-  }(), 1e-9);
+  EXPECT_NEAR(
+      model->total_mass_kg(),
+      1060.0 *
+          [&] {
+            double v = 0.0;
+            for (const mesh::Hex& hex : grid->hexes) v += mesh::hex_volume(grid->nodes, hex);
+            return v;
+          }(),
+      1e-9);
 
   auto mapping = coupling::SurfaceMapping::trilinear(grid->nodes, grid->hexes, surface.vertices);
   ASSERT_TRUE(mapping) << mapping.error().to_string();
@@ -132,8 +136,8 @@ TEST(SparseGridLiver, RunsStablyAndItsFineSurfaceFollows) {
   }
   std::printf("sparse-grid liver: %zu nodes, %zu hexahedra, largest displacement %.2f mm\n", grid->nodes.size(),
               grid->hexes.size(), 1e3 * largest);
-  EXPECT_GT(largest, 1e-3);   // it sags under its weight
-  EXPECT_LT(largest, 0.05);   // and stays bounded (the liver is 0.22 m long)
+  EXPECT_GT(largest, 1e-3);  // it sags under its weight
+  EXPECT_LT(largest, 0.05);  // and stays bounded (the liver is 0.22 m long)
 
   // The fine surface follows: each mapped vertex is its cell's combination of the moved
   // nodes, the surface keeps its volume (ν = 0.45: nearly incompressible) and no triangle
@@ -149,7 +153,8 @@ TEST(SparseGridLiver, RunsStablyAndItsFineSurfaceFollows) {
   const double volume = mesh::check_surface(mapped, surface.triangles).signed_volume_m3;
   EXPECT_NEAR(volume, rest_volume, 0.03 * rest_volume);
   for (const mesh::Tri& t : surface.triangles) {
-    const Vec3 before = (surface.vertices[t[1]] - surface.vertices[t[0]]).cross(surface.vertices[t[2]] - surface.vertices[t[0]]);
+    const Vec3 before =
+        (surface.vertices[t[1]] - surface.vertices[t[0]]).cross(surface.vertices[t[2]] - surface.vertices[t[0]]);
     const Vec3 after = (mapped[t[1]] - mapped[t[0]]).cross(mapped[t[2]] - mapped[t[0]]);
     EXPECT_GT(before.normalized().dot(after.normalized()), 0.5);
   }
@@ -240,8 +245,8 @@ TEST(SurfaceMappingBarycentric, FollowsAnAffineMotionExactlyInsideAndOutside) {
   std::uniform_real_distribution<double> u(0.0, 1.0);
   std::vector<Vec3> points;
   for (int i = 0; i < 100; ++i) points.emplace_back(0.3 * u(random), 0.2 * u(random), 0.2 * u(random));
-  points.emplace_back(0.32, 0.1, 0.1);   // just outside: extrapolated from the nearest tetrahedron
-  points.emplace_back(0.0, 0.0, 0.0);    // on a corner node
+  points.emplace_back(0.32, 0.1, 0.1);  // just outside: extrapolated from the nearest tetrahedron
+  points.emplace_back(0.0, 0.0, 0.0);   // on a corner node
   auto mapping = SurfaceMapping::barycentric(box.nodes, box.tets, points);
   ASSERT_TRUE(mapping) << mapping.error().to_string();
   EXPECT_FALSE(mapping->is_identity());

@@ -1,9 +1,9 @@
 // Sessions on worlds of several bodies: rigid shapes, two livers, force effects only, and the
 // command seam — in virtual time (lock-step, deterministic) and in real time (two threads).
 
-#include <array>
 #include <fmt/format.h>
 #include <gtest/gtest.h>
+#include <array>
 
 #include <chrono>
 #include <cmath>
@@ -19,16 +19,17 @@
 #include "hof/mesh/liver_generator.h"
 
 #include "coupling/resting_liver.h"
-#include "support/box_surface.h"
 #include "support/allocation_counter.h"
+#include "support/box_surface.h"
 
 namespace hof::coupling {
 namespace {
 
 mesh::TriMesh box(const Vec3& lo, const Vec3& hi) { return hof::testing::box_surface(lo, hi); }
 
-std::unique_ptr<haptics::ScriptedDevice> poke_device(const Vec3& start, const Vec3& direction, double approach, double depth,
-                                                      double speed, double hold, const haptics::DeviceSpec& spec = {}) {
+std::unique_ptr<haptics::ScriptedDevice> poke_device(const Vec3& start, const Vec3& direction, double approach,
+                                                     double depth, double speed, double hold,
+                                                     const haptics::DeviceSpec& spec = {}) {
   const haptics::MotionConfig motion = haptics::MotionConfig::poke(start, direction, approach, depth, speed, hold);
   auto scripted = haptics::ScriptedMotion::make(motion);
   EXPECT_TRUE(scripted) << scripted.error().to_string();
@@ -54,7 +55,8 @@ RigidRun press_rigid_box(double depth, double speed) {
   bodies[0].name = "box";
   bodies[0].surface = box(Vec3(-0.02, -0.04, -0.02), Vec3(0.02, 0.0, 0.02));
   const SessionConfig config = god_object_config();
-  auto session = Session::make(std::move(bodies), poke_device(Vec3(0, 0.05, 0), Vec3(0, -1, 0), 0.05, depth, speed, 0.3), config);
+  auto session =
+      Session::make(std::move(bodies), poke_device(Vec3(0, 0.05, 0), Vec3(0, -1, 0), 0.05, depth, speed, 0.3), config);
   EXPECT_TRUE(session) << session.error().to_string();
   RigidRun run;
   run.report = (*session)->run_virtual(5.0, [&](const haptics::HapticSample& s) { run.samples.push_back(s); });
@@ -141,8 +143,12 @@ TEST(CommandSeam, ALowerForceLimitHoldsFromTheNextStepAndIsLiftedAgain) {
   (*session)->run_virtual(6.0, [&](const haptics::HapticSample& s) {
     if (s.time_s >= 2.5 && !lowered) lowered = static_cast<bool>((*session)->submit(command::SetForceLimit{2.0}));
     if (s.time_s >= 4.0 && !lifted) lifted = static_cast<bool>((*session)->submit(command::SetForceLimit{0.0}));
-    const int window = s.time_s > 1.9 && s.time_s < 2.5 ? 0 : s.time_s > 2.6 && s.time_s < 4.0 ? 1 : s.time_s > 4.6 ? 2 : -1;
-    if (window >= 0) top[static_cast<std::size_t>(window)] = std::max(top[static_cast<std::size_t>(window)], s.force.norm());
+    const int window = s.time_s > 1.9 && s.time_s < 2.5   ? 0
+                       : s.time_s > 2.6 && s.time_s < 4.0 ? 1
+                       : s.time_s > 4.6                   ? 2
+                                                          : -1;
+    if (window >= 0)
+      top[static_cast<std::size_t>(window)] = std::max(top[static_cast<std::size_t>(window)], s.force.norm());
   });
   ASSERT_TRUE(lowered && lifted);
   EXPECT_NEAR(top[0], 8.0, 1e-6);
@@ -199,7 +205,8 @@ TwoLivers two_livers(mesh::LiverResolution resolution, const Vec3& probe_start) 
   }
   SessionConfig config;
   config.haptics.realtime_priority = false;
-  auto session = Session::make(std::move(bodies), poke_device(probe_start, Vec3(0, 0, -1), 0.04, 0.01, 0.05, 0.3), config);
+  auto session =
+      Session::make(std::move(bodies), poke_device(probe_start, Vec3(0, 0, -1), 0.04, 0.01, 0.05, 0.3), config);
   EXPECT_TRUE(session) << session.error().to_string();
   TwoLivers t;
   t.session = std::move(*session);
@@ -238,11 +245,13 @@ TEST(WorldSession, TheSameLiverPressedAloneOrBesideAnotherGivesTheSameForces) {
   const mesh::BoundarySurface b = mesh::extract_boundary(liver.nodes, liver.tets);
   mechanics::ModelConfig c = testing::resting_liver_config(liver);
   c.ode.rayleigh_mass = c.ode.rayleigh_stiffness = 0.1;
-  SessionBody body{"A", *mechanics::build_model(c), b.surface,
-                   *SurfaceMapping::by_index(liver.nodes, b.surface.vertices, b.surface_to_volume), {}, c};
+  SessionBody body{"A",       *mechanics::build_model(c),
+                   b.surface, *SurfaceMapping::by_index(liver.nodes, b.surface.vertices, b.surface_to_volume),
+                   {},        c};
   SessionConfig config;
   config.haptics.realtime_priority = false;
-  auto alone = Session::make(std::move(body), poke_device(Vec3(0.03, 0.0, 0.09), Vec3(0, 0, -1), 0.04, 0.01, 0.05, 0.3), config);
+  auto alone =
+      Session::make(std::move(body), poke_device(Vec3(0.03, 0.0, 0.09), Vec3(0, 0, -1), 0.04, 0.01, 0.05, 0.3), config);
   ASSERT_TRUE(alone);
   std::vector<Vec3> alone_forces;
   (*alone)->run_virtual(1.0, [&](const haptics::HapticSample& s) { alone_forces.push_back(s.force); });
@@ -280,14 +289,15 @@ TEST(WorldSession, EffectOnlyWorldRendersEachEffectsOwnFormulaAtEveryTick) {
   ASSERT_TRUE(motion);
   haptics::DeviceSpec spec;
   spec.max_force_rate_n_per_s = 1e6;  // the first tick's step up is the effects', not a slew
-  auto session = Session::make(std::vector<SessionBody>{}, std::make_unique<haptics::ScriptedDevice>(*motion, spec), config);
+  auto session =
+      Session::make(std::vector<SessionBody>{}, std::make_unique<haptics::ScriptedDevice>(*motion, spec), config);
   ASSERT_TRUE(session) << session.error().to_string();
   int checked = 0;
   const SessionReport report = (*session)->run_virtual(2.0, [&](const haptics::HapticSample& s) {
     ASSERT_TRUE(s.valid);
     // H3D: spring k (p − x) − d v; Stokes drag −dampingFactor · 6π μ r · v; the constant.
-    const Vec3 expected = 100.0 * (anchor - s.device) - 0.5 * 6.0 * std::numbers::pi * 50.0 * 0.0025 * s.device_velocity +
-                          Vec3(0.0, 0.3, 0.0);
+    const Vec3 expected = 100.0 * (anchor - s.device) -
+                          0.5 * 6.0 * std::numbers::pi * 50.0 * 0.0025 * s.device_velocity + Vec3(0.0, 0.3, 0.0);
     ASSERT_LT((s.force - expected).norm(), 1e-9) << "t = " << s.time_s;
     ++checked;
   });
@@ -317,8 +327,9 @@ std::unique_ptr<Session> springs_liver_session(std::unique_ptr<haptics::Device> 
   springs.mesh_springs = mechanics::MeshSpringConfig{50.0, 0.5, 1.0};
   c.force_fields.push_back(springs);
   c.ode.rayleigh_mass = c.ode.rayleigh_stiffness = 0.1;
-  SessionBody body{"Liver", *mechanics::build_model(c), b.surface,
-                   *SurfaceMapping::by_index(liver.nodes, b.surface.vertices, b.surface_to_volume), {}, c};
+  SessionBody body{"Liver",   *mechanics::build_model(c),
+                   b.surface, *SurfaceMapping::by_index(liver.nodes, b.surface.vertices, b.surface_to_volume),
+                   {},        c};
   SessionConfig config;
   config.haptics.realtime_priority = false;
   config.simulation_threads = simulation_threads;
@@ -337,9 +348,11 @@ TEST(CommandSeam, ABadValueIsRefusedWithAMessageAndChangesNothing) {
   }
   EXPECT_FALSE(session->submit(command::SetParameter{kNoBody, kStiffness, 10.0}));
   using mechanics::ComponentKind, mechanics::ParameterId;
-  EXPECT_FALSE(session->submit(command::SetParameter{kLiver, {{ComponentKind::kForceField, 1}, ParameterId::kYoungModulus}, 10.0}));
+  EXPECT_FALSE(session->submit(
+      command::SetParameter{kLiver, {{ComponentKind::kForceField, 1}, ParameterId::kYoungModulus}, 10.0}));
   EXPECT_FALSE(session->submit(command::SetParameter{kLiver, {kSprings, ParameterId::kYoungModulus}, 10.0}));
-  EXPECT_FALSE(session->submit(command::SetParameter{kLiver, {{ComponentKind::kLinearSolver, 0}, ParameterId::kIterations}, 2.5}));
+  EXPECT_FALSE(session->submit(
+      command::SetParameter{kLiver, {{ComponentKind::kLinearSolver, 0}, ParameterId::kIterations}, 2.5}));
   EXPECT_FALSE(session->submit(command::SetParameter{kLiver, {{ComponentKind::kModel, 0}, ParameterId::kDt}, 0.0}));
   EXPECT_FALSE(session->submit(command::SingleStep{0}));
   haptics::SurfaceMaterial negative;
@@ -388,7 +401,8 @@ TEST(CommandSeam, AModelSwitchedMidRunStartsFromTheCurrentShapeAndActsAtTheNextS
   mechanics::ModelConfig fem = *b->body().config;
   fem.force_fields[0] = mechanics::ForceFieldConfig{};
   fem.force_fields[0].name = "FEM";
-  fem.force_fields[0].tetrahedron_fem = mechanics::TetrahedronFemConfig{3000.0, 0.45, mechanics::FemMethod::kLarge, {}, {}};
+  fem.force_fields[0].tetrahedron_fem =
+      mechanics::TetrahedronFemConfig{3000.0, 0.45, mechanics::FemMethod::kLarge, {}, {}};
   ASSERT_TRUE(b->submit(command::SetModel{kLiver, fem, nullptr}));
   const SessionReport rb = b->run_virtual(0.01, {});
   ASSERT_EQ(rb.applied_commands.size(), 1u);
@@ -507,8 +521,8 @@ TEST(RealTimeSession, TheSimulationRunsOnTheThreadsAskedForAndEveryCoreButOneByD
     hold.kind = haptics::MotionKind::kHold;
     hold.start_m = Vec3(0.03, 0.0, 0.09);
     hold.hold_s = std::numeric_limits<double>::infinity();
-    auto session = springs_liver_session(std::make_unique<haptics::ScriptedDevice>(*haptics::ScriptedMotion::make(hold)),
-                                         asked);
+    auto session =
+        springs_liver_session(std::make_unique<haptics::ScriptedDevice>(*haptics::ScriptedMotion::make(hold)), asked);
     session->start_realtime();
     while (session->haptic_loop().ticks() < 50) std::this_thread::sleep_for(std::chrono::milliseconds(2));
     const SessionReport report = session->stop_realtime({});
@@ -524,8 +538,8 @@ TEST(RealTimeSession, TheHapticLoopAndTheSnapshotsRunOnACpuOfTheirOwn) {
     hold.kind = haptics::MotionKind::kHold;
     hold.start_m = Vec3(0.03, 0.0, 0.09);
     hold.hold_s = std::numeric_limits<double>::infinity();
-    auto session = springs_liver_session(std::make_unique<haptics::ScriptedDevice>(*haptics::ScriptedMotion::make(hold)), 0,
-                                         pin);
+    auto session =
+        springs_liver_session(std::make_unique<haptics::ScriptedDevice>(*haptics::ScriptedMotion::make(hold)), 0, pin);
     session->start_realtime();
     while (session->haptic_loop().ticks() < 50) std::this_thread::sleep_for(std::chrono::milliseconds(2));
     const SessionReport report = session->stop_realtime({});
@@ -585,7 +599,8 @@ TEST(RealTimeSession, TheLastShapeOfARunIsPublishedAndEveryShapeInOrder) {
   const std::vector<std::pair<Vec3, Vec3>> root = last.tree.boxes(0);
   ASSERT_EQ(root.size(), 1u);
   for (const Vec3& p : last.vertices) {
-    EXPECT_TRUE((p.array() >= root[0].first.array()).all() && (p.array() <= root[0].second.array()).all()) << p.transpose();
+    EXPECT_TRUE((p.array() >= root[0].first.array()).all() && (p.array() <= root[0].second.array()).all())
+        << p.transpose();
   }
 }
 
@@ -600,24 +615,28 @@ TEST(CommandSeam, AnotherDeviceIsSwitchedToWithItsOwnForceLimit) {
   hold.start_m = Vec3(0.0, 0.5, 0.0);
   hold.hold_s = std::numeric_limits<double>::infinity();
   SessionConfig config = god_object_config();
-  auto session = Session::make(std::move(bodies), std::make_unique<haptics::ScriptedDevice>(*haptics::ScriptedMotion::make(hold)),
-                               config);
+  auto session = Session::make(std::move(bodies),
+                               std::make_unique<haptics::ScriptedDevice>(*haptics::ScriptedMotion::make(hold)), config);
   ASSERT_TRUE(session);
   (*session)->run_virtual(0.1, {});
   // A device that is not there, and a motion that cannot be, are refused when submitted.
-  auto absent = (*session)->submit(command::SetDevice{haptics::ReplayConfig{"/nonexistent/hof-replay.csv", false, {}}, "replay", nullptr});
+  auto absent = (*session)->submit(
+      command::SetDevice{haptics::ReplayConfig{"/nonexistent/hof-replay.csv", false, {}}, "replay", nullptr});
   ASSERT_FALSE(absent);
   haptics::MotionConfig backwards;
   backwards.speed_m_per_s = -1.0;
-  EXPECT_FALSE((*session)->submit(command::SetDevice{haptics::ScriptedConfig{backwards, {}}, "scripted:poke,speed=-1", nullptr}));
-  haptics::MotionConfig poke;  // scripted:poke,start=0;0.05;0,direction=0;-1;0,approach=0.05,depth=0.03,speed=0.1,hold=1
+  EXPECT_FALSE((*session)->submit(
+      command::SetDevice{haptics::ScriptedConfig{backwards, {}}, "scripted:poke,speed=-1", nullptr}));
+  haptics::MotionConfig
+      poke;  // scripted:poke,start=0;0.05;0,direction=0;-1;0,approach=0.05,depth=0.03,speed=0.1,hold=1
   poke.start_m = Vec3(0.0, 0.05, 0.0);
   poke.direction = Vec3(0.0, -1.0, 0.0);
   poke.approach_m = 0.05;
   poke.depth_m = 0.03;
   poke.speed_m_per_s = 0.1;
   poke.hold_s = 1.0;
-  const haptics::DeviceConfig omni = haptics::ScriptedConfig{poke, haptics::device_spec_for_model(haptics::DeviceModel::kOmni)};
+  const haptics::DeviceConfig omni =
+      haptics::ScriptedConfig{poke, haptics::device_spec_for_model(haptics::DeviceModel::kOmni)};
   ASSERT_TRUE((*session)->submit(command::SetDevice{omni, "scripted:poke (omni)", nullptr}));
   double largest = 0.0;
   int clamped = 0;

@@ -40,7 +40,8 @@ TEST(ProjectOntoHalfSpaces, OntoOneTwoAndThreePlanes) {
 }
 
 TEST(ProjectOntoHalfSpaces, PlanesThatCannotAllBeMetGiveTheFallback) {
-  const std::array<HalfSpace, 3> planes{plane(Vec3::UnitZ(), 1.0), plane(-Vec3::UnitZ(), 0.0), HalfSpace{}};  // z ≥ 1, z ≤ 0
+  const std::array<HalfSpace, 3> planes{plane(Vec3::UnitZ(), 1.0), plane(-Vec3::UnitZ(), 0.0),
+                                        HalfSpace{}};  // z ≥ 1, z ≤ 0
   EXPECT_EQ(project_onto_half_spaces(Vec3(0, 0, 0.5), planes, 2, kFallback), kFallback);
 }
 

@@ -25,7 +25,7 @@ TEST(ForceEffects, SpringActivatesInsideStartAndReleasesOutsideEscape) {
   EXPECT_EQ(effects.evaluate(Vec3(0.015, 0, 0), Vec3::Zero()), Vec3::Zero());  // not yet caught
   EXPECT_NEAR(effects.evaluate(Vec3(0.005, 0, 0), Vec3::Zero()).x(), -100.0 * 0.005, 1e-12);
   EXPECT_NEAR(effects.evaluate(Vec3(0.015, 0, 0), Vec3::Zero()).x(), -100.0 * 0.015, 1e-12);  // held
-  EXPECT_EQ(effects.evaluate(Vec3(0.025, 0, 0), Vec3::Zero()), Vec3::Zero());  // escaped
+  EXPECT_EQ(effects.evaluate(Vec3(0.025, 0, 0), Vec3::Zero()), Vec3::Zero());                 // escaped
 }
 
 TEST(ForceEffects, ViscosityIsStokesDragAndConstantAdds) {
@@ -63,8 +63,8 @@ TEST(ForceEffects, SpringPullsTowardItsAnchorFromEverySide) {
   for (const Vec3& dir : {Vec3(1, 0, 0), Vec3(0, -1, 0), Vec3(0, 0, 1), Vec3(-1, 1, -1).normalized()}) {
     const Vec3 x = spring.position_m + 0.02 * dir;
     const Vec3 f = effects.evaluate(x, Vec3::Zero());
-    EXPECT_NEAR(f.norm(), 100.0 * 0.02, 1e-12);           // H3D default 100 N/m
-    EXPECT_NEAR(f.normalized().dot(-dir), 1.0, 1e-12);    // restoring
+    EXPECT_NEAR(f.norm(), 100.0 * 0.02, 1e-12);         // H3D default 100 N/m
+    EXPECT_NEAR(f.normalized().dot(-dir), 1.0, 1e-12);  // restoring
   }
 }
 
@@ -151,7 +151,7 @@ TEST(ForceEffects, MagnetCatchesWithinStartAndLetsGoAtEscape) {
   magnet.start_distance_m = 0.25;
   magnet.escape_distance_m = 0.5;
   effects.magnets.push_back(magnet);
-  EXPECT_EQ(effects.evaluate(Vec3(0.1, 0.05, 0.375), Vec3::Zero()), Vec3::Zero());  // not caught yet
+  EXPECT_EQ(effects.evaluate(Vec3(0.1, 0.05, 0.375), Vec3::Zero()), Vec3::Zero());        // not caught yet
   EXPECT_NEAR(effects.evaluate(Vec3(0.1, 0.05, 0.24), Vec3::Zero()).z(), -24.0, 1e-12);   // caught
   EXPECT_NEAR(effects.evaluate(Vec3(0.1, 0.05, 0.375), Vec3::Zero()).z(), -37.5, 1e-12);  // held
   EXPECT_NEAR(effects.evaluate(Vec3(0.1, 0.05, 0.49), Vec3::Zero()).z(), -49.0, 1e-12);   // held

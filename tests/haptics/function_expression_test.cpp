@@ -39,10 +39,10 @@ std::string error_of(const std::string& text, const std::vector<std::string>& va
 TEST(FunctionExpression, PrecedenceAndAssociativityAreMathematics) {
   EXPECT_EQ(value("1 + 2 * 3"), 7.0);
   EXPECT_EQ(value("(1 + 2) * 3"), 9.0);
-  EXPECT_EQ(value("10 - 4 - 3"), 3.0);    // left to right
-  EXPECT_EQ(value("8 / 4 / 2"), 1.0);     // left to right
-  EXPECT_EQ(value("2 ^ 3 ^ 2"), 512.0);   // right to left: 2^9
-  EXPECT_EQ(value("-2 ^ 2"), -4.0);       // the power binds tighter than the sign
+  EXPECT_EQ(value("10 - 4 - 3"), 3.0);   // left to right
+  EXPECT_EQ(value("8 / 4 / 2"), 1.0);    // left to right
+  EXPECT_EQ(value("2 ^ 3 ^ 2"), 512.0);  // right to left: 2^9
+  EXPECT_EQ(value("-2 ^ 2"), -4.0);      // the power binds tighter than the sign
   EXPECT_EQ(value("2 ^ -1"), 0.5);
   EXPECT_EQ(value("--3"), 3.0);
   EXPECT_EQ(value("+3"), 3.0);

@@ -240,7 +240,8 @@ TEST(RealTime, RunsWithAConcurrentProducerAndStopsCleanly) {
 
 TEST(HapticTick, AllocatesNothing) {
   HOF_SKIP_UNLESS_COUNTING_ALLOCATIONS();
-  testing::ProgrammedDevice device([](double t) { return Vec3(0.03 * std::sin(5 * t), 0.0, 0.002 - 0.01 * std::min(t, 0.5)); });
+  testing::ProgrammedDevice device(
+      [](double t) { return Vec3(0.03 * std::sin(5 * t), 0.0, 0.002 - 0.01 * std::min(t, 0.5)); });
   TripleBuffer<SurfaceSnapshot> surfaces(floor_snapshot());
   surfaces.write_slot() = floor_snapshot();
   surfaces.publish();

@@ -68,7 +68,8 @@ TEST_P(ProxyRendererTest, NoForceOutside) {
   EXPECT_EQ(c.proxy, Vec3(0.0, 0.0, 0.02));
 }
 
-INSTANTIATE_TEST_SUITE_P(Proxies, ProxyRendererTest, ::testing::Values(RendererKind::kGodObject, RendererKind::kRuspini));
+INSTANTIATE_TEST_SUITE_P(Proxies, ProxyRendererTest,
+                         ::testing::Values(RendererKind::kGodObject, RendererKind::kRuspini));
 
 // Largest change of force direction between consecutive ticks while the device slides at a
 // constant depth under a faceted sphere, across several edges.
@@ -187,7 +188,8 @@ TEST(FallThrough, PenaltyFallsThroughAThinPlateWhereProxiesDoNot) {
     HapticRenderer r(config(kind), smooth(), kDeviceStiffness);
     r.reset(Vec3(0, 0, 0.01));
     Vec3 last_force = Vec3::Zero();
-    for (double z = 0.01; z > -0.02; z -= 0.003) last_force = r.update(Vec3(0, 0, z), Vec3::Zero(), s, false, 1e-3).force;
+    for (double z = 0.01; z > -0.02; z -= 0.003)
+      last_force = r.update(Vec3(0, 0, z), Vec3::Zero(), s, false, 1e-3).force;
     const double proxy_z = r.contact().proxy.z();
     if (kind == RendererKind::kPenalty) {
       // Once past the middle, the nearest face is the bottom one: pushed out below.

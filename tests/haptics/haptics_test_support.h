@@ -49,7 +49,8 @@ class ProgrammedDevice final : public Device {
 /// Closed, outward box surface [lo, hi] split into 12 triangles.
 inline mesh::TriMesh box_surface(const Vec3& lo, const Vec3& hi) {
   mesh::TriMesh m;
-  for (int i = 0; i < 8; ++i) m.vertices.emplace_back(i & 1 ? hi.x() : lo.x(), i & 2 ? hi.y() : lo.y(), i & 4 ? hi.z() : lo.z());
+  for (int i = 0; i < 8; ++i)
+    m.vertices.emplace_back(i & 1 ? hi.x() : lo.x(), i & 2 ? hi.y() : lo.y(), i & 4 ? hi.z() : lo.z());
   const int quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
   for (const auto& q : quads) {
     m.triangles.push_back({q[0], q[1], q[2]});
@@ -66,7 +67,8 @@ inline mesh::TriMesh sphere_surface(const Vec3& center, double radius, int rings
     const double theta = std::numbers::pi * r / rings;
     for (int s = 0; s < segments; ++s) {
       const double phi = 2 * std::numbers::pi * s / segments;
-      m.vertices.push_back(center + radius * Vec3(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta)));
+      m.vertices.push_back(
+          center + radius * Vec3(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta)));
     }
   }
   m.vertices.push_back(center - Vec3(0, 0, radius));
@@ -85,7 +87,8 @@ inline mesh::TriMesh sphere_surface(const Vec3& center, double radius, int rings
 
 /// Generalised winding number of a closed outward surface at p (≈1 inside, ≈0 outside), by
 /// the solid angles of its triangles (Van Oosterom & Strackee 1983).
-inline double winding_number(const std::vector<Vec3>& vertices, const std::vector<mesh::Tri>& triangles, const Vec3& p) {
+inline double winding_number(const std::vector<Vec3>& vertices, const std::vector<mesh::Tri>& triangles,
+                             const Vec3& p) {
   double total = 0.0;
   for (const mesh::Tri& t : triangles) {
     const Vec3 a = vertices[t[0]] - p, b = vertices[t[1]] - p, c = vertices[t[2]] - p;

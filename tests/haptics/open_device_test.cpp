@@ -35,8 +35,9 @@ TEST(DeviceBackends, ReadAndWriteForceNeverAllocate) {
   poke.repeat = 0;
   VirtualHandParams exact;
   exact.integrator = HandIntegrator::kExactZeroOrderHold;
-  for (const DeviceConfig& config : {DeviceConfig{ReplayConfig{path, true, {}}}, DeviceConfig{ScriptedConfig{slide, {}}},
-                                     DeviceConfig{VirtualHandConfig{circle, {}, {}}}, DeviceConfig{VirtualHandConfig{poke, exact, {}}}}) {
+  for (const DeviceConfig& config :
+       {DeviceConfig{ReplayConfig{path, true, {}}}, DeviceConfig{ScriptedConfig{slide, {}}},
+        DeviceConfig{VirtualHandConfig{circle, {}, {}}}, DeviceConfig{VirtualHandConfig{poke, exact, {}}}}) {
     auto d = open_device(config);
     ASSERT_TRUE(d) << d.error().to_string();
     devices.push_back(std::move(*d));

@@ -55,7 +55,8 @@ TEST(ReplayDevice, OptionalColumnsInAnyOrder) {
   const auto path = dir.write("b.csv",
                               "t,button,qz,x,qw,z,qy,y,qx\n"
                               "0,1,0,0.0,1,0,0,0,0\n"
-                              "2,3," + std::to_string(h) + ",0.02," + std::to_string(h) + ",0,0,0,0\n");
+                              "2,3," +
+                                  std::to_string(h) + ",0.02," + std::to_string(h) + ",0,0,0,0\n");
   auto device = ReplayDevice::open(path, false);
   ASSERT_TRUE(device) << device.error().to_string();
   const DeviceReading r = (*device)->read(1.0);
@@ -142,7 +143,6 @@ TEST(ReplayDevice, LoopWrapsAround) {
   EXPECT_EQ(d.health(), DeviceHealth::kOk);
 }
 
-
 TEST(ReplayDevice, OpensFromItsTypedConfig) {
   TempDir dir;
   const auto path = dir.write("r.csv", "t,x,y,z\n0,0,0,0\n1,0.01,0,0\n");
@@ -156,7 +156,8 @@ TEST(ReplayDevice, OpensFromItsTypedConfig) {
   auto absent = open_device(ReplayConfig{missing, false, {}});
   ASSERT_FALSE(absent);
   EXPECT_EQ(absent.error().code, ErrorCode::kIo);
-  EXPECT_NE(absent.error().to_string().find(missing + ": replay: no such file"), std::string::npos) << absent.error().to_string();
+  EXPECT_NE(absent.error().to_string().find(missing + ": replay: no such file"), std::string::npos)
+      << absent.error().to_string();
 }
 
 }  // namespace

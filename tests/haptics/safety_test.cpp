@@ -45,20 +45,30 @@ TEST(SafetyFilter, TheForceLimitHoldsWhateverTheInput) {
   std::uniform_int_distribution<int> pick(0, 9);
   const auto component = [&]() -> double {
     switch (pick(rng)) {
-      case 0: return kNaN;
-      case 1: return pick(rng) < 5 ? kInf : -kInf;
-      case 2: return 0.0;
-      default: return unit(rng) * std::pow(10.0, exponent(rng));
+      case 0:
+        return kNaN;
+      case 1:
+        return pick(rng) < 5 ? kInf : -kInf;
+      case 2:
+        return 0.0;
+      default:
+        return unit(rng) * std::pow(10.0, exponent(rng));
     }
   };
   const auto odd_value = [&]() -> double {
     switch (pick(rng)) {
-      case 0: return kNaN;
-      case 1: return kInf;
-      case 2: return -1.0;
-      case 3: return 0.0;
-      case 4: return 1e9;
-      default: return std::abs(unit(rng)) * 20.0;
+      case 0:
+        return kNaN;
+      case 1:
+        return kInf;
+      case 2:
+        return -1.0;
+      case 3:
+        return 0.0;
+      case 4:
+        return 1e9;
+      default:
+        return std::abs(unit(rng)) * 20.0;
     }
   };
   for (const double device_rate : {0.0, 2000.0, 1e12}) {
@@ -71,7 +81,9 @@ TEST(SafetyFilter, TheForceLimitHoldsWhateverTheInput) {
         if (i % 1000 == 0) filter.set_max_force(odd_value());
         if (i % 7000 == 0) filter.reset();
         const Vec3 requested(component(), component(), component());
-        const Reading reading = pick(rng) == 0 ? Reading::kMissing : pick(rng) == 0 ? Reading::kNonFinite : Reading::kValid;
+        const Reading reading = pick(rng) == 0   ? Reading::kMissing
+                                : pick(rng) == 0 ? Reading::kNonFinite
+                                                 : Reading::kValid;
         const double age = pick(rng) == 0 ? odd_value() : 0.01;
         const double dt = pick(rng) == 0 ? odd_value() : kDt;
         const Vec3 f = filter.filter(requested, reading, age, pick(rng) == 0, dt);
@@ -202,7 +214,7 @@ TEST(SafetyFilter, TheWatchdogTripsOnTheConfiguredNumberOfOverrunsInARow) {
 
 TEST(SafetyFilter, TheSlewLimitMovesTheForceByAtMostRateTimesDtAlongTheChange) {
   SafetyFilter filter(device(8.0, 2000.0), immediate());  // 2 N per 1 ms tick
-  const Vec3 requested(0.0, 3.0, 4.0);                      // 5 N
+  const Vec3 requested(0.0, 3.0, 4.0);                    // 5 N
   const Vec3 unit = requested.normalized();
   Vec3 f = tick(filter, requested);
   EXPECT_LT((f - 2.0 * unit).norm(), 1e-12);

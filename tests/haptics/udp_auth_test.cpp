@@ -85,7 +85,7 @@ TEST(UdpAuth, AnyAlteredByteAWrongKeyOrAWrongSizeIsRefused) {
   EXPECT_EQ(unseal(std::span(buffer.data(), sealed - 1), counting_key(), session, body), 0u);  // truncated
   std::vector<std::uint8_t> small(size - 1);
   EXPECT_EQ(unseal(buffer, counting_key(), session, small), 0u);  // no room for the body
-  EXPECT_EQ(session, 77u);  // untouched by every refusal
+  EXPECT_EQ(session, 77u);                                        // untouched by every refusal
   // Sealing needs room for the trailer and at least a header.
   std::vector<std::uint8_t> tight = packet();
   EXPECT_EQ(seal(tight, tight.size(), kSession, counting_key()), 0u);
@@ -124,7 +124,8 @@ TEST(UdpAuth, KeyFilesThatAreSharedShortOrNotHexAreRefusedNamingTheFile) {
     return path;
   };
   const std::string digits = "000102030405060708090a0b0c0d0e0f101112131415161718191a1b1c1d1e1f";
-  const auto good = read_key_file(write_key("good.key", "  " + digits.substr(0, 32) + "\n" + digits.substr(32) + "\n", 0600));
+  const auto good =
+      read_key_file(write_key("good.key", "  " + digits.substr(0, 32) + "\n" + digits.substr(32) + "\n", 0600));
   ASSERT_TRUE(good) << good.error().to_string();
   EXPECT_EQ(*good, counting_key());
   const auto shared = read_key_file(write_key("shared.key", digits, 0640));

@@ -4,10 +4,10 @@
 // so the tests pass on a loaded machine and never hang.
 
 #include <arpa/inet.h>
-#include <sys/stat.h>
 #include <netinet/in.h>
 #include <poll.h>
 #include <sys/socket.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <fmt/format.h>
@@ -18,13 +18,13 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
-#include <limits>
-#include <functional>
-#include <optional>
-#include <vector>
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <limits>
+#include <optional>
 #include <thread>
+#include <vector>
 
 #include "hof/haptics/device.h"
 #include "hof/haptics/device_backends/udp_device.h"
@@ -319,20 +319,20 @@ TEST(UdpDevice, GarbageDatagramsAreCountedAndIgnored) {
   const std::size_t size = udp::encode(state(1000, 0.05), bytes);
   std::array<std::uint8_t, udp::kMaxPacketSize> bad = bytes;
   const std::uint8_t junk[] = {0xde, 0xad, 0xbe, 0xef, 0x00, 0x01};
-  peer.send_raw(device->local_port(), junk, sizeof(junk));          // foreign magic
-  peer.send_raw(device->local_port(), bytes.data(), size - 8);      // truncated state
+  peer.send_raw(device->local_port(), junk, sizeof(junk));      // foreign magic
+  peer.send_raw(device->local_port(), bytes.data(), size - 8);  // truncated state
   bad[4] = 9;
-  peer.send_raw(device->local_port(), bad.data(), size);            // unknown version
+  peer.send_raw(device->local_port(), bad.data(), size);  // unknown version
   bad = bytes;
   bad[6] = 0x80;
-  peer.send_raw(device->local_port(), bad.data(), size);            // unknown flag
+  peer.send_raw(device->local_port(), bad.data(), size);  // unknown flag
   bad = bytes;
-  for (int i = 24; i < 32; ++i) bad[i] = 0xff;                       // x = NaN
+  for (int i = 24; i < 32; ++i) bad[i] = 0xff;  // x = NaN
   peer.send_raw(device->local_port(), bad.data(), size);
-  peer.send(device->local_port(), udp::ForcePacket{});               // HoF never takes forces
+  peer.send(device->local_port(), udp::ForcePacket{});  // HoF never takes forces
   std::array<std::uint8_t, 4000> big{};
   std::memcpy(big.data(), "HOFS", 4);
-  peer.send_raw(device->local_port(), big.data(), big.size());      // oversized
+  peer.send_raw(device->local_port(), big.data(), big.size());  // oversized
   ASSERT_TRUE(eventually([&] { return device->stats().malformed >= before + 7; }));
   // None of them moved the stylus; the next good state does.
   EXPECT_EQ(device->read(0.0).position_m.x(), 0.01);
@@ -416,7 +416,8 @@ TEST(UdpDevice, ALocalBridgeListensOnLoopbackOnly) {
   ::inet_pton(AF_INET, "127.0.0.2", &local.sin_addr);  // the port on 127.0.0.2: not bound there
   std::array<std::uint8_t, udp::kMaxPacketSize> bytes{};
   const std::size_t size = udp::encode(state(1), bytes);
-  for (int i = 0; i < 5; ++i) ::sendto(fd, bytes.data(), size, 0, reinterpret_cast<const sockaddr*>(&local), sizeof(local));
+  for (int i = 0; i < 5; ++i)
+    ::sendto(fd, bytes.data(), size, 0, reinterpret_cast<const sockaddr*>(&local), sizeof(local));
   ::close(fd);
   std::this_thread::sleep_for(std::chrono::milliseconds(30));
   EXPECT_EQ((*opened)->stats().datagrams, 0u);
@@ -530,7 +531,8 @@ TEST(UdpProtocol, ASealedPacketRoundTripsAndAnyChangedByteIsRefused) {
   }
   EXPECT_FALSE(unseal(sealed, test_key(2)));
   EXPECT_FALSE(unseal(std::vector<std::uint8_t>(sealed.begin(), sealed.end() - 1), key));
-  EXPECT_FALSE(unseal(std::vector<std::uint8_t>(bytes.begin(), bytes.begin() + static_cast<std::ptrdiff_t>(plain)), key));
+  EXPECT_FALSE(
+      unseal(std::vector<std::uint8_t>(bytes.begin(), bytes.begin() + static_cast<std::ptrdiff_t>(plain)), key));
 }
 
 /// Opens a keyed device on loopback, greets it from `peer` and returns the session of the

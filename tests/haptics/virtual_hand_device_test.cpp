@@ -80,8 +80,8 @@ TEST(VirtualHandDevice, OneSemiImplicitEulerSubstepPerMillisecondTick) {
     hand.write_force(f, Vec3::Zero());
     hand.read(i * 1e-3);
     const double h = i * 1e-3 - (i - 1) * 1e-3;
-    v += (h / p.mass_kg) * (p.stiffness_n_per_m * (target - x) - p.damping_n_s_per_m * v -
-                            p.device_damping_n_s_per_m * v + f);
+    v += (h / p.mass_kg) *
+         (p.stiffness_n_per_m * (target - x) - p.damping_n_s_per_m * v - p.device_damping_n_s_per_m * v + f);
     x += h * v;
     ASSERT_NEAR((hand.position() - x).norm(), 0.0, 1e-15) << "tick " << i;
   }

@@ -13,7 +13,8 @@ namespace {
 // Deterministic values of varied sign and magnitude.
 std::vector<double> values(std::size_t n, double seed) {
   std::vector<double> v(n);
-  for (std::size_t i = 0; i < n; ++i) v[i] = std::sin(seed + 1.7 * static_cast<double>(i)) * std::pow(10.0, static_cast<double>(i % 5) - 2.0);
+  for (std::size_t i = 0; i < n; ++i)
+    v[i] = std::sin(seed + 1.7 * static_cast<double>(i)) * std::pow(10.0, static_cast<double>(i % 5) - 2.0);
   return v;
 }
 
@@ -22,8 +23,8 @@ struct Range {
   std::size_t nodes, first, last;
 };
 // Lengths 0–11 and 23: every tail after the four-node steps (0, 1, 2 and 3 nodes).
-const Range kRanges[] = {{0, 0, 0}, {1, 0, 1}, {3, 0, 3}, {4, 0, 4}, {6, 0, 6},  {7, 0, 7},
-                         {9, 2, 9}, {10, 0, 10}, {13, 1, 12}, {29, 3, 26}};
+const Range kRanges[] = {{0, 0, 0}, {1, 0, 1}, {3, 0, 3},   {4, 0, 4},   {6, 0, 6},
+                         {7, 0, 7}, {9, 2, 9}, {10, 0, 10}, {13, 1, 12}, {29, 3, 26}};
 
 TEST(CgKernels, UpdateSolutionMatchesTheTextbookLoops) {
   for (const Range& range : kRanges) {
@@ -40,7 +41,8 @@ TEST(CgKernels, UpdateSolutionMatchesTheTextbookLoops) {
       rr_ref += r_ref[d] * r_ref[d];
     }
     BlockSparseMatrix::round_to_single(r_ref.data(), r_single_ref.data(), range.first, range.last);
-    const double rr = cg_update_solution(x.data(), r.data(), p.data(), ap.data(), alpha, r_single.data(), range.first, range.last);
+    const double rr =
+        cg_update_solution(x.data(), r.data(), p.data(), ap.data(), alpha, r_single.data(), range.first, range.last);
     for (std::size_t d = 0; d < dofs; ++d) {
       // Fused multiply-adds may round the last bit differently; outside the range nothing moves.
       EXPECT_NEAR(x[d], x_ref[d], 1e-15 * (1.0 + std::abs(x_ref[d]))) << "dof " << d;
@@ -53,7 +55,8 @@ TEST(CgKernels, UpdateSolutionMatchesTheTextbookLoops) {
     }
     // Without a rounded copy requested, the same update.
     auto x2 = values(dofs, 0.3), r2 = values(dofs, 0.4);
-    EXPECT_EQ(cg_update_solution(x2.data(), r2.data(), p.data(), ap.data(), alpha, nullptr, range.first, range.last), rr);
+    EXPECT_EQ(cg_update_solution(x2.data(), r2.data(), p.data(), ap.data(), alpha, nullptr, range.first, range.last),
+              rr);
     EXPECT_EQ(x2, x);
     EXPECT_EQ(r2, r);
   }

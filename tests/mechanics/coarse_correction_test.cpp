@@ -59,7 +59,8 @@ TEST(SystemAssembly, TheSinglePrecisionCopyHoldsHeldNodesAsTheDoubleMatrixDoes) 
     for (std::int64_t slot = a.row_start()[r]; slot < a.row_start()[r + 1]; ++slot) {
       for (int i = 0; i < 3; ++i) {
         for (int q = 0; q < 3; ++q) {
-          single(3 * r + i, 3 * a.columns()[slot] + q) = a.single_block(slot)[BlockSparseMatrix::kSingleColumnStride * q + i];
+          single(3 * r + i, 3 * a.columns()[slot] + q) =
+              a.single_block(slot)[BlockSparseMatrix::kSingleColumnStride * q + i];
         }
       }
     }
@@ -131,7 +132,10 @@ TEST(CoarseCorrection, TwoLevelCgConvergesToTheExactSolveEvenWithAStaleCoarseMat
     two_level.state.x = exact.state.x;
     two_level.state.v = exact.state.v;
   }
-  EXPECT_GT((exact.state.x - Eigen::Map<const Eigen::VectorXd>(simple.nodes[0].data(), exact.state.x.size())).cwiseAbs().maxCoeff(), 1e-3)
+  EXPECT_GT((exact.state.x - Eigen::Map<const Eigen::VectorXd>(simple.nodes[0].data(), exact.state.x.size()))
+                .cwiseAbs()
+                .maxCoeff(),
+            1e-3)
       << "the press moved the liver";
 }
 
@@ -167,8 +171,8 @@ TEST(CoarseCorrection, FourTwoLevelIterationsSolveAPressedStepFarBetterThanFourJ
   ASSERT_TRUE(step(exact.model, exact.state));
   const double jacobi_error = step_error(v0, jacobi.state.v, exact.state.v);
   const double two_level_error = step_error(v0, two_level.state.v, exact.state.v);
-  std::printf("%zu nodes, 4 iterations from zero: block Jacobi %.3e, two-level %.3e\n", liver.nodes.size(), jacobi_error,
-              two_level_error);
+  std::printf("%zu nodes, 4 iterations from zero: block Jacobi %.3e, two-level %.3e\n", liver.nodes.size(),
+              jacobi_error, two_level_error);
   EXPECT_GT(jacobi_error, 0.1);  // the step is not trivial for CG
   EXPECT_LT(two_level_error, 0.25 * jacobi_error);
 }
@@ -179,7 +183,8 @@ TEST(CoarseCorrection, HeldAndTinyBodiesStillStep) {
   mesh::Mesh tet;
   tet.nodes = {Vec3(0, 0, 0), Vec3(0.01, 0, 0), Vec3(0, 0.01, 0), Vec3(0, 0, 0.01)};
   tet.tets = {{0, 1, 2, 3}};
-  for (const std::vector<std::int32_t>& held : {std::vector<std::int32_t>{0, 1, 2}, std::vector<std::int32_t>{0, 1, 2, 3}}) {
+  for (const std::vector<std::int32_t>& held :
+       {std::vector<std::int32_t>{0, 1, 2}, std::vector<std::int32_t>{0, 1, 2, 3}}) {
     ModelConfig c = physiological_liver_config(tet);
     c.fixed.front().indices = held;
     c.linear.coarse_correction = true;
@@ -187,8 +192,10 @@ TEST(CoarseCorrection, HeldAndTinyBodiesStillStep) {
     Solver s = make_solver(c);
     for (int n = 0; n < 20; ++n) ASSERT_TRUE(step(s.model, s.state)) << s.state.divergence.reason;
     EXPECT_TRUE(s.state.x.allFinite() && s.state.v.allFinite());
-    if (held.size() == 4) EXPECT_EQ(s.state.v.cwiseAbs().maxCoeff(), 0.0);
-    else EXPECT_LT(s.state.x[3 * 3 + 2], 0.01);  // the free corner sags under gravity
+    if (held.size() == 4)
+      EXPECT_EQ(s.state.v.cwiseAbs().maxCoeff(), 0.0);
+    else
+      EXPECT_LT(s.state.x[3 * 3 + 2], 0.01);  // the free corner sags under gravity
   }
 }
 
@@ -196,13 +203,15 @@ TEST(CoarseCorrection, HeldAndTinyBodiesStillStep) {
 TEST(CoarseCorrection, TheTwoLevelPreconditionerAndItsRefreshAreParameters) {
   ModelConfig c = physiological_liver_config(*mesh::generate_liver(mesh::LiverResolution::kSimple));
   ASSERT_TRUE(set_parameter(c, ParameterRef{{ComponentKind::kLinearSolver, 0}, ParameterId::kCoarseCorrection}, 1.0));
-  ASSERT_TRUE(set_parameter(c, ParameterRef{{ComponentKind::kLinearSolver, 0}, ParameterId::kCoarseRefreshSteps}, 50.0));
+  ASSERT_TRUE(
+      set_parameter(c, ParameterRef{{ComponentKind::kLinearSolver, 0}, ParameterId::kCoarseRefreshSteps}, 50.0));
   EXPECT_TRUE(c.linear.coarse_correction);
   EXPECT_EQ(c.linear.coarse_refresh_steps, 50);
   EXPECT_EQ(*get_parameter(c, ParameterRef{{ComponentKind::kLinearSolver, 0}, ParameterId::kCoarseCorrection}), 1.0);
   EXPECT_EQ(*get_parameter(c, ParameterRef{{ComponentKind::kLinearSolver, 0}, ParameterId::kCoarseRefreshSteps}), 50.0);
-  for (const auto& [id, value] : {std::pair{ParameterId::kCoarseCorrection, 0.5}, std::pair{ParameterId::kCoarseCorrection, 2.0},
-                                  std::pair{ParameterId::kCoarseRefreshSteps, 0.0}, std::pair{ParameterId::kCoarseRefreshSteps, 1.5}}) {
+  for (const auto& [id, value] :
+       {std::pair{ParameterId::kCoarseCorrection, 0.5}, std::pair{ParameterId::kCoarseCorrection, 2.0},
+        std::pair{ParameterId::kCoarseRefreshSteps, 0.0}, std::pair{ParameterId::kCoarseRefreshSteps, 1.5}}) {
     const std::string_view parameter = parameter_name(id);
     auto refused = set_parameter(c, ParameterRef{{ComponentKind::kLinearSolver, 0}, id}, value);
     ASSERT_FALSE(refused) << parameter << " = " << value;
@@ -211,7 +220,8 @@ TEST(CoarseCorrection, TheTwoLevelPreconditionerAndItsRefreshAreParameters) {
     EXPECT_EQ(c.linear.coarse_refresh_steps, 50);
   }
   const auto refs = parameter_refs(c);
-  EXPECT_NE(std::ranges::find(refs, ParameterRef{{ComponentKind::kLinearSolver, 0}, ParameterId::kCoarseCorrection}), refs.end());
+  EXPECT_NE(std::ranges::find(refs, ParameterRef{{ComponentKind::kLinearSolver, 0}, ParameterId::kCoarseCorrection}),
+            refs.end());
 }
 
 }  // namespace

@@ -54,10 +54,12 @@ TEST(Fault, TheSolverNamedIsTheModels) {
                            {FaultKind::kLinearSolveFailed, -1, -1, 0.0})
                 .component,
             "CGLinearSolver 'lin'");
-  EXPECT_EQ(describe_fault(small_model(OdeSolverKind::kRungeKutta4, LinearSolverKind::kSparseLdlt), {FaultKind::kNonFiniteNode, 0, -1, 0.0})
+  EXPECT_EQ(describe_fault(small_model(OdeSolverKind::kRungeKutta4, LinearSolverKind::kSparseLdlt),
+                           {FaultKind::kNonFiniteNode, 0, -1, 0.0})
                 .component,
             "RungeKutta4Solver 'ode'");
-  EXPECT_EQ(describe_fault(small_model(OdeSolverKind::kStatic, LinearSolverKind::kSparseLdlt), {FaultKind::kNonFiniteNode, 0, -1, 0.0})
+  EXPECT_EQ(describe_fault(small_model(OdeSolverKind::kStatic, LinearSolverKind::kSparseLdlt),
+                           {FaultKind::kNonFiniteNode, 0, -1, 0.0})
                 .component,
             "StaticSolver 'ode'");
 }

@@ -38,7 +38,8 @@ ModelConfig static_config(const BoxMesh& box, FemMethod method, double young = 1
 
 // Consistent nodal loads of a uniform traction on the boundary triangles whose nodes all
 // satisfy `on_face`: each triangle gives area/3 of its force to each of its nodes.
-ConstantForceConfig traction(const BoxMesh& box, const Vec3& traction_pa, const std::function<bool(const Vec3&)>& on_face) {
+ConstantForceConfig traction(const BoxMesh& box, const Vec3& traction_pa,
+                             const std::function<bool(const Vec3&)>& on_face) {
   const mesh::BoundarySurface b = mesh::extract_boundary(box.nodes, box.tets);
   std::map<std::int32_t, Vec3> loads;
   for (const mesh::Tri& t : b.volume_triangles) {
@@ -130,10 +131,12 @@ TEST(RigidMotion, LinearFemIsTranslationInvariantButNotRotationInvariant) {
   auto model = build_model(static_config(box, FemMethod::kSmall, 5000.0, 0.45));
   ASSERT_TRUE(model);
   MechanicalState state = make_state(*model);
-  for (std::size_t n = 0; n < box.nodes.size(); ++n) state.x.segment<3>(3 * static_cast<Eigen::Index>(n)) = box.nodes[n] + Vec3(1, 2, 3);
+  for (std::size_t n = 0; n < box.nodes.size(); ++n)
+    state.x.segment<3>(3 * static_cast<Eigen::Index>(n)) = box.nodes[n] + Vec3(1, 2, 3);
   EXPECT_LT(max_residual_force(*model, state), 1e-9);
   const Mat3 r = Eigen::AngleAxisd(std::numbers::pi / 2, Vec3::UnitZ()).toRotationMatrix();
-  for (std::size_t n = 0; n < box.nodes.size(); ++n) state.x.segment<3>(3 * static_cast<Eigen::Index>(n)) = r * box.nodes[n];
+  for (std::size_t n = 0; n < box.nodes.size(); ++n)
+    state.x.segment<3>(3 * static_cast<Eigen::Index>(n)) = r * box.nodes[n];
   EXPECT_GT(max_residual_force(*model, state), 1.0);  // the "inflation" artefact of linear FEM
 }
 
@@ -186,8 +189,10 @@ TEST_P(UniaxialTest, StressOverStrainIsTheModulus) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Cases, UniaxialTest,
-                         ::testing::Values(UniaxialCase{FemMethod::kSmall, false}, UniaxialCase{FemMethod::kSmall, true},
-                                           UniaxialCase{FemMethod::kLarge, false}, UniaxialCase{FemMethod::kPolar, true}));
+                         ::testing::Values(UniaxialCase{FemMethod::kSmall, false},
+                                           UniaxialCase{FemMethod::kSmall, true},
+                                           UniaxialCase{FemMethod::kLarge, false},
+                                           UniaxialCase{FemMethod::kPolar, true}));
 
 // Material regions (SOFA's per-element youngModulus): a bar of two materials in series under
 // uniaxial stress σ stretches by σ (L₁/E₁ + L₂/E₂). With ν = 0 the two halves do not contract
@@ -328,8 +333,8 @@ double cantilever_tip_ratio(int through_thickness) {
   const double inertia = h * h * h * h / 12.0;
   const double shear_modulus = young / (2.0 * (1.0 + poisson));
   const double kappa = 10.0 * (1.0 + poisson) / (12.0 + 11.0 * poisson);
-  const double timoshenko = load * length * length * length / (3.0 * young * inertia) +
-                            load * length / (kappa * shear_modulus * h * h);
+  const double timoshenko =
+      load * length * length * length / (3.0 * young * inertia) + load * length / (kappa * shear_modulus * h * h);
   return deflection / timoshenko;
 }
 

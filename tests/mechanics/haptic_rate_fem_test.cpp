@@ -93,8 +93,10 @@ void expect_haptic_rate_cg_at_least_as_good_as_cold_cg(const mesh::Mesh& liver) 
   // The press moved the liver (else every solver is trivially exact) and cold CG is inexact.
   EXPECT_GT(largest_motion, 1e-4);
   EXPECT_GT(worst_cold, 1e-3);
-  std::printf("%zu nodes, worst relative step error: warm two-level %d iterations (matrix every %d steps) %.3e, cold 25 iterations %.3e\n",
-              liver.nodes.size(), warm_config.linear.iterations, warm_config.ode.matrix_reuse_steps, worst_warm, worst_cold);
+  std::printf(
+      "%zu nodes, worst relative step error: warm two-level %d iterations (matrix every %d steps) %.3e, cold 25 "
+      "iterations %.3e\n",
+      liver.nodes.size(), warm_config.linear.iterations, warm_config.ode.matrix_reuse_steps, worst_warm, worst_cold);
   EXPECT_LE(worst_warm, worst_cold);
 }
 
@@ -158,7 +160,8 @@ TEST(HapticRateFem, WarmStartAndMatrixReuseAreParameters) {
   EXPECT_EQ(c.ode.matrix_reuse_steps, 3);  // one integer parameter does not write another
   const ParameterRef reuse{{ComponentKind::kOdeSolver, 0}, ParameterId::kMatrixReuseSteps};
   const ParameterRef warm{{ComponentKind::kLinearSolver, 0}, ParameterId::kWarmStart};
-  for (const auto& [ref, value] : {std::pair{reuse, 0.0}, std::pair{reuse, 2.5}, std::pair{warm, 2.0}, std::pair{warm, 0.5}}) {
+  for (const auto& [ref, value] :
+       {std::pair{reuse, 0.0}, std::pair{reuse, 2.5}, std::pair{warm, 2.0}, std::pair{warm, 0.5}}) {
     const ModelConfig before = c;
     const std::string_view parameter = parameter_name(ref.id);
     auto refused = set_parameter(c, ref, value);

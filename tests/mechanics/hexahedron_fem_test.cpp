@@ -62,9 +62,12 @@ Eigen::VectorXd internal_forces(const MechanicalModel& model, const std::vector<
 
 std::string method_name(const ::testing::TestParamInfo<FemMethod>& info) {
   switch (info.param) {
-    case FemMethod::kSmall: return "Small";
-    case FemMethod::kLarge: return "Large";
-    case FemMethod::kPolar: return "Polar";
+    case FemMethod::kSmall:
+      return "Small";
+    case FemMethod::kLarge:
+      return "Large";
+    case FemMethod::kPolar:
+      return "Polar";
   }
   return "Unknown";
 }
@@ -128,7 +131,8 @@ TEST_P(HexTangentTest, AssembledStiffnessMatchesFiniteDifferencesAfterARotation)
   ForceFieldState state = (*field)->make_state();
   const Mat3 r = Eigen::AngleAxisd(0.8, Vec3(1, -2, 0.5).normalized()).toRotationMatrix();
   Eigen::VectorXd x(3 * static_cast<Eigen::Index>(grid.nodes.size()));
-  for (std::size_t n = 0; n < grid.nodes.size(); ++n) x.segment<3>(3 * static_cast<Eigen::Index>(n)) = r * grid.nodes[n];
+  for (std::size_t n = 0; n < grid.nodes.size(); ++n)
+    x.segment<3>(3 * static_cast<Eigen::Index>(n)) = r * grid.nodes[n];
   const Eigen::VectorXd v = Eigen::VectorXd::Zero(x.size());
   Eigen::VectorXd f = Eigen::VectorXd::Zero(x.size());
   (*field)->add_force(x, v, state, f);
@@ -165,8 +169,8 @@ TEST_P(HexTangentTest, AssembledStiffnessMatchesFiniteDifferencesAfterARotation)
   EXPECT_LT((product - dense * probe).norm(), 1e-6 * (dense * probe).norm());
 }
 
-INSTANTIATE_TEST_SUITE_P(Methods, HexTangentTest, ::testing::Values(FemMethod::kSmall, FemMethod::kLarge, FemMethod::kPolar),
-                         method_name);
+INSTANTIATE_TEST_SUITE_P(Methods, HexTangentTest,
+                         ::testing::Values(FemMethod::kSmall, FemMethod::kLarge, FemMethod::kPolar), method_name);
 
 // ---- patch tests ----------------------------------------------------------------------------
 
@@ -174,7 +178,8 @@ INSTANTIATE_TEST_SUITE_P(Methods, HexTangentTest, ::testing::Values(FemMethod::k
 // divergence theorem with Σ_c X_c ∇N_cᵀ = I), so uniform stress σ gives exactly σ V.
 Mat3 stress_resultant(const Eigen::VectorXd& f, const std::vector<Vec3>& rest) {
   Mat3 sum = Mat3::Zero();
-  for (std::size_t n = 0; n < rest.size(); ++n) sum -= f.segment<3>(3 * static_cast<Eigen::Index>(n)) * rest[n].transpose();
+  for (std::size_t n = 0; n < rest.size(); ++n)
+    sum -= f.segment<3>(3 * static_cast<Eigen::Index>(n)) * rest[n].transpose();
   return sum;
 }
 
@@ -214,8 +219,10 @@ TEST_P(HexPatchTest, AGridUnderUniaxialStrainHasTheAnalyticFaceResultants) {
   const Eigen::VectorXd f = internal_forces(*model, x);
   const Lame l = lame_parameters(young, poisson);
   Vec3 x_face = Vec3::Zero(), y_face = Vec3::Zero();
-  for (std::int32_t n : nodes_where(grid.nodes, [&](const Vec3& p) { return p.x() == size.x(); })) x_face += f.segment<3>(3 * n);
-  for (std::int32_t n : nodes_where(grid.nodes, [&](const Vec3& p) { return p.y() == size.y(); })) y_face += f.segment<3>(3 * n);
+  for (std::int32_t n : nodes_where(grid.nodes, [&](const Vec3& p) { return p.x() == size.x(); }))
+    x_face += f.segment<3>(3 * n);
+  for (std::int32_t n : nodes_where(grid.nodes, [&](const Vec3& p) { return p.y() == size.y(); }))
+    y_face += f.segment<3>(3 * n);
   // The internal force on a face is minus the traction that holds it.
   EXPECT_NEAR(-x_face.x(), (l.lambda + 2.0 * l.mu) * strain * size.y() * size.z(), 1e-9);
   EXPECT_NEAR(-y_face.y(), l.lambda * strain * size.x() * size.z(), 1e-9);
@@ -227,8 +234,8 @@ TEST_P(HexPatchTest, AGridUnderUniaxialStrainHasTheAnalyticFaceResultants) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Methods, HexPatchTest, ::testing::Values(FemMethod::kSmall, FemMethod::kLarge, FemMethod::kPolar),
-                         method_name);
+INSTANTIATE_TEST_SUITE_P(Methods, HexPatchTest,
+                         ::testing::Values(FemMethod::kSmall, FemMethod::kLarge, FemMethod::kPolar), method_name);
 
 // SOFA's `polar` (HexahedronFEMForceField::computeRotationPolar) rotates by the polar factor
 // of the matrix of the element's averaged edges, relative to that at rest — not by the polar
@@ -237,8 +244,8 @@ INSTANTIATE_TEST_SUITE_P(Methods, HexPatchTest, ::testing::Values(FemMethod::kSm
 TEST(HexPolar, RotatesByThePolarFactorOfTheAveragedEdgesAsSofa) {
   const Vec3 size(2.0, 1.0, 1.0);
   const mesh::HexGrid cell = box_grid({2, 2, 2}, size);
-  auto field = HexahedronFemForceField::make(cell.nodes, cell.hexes, *hex_field(FemMethod::kPolar, 1000.0, 0.3).hexahedron_fem,
-                                             "FEM");
+  auto field = HexahedronFemForceField::make(cell.nodes, cell.hexes,
+                                             *hex_field(FemMethod::kPolar, 1000.0, 0.3).hexahedron_fem, "FEM");
   ASSERT_TRUE(field) << field.error().to_string();
   Mat3 gradient;  // a shear of the long axis plus some stretch
   gradient << 1.05, 0.0, 0.0, 0.35, 0.98, 0.0, 0.0, 0.1, 1.0;
@@ -263,7 +270,8 @@ TEST(HexPolar, RotatesByThePolarFactorOfTheAveragedEdgesAsSofa) {
     }
     const Eigen::VectorXd local = -((*field)->element_stiffness(0) * u);
     Eigen::VectorXd out(24);
-    for (int c = 0; c < 8; ++c) out.segment<3>(3 * static_cast<Eigen::Index>(corners[static_cast<std::size_t>(c)])) = r * local.segment<3>(3 * c);
+    for (int c = 0; c < 8; ++c)
+      out.segment<3>(3 * static_cast<Eigen::Index>(corners[static_cast<std::size_t>(c)])) = r * local.segment<3>(3 * c);
     return out;
   };
   const Eigen::VectorXd sofa = expected_force(polar_factor(gradient * size.asDiagonal()));
@@ -319,8 +327,8 @@ class HexRigidMotionTest : public ::testing::TestWithParam<FemMethod> {};
 
 TEST_P(HexRigidMotionTest, CorotationalGivesNoForceForAnyRotation) {
   for (const auto& [angle, axis] : std::vector<std::pair<double, Vec3>>{{std::numbers::pi / 2, Vec3(0.3, -0.5, 0.8)},
-                                                                         {std::numbers::pi / 6, Vec3(1, 2, 3)},
-                                                                         {std::numbers::pi, Vec3(1, 1, 0)}}) {
+                                                                        {std::numbers::pi / 6, Vec3(1, 2, 3)},
+                                                                        {std::numbers::pi, Vec3(1, 1, 0)}}) {
     EXPECT_LT(rigid_motion_force(GetParam(), angle, axis), 1e-9) << "rotation by " << angle << " rad";
   }
 }
@@ -477,7 +485,8 @@ TEST(HexErrors, WrongLengthListsAndBadValuesNameTheComponent) {
   c.hexahedra[1][3] = 99;
   auto missing = build_model(c);
   ASSERT_FALSE(missing);
-  EXPECT_NE(missing.error().message.find("hexahedron 1 refers to node 99"), std::string::npos) << missing.error().message;
+  EXPECT_NE(missing.error().message.find("hexahedron 1 refers to node 99"), std::string::npos)
+      << missing.error().message;
 }
 
 TEST(HexErrors, AnInvertedOrFlatHexahedronIsNamed) {
@@ -551,7 +560,8 @@ TEST(HexMass, AHalfFilledCellIsHalfAsStiffButDiagonalMassLumpsItWhole) {
   EXPECT_NEAR(model->node_mass_kg[corner_of_only(full, half)], 1000.0 * 0.001 / 8.0, 1e-15);
   const auto* fem = dynamic_cast<const HexahedronFemForceField*>(model->force_fields.front().get());
   ASSERT_NE(fem, nullptr);
-  EXPECT_LT((fem->element_stiffness(0) - 0.5 * fem->element_stiffness(1)).norm(), 1e-12 * fem->element_stiffness(1).norm());
+  EXPECT_LT((fem->element_stiffness(0) - 0.5 * fem->element_stiffness(1)).norm(),
+            1e-12 * fem->element_stiffness(1).norm());
 }
 
 TEST(HexMass, TetrahedralDiagonalMassHonoursPerElementDensity) {
@@ -576,7 +586,9 @@ TEST(HexParameters, YoungModulusAndPoissonRatioAreAddressable) {
   EXPECT_FALSE(set_parameter(c, ParameterRef{{ComponentKind::kForceField, 0}, ParameterId::kPoissonRatio}, 0.5));
   EXPECT_EQ(component_name(c, {ComponentKind::kForceField, 0}), "FEM");
   const auto refs = parameter_refs(c);
-  EXPECT_NE(std::find(refs.begin(), refs.end(), ParameterRef{{ComponentKind::kForceField, 0}, ParameterId::kYoungModulus}), refs.end());
+  EXPECT_NE(
+      std::find(refs.begin(), refs.end(), ParameterRef{{ComponentKind::kForceField, 0}, ParameterId::kYoungModulus}),
+      refs.end());
 }
 
 }  // namespace

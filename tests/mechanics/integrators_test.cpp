@@ -58,7 +58,8 @@ double highest_frequency(const MechanicalModel& model) {
   detail::assemble_system(model, state, 0.0, 1.0);
   const Eigen::MatrixXd k = state.work->system.to_dense();
   Eigen::VectorXd inv_sqrt_m(k.rows());
-  for (Eigen::Index i = 0; i < k.rows(); ++i) inv_sqrt_m[i] = 1.0 / std::sqrt(model.node_mass_kg[static_cast<std::size_t>(i / 3)]);
+  for (Eigen::Index i = 0; i < k.rows(); ++i)
+    inv_sqrt_m[i] = 1.0 / std::sqrt(model.node_mass_kg[static_cast<std::size_t>(i / 3)]);
   const Eigen::MatrixXd scaled = inv_sqrt_m.asDiagonal() * k * inv_sqrt_m.asDiagonal();
   return std::sqrt(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(scaled).eigenvalues().maxCoeff());
 }
@@ -169,7 +170,8 @@ TEST(Dynamics, InvertedLinearElementUnderExtremeLoadIsReported) {
   EXPECT_NE(state.divergence.reason.find("inverted"), std::string::npos);
   EXPECT_EQ(state.divergence.fault.kind, FaultKind::kInvertedElement);
   EXPECT_EQ(state.divergence.fault.field, 0);
-  EXPECT_NE(state.divergence.reason.find(fmt::format("tetrahedron {} is", state.divergence.fault.index)), std::string::npos);
+  EXPECT_NE(state.divergence.reason.find(fmt::format("tetrahedron {} is", state.divergence.fault.index)),
+            std::string::npos);
   EXPECT_TRUE(state.x.allFinite());
 }
 

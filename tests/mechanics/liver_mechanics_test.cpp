@@ -159,7 +159,7 @@ TEST(SofaLiver, TheSofaDemoMeshRunsWithItsSettings) {
   MechanicalState state = make_state(*model);
   for (int i = 0; i < 100; ++i) ASSERT_TRUE(step(*model, state)) << state.divergence.reason;
   EXPECT_LT(state.position(10).y(), model->rest_positions[10].y());  // it sags under gravity
-  EXPECT_EQ(state.position(3), model->rest_positions[3]);             // fixed nodes stay
+  EXPECT_EQ(state.position(3), model->rest_positions[3]);            // fixed nodes stay
 }
 
 }  // namespace

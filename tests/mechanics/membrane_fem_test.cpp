@@ -26,7 +26,8 @@ struct Sheet {
 Sheet sheet(int nx, int ny, double length, double height) {
   Sheet s{{}, {}, nx, ny};
   for (int j = 0; j <= ny; ++j) {
-    for (int i = 0; i <= nx; ++i) s.nodes.emplace_back(i == nx ? length : length * i / nx, j == ny ? height : height * j / ny, 0.0);
+    for (int i = 0; i <= nx; ++i)
+      s.nodes.emplace_back(i == nx ? length : length * i / nx, j == ny ? height : height * j / ny, 0.0);
   }
   for (int j = 0; j < ny; ++j) {
     for (int i = 0; i < nx; ++i) {

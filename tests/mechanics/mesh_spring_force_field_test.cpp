@@ -158,12 +158,12 @@ TEST(MeshSprings, AnEdgeOfATriangleAndATetrahedronTakesTheTrianglesValues) {
   field = MeshSpringForceField::make(kTetNodes, kTet, kFace, config, "springs");
   ASSERT_TRUE(field) << field.error().to_string();
   ASSERT_EQ((*field)->spring_count(), 6u);
-  for (const auto& [edge, value] : stiffness_by_edge(**field)) EXPECT_NEAR(value, 1.0, 1e-12) << edge.first << "-" << edge.second;
+  for (const auto& [edge, value] : stiffness_by_edge(**field))
+    EXPECT_NEAR(value, 1.0, 1e-12) << edge.first << "-" << edge.second;
 
   // SOFA's `stiffness` is every kind's: all six edges alike.
-  auto generic = MeshSpringForceField::make(kTetNodes, kTet, kFace,
-                                            MeshSpringConfig{4.0, 0.0, 1.0, SpringStiffnessRule::kDividedByRestLength},
-                                            "springs");
+  auto generic = MeshSpringForceField::make(
+      kTetNodes, kTet, kFace, MeshSpringConfig{4.0, 0.0, 1.0, SpringStiffnessRule::kDividedByRestLength}, "springs");
   ASSERT_TRUE(generic) << generic.error().to_string();
   for (const auto& [edge, value] : stiffness_by_edge(**generic)) EXPECT_NEAR(value, 4.0, 1e-12);
 }

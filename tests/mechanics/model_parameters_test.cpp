@@ -29,7 +29,8 @@ TEST(ModelParameters, AReferenceSetsAndReadsItsSlot) {
   ASSERT_FALSE(refused);
   EXPECT_NE(refused.error().message.find("dt = -1 is out of range"), std::string::npos) << refused.error().message;
   EXPECT_EQ(config.dt_s, 0.002) << "unchanged on an error";
-  EXPECT_FALSE(set_parameter(config, {kModel, ParameterId::kYoungModulus}, 1000.0)) << "the model itself has no Young's modulus";
+  EXPECT_FALSE(set_parameter(config, {kModel, ParameterId::kYoungModulus}, 1000.0))
+      << "the model itself has no Young's modulus";
 }
 
 TEST(ModelParameters, AComponentWithoutTheParameterOrAMissingForceFieldIsAnError) {

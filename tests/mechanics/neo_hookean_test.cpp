@@ -344,8 +344,7 @@ TEST(NeoHookean, CollapsedElementsGiveFiniteRestoringForces) {
   // F = 0: all nodes at one point. Flattened: all nodes in the plane z = 0.
   std::vector<Vec3> flat;
   for (const Vec3& p : single_tet_rest()) flat.push_back(Vec3(p.x(), p.y(), 0.0));
-  for (const Eigen::VectorXd& x :
-       {affine(single_tet_rest(), Mat3::Zero(), Vec3(0.3, 0.3, 0.3)), flatten(flat)}) {
+  for (const Eigen::VectorXd& x : {affine(single_tet_rest(), Mat3::Zero(), Vec3(0.3, 0.3, 0.3)), flatten(flat)}) {
     const Eigen::VectorXd f = forces(*field, x);
     ASSERT_TRUE(f.allFinite());
     ASSERT_GT(f.norm(), 0.0);

@@ -14,7 +14,6 @@
 #include "hof/mesh/hex_grid.h"
 #include "hof/mesh/liver_generator.h"
 
-
 namespace hof::mechanics {
 namespace {
 

@@ -22,8 +22,10 @@ Eigen::VectorXd deformed(const testing::BoxMesh& box) {
   for (std::size_t n = 0; n < box.nodes.size(); ++n) {
     const Vec3& p = box.nodes[n];
     const double angle = 0.4 * p.x() / box.size.x();
-    const Vec3 bent(p.x(), std::cos(angle) * p.y() - std::sin(angle) * p.z(), std::sin(angle) * p.y() + std::cos(angle) * p.z());
-    x.segment<3>(3 * static_cast<Eigen::Index>(n)) = bent + Vec3(0.1 * p.y() * p.y(), 0.05 * p.x() * p.z(), -0.02 * p.x());
+    const Vec3 bent(p.x(), std::cos(angle) * p.y() - std::sin(angle) * p.z(),
+                    std::sin(angle) * p.y() + std::cos(angle) * p.z());
+    x.segment<3>(3 * static_cast<Eigen::Index>(n)) =
+        bent + Vec3(0.1 * p.y() * p.y(), 0.05 * p.x() * p.z(), -0.02 * p.x());
   }
   return x;
 }
@@ -87,7 +89,8 @@ void expect_targets_agree(ForceField& field, const Eigen::VectorXd& x) {
 
 TEST(StiffnessAssembly, CorotationalFemTargetsAgree) {
   const auto box = testing::box_mesh(3, 2, 2, Vec3(0.03, 0.02, 0.02));
-  auto field = TetrahedronFemForceField::make(box.nodes, box.tets, {30000.0, 0.45, FemMethod::kLarge, {}, {}}, "tissue");
+  auto field =
+      TetrahedronFemForceField::make(box.nodes, box.tets, {30000.0, 0.45, FemMethod::kLarge, {}, {}}, "tissue");
   ASSERT_TRUE(field.has_value()) << field.error().to_string();
   expect_targets_agree(**field, deformed(box));
 }

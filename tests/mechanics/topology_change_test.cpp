@@ -23,7 +23,7 @@ constexpr double kLength = 0.3;
 
 // A cantilever of 6 cubes along x (6 tetrahedra each), held at x = 0, sagging under gravity.
 ModelConfig beam(std::vector<Vec3> positions, std::vector<mesh::Tet> tets, LinearSolverKind linear,
-               FemMethod method = FemMethod::kLarge) {
+                 FemMethod method = FemMethod::kLarge) {
   ModelConfig c;
   c.name = "beam";
   c.positions = std::move(positions);
@@ -178,7 +178,9 @@ TEST_P(TopologyChangeTest, AMalformedChangeLeavesTheBodyAsItWas) {
 
 INSTANTIATE_TEST_SUITE_P(Solvers, TopologyChangeTest,
                          ::testing::Values(LinearSolverKind::kConjugateGradient, LinearSolverKind::kSparseLdlt),
-                         [](const auto& solver) { return solver.param == LinearSolverKind::kSparseLdlt ? "Ldlt" : "Cg"; });
+                         [](const auto& solver) {
+                           return solver.param == LinearSolverKind::kSparseLdlt ? "Ldlt" : "Cg";
+                         });
 
 // ---- the incremental path --------------------------------------------------------------------
 
@@ -254,7 +256,8 @@ struct IncrementalAgainstWhole {
 std::vector<std::int32_t> tets_around(const ModelConfig& c, mesh::NodeIndex node) {
   std::vector<std::int32_t> ids;
   for (std::size_t t = 0; t < c.tets.size(); ++t) {
-    if (std::find(c.tets[t].begin(), c.tets[t].end(), node) != c.tets[t].end()) ids.push_back(static_cast<std::int32_t>(t));
+    if (std::find(c.tets[t].begin(), c.tets[t].end(), node) != c.tets[t].end())
+      ids.push_back(static_cast<std::int32_t>(t));
   }
   return ids;
 }
@@ -311,14 +314,14 @@ TEST_P(IncrementalTopologyChangeTest, SplittingATetrahedronAtAnAddedNodeRebuilds
     const auto p = mesh::tet_corners(bodies.config.positions, t);
     const Vec3 centre = 0.25 * (p[0] + p[1] + p[2] + p[3]);
     const auto added = static_cast<mesh::NodeIndex>(bodies.config.positions.size());
-    const std::vector<mesh::Tet> pieces{{added, t[1], t[2], t[3]}, {t[0], added, t[2], t[3]},
-                                        {t[0], t[1], added, t[3]}, {t[0], t[1], t[2], added}};
+    const std::vector<mesh::Tet> pieces{
+        {added, t[1], t[2], t[3]}, {t[0], added, t[2], t[3]}, {t[0], t[1], added, t[3]}, {t[0], t[1], t[2], added}};
     const TopologyChange change = tetrahedra_change(bodies.config, {split}, {centre}, pieces);
     const TopologyChangeReport report = bodies.apply(change);
     EXPECT_EQ(report.added_nodes, 1u);
     EXPECT_EQ(report.removed_nodes, 0u);
     EXPECT_EQ(report.elements_rebuilt, pieces.size());  // only the split's pieces
-    EXPECT_EQ(report.nodes_remassed, 5u);                // the split tetrahedron's corners and its centre
+    EXPECT_EQ(report.nodes_remassed, 5u);               // the split tetrahedron's corners and its centre
     bodies.expect_same_body();
   }
   EXPECT_EQ(bodies.incremental.node_count(), nodes + 2);
@@ -367,7 +370,8 @@ INSTANTIATE_TEST_SUITE_P(SolversAndMethods, IncrementalTopologyChangeTest,
                            const char* method = test.param.method == FemMethod::kSmall   ? "Small"
                                                 : test.param.method == FemMethod::kLarge ? "Large"
                                                                                          : "Polar";
-                           return std::string(test.param.linear == LinearSolverKind::kSparseLdlt ? "Ldlt" : "Cg") + method;
+                           return std::string(test.param.linear == LinearSolverKind::kSparseLdlt ? "Ldlt" : "Cg") +
+                                  method;
                          });
 
 }  // namespace

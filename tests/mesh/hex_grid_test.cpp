@@ -119,11 +119,13 @@ TriMesh unit_cube_surface() {
 TEST(SparseGrid, KeepsExactlyTheCellsOfAnAlignedCube) {
   // Cells of 1/3 in the box [−1, 2]³: the cube is the middle 3×3×3 block; its faces lie on
   // grid planes and must not claim the cells outside them.
-  auto grid = sparse_grid(unit_cube_surface(), {10, 10, 10}, std::pair<Vec3, Vec3>(Vec3::Constant(-1), Vec3::Constant(2)));
+  auto grid =
+      sparse_grid(unit_cube_surface(), {10, 10, 10}, std::pair<Vec3, Vec3>(Vec3::Constant(-1), Vec3::Constant(2)));
   ASSERT_TRUE(grid) << grid.error().to_string();
   EXPECT_EQ(grid->hexes.size(), 27u);
   EXPECT_EQ(grid->nodes.size(), 64u);
-  for (const Vec3& p : grid->nodes) EXPECT_TRUE((p.array() > -1e-12).all() && (p.array() < 1 + 1e-12).all()) << p.transpose();
+  for (const Vec3& p : grid->nodes)
+    EXPECT_TRUE((p.array() > -1e-12).all() && (p.array() < 1 + 1e-12).all()) << p.transpose();
   // The same cube with SOFA's default box (1% larger): every cell is crossed or inside.
   auto fitted = sparse_grid(unit_cube_surface(), {5, 5, 5});
   ASSERT_TRUE(fitted);

@@ -40,14 +40,14 @@ TEST_F(MeshIoTest, GmshV2MixedElementsAreCountedAndMapped) {
                           "10 0 0 0\n20 1 0 0\n30 0 1 0\n40 0 0 1\n50 1 1 0\n60 1 1 1\n"
                           "$EndNodes\n"
                           "$Elements\n8\n"
-                          "1 15 2 0 1 10\n"              // point
-                          "2 1 2 0 1 10 20\n"            // line
-                          "3 8 2 0 1 10 20 30\n"         // 3-node line
-                          "4 2 2 7 2 10 20 30\n"         // triangle, physical 7
-                          "5 2 2 7 2 20 50 30\n"         // triangle
-                          "6 4 2 9 3 10 20 30 40\n"      // tet, physical 9
-                          "7 3 2 0 4 10 20 50 30\n"      // quad (line 26)
-                          "8 4 3 9 3 5 20 50 30 60\n"    // tet with 3 tags
+                          "1 15 2 0 1 10\n"            // point
+                          "2 1 2 0 1 10 20\n"          // line
+                          "3 8 2 0 1 10 20 30\n"       // 3-node line
+                          "4 2 2 7 2 10 20 30\n"       // triangle, physical 7
+                          "5 2 2 7 2 20 50 30\n"       // triangle
+                          "6 4 2 9 3 10 20 30 40\n"    // tet, physical 9
+                          "7 3 2 0 4 10 20 50 30\n"    // quad (line 26)
+                          "8 4 3 9 3 5 20 50 30 60\n"  // tet with 3 tags
                           "$EndElements\n"
                           "$NodeData\n1\n\"x\"\n$EndNodeData\n");
   const auto r = read_mesh(path);
@@ -63,8 +63,7 @@ TEST_F(MeshIoTest, GmshV2MixedElementsAreCountedAndMapped) {
   EXPECT_EQ(r->report.ignored_lines, 2);
   EXPECT_EQ(r->report.ignored_other, 1);
   ASSERT_EQ(r->report.warnings.size(), 1u);
-  EXPECT_NE(r->report.warnings[0].find("mixed.msh:26: ignored 1 element(s) of Gmsh type 3"),
-            std::string::npos)
+  EXPECT_NE(r->report.warnings[0].find("mixed.msh:26: ignored 1 element(s) of Gmsh type 3"), std::string::npos)
       << r->report.warnings[0];
 }
 
@@ -125,8 +124,7 @@ TEST_F(MeshIoTest, GmshBinaryWrongNodeCountReportsByteOffset) {
   // The count says 4 nodes, so the fifth node's bytes stand where $EndNodes should be.
   const Error e = read_error("count.msh", binary_msh(false, 4));
   EXPECT_EQ(e.code, ErrorCode::kParse);
-  EXPECT_NE(e.to_string().find("count.msh: byte 161: expected $EndNodes"), std::string::npos)
-      << e.to_string();
+  EXPECT_NE(e.to_string().find("count.msh: byte 161: expected $EndNodes"), std::string::npos) << e.to_string();
 }
 
 TEST_F(MeshIoTest, GmshBinaryMissingNodeReportsByteOffset) {
@@ -134,8 +132,7 @@ TEST_F(MeshIoTest, GmshBinaryMissingNodeReportsByteOffset) {
   EXPECT_EQ(e.code, ErrorCode::kInvalidMesh);
   // Header to the node data 49 bytes, nodes 5 x 28, "\n$EndNodes\n$Elements\n3\n" 23, the
   // point block 28, the tet block header 12 and the first tet 28: the second tet is at 280.
-  EXPECT_NE(e.to_string().find("missing.msh: byte 280: element refers to node tag 99"),
-            std::string::npos)
+  EXPECT_NE(e.to_string().find("missing.msh: byte 280: element refers to node tag 99"), std::string::npos)
       << e.to_string();
 }
 
@@ -153,8 +150,8 @@ TEST_F(MeshIoTest, ProgressIsReportedFromZeroToOne) {
 
 TEST_F(MeshIoTest, GmshTruncatedFile) {
   // Cut inside the last node.
-  const Error e = read_error("trunc.msh", std::string(kHeader22) +
-                                              "$Nodes\n3\n1 0.5 0.5 0.5\n2 1.5 0.5 0.5\n3 0.5 1.5");
+  const Error e =
+      read_error("trunc.msh", std::string(kHeader22) + "$Nodes\n3\n1 0.5 0.5 0.5\n2 1.5 0.5 0.5\n3 0.5 1.5");
   expect_error_at(e, ErrorCode::kParse, "trunc.msh", 8, "unexpected end of file: expected z coordinate");
   EXPECT_NE(e.message.find("node 3 of 3"), std::string::npos) << e.message;
   // Cut so early that the count cannot fit: caught at the count, before any reserve.
@@ -168,14 +165,12 @@ TEST_F(MeshIoTest, GmshSectionNotClosed) {
 }
 
 TEST_F(MeshIoTest, GmshNodeCountLargerThanNodes) {
-  const Error e = read_error("count.msh", std::string(kHeader22) +
-                                              "$Nodes\n3\n1 0 0 0\n2 1 0 0\n$EndNodes\n");
+  const Error e = read_error("count.msh", std::string(kHeader22) + "$Nodes\n3\n1 0 0 0\n2 1 0 0\n$EndNodes\n");
   expect_error_at(e, ErrorCode::kParse, "count.msh", 8, "count is wrong");
 }
 
 TEST_F(MeshIoTest, GmshNodeCountSmallerThanNodes) {
-  const Error e = read_error("count.msh", std::string(kHeader22) +
-                                              "$Nodes\n1\n1 0 0 0\n2 1 0 0\n$EndNodes\n");
+  const Error e = read_error("count.msh", std::string(kHeader22) + "$Nodes\n1\n1 0 0 0\n2 1 0 0\n$EndNodes\n");
   expect_error_at(e, ErrorCode::kParse, "count.msh", 7, "expected $EndNodes");
 }
 
@@ -230,8 +225,9 @@ TEST_F(MeshIoTest, GmshDuplicateNodeTag) {
 TEST_F(MeshIoTest, GmshAbsurdCountFailsWithoutAllocating) {
   const Error e = read_error("huge.msh", std::string(kHeader22) + "$Nodes\n999999999999999\n1 0 0 0\n$EndNodes\n");
   expect_error_at(e, ErrorCode::kParse, "huge.msh", 5, "node count 999999999999999 is impossible");
-  const Error b = read_error("huge4.msh", "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n"
-                                          "$Nodes\n1 2000000000 1 2000000000\n$EndNodes\n");
+  const Error b = read_error("huge4.msh",
+                             "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n"
+                             "$Nodes\n1 2000000000 1 2000000000\n$EndNodes\n");
   expect_error_at(b, ErrorCode::kParse, "huge4.msh", 5, "impossible");
 }
 
@@ -272,11 +268,9 @@ TEST_F(MeshIoTest, LargeGmshFileReadsQuickly) {
   for (int k = 0; k < kN; ++k)
     for (int j = 0; j < kN; ++j)
       for (int i = 0; i < kN; ++i) {
-        const NodeIndex c[8] = {id(i, j, k),         id(i + 1, j, k),         id(i + 1, j + 1, k),
-                                id(i, j + 1, k),     id(i, j, k + 1),         id(i + 1, j, k + 1),
-                                id(i + 1, j + 1, k + 1), id(i, j + 1, k + 1)};
-        const int tets[6][4] = {{0, 1, 2, 6}, {0, 2, 3, 6}, {0, 3, 7, 6},
-                                {0, 7, 4, 6}, {0, 4, 5, 6}, {0, 5, 1, 6}};
+        const NodeIndex c[8] = {id(i, j, k),     id(i + 1, j, k),     id(i + 1, j + 1, k),     id(i, j + 1, k),
+                                id(i, j, k + 1), id(i + 1, j, k + 1), id(i + 1, j + 1, k + 1), id(i, j + 1, k + 1)};
+        const int tets[6][4] = {{0, 1, 2, 6}, {0, 2, 3, 6}, {0, 3, 7, 6}, {0, 7, 4, 6}, {0, 4, 5, 6}, {0, 5, 1, 6}};
         for (const auto& t : tets) m.tets.push_back({c[t[0]], c[t[1]], c[t[2]], c[t[3]]});
       }
   m.tet_regions.assign(m.tets.size(), 3);

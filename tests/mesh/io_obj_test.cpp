@@ -89,14 +89,8 @@ TEST_F(MeshIoTest, ObjAllIndexFormsQuadAndNegativeIndices) {
   const auto r = read_mesh(path);
   ASSERT_TRUE(r) << r.error().to_string();
   EXPECT_EQ(r->mesh.nodes.size(), 5u);
-  EXPECT_EQ(r->mesh.triangles, (std::vector<Tri>{{0, 1, 2},
-                                                 {0, 1, 2},
-                                                 {0, 2, 3},
-                                                 {0, 1, 4},
-                                                 {0, 1, 2},
-                                                 {0, 2, 3},
-                                                 {4, 3, 2},
-                                                 {0, 1, 3}}));
+  EXPECT_EQ(r->mesh.triangles,
+            (std::vector<Tri>{{0, 1, 2}, {0, 1, 2}, {0, 2, 3}, {0, 1, 4}, {0, 1, 2}, {0, 2, 3}, {4, 3, 2}, {0, 1, 3}}));
   // The first normal a face gives a vertex wins.
   ASSERT_EQ(r->mesh.normals.size(), 5u);
   EXPECT_EQ(r->mesh.normals[0], Vec3(0, 0, 1));
@@ -110,8 +104,9 @@ TEST_F(MeshIoTest, ObjAllIndexFormsQuadAndNegativeIndices) {
 }
 
 TEST_F(MeshIoTest, ObjVerticesWithoutNormalGetZeroAndAWarning) {
-  const auto r = read_mesh(write("partial.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n"
-                                                "vn 0 0 1\nf 1//1 2//1 3//1\n"));
+  const auto r = read_mesh(write("partial.obj",
+                                 "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n"
+                                 "vn 0 0 1\nf 1//1 2//1 3//1\n"));
   ASSERT_TRUE(r) << r.error().to_string();
   ASSERT_EQ(r->mesh.normals.size(), 4u);
   EXPECT_EQ(r->mesh.normals[3], Vec3::Zero());
@@ -121,28 +116,27 @@ TEST_F(MeshIoTest, ObjVerticesWithoutNormalGetZeroAndAWarning) {
 
 TEST_F(MeshIoTest, ObjBadInput) {
   expect_error_at(read_error("empty.obj", ""), ErrorCode::kParse, "empty.obj", 1, "file is empty");
-  expect_error_at(read_error("range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n"),
-                  ErrorCode::kInvalidMesh, "range.obj", 4, "vertex index 4 is out of range");
-  expect_error_at(read_error("neg.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf -1 -2 -4\n"),
-                  ErrorCode::kInvalidMesh, "neg.obj", 4, "vertex index -4 is out of range");
-  expect_error_at(read_error("zero.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n"),
-                  ErrorCode::kInvalidMesh, "zero.obj", 4, "index 0");
+  expect_error_at(read_error("range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n"), ErrorCode::kInvalidMesh, "range.obj",
+                  4, "vertex index 4 is out of range");
+  expect_error_at(read_error("neg.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf -1 -2 -4\n"), ErrorCode::kInvalidMesh, "neg.obj",
+                  4, "vertex index -4 is out of range");
+  expect_error_at(read_error("zero.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n"), ErrorCode::kInvalidMesh, "zero.obj",
+                  4, "index 0");
   expect_error_at(read_error("normal.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//2 3//1\n"),
                   ErrorCode::kInvalidMesh, "normal.obj", 5, "normal index 2 is out of range");
-  expect_error_at(read_error("nan.obj", "v 0 0 0\nv 1 NaN 0\n"), ErrorCode::kInvalidMesh,
-                  "nan.obj", 2, "not a finite number");
+  expect_error_at(read_error("nan.obj", "v 0 0 0\nv 1 NaN 0\n"), ErrorCode::kInvalidMesh, "nan.obj", 2,
+                  "not a finite number");
   expect_error_at(read_error("word.obj", "v 0 0 0\nv 1 x 0\n"), ErrorCode::kParse, "word.obj", 2,
                   "'x' is not a number");
-  expect_error_at(read_error("short.obj", "v 0 0\n"), ErrorCode::kParse, "short.obj", 1,
-                  "needs 3 values, found 2");
-  expect_error_at(read_error("face.obj", "v 0 0 0\nv 1 0 0\nf 1 2\n"), ErrorCode::kInvalidMesh,
-                  "face.obj", 3, "face with 2 vertices");
-  expect_error_at(read_error("form.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/ 2 3\n"), ErrorCode::kParse,
-                  "form.obj", 4, "bad face vertex '1/'");
-  expect_error_at(read_error("novert.obj", "# nothing\ng x\n"), ErrorCode::kInvalidMesh,
-                  "novert.obj", 2, "no vertices");
-  expect_error_at(read_error("unknown.obj", "v 0 0 0\nbogus 1 2\n"), ErrorCode::kParse,
-                  "unknown.obj", 2, "unknown OBJ statement 'bogus'");
+  expect_error_at(read_error("short.obj", "v 0 0\n"), ErrorCode::kParse, "short.obj", 1, "needs 3 values, found 2");
+  expect_error_at(read_error("face.obj", "v 0 0 0\nv 1 0 0\nf 1 2\n"), ErrorCode::kInvalidMesh, "face.obj", 3,
+                  "face with 2 vertices");
+  expect_error_at(read_error("form.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/ 2 3\n"), ErrorCode::kParse, "form.obj", 4,
+                  "bad face vertex '1/'");
+  expect_error_at(read_error("novert.obj", "# nothing\ng x\n"), ErrorCode::kInvalidMesh, "novert.obj", 2,
+                  "no vertices");
+  expect_error_at(read_error("unknown.obj", "v 0 0 0\nbogus 1 2\n"), ErrorCode::kParse, "unknown.obj", 2,
+                  "unknown OBJ statement 'bogus'");
 }
 
 TEST_F(MeshIoTest, ObjBinaryGarbage) {

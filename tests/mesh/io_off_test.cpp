@@ -44,21 +44,20 @@ TEST_F(MeshIoTest, OffWithCommentsColoursAndAQuad) {
 
 TEST_F(MeshIoTest, OffBadInput) {
   expect_error_at(read_error("empty.off", ""), ErrorCode::kParse, "empty.off", 1, "file is empty");
-  expect_error_at(read_error("header.off", "PLY\n3 1 0\n"), ErrorCode::kParse, "header.off", 1,
-                  "not an OFF file");
+  expect_error_at(read_error("header.off", "PLY\n3 1 0\n"), ErrorCode::kParse, "header.off", 1, "not an OFF file");
   // One vertex short: the face line is taken as vertex 4, then the face is missing.
   expect_error_at(read_error("few.off", "OFF\n4 1 0\n0.25 0.25 0.25\n1.25 0.25 0.25\n0.25 1.25 0.25\n3 0 1 2\n"),
                   ErrorCode::kParse, "few.off", 6, "face 1 of 1");
-  expect_error_at(read_error("short.off", "OFF\n4 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"),
-                  ErrorCode::kParse, "short.off", 2, "face count 1 is impossible");
-  expect_error_at(read_error("more.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 1 2\n"),
-                  ErrorCode::kParse, "more.off", 7, "face count is wrong");
-  expect_error_at(read_error("range.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n"),
-                  ErrorCode::kInvalidMesh, "range.off", 6, "vertex index 3 is out of range");
-  expect_error_at(read_error("nan.off", "OFF\n3 1 0\n0 0 0\n1 0 inf\n0 1 0\n3 0 1 2\n"),
-                  ErrorCode::kInvalidMesh, "nan.off", 4, "not a finite number");
-  expect_error_at(read_error("huge.off", "OFF\n99999999999 1 0\n0 0 0\n"), ErrorCode::kParse,
-                  "huge.off", 2, "vertex count 99999999999 is impossible");
+  expect_error_at(read_error("short.off", "OFF\n4 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"), ErrorCode::kParse, "short.off",
+                  2, "face count 1 is impossible");
+  expect_error_at(read_error("more.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 1 2\n"), ErrorCode::kParse,
+                  "more.off", 7, "face count is wrong");
+  expect_error_at(read_error("range.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n"), ErrorCode::kInvalidMesh,
+                  "range.off", 6, "vertex index 3 is out of range");
+  expect_error_at(read_error("nan.off", "OFF\n3 1 0\n0 0 0\n1 0 inf\n0 1 0\n3 0 1 2\n"), ErrorCode::kInvalidMesh,
+                  "nan.off", 4, "not a finite number");
+  expect_error_at(read_error("huge.off", "OFF\n99999999999 1 0\n0 0 0\n"), ErrorCode::kParse, "huge.off", 2,
+                  "vertex count 99999999999 is impossible");
   for (unsigned seed = 1; seed <= 20; ++seed) {
     const Error e = read_error("garbage.off", garbage(4096, seed));
     EXPECT_EQ(e.code, ErrorCode::kParse) << e.to_string();

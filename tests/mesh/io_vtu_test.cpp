@@ -55,12 +55,12 @@ TEST_F(MeshIoTest, VtuBadInput) {
   // Line numbers below follow the writer's layout (normals on lines 6-10, ...).
   expect_error_at(read_error("range.vtu", replace("          0 1 2 3\n", "          0 1 2 7\n")),
                   ErrorCode::kInvalidMesh, "range.vtu", 34, "refers to point 7");
-  expect_error_at(read_error("nan.vtu", replace("1 1e+22 -7.125", "1 nan -7.125")),
-                  ErrorCode::kInvalidMesh, "nan.vtu", 27, "not a finite number");
-  expect_error_at(read_error("count.vtu", replace("NumberOfPoints=\"5\"", "NumberOfPoints=\"6\"")),
-                  ErrorCode::kParse, "count.vtu", 24, "DataArray 'Points' holds 15 values, expected 18");
-  expect_error_at(read_error("xml.vtu", replace("</Points>", "</Pointz>")), ErrorCode::kParse,
-                  "xml.vtu", 31, "not valid XML");
+  expect_error_at(read_error("nan.vtu", replace("1 1e+22 -7.125", "1 nan -7.125")), ErrorCode::kInvalidMesh, "nan.vtu",
+                  27, "not a finite number");
+  expect_error_at(read_error("count.vtu", replace("NumberOfPoints=\"5\"", "NumberOfPoints=\"6\"")), ErrorCode::kParse,
+                  "count.vtu", 24, "DataArray 'Points' holds 15 values, expected 18");
+  expect_error_at(read_error("xml.vtu", replace("</Points>", "</Pointz>")), ErrorCode::kParse, "xml.vtu", 31,
+                  "not valid XML");
 }
 
 }  // namespace

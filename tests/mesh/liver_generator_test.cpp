@@ -98,8 +98,8 @@ TEST_P(LiverResolutionTest, TwoLobesNotASphereOrABox) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Standard, LiverResolutionTest,
-                         ::testing::Values(LiverResolution::kSimple, LiverResolution::kCoarse,
-                                           LiverResolution::kMedium, LiverResolution::kFine),
+                         ::testing::Values(LiverResolution::kSimple, LiverResolution::kCoarse, LiverResolution::kMedium,
+                                           LiverResolution::kFine),
                          [](const auto& param_info) { return std::string(to_string(param_info.param)); });
 
 std::string file_bytes(const std::filesystem::path& p) {
@@ -123,8 +123,8 @@ TEST(LiverGenerator, DeterministicToTheByte) {
 }
 
 TEST(LiverGenerator, ResolutionNamesRoundTrip) {
-  for (auto r : {LiverResolution::kSimple, LiverResolution::kCoarse, LiverResolution::kMedium,
-                 LiverResolution::kFine}) {
+  for (auto r :
+       {LiverResolution::kSimple, LiverResolution::kCoarse, LiverResolution::kMedium, LiverResolution::kFine}) {
     EXPECT_EQ(parse_liver_resolution(to_string(r)), r);
   }
   EXPECT_FALSE(parse_liver_resolution("huge").has_value());

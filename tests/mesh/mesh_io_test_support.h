@@ -88,8 +88,7 @@ class MeshIoTest : public ::testing::Test {
   void SetUp() override {
     const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
     dir_ = fs::temp_directory_path() /
-           ("hof_mesh_io_" + std::to_string(::getpid()) + "_" + info->test_suite_name() + "_" +
-            info->name());
+           ("hof_mesh_io_" + std::to_string(::getpid()) + "_" + info->test_suite_name() + "_" + info->name());
     fs::remove_all(dir_);
     fs::create_directories(dir_);
   }
@@ -118,8 +117,8 @@ class MeshIoTest : public ::testing::Test {
 };
 
 /// Asserts the error's code and that its one-line text holds `file:line:` and `fragment`.
-inline void expect_error_at(const Error& e, ErrorCode code, const std::string& file_name,
-                     std::int64_t line, const std::string& fragment) {
+inline void expect_error_at(const Error& e, ErrorCode code, const std::string& file_name, std::int64_t line,
+                            const std::string& fragment) {
   const std::string text = e.to_string();
   EXPECT_EQ(e.code, code) << text;
   EXPECT_NE(text.find(file_name + ":" + std::to_string(line) + ": "), std::string::npos) << text;
@@ -130,8 +129,8 @@ inline void expect_error_at(const Error& e, ErrorCode code, const std::string& f
 /// nodes, regions, normals, coordinates that need all 17 digits, and a negative zero.
 inline Mesh sample_mesh() {
   Mesh m;
-  m.nodes = {Vec3(0.1, 0.2, 1.0 / 3.0), Vec3(1e-300, -0.0, 2.5), Vec3(1.0, 1e22, -7.125),
-             Vec3(0.0, 0.0, 1.0),       Vec3(-1.0 / 7.0, 3.0, 4.0)};
+  m.nodes = {Vec3(0.1, 0.2, 1.0 / 3.0), Vec3(1e-300, -0.0, 2.5), Vec3(1.0, 1e22, -7.125), Vec3(0.0, 0.0, 1.0),
+             Vec3(-1.0 / 7.0, 3.0, 4.0)};
   m.tets = {{0, 1, 2, 3}, {1, 2, 3, 4}};
   m.tet_regions = {4, 9};
   m.triangles = {{0, 1, 2}, {1, 2, 4}, {0, 3, 4}};
@@ -159,7 +158,7 @@ inline std::string binary_msh(bool swap, int node_count = 5, int last_tag = 5) {
 }
 
 inline std::string binary_stl(const std::vector<std::array<float, 9>>& triangles,
-                       std::string header = "solid binary file whose header starts like ASCII") {
+                              std::string header = "solid binary file whose header starts like ASCII") {
   header.resize(80, ' ');
   Bytes b;
   b.text(header).u32(static_cast<std::uint32_t>(triangles.size()));

@@ -41,7 +41,8 @@ Mesh regular_tet() {
 Mesh unit_cube() {
   Mesh m;
   for (int c = 0; c < 8; ++c) m.nodes.emplace_back(c & 1, (c >> 1) & 1, (c >> 2) & 1);
-  for (const auto& [a, b] : {std::pair{1, 3}, {1, 5}, {2, 3}, {2, 6}, {4, 5}, {4, 6}}) m.tets.push_back(oriented(m.nodes, {0, a, b, 7}));
+  for (const auto& [a, b] : {std::pair{1, 3}, {1, 5}, {2, 3}, {2, 6}, {4, 5}, {4, 6}})
+    m.tets.push_back(oriented(m.nodes, {0, a, b, 7}));
   return m;
 }
 
@@ -73,7 +74,7 @@ TEST(MeshReport, ACubeOfSixTetrahedraHasTheCubesVolumeEdgesAndSurface) {
   EXPECT_NEAR(r.quality.min_volume_m3, 1.0 / 6.0, 1e-15);
   EXPECT_NEAR(r.quality.max_volume_m3, 1.0 / 6.0, 1e-15);
   EXPECT_LT(r.quality.min_radius_ratio, 1.0);
-  EXPECT_NEAR(r.quality.min_dihedral_deg, 45.0, 1e-9);   // Kuhn tets: 45°, 60° and 90°
+  EXPECT_NEAR(r.quality.min_dihedral_deg, 45.0, 1e-9);  // Kuhn tets: 45°, 60° and 90°
   EXPECT_NEAR(r.quality.max_dihedral_deg, 90.0, 1e-9);
   EXPECT_TRUE(r.problems.empty()) << r.problems.front();
 }

@@ -7,7 +7,9 @@ namespace {
 
 // Closed outward tetrahedron surface on vertices base..base+3.
 std::vector<Tri> tet_surface(NodeIndex base) {
-  return {{base + 1, base + 2, base + 3}, {base, base + 3, base + 2}, {base, base + 1, base + 3},
+  return {{base + 1, base + 2, base + 3},
+          {base, base + 3, base + 2},
+          {base, base + 1, base + 3},
           {base, base + 2, base + 1}};
 }
 

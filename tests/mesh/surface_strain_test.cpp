@@ -26,8 +26,8 @@ double strain_of(const Eigen::Matrix2d& f) {
 }
 
 TEST(TriangleGreenStrain, AStretchGivesHalfOfLambdaSquaredMinusOneSigned) {
-  EXPECT_NEAR(strain_of(Eigen::Vector2d(1.2, 1.0).asDiagonal()), 0.5 * (1.44 - 1.0), 1e-14);   // stretched
-  EXPECT_NEAR(strain_of(Eigen::Vector2d(0.8, 1.0).asDiagonal()), 0.5 * (0.64 - 1.0), 1e-14);   // compressed
+  EXPECT_NEAR(strain_of(Eigen::Vector2d(1.2, 1.0).asDiagonal()), 0.5 * (1.44 - 1.0), 1e-14);  // stretched
+  EXPECT_NEAR(strain_of(Eigen::Vector2d(0.8, 1.0).asDiagonal()), 0.5 * (0.64 - 1.0), 1e-14);  // compressed
   // Both: the one of larger magnitude wins, with its sign.
   EXPECT_NEAR(strain_of(Eigen::Vector2d(1.1, 0.7).asDiagonal()), 0.5 * (0.49 - 1.0), 1e-14);
   EXPECT_NEAR(strain_of(Eigen::Vector2d(1.3, 0.9).asDiagonal()), 0.5 * (1.69 - 1.0), 1e-14);
@@ -48,7 +48,8 @@ TEST(TriangleGreenStrain, RigidMotionIsNoStrainAndTheTrianglesPoseDoesNotMatter)
   for (int trial = 0; trial < 200; ++trial) {
     const Vec3 a0(u(rng), u(rng), u(rng)), a1(u(rng), u(rng), u(rng)), a2(u(rng), u(rng), u(rng));
     if ((a1 - a0).cross(a2 - a0).norm() < 1e-2) continue;
-    const Eigen::Matrix3d r = Eigen::AngleAxisd(3.0 * u(rng), Vec3(u(rng), u(rng), u(rng)).normalized()).toRotationMatrix();
+    const Eigen::Matrix3d r =
+        Eigen::AngleAxisd(3.0 * u(rng), Vec3(u(rng), u(rng), u(rng)).normalized()).toRotationMatrix();
     const Vec3 shift(u(rng), u(rng), u(rng));
     EXPECT_NEAR(triangle_green_strain(a0, a1, a2, r * a0 + shift, r * a1 + shift, r * a2 + shift), 0.0, 1e-12);
     // A stretch by 1.25 along an in-plane direction, then the rigid motion: (1.25² − 1)/2.

@@ -25,9 +25,7 @@ TriMesh box_surface(const Vec3& o = Vec3::Zero(), double s = 1.0) {
   return m;
 }
 
-TEST(Tetrahedralize, BoxSurfaceCheckedBeforeMeshing) {
-  ASSERT_TRUE(check_surface(box_surface()).closed_outward());
-}
+TEST(Tetrahedralize, BoxSurfaceCheckedBeforeMeshing) { ASSERT_TRUE(check_surface(box_surface()).closed_outward()); }
 
 TEST(Tetrahedralize, BoxFillsItsVolumeWithPositiveTets) {
   auto mesh = tetrahedralize(box_surface(), {});
@@ -62,8 +60,7 @@ TEST(Tetrahedralize, OpenSurfaceIsAClearError) {
   auto mesh = tetrahedralize(open, {}, "lid.obj");
   ASSERT_FALSE(mesh.has_value());
   EXPECT_EQ(mesh.error().code, ErrorCode::kMeshing);
-  EXPECT_NE(mesh.error().message.find("lid.obj: the surface is not closed"), std::string::npos)
-      << mesh.error().message;
+  EXPECT_NE(mesh.error().message.find("lid.obj: the surface is not closed"), std::string::npos) << mesh.error().message;
 }
 
 TEST(Tetrahedralize, SelfIntersectingSurfaceIsAClearError) {

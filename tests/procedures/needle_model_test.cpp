@@ -43,7 +43,7 @@ TEST(NeedleModel, SimoneOkamuraStiffnessIsThePolynomialInMillimetres) {
 }
 
 TEST(NeedleModel, KarnoppHasItsFourBranches) {
-  const KarnoppFriction k;  // Cp 0.121 mN/mm, Cn −0.117 mN/mm, bp 3.2, bn −1.6 mN s/mm², Δv 2 mm/s
+  const KarnoppFriction k;     // Cp 0.121 mN/mm, Cn −0.117 mN/mm, bp 3.2, bn −1.6 mN s/mm², Δv 2 mm/s
   const double length = 0.03;  // 30 mm inserted
   // Slipping inward: 30 mm · (0.121 mN/mm + 3.2 mN s/mm² · 5 mm/s) = 30 · 16.121 mN.
   EXPECT_NEAR(karnopp_force(k, length, 0.005, 0.0), 30 * 16.121e-3, 1e-12);
@@ -113,7 +113,8 @@ TEST(NeedleModel, ThePrintedFormStartsEachPhaseFromAboutZero) {
   EXPECT_NEAR(post_puncture_force(p, 1.0, 0.01, 0.0), 1.7, 1e-6);
   // The two forms differ by 2b everywhere.
   for (double d : {0.0, 0.01, 0.03}) {
-    EXPECT_NEAR(fung_force(p.fung_pre, d, FungForm::kPrinted) - fung_force(p.fung_pre, d, FungForm::kIntegrated), 2 * -0.098, 1e-12);
+    EXPECT_NEAR(fung_force(p.fung_pre, d, FungForm::kPrinted) - fung_force(p.fung_pre, d, FungForm::kIntegrated),
+                2 * -0.098, 1e-12);
   }
 }
 

@@ -27,8 +27,8 @@ mesh::TriMesh box(const Vec3& lo, const Vec3& hi) { return hof::testing::box_sur
 
 // Insert–hold–extract along −z: from `start`, `approach` to the surface, `depth` further at
 // `speed`, hold, withdraw to the start at the same speed.
-std::unique_ptr<haptics::ScriptedDevice> insertion(const Vec3& start, double approach, double depth, double speed, double hold,
-                                                    const haptics::DeviceSpec& spec = {}) {
+std::unique_ptr<haptics::ScriptedDevice> insertion(const Vec3& start, double approach, double depth, double speed,
+                                                   double hold, const haptics::DeviceSpec& spec = {}) {
   const haptics::MotionConfig motion = haptics::MotionConfig::poke(start, Vec3(0, 0, -1), approach, depth, speed, hold);
   auto scripted = haptics::ScriptedMotion::make(motion);
   EXPECT_TRUE(scripted) << scripted.error().to_string();
@@ -72,7 +72,8 @@ BoxRun pierce_box(NeedleConfig needle, haptics::RendererKind renderer, double sp
   needle.bodies.emplace_back("block", needle.tissue);  // a rigid body is pierced only when named
   SessionConfig config = needle_config(needle, bodies);
   config.haptics.renderer.kind = renderer;
-  auto session = Session::make(std::move(bodies), insertion(Vec3(0.003, 0.002, 0.01), 0.01, 0.04, speed, 1.0, spec), config);
+  auto session =
+      Session::make(std::move(bodies), insertion(Vec3(0.003, 0.002, 0.01), 0.01, 0.04, speed, 1.0, spec), config);
   EXPECT_TRUE(session) << session.error().to_string();
   BoxRun run;
   const double seconds = (0.01 + 0.04 + 0.05) / speed + 1.0 + 0.5;
@@ -81,7 +82,7 @@ BoxRun pierce_box(NeedleConfig needle, haptics::RendererKind renderer, double sp
 }
 
 TEST(NeedleInsertion, TheForceFollowsFungExactlyPhaseByPhase) {
-  NeedleConfig needle;  // the literature's defaults: Fung, capsule 20 mm, relaxation 2 s
+  NeedleConfig needle;                              // the literature's defaults: Fung, capsule 20 mm, relaxation 2 s
   needle.tissue.fung_form = FungForm::kIntegrated;  // the form fung() writes out
   const BoxRun run = pierce_box(needle, haptics::RendererKind::kRuspini);
   std::set<NeedlePhase> seen;
@@ -99,8 +100,12 @@ TEST(NeedleInsertion, TheForceFollowsFungExactlyPhaseByPhase) {
     const double v = s.tool.axial_velocity_m_per_s;  // the tool's (filtered) estimate, inward
     double expected = 0.0;
     switch (phase) {
-      case NeedlePhase::kPrePuncture: expected = fung(kPreA, kPreB, kPreD0, kPreF0, d); break;
-      case NeedlePhase::kPunctured: expected = fung(kPostA, kPostB, kPostD0, kPostF0, d); break;
+      case NeedlePhase::kPrePuncture:
+        expected = fung(kPreA, kPreB, kPreD0, kPreF0, d);
+        break;
+      case NeedlePhase::kPunctured:
+        expected = fung(kPostA, kPostB, kPostD0, kPostF0, d);
+        break;
       case NeedlePhase::kRelaxation:
         if (previous != NeedlePhase::kRelaxation) {
           relax_start = s.time_s;
@@ -109,10 +114,13 @@ TEST(NeedleInsertion, TheForceFollowsFungExactlyPhaseByPhase) {
         expected = relax_force * std::exp(-(s.time_s - relax_start) / 2.0);
         break;
       case NeedlePhase::kExtraction:  // Karnopp, its branches written out
-        expected = v >= 0.001 ? d * (0.121 + 3200.0 * v) : v <= -0.001 ? d * (-0.117 + -1600.0 * std::abs(v))
-                                                                        : std::clamp(previous_axial, -0.117 * d, 0.121 * d);
+        expected = v >= 0.001    ? d * (0.121 + 3200.0 * v)
+                   : v <= -0.001 ? d * (-0.117 + -1600.0 * std::abs(v))
+                                 : std::clamp(previous_axial, -0.117 * d, 0.121 * d);
         break;
-      default: expected = 0.0; break;
+      default:
+        expected = 0.0;
+        break;
     }
     if (s.time_s > 1.5 && s.time_s < 4.9) {
       // Away from the script's corners the velocity estimate is the script's (inserting at 10 mm/s).
@@ -131,9 +139,9 @@ TEST(NeedleInsertion, TheForceFollowsFungExactlyPhaseByPhase) {
   }
   EXPECT_GT(checked, 5000);
   // Every phase, in the order of an insert–hold–extract.
-  const std::vector<NeedlePhase> expected_order{NeedlePhase::kFree,       NeedlePhase::kTouching,   NeedlePhase::kPrePuncture,
-                                                NeedlePhase::kPunctured,  NeedlePhase::kRelaxation, NeedlePhase::kExtraction,
-                                                NeedlePhase::kOut};
+  const std::vector<NeedlePhase> expected_order{
+      NeedlePhase::kFree,       NeedlePhase::kTouching,   NeedlePhase::kPrePuncture, NeedlePhase::kPunctured,
+      NeedlePhase::kRelaxation, NeedlePhase::kExtraction, NeedlePhase::kOut};
   EXPECT_EQ(order, expected_order);
 }
 
@@ -221,8 +229,8 @@ TEST(NeedleInsertion, TheDefaultNeedleRisesDropsAtPunctureResistsAfterAndDragsOn
 TEST(NeedleInsertion, SimoneOkamuraPunctureThresholdAndKarnoppFriction) {
   NeedleConfig needle;
   needle.tissue.model = NeedleForceModel::kSimoneOkamura;
-  needle.tissue.capsule_m = 0.05;         // deeper than the insertion: the force breaks it
-  needle.tissue.puncture_force_n = 0.5;   // a0 + a1 d + a2 d² reaches 0.5 N at 14.3 mm
+  needle.tissue.capsule_m = 0.05;        // deeper than the insertion: the force breaks it
+  needle.tissue.puncture_force_n = 0.5;  // a0 + a1 d + a2 d² reaches 0.5 N at 14.3 mm
   const BoxRun run = pierce_box(needle, haptics::RendererKind::kGodObject);
   double puncture_depth = -1.0;
   NeedlePhase previous = NeedlePhase::kFree;
@@ -296,9 +304,10 @@ TEST(NeedleInsertion, TheAxisFollowsTheMotionOrTheNormalAndTheLateralSpringHolds
     // face's own (no shading from the box's edges).
     config.haptics.renderer.kind = haptics::RendererKind::kGodObject;
     const Vec3 direction(0.3, 0.0, -1.0);
-    const haptics::MotionConfig motion =
-        haptics::MotionConfig::poke(Vec3(-0.006, 0.0, 0.02), direction, 0.02 * direction.norm() /* to z = 0 */, 0.03, 0.01, 0.2);
-    auto session = Session::make(std::move(bodies), std::make_unique<haptics::ScriptedDevice>(*haptics::ScriptedMotion::make(motion)), config);
+    const haptics::MotionConfig motion = haptics::MotionConfig::poke(
+        Vec3(-0.006, 0.0, 0.02), direction, 0.02 * direction.norm() /* to z = 0 */, 0.03, 0.01, 0.2);
+    auto session = Session::make(
+        std::move(bodies), std::make_unique<haptics::ScriptedDevice>(*haptics::ScriptedMotion::make(motion)), config);
     EXPECT_TRUE(session);
     haptics::HapticSample deepest;
     (*session)->run_virtual(5.6, [&](const haptics::HapticSample& s) {
@@ -374,8 +383,10 @@ TEST_P(LiverPierced, DeformsAroundThePathAndIsDraggedOnExtraction) {
       entry = run.samples[i].tool.entry;
       axis = run.samples[i].tool.axis;
     }
-    if (before == NeedlePhase::kRelaxation && phase == NeedlePhase::kExtraction) start_of_extraction = run.samples[i].time_s;
-    if (phase == NeedlePhase::kExtraction && run.samples[i].tool.depth_m > 0.012 && run.samples[i].tool.depth_m < 0.015) {
+    if (before == NeedlePhase::kRelaxation && phase == NeedlePhase::kExtraction)
+      start_of_extraction = run.samples[i].time_s;
+    if (phase == NeedlePhase::kExtraction && run.samples[i].tool.depth_m > 0.012 &&
+        run.samples[i].tool.depth_m < 0.015) {
       mid_extraction = run.samples[i].time_s;
     }
   }
@@ -408,7 +419,8 @@ TEST_P(LiverPierced, DeformsAroundThePathAndIsDraggedOnExtraction) {
   for (Eigen::Index n = 0; n < rest.size() / 3; ++n) {
     const Vec3 x = held.segment<3>(3 * n);
     const double along = (x - entry).dot(axis);
-    if (along < -0.005 || along > 0.03 || ((x - entry) - along * axis).norm() > 0.02) continue;  // the simple liver's nodes are ~15 mm apart
+    if (along < -0.005 || along > 0.03 || ((x - entry) - along * axis).norm() > 0.02)
+      continue;  // the simple liver's nodes are ~15 mm apart
     outward += -(dragged.segment<3>(3 * n) - x).dot(axis);
     ++near_path;
   }
@@ -468,7 +480,9 @@ mechanics::ModelConfig block_config(const Vec3& origin, double size, int cells) 
   mechanics::ModelConfig c;
   c.name = "block";
   const double h = size / cells;
-  const auto node = [&](int i, int j, int k) { return static_cast<std::int32_t>((k * (cells + 1) + j) * (cells + 1) + i); };
+  const auto node = [&](int i, int j, int k) {
+    return static_cast<std::int32_t>((k * (cells + 1) + j) * (cells + 1) + i);
+  };
   for (int k = 0; k <= cells; ++k) {
     for (int j = 0; j <= cells; ++j) {
       for (int i = 0; i <= cells; ++i) c.positions.push_back(origin + Vec3(i * h, j * h, k * h));
@@ -478,13 +492,14 @@ mechanics::ModelConfig block_config(const Vec3& origin, double size, int cells) 
     for (int j = 0; j < cells; ++j) {
       for (int i = 0; i < cells; ++i) {
         // Six tetrahedra per cube around its main diagonal (positively oriented).
-        const std::array<std::int32_t, 8> v{node(i, j, k),         node(i + 1, j, k),         node(i + 1, j + 1, k),
-                                            node(i, j + 1, k),     node(i, j, k + 1),         node(i + 1, j, k + 1),
-                                            node(i + 1, j + 1, k + 1), node(i, j + 1, k + 1)};
+        const std::array<std::int32_t, 8> v{
+            node(i, j, k),     node(i + 1, j, k),     node(i + 1, j + 1, k),     node(i, j + 1, k),
+            node(i, j, k + 1), node(i + 1, j, k + 1), node(i + 1, j + 1, k + 1), node(i, j + 1, k + 1)};
         const int tets[6][4] = {{0, 1, 2, 6}, {0, 2, 3, 6}, {0, 3, 7, 6}, {0, 7, 4, 6}, {0, 4, 5, 6}, {0, 5, 1, 6}};
         for (const auto& t : tets) {
           mesh::Tet tet{v[t[0]], v[t[1]], v[t[2]], v[t[3]]};
-          const Vec3 a = c.positions[tet[0]], b = c.positions[tet[1]], cc = c.positions[tet[2]], d = c.positions[tet[3]];
+          const Vec3 a = c.positions[tet[0]], b = c.positions[tet[1]], cc = c.positions[tet[2]],
+                     d = c.positions[tet[3]];
           if ((b - a).dot((cc - a).cross(d - a)) < 0.0) std::swap(tet[2], tet[3]);
           c.tets.push_back(tet);
         }
@@ -561,7 +576,8 @@ TEST(NeedleInsertion, RealTimeSessionRunsAndStopsCleanlyWithTheNeedle) {
   SessionConfig config = needle_config(NeedleConfig{}, bodies);
   haptics::DeviceSpec spec;
   spec.max_force_n = 3.3;
-  auto session = Session::make(std::move(bodies), insertion(Vec3(0.03, 0.0, 0.06), 0.01, 0.03, 0.05, 0.1, spec), config);
+  auto session =
+      Session::make(std::move(bodies), insertion(Vec3(0.03, 0.0, 0.06), 0.01, 0.03, 0.05, 0.1, spec), config);
   ASSERT_TRUE(session) << session.error().to_string();
   std::uint64_t last_tick = 0;
   bool ordered = true, any = false;

@@ -162,7 +162,8 @@ TEST(NeedleTool, NewParametersReachTheNextTickAndTheNeedleKeepsItsPhase) {
   ASSERT_TRUE(b.tool->configure(changed));
   b.tick(Vec3(0, 0, -0.0301), Vec3(0, 0, -0.01));
   EXPECT_EQ(b.phase(), NeedlePhase::kPunctured);
-  EXPECT_NEAR(b.state.axial_force_n, fung_force(changed.tissue.fung_post, b.state.depth_m, changed.tissue.fung_form), 1e-12);
+  EXPECT_NEAR(b.state.axial_force_n, fung_force(changed.tissue.fung_post, b.state.depth_m, changed.tissue.fung_form),
+              1e-12);
   // A bad value is refused and changes nothing.
   changed.tissue.capsule_m = -1.0;
   EXPECT_FALSE(b.tool->configure(changed));

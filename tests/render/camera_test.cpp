@@ -36,9 +36,9 @@ TEST(OrbitCamera, TheDefaultLooksAtTheOriginFromTheFrontAndAbove) {
   const OrbitCamera c;
   expect_orthonormal_frame(c);
   EXPECT_NEAR((c.eye() - c.target()).norm(), 0.5, 1e-12);
-  EXPECT_LT(c.eye().y(), 0.0);                // in front (−y) of a z-up scene
-  EXPECT_GT(c.eye().z(), 0.0);                // above it
-  EXPECT_GT(c.up_on_screen().z(), 0.0);       // the scene's up is up on screen
+  EXPECT_LT(c.eye().y(), 0.0);           // in front (−y) of a z-up scene
+  EXPECT_GT(c.eye().z(), 0.0);           // above it
+  EXPECT_GT(c.up_on_screen().z(), 0.0);  // the scene's up is up on screen
   EXPECT_NEAR(c.fov_y_rad(), 40.0 * std::numbers::pi / 180.0, 1e-15);
 }
 

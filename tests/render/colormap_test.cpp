@@ -15,8 +15,8 @@ namespace {
 float luminance(const Eigen::Vector3f& c) { return 0.2126f * c.x() + 0.7152f * c.y() + 0.0722f * c.z(); }
 
 TEST(Viridis, EndsAndMiddleAreMatplotlibsValues) {
-  EXPECT_EQ(viridis(0.0f), Eigen::Vector3f(0.267f, 0.005f, 0.329f));  // dark purple
-  EXPECT_EQ(viridis(0.5f), Eigen::Vector3f(0.164f, 0.471f, 0.558f));  // teal
+  EXPECT_EQ(viridis(0.0f), Eigen::Vector3f(0.267f, 0.005f, 0.329f));                   // dark purple
+  EXPECT_EQ(viridis(0.5f), Eigen::Vector3f(0.164f, 0.471f, 0.558f));                   // teal
   EXPECT_LT((viridis(1.0f) - Eigen::Vector3f(0.993f, 0.906f, 0.144f)).norm(), 1e-6f);  // yellow
 }
 

@@ -39,8 +39,9 @@ TEST(DeviceSpec, OpensTheSimulatedBackends) {
   EXPECT_TRUE((*poke)->read(0.0).valid);
   EXPECT_NEAR(((*poke)->read(0.0).position_m - Vec3(0, 0.05, 0)).norm(), 0.0, 1e-15);
 
-  auto custom = scene::open_device("scripted:poke, start=0.01;0.02;0, direction=0;0;-2, depth=0.005, speed=0.02, "
-                            "hold=0.5, approach=0.01, repeat=3, model=omni");
+  auto custom = scene::open_device(
+      "scripted:poke, start=0.01;0.02;0, direction=0;0;-2, depth=0.005, speed=0.02, "
+      "hold=0.5, approach=0.01, repeat=3, model=omni");
   ASSERT_TRUE(custom) << custom.error().to_string();
   EXPECT_EQ((*custom)->spec().max_force_n, 3.3);
   EXPECT_EQ((*custom)->spec().max_stiffness_n_per_m, 700.0);
@@ -118,8 +119,7 @@ TEST(DeviceSpec, ErrorsNameTheSpecAndTheProblem) {
   auto d = scene::open_device("replay:" + missing);
   ASSERT_FALSE(d);
   EXPECT_EQ(d.error().code, ErrorCode::kIo);
-  EXPECT_NE(d.error().to_string().find(missing + ": replay: no such file"), std::string::npos)
-      << d.error().to_string();
+  EXPECT_NE(d.error().to_string().find(missing + ": replay: no such file"), std::string::npos) << d.error().to_string();
 }
 
 TEST(DeviceSpec, PalpateAndMouseSpecs) {
@@ -148,7 +148,8 @@ T parsed(const std::string& spec) {
 
 TEST(DeviceSpec, ParsesEveryKeyIntoItsTypedField) {
   const auto poke = parsed<haptics::ScriptedConfig>(
-      "scripted:poke, start=0.01;0.02;0, direction=0;0;-2, depth=0.005, speed=0.02, hold=0.5, approach=0.01, repeat=3, force=1.5, "
+      "scripted:poke, start=0.01;0.02;0, direction=0;0;-2, depth=0.005, speed=0.02, hold=0.5, approach=0.01, repeat=3, "
+      "force=1.5, "
       "model=omni");
   EXPECT_EQ(poke.motion.kind, haptics::MotionKind::kPoke);
   EXPECT_EQ(poke.motion.start_m, Vec3(0.01, 0.02, 0.0));
@@ -162,7 +163,8 @@ TEST(DeviceSpec, ParsesEveryKeyIntoItsTypedField) {
   EXPECT_EQ(poke.spec.model, "omni");
   EXPECT_EQ(poke.spec.max_force_n, 3.3);
 
-  const auto slide = parsed<haptics::ScriptedConfig>("scripted:press-and-slide,slide=0;0;1,distance=0.01,slide_speed=0.02,hold=forever");
+  const auto slide = parsed<haptics::ScriptedConfig>(
+      "scripted:press-and-slide,slide=0;0;1,distance=0.01,slide_speed=0.02,hold=forever");
   EXPECT_EQ(slide.motion.kind, haptics::MotionKind::kPressAndSlide);
   EXPECT_EQ(slide.motion.slide_direction, Vec3(0, 0, 1));
   EXPECT_EQ(slide.motion.slide_distance_m, 0.01);
@@ -173,7 +175,8 @@ TEST(DeviceSpec, ParsesEveryKeyIntoItsTypedField) {
   EXPECT_EQ(palpate.motion.palpation_step_m, Vec3(0.02, 0, 0));
   EXPECT_EQ(palpate.motion.palpation_count, 3U);
 
-  const auto circle = parsed<haptics::ScriptedConfig>("scripted:circle,center=0;0.02;0,normal=0;0;1,radius=0.03,period=2,repeat");
+  const auto circle =
+      parsed<haptics::ScriptedConfig>("scripted:circle,center=0;0.02;0,normal=0;0;1,radius=0.03,period=2,repeat");
   EXPECT_EQ(circle.motion.kind, haptics::MotionKind::kCircle);
   EXPECT_EQ(circle.motion.centre_m, Vec3(0, 0.02, 0));
   EXPECT_EQ(circle.motion.normal, Vec3(0, 0, 1));
@@ -186,7 +189,8 @@ TEST(DeviceSpec, ParsesEveryKeyIntoItsTypedField) {
   EXPECT_TRUE(std::isinf(hold.motion.hold_s));  // a held target stays unless told
 
   const auto hand = parsed<haptics::VirtualHandConfig>(
-      "virtual-hand:circle,mass=0.2,stiffness=300,damping=3,device_damping=1,substep=0.0005,integrator=exact,model=falcon");
+      "virtual-hand:circle,mass=0.2,stiffness=300,damping=3,device_damping=1,substep=0.0005,integrator=exact,model="
+      "falcon");
   EXPECT_EQ(hand.motion.kind, haptics::MotionKind::kCircle);
   EXPECT_EQ(hand.hand.mass_kg, 0.2);
   EXPECT_EQ(hand.hand.stiffness_n_per_m, 300.0);
@@ -227,7 +231,8 @@ TEST(DeviceSpec, ParsesEveryKeyIntoItsTypedField) {
   EXPECT_EQ(dhd.model->max_force_n, 8.0);
   EXPECT_FALSE(parsed<haptics::DhdConfig>("dhd").model);
 
-  const auto hd = parsed<haptics::OpenHapticsConfig>("openhaptics,device=Default Device,library=/opt/libHD.so,model=touch");
+  const auto hd =
+      parsed<haptics::OpenHapticsConfig>("openhaptics,device=Default Device,library=/opt/libHD.so,model=touch");
   EXPECT_EQ(hd.device, "Default Device");
   EXPECT_EQ(hd.library, "/opt/libHD.so");
   ASSERT_TRUE(hd.model);
@@ -256,7 +261,8 @@ TEST(DeviceSpec, ParseErrorsOfTheOtherBackends) {
   // Parsing alone names the same problems, before anything is opened.
   auto parse = scene::parse_device_spec("scripted:poke,depht=0.01");
   ASSERT_FALSE(parse);
-  EXPECT_EQ(parse.error().message.rfind("device spec 'scripted:poke,depht=0.01': unknown key 'depht'", 0), 0U) << parse.error().message;
+  EXPECT_EQ(parse.error().message.rfind("device spec 'scripted:poke,depht=0.01': unknown key 'depht'", 0), 0U)
+      << parse.error().message;
   EXPECT_TRUE(scene::parse_device_spec("scripted:poke,speed=-1")) << "the motion is checked when opened";
 }
 

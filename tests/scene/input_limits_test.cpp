@@ -54,8 +54,9 @@ TEST(InputLimits, ASofaSceneNestingTwentyThousandNodesIsRefusedByLine) {
 }
 
 TEST(InputLimits, AnX3dSceneNestingTwentyThousandGroupsIsRefused) {
-  const auto path = write("deep.x3d", "<X3D>\n<Scene>\n" + nested("<Group>", "</Group>", kDeep, "<Shape><Box/></Shape>") +
-                                          "\n</Scene>\n</X3D>\n");
+  const auto path =
+      write("deep.x3d", "<X3D>\n<Scene>\n" + nested("<Group>", "</Group>", kDeep, "<Shape><Box/></Shape>") +
+                            "\n</Scene>\n</X3D>\n");
   auto scene = read_x3d_scene(path);
   ASSERT_FALSE(scene);
   expect_depth_error(scene.error(), "deep.x3d", 3);
@@ -70,15 +71,16 @@ TEST(InputLimits, AProjectWithADeepInlineSceneIsRefusedQuickly) {
 }
 
 TEST(InputLimits, AVtuFileNestingDeeplyIsRefused) {
-  const auto path = write("deep.vtu", "<VTKFile type=\"UnstructuredGrid\">\n" + nested("<Piece>", "</Piece>", kDeep, "") +
-                                          "\n</VTKFile>\n");
+  const auto path = write("deep.vtu", "<VTKFile type=\"UnstructuredGrid\">\n" +
+                                          nested("<Piece>", "</Piece>", kDeep, "") + "\n</VTKFile>\n");
   auto read = mesh::read_mesh(path);
   ASSERT_FALSE(read);
   expect_depth_error(read.error(), "deep.vtu", 2);
 }
 
 TEST(InputLimits, AnX3dUseInsideTheNodeItNamesIsACycleNamedByLine) {
-  const auto path = write("cycle.x3d", "<X3D>\n<Scene>\n<Transform DEF=\"a\">\n<Transform USE=\"a\"/>\n</Transform>\n</Scene>\n</X3D>\n");
+  const auto path = write(
+      "cycle.x3d", "<X3D>\n<Scene>\n<Transform DEF=\"a\">\n<Transform USE=\"a\"/>\n</Transform>\n</Scene>\n</X3D>\n");
   auto scene = read_x3d_scene(path);
   ASSERT_FALSE(scene);
   EXPECT_NE(scene.error().message.find("a cycle"), std::string::npos) << scene.error().to_string();
@@ -100,9 +102,9 @@ TEST(InputLimits, AnX3dThatDoublesThroughUseFortyTimesIsRefusedNotExpanded) {
 
 TEST(InputLimits, ScenesJustUnderTheLimitStillRead) {
   // The limit refuses only absurd files: a scene nesting 200 nodes is read.
-  const auto path = write("deep-ok.scn", "<Node name=\"root\">\n" +
-                                             nested("<Node>", "</Node>", 200, "<MechanicalObject position=\"0 0 0\"/>") +
-                                             "\n</Node>\n");
+  const auto path = write(
+      "deep-ok.scn", "<Node name=\"root\">\n" +
+                         nested("<Node>", "</Node>", 200, "<MechanicalObject position=\"0 0 0\"/>") + "\n</Node>\n");
   auto scene = read_sofa_scene(path);
   EXPECT_TRUE(scene) << scene.error().to_string();
 }
@@ -118,13 +120,16 @@ TEST(InputLimits, ProjectCountsOutOfRangeAreErrorsNotConversions) {
   for (const std::string& attribute : {std::string("<options maxTrianglesInLeaf=\"3.3e85\"/>"),
                                        std::string("<safety maxConsecutiveOverruns=\"-1e300\"/>"),
                                        std::string("<options maxTrianglesInLeaf=\"2.5\"/>")}) {
-    const std::string text = "<hof version=\"1\">\n<mechanics scene=\"x.scn\"/>\n<haptics>\n" + attribute + "\n</haptics>\n</hof>\n";
+    const std::string text =
+        "<hof version=\"1\">\n<mechanics scene=\"x.scn\"/>\n<haptics>\n" + attribute + "\n</haptics>\n</hof>\n";
     auto project = parse_project(text, "counts.hof");
     ASSERT_FALSE(project) << attribute;
     EXPECT_NE(project.error().message.find("whole number"), std::string::npos) << project.error().to_string();
     EXPECT_EQ(project.error().line, 4) << project.error().to_string();
   }
-  const std::string grid = "<hof version=\"1\">\n<mechanics scene=\"x.scn\"/>\n<bodies>\n<body name=\"b\" model=\"hexahedra\" grid=\"1e300 4 4\"/>\n</bodies>\n</hof>\n";
+  const std::string grid =
+      "<hof version=\"1\">\n<mechanics scene=\"x.scn\"/>\n<bodies>\n<body name=\"b\" model=\"hexahedra\" grid=\"1e300 "
+      "4 4\"/>\n</bodies>\n</hof>\n";
   auto project = parse_project(grid, "grid.hof");
   ASSERT_FALSE(project);
   EXPECT_EQ(project.error().line, 4) << project.error().to_string();

@@ -52,11 +52,14 @@ TEST(SceneParameters, AnUnknownNameIsAnErrorNamingTheClosest) {
 TEST(SceneParameters, NamesResolveToTheComponentAndTheParameter) {
   const mechanics::ModelConfig c = named_model();
   EXPECT_EQ(*resolve_parameter(c, "", "dt"), (ParameterRef{{ComponentKind::kModel, 0}, ParameterId::kDt}));
-  EXPECT_EQ(*resolve_parameter(c, "skin", "thickness"), (ParameterRef{{ComponentKind::kForceField, 1}, ParameterId::kThickness}));
+  EXPECT_EQ(*resolve_parameter(c, "skin", "thickness"),
+            (ParameterRef{{ComponentKind::kForceField, 1}, ParameterId::kThickness}));
   EXPECT_EQ(*resolve_parameter(c, "odesolver", "rayleighMass"),
             (ParameterRef{{ComponentKind::kOdeSolver, 0}, ParameterId::kRayleighMass}));
-  EXPECT_EQ(*resolve_parameter(c, "cg", "iterations"), (ParameterRef{{ComponentKind::kLinearSolver, 0}, ParameterId::kIterations}));
-  EXPECT_EQ(*resolve_parameter(c, "mass", "totalMass"), (ParameterRef{{ComponentKind::kMass, 0}, ParameterId::kTotalMass}));
+  EXPECT_EQ(*resolve_parameter(c, "cg", "iterations"),
+            (ParameterRef{{ComponentKind::kLinearSolver, 0}, ParameterId::kIterations}));
+  EXPECT_EQ(*resolve_parameter(c, "mass", "totalMass"),
+            (ParameterRef{{ComponentKind::kMass, 0}, ParameterId::kTotalMass}));
   const auto ref = *resolve_parameter(c, "springs", "damping");
   EXPECT_EQ(parameter_path(c, ref), "springs/damping");
   EXPECT_EQ(parameter_path(c, *resolve_parameter(c, "", "gravityZ")), "/gravityZ");

@@ -4,13 +4,13 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
-#include <cmath>
+#include <map>
 #include <regex>
 #include <sstream>
-#include <map>
 
 namespace hof::scene {
 namespace {
@@ -89,9 +89,10 @@ TEST(Project, NeedleRoundTripsWithEveryParameter) {
   ASSERT_TRUE(write_project(*loaded, dir / "b.hof"));
   EXPECT_EQ(bytes(dir / "a.hof"), bytes(dir / "b.hof"));
   // A body's set starts from the common one: only what it names differs.
-  std::ofstream(dir / "partial.hof") << "<hof>\n  <mechanics scene=\"x.scn\"/>\n  <haptics>\n    <needle>\n"
-                                        "      <tissue capsule=\"0.03\"/>\n      <tissue body=\"B\" punctureForce=\"1\"/>\n"
-                                        "    </needle>\n  </haptics>\n</hof>\n";
+  std::ofstream(dir / "partial.hof")
+      << "<hof>\n  <mechanics scene=\"x.scn\"/>\n  <haptics>\n    <needle>\n"
+         "      <tissue capsule=\"0.03\"/>\n      <tissue body=\"B\" punctureForce=\"1\"/>\n"
+         "    </needle>\n  </haptics>\n</hof>\n";
   loaded = read_project(dir / "partial.hof");
   ASSERT_TRUE(loaded) << loaded.error().to_string();
   ASSERT_EQ(loaded->needle->bodies.size(), 1u);
@@ -104,8 +105,8 @@ TEST(Project, NeedleErrorsNameTheLineAndAttribute) {
   const auto dir = std::filesystem::temp_directory_path() / "hof_project_needle_errors";
   std::filesystem::create_directories(dir);
   const auto error_of = [&](const std::string& tissue) {
-    std::ofstream(dir / "bad.hof") << "<hof>\n  <mechanics scene=\"x.scn\"/>\n  <haptics>\n    <needle>\n      " << tissue
-                                   << "\n    </needle>\n  </haptics>\n</hof>\n";
+    std::ofstream(dir / "bad.hof") << "<hof>\n  <mechanics scene=\"x.scn\"/>\n  <haptics>\n    <needle>\n      "
+                                   << tissue << "\n    </needle>\n  </haptics>\n</hof>\n";
     auto p = read_project(dir / "bad.hof");
     return p ? std::string("accepted") : p.error().to_string();
   };
@@ -137,12 +138,15 @@ TEST(Project, InlineSceneRoundTripsAndLoads) {
   const auto dir = std::filesystem::temp_directory_path() / "hof_project_inline";
   std::filesystem::create_directories(dir);
   const std::string mesh = HOF_SOURCE_DIR "/data/models/liver-simple.msh";
-  std::ofstream(dir / "inline.hof") << "<hof name=\"inline\">\n  <mechanics>\n    <Node name=\"root\" dt=\"0.01\" gravity=\"0 0 0\">\n"
-                                       "      <Node name=\"Liver\">\n        <EulerImplicitSolver/>\n        <CGLinearSolver/>\n"
-                                       "        <MeshGmshLoader name=\"l\" filename=\"" << mesh << "\"/>\n"
-                                       "        <MechanicalObject src=\"@l\"/>\n        <UniformMass totalMass=\"1\"/>\n"
-                                       "        <MeshSpringForceField stiffness=\"100\"/>\n        <FixedConstraint indices=\"0 1 2\"/>\n"
-                                       "      </Node>\n    </Node>\n  </mechanics>\n</hof>\n";
+  std::ofstream(dir / "inline.hof")
+      << "<hof name=\"inline\">\n  <mechanics>\n    <Node name=\"root\" dt=\"0.01\" gravity=\"0 0 0\">\n"
+         "      <Node name=\"Liver\">\n        <EulerImplicitSolver/>\n        <CGLinearSolver/>\n"
+         "        <MeshGmshLoader name=\"l\" filename=\""
+      << mesh
+      << "\"/>\n"
+         "        <MechanicalObject src=\"@l\"/>\n        <UniformMass totalMass=\"1\"/>\n"
+         "        <MeshSpringForceField stiffness=\"100\"/>\n        <FixedConstraint indices=\"0 1 2\"/>\n"
+         "      </Node>\n    </Node>\n  </mechanics>\n</hof>\n";
   auto p = read_project(dir / "inline.hof");
   ASSERT_TRUE(p) << p.error().to_string();
   EXPECT_TRUE(p->mechanics_scene.empty());
@@ -166,7 +170,8 @@ TEST(Project, ThesisAppendixFormatIsRead) {
       << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<hof>\n  <sofa>\n    <sg>\n"
          "      <Node name=\"root\" dt=\"0.02\" showBehaviorModels=\"0\" gravity=\"0 0 0\">\n"
          "        <Object type=\"CGImplicit\" iterations=\"5\"/>\n"
-         "        <Object type=\"MeshTopology\" name=\"mesh\" filename=\"" HOF_SOURCE_DIR "/data/models/liver-coarse.msh\" />\n"
+         "        <Object type=\"MeshTopology\" name=\"mesh\" filename=\"" HOF_SOURCE_DIR
+         "/data/models/liver-coarse.msh\" />\n"
          "        <Object type=\"MechanicalObject\" name=\"mechanics\" template=\"Vec3d\" />\n"
          "        <Object type=\"FixedConstraint\" name=\"fixed\" indices=\"11 86 87 124 128\"/>\n"
          "        <Object type=\"ExternalForceField\" name=\"extforce\" force=\"0 0 0\" />\n"
@@ -174,7 +179,8 @@ TEST(Project, ThesisAppendixFormatIsRead) {
          "        <Object type=\"UniformMass\" name=\"mass\" totalMass=\"1000\"/>\n"
          "      </Node>\n    </sg>\n  </sofa>\n"
          "  <h3d>\n    <graphics fullscreen=\"no\" mirrored=\"no\" renderMode=\"MONO\"/>\n"
-         "    <haptics showTime=\"no\"><device filename=\"" HOF_ANCHORS_DIR "/h3d/settings/common/device/FalconDevice\"/></haptics>\n  </h3d>\n</hof>\n";
+         "    <haptics showTime=\"no\"><device filename=\"" HOF_ANCHORS_DIR
+         "/h3d/settings/common/device/FalconDevice\"/></haptics>\n  </h3d>\n</hof>\n";
   auto p = read_project(dir / "thesis.hof");
   ASSERT_TRUE(p) << p.error().to_string();
   auto scene = read_sofa_scene(scene_file(*p, dir / "thesis.hof"));
@@ -281,9 +287,10 @@ HofProject rich_project() {
 
 // The written file's elements under <haptics> and <graphics>, each as the edit path names it
 // (haptics/effects/SpringEffect[2]) with its attributes: the writer writes one element a line.
-std::vector<std::pair<std::string, std::vector<std::pair<std::string, std::string>>>> written_settings(const std::string& xml) {
+std::vector<std::pair<std::string, std::vector<std::pair<std::string, std::string>>>> written_settings(
+    const std::string& xml) {
   std::vector<std::pair<std::string, std::vector<std::pair<std::string, std::string>>>> out;
-  std::vector<std::string> path;                   // the open elements' names, with [n]
+  std::vector<std::string> path;                       // the open elements' names, with [n]
   std::vector<std::map<std::string, int>> counts{{}};  // children seen per open element
   std::istringstream lines(xml);
   const std::regex open_tag(R"(^(\s*)<([A-Za-z]+)(.*?)(/?)>$)");
@@ -306,8 +313,10 @@ std::vector<std::pair<std::string, std::vector<std::pair<std::string, std::strin
     element += part;
     const std::string attributes = m[3];
     std::vector<std::pair<std::string, std::string>> values;
-    for (std::sregex_iterator a(attributes.begin(), attributes.end(), attribute), end; a != end; ++a) values.emplace_back((*a)[1], (*a)[2]);
-    if (!path.empty() && (element.starts_with("haptics") || element.starts_with("graphics"))) out.emplace_back(element, values);
+    for (std::sregex_iterator a(attributes.begin(), attributes.end(), attribute), end; a != end; ++a)
+      values.emplace_back((*a)[1], (*a)[2]);
+    if (!path.empty() && (element.starts_with("haptics") || element.starts_with("graphics")))
+      out.emplace_back(element, values);
     if (m[4] != "/") {
       path.push_back(part);
       counts.emplace_back();
@@ -347,13 +356,14 @@ TEST(ProjectEdit, IsTypedByWhatTheSettingBelongsTo) {
     return e.value_or(ProjectEdit{});
   };
   EXPECT_TRUE(std::holds_alternative<project_edit::Rendering>(edit("haptics", "renderer", "PenaltyRenderer")));
-  EXPECT_EQ(std::get<project_edit::Rendering>(edit("haptics", "renderer", "PenaltyRenderer")).renderer, haptics::RendererKind::kPenalty);
+  EXPECT_EQ(std::get<project_edit::Rendering>(edit("haptics", "renderer", "PenaltyRenderer")).renderer,
+            haptics::RendererKind::kPenalty);
   EXPECT_TRUE(std::holds_alternative<project_edit::Device>(edit("haptics", "device", "falcon")));
   EXPECT_TRUE(std::holds_alternative<project_edit::ForceLimit>(edit("haptics/safety", "maxForce", "3")));
   EXPECT_EQ(std::get<project_edit::ForceLimit>(edit("haptics/safety", "maxForce", "3")).max_force_n, 3.0);
   EXPECT_TRUE(std::holds_alternative<project_edit::Safety>(edit("haptics/safety", "fadeIn", "1")));
-  EXPECT_TRUE(std::holds_alternative<project_edit::Calibration>(edit("haptics/calibration", "positionCalibration",
-                                                                     "2 0 0 0 0 2 0 0 0 0 2 0 0 0 0 1")));
+  EXPECT_TRUE(std::holds_alternative<project_edit::Calibration>(
+      edit("haptics/calibration", "positionCalibration", "2 0 0 0 0 2 0 0 0 0 2 0 0 0 0 1")));
   const auto effects = edit("haptics/effects/ForceField", "force", "1 2 3");
   ASSERT_TRUE(std::holds_alternative<project_edit::Effects>(effects));
   EXPECT_EQ(std::get<project_edit::Effects>(effects).effects.constants[0].force_n, Vec3(1.0, 2.0, 3.0));
@@ -381,37 +391,51 @@ TEST(ProjectEdit, EachKindOfErrorNamesTheSettingAndWhatIsKnown) {
   // not set by name.
   EXPECT_TRUE(has(message("haptics/effects/SpringEffect[0]", "damping", "1"), "is not NAME[n] with n >= 1"));
   EXPECT_TRUE(has(message("haptics/needle/tissue[3]", "capsule", "1"), "<hof/haptics/needle> has 2 <tissue>, not 3"));
-  EXPECT_TRUE(has(message("haptics/effects/SpringEffect[2]/x", "a", "1"), "no element <x> in <hof/haptics/effects/SpringEffect[2]> (it has: none)"));
-  EXPECT_TRUE(has(message("haptic", "renderer", "PenaltyRenderer"), "no element <haptic> in <hof> (it has: haptics, graphics)"));
+  EXPECT_TRUE(has(message("haptics/effects/SpringEffect[2]/x", "a", "1"),
+                  "no element <x> in <hof/haptics/effects/SpringEffect[2]> (it has: none)"));
+  EXPECT_TRUE(has(message("haptic", "renderer", "PenaltyRenderer"),
+                  "no element <haptic> in <hof> (it has: haptics, graphics)"));
   EXPECT_TRUE(has(message("bodies", "name", "Liver"), "<bodies> is not set by name here"));
   HofProject no_needle = p;
   no_needle.needle.reset();
   auto e = set_project_attribute(no_needle, "memory.hof", "haptics/needle", "axis", "motion");
   ASSERT_FALSE(e);
-  EXPECT_TRUE(has(e.error().message, "no element <needle> in <hof/haptics> (it has: calibration, surface, safety, options, stylus, effects)"))
+  EXPECT_TRUE(
+      has(e.error().message,
+          "no element <needle> in <hof/haptics> (it has: calibration, surface, safety, options, stylus, effects)"))
       << e.error().message;
   // An attribute the element does not have (its attributes listed; a body's tissue set has body).
   EXPECT_TRUE(has(message("haptics/safety", "maxforce", "1"),
-                  "<hof/haptics/safety> has no attribute 'maxforce' (it has: fadeIn, fadeOut, maxSnapshotAge, maxConsecutiveOverruns, maxForce)"));
+                  "<hof/haptics/safety> has no attribute 'maxforce' (it has: fadeIn, fadeOut, maxSnapshotAge, "
+                  "maxConsecutiveOverruns, maxForce)"));
   EXPECT_TRUE(has(message("haptics/needle/tissue[2]", "bodyName", "x"), "(it has: body, pierceable, model,"));
-  EXPECT_TRUE(has(message("haptics/effects", "springConstant", "1"), "<hof/haptics/effects> has no attribute 'springConstant' (it has: none)"));
+  EXPECT_TRUE(has(message("haptics/effects", "springConstant", "1"),
+                  "<hof/haptics/effects> has no attribute 'springConstant' (it has: none)"));
   // A value the reader refuses: not a number, not a choice, out of range, and the checks of the
   // whole element (the surface, a tissue set, the needle, the haptic rate) — each as the file's
   // reader says it, after the setting and its value.
-  EXPECT_TRUE(has(message("haptics/stylus", "radius", "wide"), "'haptics/stylus@radius' = 'wide': <stylus> radius=\"wide\" is not a number"));
-  EXPECT_TRUE(has(message("haptics", "touchableFace", "SIDE"), "unknown touchableFace \"SIDE\" (FRONT, BACK, FRONT_AND_BACK)"));
-  EXPECT_TRUE(has(message("graphics", "colorBy", "heat"), "unknown colorBy \"heat\" (material, displacement, strain, stress)"));
+  EXPECT_TRUE(has(message("haptics/stylus", "radius", "wide"),
+                  "'haptics/stylus@radius' = 'wide': <stylus> radius=\"wide\" is not a number"));
+  EXPECT_TRUE(
+      has(message("haptics", "touchableFace", "SIDE"), "unknown touchableFace \"SIDE\" (FRONT, BACK, FRONT_AND_BACK)"));
+  EXPECT_TRUE(
+      has(message("graphics", "colorBy", "heat"), "unknown colorBy \"heat\" (material, displacement, strain, stress)"));
   EXPECT_TRUE(has(message("haptics/options", "maxTrianglesInLeaf", "0.5"), "must be a whole number from 1 to 1000000"));
   EXPECT_TRUE(has(message("haptics/light", "x", "1"), "no element <light> in <hof/haptics>"));
   EXPECT_TRUE(has(message("graphics/light", "useless", "1"), "has no attribute 'useless'"));
-  EXPECT_TRUE(has(message("graphics/light", "headlight", "maybe"), "<light> headlight=\"maybe\" must be true or false"));
-  EXPECT_TRUE(has(message("graphics/material", "diffuseColor", "1 2 3"), "<material> diffuseColor must be three numbers in [0, 1]"));
+  EXPECT_TRUE(
+      has(message("graphics/light", "headlight", "maybe"), "<light> headlight=\"maybe\" must be true or false"));
+  EXPECT_TRUE(has(message("graphics/material", "diffuseColor", "1 2 3"),
+                  "<material> diffuseColor must be three numbers in [0, 1]"));
   EXPECT_TRUE(has(message("haptics/effects/SpringEffect[2]", "position", "1 2"), "must be three numbers"));
   EXPECT_TRUE(has(message("haptics/needle/tissue", "fungPre", "1 2 3"), "must be 4 numbers (a 1/m, b N, d0 m, F0 N)"));
-  EXPECT_TRUE(has(message("haptics/calibration", "positionCalibration", "1 0 0"), "positionCalibration must be 16 numbers"));
-  EXPECT_TRUE(has(message("haptics/surface", "staticFriction", "2"), "surface: staticFriction must be in [0, 1], got 2"));
+  EXPECT_TRUE(
+      has(message("haptics/calibration", "positionCalibration", "1 0 0"), "positionCalibration must be 16 numbers"));
+  EXPECT_TRUE(
+      has(message("haptics/surface", "staticFriction", "2"), "surface: staticFriction must be in [0, 1], got 2"));
   EXPECT_TRUE(has(message("haptics/safety", "maxForce", "-1"), "<safety> maxForce must be >= 0 N"));
-  EXPECT_TRUE(has(message("haptics/needle", "velocityFilter", "2"), "<needle> velocityFilter must be in [0, 1] s, got 2"));
+  EXPECT_TRUE(
+      has(message("haptics/needle", "velocityFilter", "2"), "<needle> velocityFilter must be in [0, 1] s, got 2"));
   EXPECT_TRUE(has(message("haptics/needle", "tipLength", "1"), "needle"));
   EXPECT_TRUE(has(message("haptics/needle/tissue[2]", "body", ""), "<tissue body=\"\">: name the body"));
   EXPECT_TRUE(has(message("haptics", "hapticRate", "50"), "hapticRate must be in [100, 20000] Hz, got 50"));
@@ -427,7 +451,7 @@ TEST(ProjectEdit, EachKindOfErrorNamesTheSettingAndWhatIsKnown) {
   auto refused = set_project_attribute(p, "memory.hof", "haptics/surface", "stiffness", "-1");
   ASSERT_FALSE(refused);
   EXPECT_EQ(refused.error().file, "memory.hof");  // a value refused names the project, as a file's error does
-  EXPECT_EQ(to_xml(p), before);  // nothing changed
+  EXPECT_EQ(to_xml(p), before);                   // nothing changed
 }
 
 }  // namespace

@@ -61,10 +61,14 @@ TEST(SceneEdit, ReplacingTheForceFieldAndTheSolverReadsBackAsAskedAndKeepsTheRes
   // Neo-Hookean with the same small-strain E and ν: SOFA's ParameterSet is (μ, k).
   const double young = 50.0, poisson = 0.45;
   const double mu = young / (2.0 * (1.0 + poisson)), bulk = young / (3.0 * (1.0 - 2.0 * poisson));
-  auto neo = edit_scene(*text, {SceneEdit::Action::kReplace, "LiverFEM", "FEM", "TetrahedronHyperelasticityFEMForceField",
+  auto neo = edit_scene(*text, {SceneEdit::Action::kReplace,
+                                "LiverFEM",
+                                "FEM",
+                                "TetrahedronHyperelasticityFEMForceField",
                                 {{"materialName", "NeoHookean"}, {"ParameterSet", fmt::format("{} {}", mu, bulk)}}});
   ASSERT_TRUE(neo) << neo.error().to_string();
-  auto solver = edit_scene(*neo, {SceneEdit::Action::kReplace, "LiverFEM", "cg_odesolver", "EulerExplicitSolver", {{"symplectic", "1"}}});
+  auto solver = edit_scene(
+      *neo, {SceneEdit::Action::kReplace, "LiverFEM", "cg_odesolver", "EulerExplicitSolver", {{"symplectic", "1"}}});
   ASSERT_TRUE(solver) << solver.error().to_string();
   const mechanics::ModelConfig after = only_model(*solver, where);
   ASSERT_EQ(after.force_fields.size(), 1u);
@@ -88,7 +92,9 @@ TEST(SceneEdit, AddAndRemoveComponentsAndNameWhatIsMissing) {
   const fs::path where = folder / "project.hof";
   auto removed = edit_scene(*text, {SceneEdit::Action::kRemove, "LiverFEM", "FixedProjectiveConstraint", "", {}});
   ASSERT_TRUE(removed) << removed.error().to_string();
-  auto added = edit_scene(*removed, {SceneEdit::Action::kAdd, "LiverFEM", "push", "ConstantForceField", {{"indices", "5"}, {"forces", "0 0.1 0"}}});
+  auto added = edit_scene(
+      *removed,
+      {SceneEdit::Action::kAdd, "LiverFEM", "push", "ConstantForceField", {{"indices", "5"}, {"forces", "0 0.1 0"}}});
   ASSERT_TRUE(added) << added.error().to_string();
   const mechanics::ModelConfig c = only_model(*added, where);
   EXPECT_TRUE(c.fixed.empty());
@@ -117,7 +123,10 @@ TEST(SceneEdit, A2008SceneIsEditedInItsOwnSyntax) {
   const mechanics::ModelConfig before = only_model(*text, folder / "p.hof");
   ASSERT_FALSE(before.force_fields.empty());
   const std::string name = before.force_fields[0].name;
-  auto edited = edit_scene(*text, {SceneEdit::Action::kReplace, before.name, name, "TetrahedronFEMForceField",
+  auto edited = edit_scene(*text, {SceneEdit::Action::kReplace,
+                                   before.name,
+                                   name,
+                                   "TetrahedronFEMForceField",
                                    {{"youngModulus", "800"}, {"poissonRatio", "0.3"}, {"method", "polar"}}});
   ASSERT_TRUE(edited) << edited.error().to_string();
   EXPECT_NE(edited->find("<Object type=\"TetrahedronFEMForceField\""), std::string::npos);
@@ -134,7 +143,10 @@ TEST(SceneEdit, APerElementYoungModulusIsReadAsRegionsAndAWrongLengthIsRefused) 
   const mechanics::ModelConfig c = only_model(*text, folder / "p.hof");
   std::string values;
   for (std::size_t t = 0; t < c.tets.size(); ++t) values += t == 7 ? "400 " : "50 ";
-  auto listed = edit_scene(*text, {SceneEdit::Action::kReplace, "LiverFEM", "FEM", "TetrahedronFEMForceField",
+  auto listed = edit_scene(*text, {SceneEdit::Action::kReplace,
+                                   "LiverFEM",
+                                   "FEM",
+                                   "TetrahedronFEMForceField",
                                    {{"youngModulus", values}, {"poissonRatio", "0.45"}}});
   ASSERT_TRUE(listed);
   const mechanics::ModelConfig regions = only_model(*listed, folder / "p.hof");
@@ -144,7 +156,9 @@ TEST(SceneEdit, APerElementYoungModulusIsReadAsRegionsAndAWrongLengthIsRefused) 
   EXPECT_EQ(fem.element_young_modulus_pa[7], 400.0);
   EXPECT_EQ(fem.element_young_modulus_pa[8], 0.0);
 
-  auto short_list = edit_scene(*text, {SceneEdit::Action::kReplace, "LiverFEM", "FEM", "TetrahedronFEMForceField", {{"youngModulus", "50 60 70"}}});
+  auto short_list = edit_scene(
+      *text,
+      {SceneEdit::Action::kReplace, "LiverFEM", "FEM", "TetrahedronFEMForceField", {{"youngModulus", "50 60 70"}}});
   ASSERT_TRUE(short_list);
   auto refused = read_sofa_scene_text(*short_list, folder / "p.hof");
   ASSERT_FALSE(refused);
@@ -179,7 +193,8 @@ TEST(MaterialRegion, ASphereStiffensTheTetrahedraInsideAndRoundTripsThroughThePr
   EXPECT_LT(inside, config.tets.size() / 2);
 
   const std::string xml = to_xml(*project);
-  EXPECT_NE(xml.find("<region name=\"tumour\" body=\"Liver\" shape=\"sphere\" center=\"0 0 0.04\" radius=\"0.025\" youngModulus=\"54000\"/>"),
+  EXPECT_NE(xml.find("<region name=\"tumour\" body=\"Liver\" shape=\"sphere\" center=\"0 0 0.04\" radius=\"0.025\" "
+                     "youngModulus=\"54000\"/>"),
             std::string::npos)
       << xml;
   auto again = parse_project(xml, file);

@@ -161,8 +161,7 @@ TEST(SofaScene, History2008MeshLoader) {
 class SofaSceneFiles : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           fmt_name(::testing::UnitTest::GetInstance()->current_test_info()->name());
+    dir_ = fs::temp_directory_path() / fmt_name(::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::create_directories(dir_);
     // One tetrahedron as a Gmsh v2 file.
     write("tet.msh",
@@ -184,8 +183,9 @@ class SofaSceneFiles : public ::testing::Test {
 };
 
 TEST_F(SofaSceneFiles, MalformedXmlReportsTheLine) {
-  const Error e = read_error("<Node name=\"root\">\n  <EulerImplicitSolver/>\n  <MechanicalObject position=\"0 0 0\"\n"
-                             "  <UniformMass/>\n</Node>\n");
+  const Error e = read_error(
+      "<Node name=\"root\">\n  <EulerImplicitSolver/>\n  <MechanicalObject position=\"0 0 0\"\n"
+      "  <UniformMass/>\n</Node>\n");
   EXPECT_EQ(e.code, ErrorCode::kParse);
   EXPECT_EQ(e.line, 4);
   EXPECT_NE(e.message.find("malformed XML"), std::string::npos) << e.message;
@@ -193,9 +193,10 @@ TEST_F(SofaSceneFiles, MalformedXmlReportsTheLine) {
 }
 
 TEST_F(SofaSceneFiles, MissingMeshNamesThePath) {
-  const Error e = read_error("<Node name=\"root\">\n<Node name=\"body\">\n  <EulerImplicitSolver/>\n"
-                             "  <MeshGmshLoader name=\"loader\" filename=\"nowhere/missing.msh\"/>\n"
-                             "  <MechanicalObject src=\"@loader\"/>\n</Node>\n</Node>\n");
+  const Error e = read_error(
+      "<Node name=\"root\">\n<Node name=\"body\">\n  <EulerImplicitSolver/>\n"
+      "  <MeshGmshLoader name=\"loader\" filename=\"nowhere/missing.msh\"/>\n"
+      "  <MechanicalObject src=\"@loader\"/>\n</Node>\n</Node>\n");
   EXPECT_EQ(e.code, ErrorCode::kIo);
   EXPECT_EQ(e.line, 4);
   EXPECT_NE(e.message.find("MeshGmshLoader 'loader'"), std::string::npos) << e.message;
@@ -203,9 +204,10 @@ TEST_F(SofaSceneFiles, MissingMeshNamesThePath) {
 }
 
 TEST_F(SofaSceneFiles, BadNumberNamesTheAttribute) {
-  const Error e = read_error("<Node name=\"root\">\n  <EulerImplicitSolver/>\n  <MeshGmshLoader name=\"l\" filename=\"tet.msh\"/>\n"
-                             "  <MechanicalObject src=\"@l\"/>\n"
-                             "  <TetrahedronFEMForceField name=\"FEM\" youngModulus=\"3e3x\"/>\n</Node>\n");
+  const Error e = read_error(
+      "<Node name=\"root\">\n  <EulerImplicitSolver/>\n  <MeshGmshLoader name=\"l\" filename=\"tet.msh\"/>\n"
+      "  <MechanicalObject src=\"@l\"/>\n"
+      "  <TetrahedronFEMForceField name=\"FEM\" youngModulus=\"3e3x\"/>\n</Node>\n");
   EXPECT_EQ(e.line, 5);
   EXPECT_NE(e.message.find("TetrahedronFEMForceField 'FEM'"), std::string::npos) << e.message;
   EXPECT_NE(e.message.find("youngModulus"), std::string::npos) << e.message;
@@ -213,22 +215,25 @@ TEST_F(SofaSceneFiles, BadNumberNamesTheAttribute) {
 }
 
 TEST_F(SofaSceneFiles, UnknownLinkIsAnError) {
-  const Error e = read_error("<Node name=\"root\">\n  <EulerImplicitSolver/>\n  <MeshGmshLoader name=\"l\" filename=\"tet.msh\"/>\n"
-                             "  <MechanicalObject name=\"dofs\" position=\"@nothere.position\"/>\n</Node>\n");
+  const Error e = read_error(
+      "<Node name=\"root\">\n  <EulerImplicitSolver/>\n  <MeshGmshLoader name=\"l\" filename=\"tet.msh\"/>\n"
+      "  <MechanicalObject name=\"dofs\" position=\"@nothere.position\"/>\n</Node>\n");
   EXPECT_EQ(e.line, 4);
   EXPECT_NE(e.message.find("MechanicalObject 'dofs'"), std::string::npos) << e.message;
   EXPECT_NE(e.message.find("@nothere.position"), std::string::npos) << e.message;
 }
 
 TEST_F(SofaSceneFiles, FixedIndexOutOfRange) {
-  const Error e = read_error("<Node name=\"root\">\n  <EulerImplicitSolver/>\n  <MeshGmshLoader name=\"l\" filename=\"tet.msh\"/>\n"
-                             "  <MechanicalObject src=\"@l\"/>\n  <FixedProjectiveConstraint indices=\"0 4\"/>\n</Node>\n");
+  const Error e = read_error(
+      "<Node name=\"root\">\n  <EulerImplicitSolver/>\n  <MeshGmshLoader name=\"l\" filename=\"tet.msh\"/>\n"
+      "  <MechanicalObject src=\"@l\"/>\n  <FixedProjectiveConstraint indices=\"0 4\"/>\n</Node>\n");
   EXPECT_EQ(e.line, 5);
   EXPECT_NE(e.message.find("node 4 out of range"), std::string::npos) << e.message;
 }
 
 TEST_F(SofaSceneFiles, ModelWithoutPositions) {
-  const Error e = read_error("<Node name=\"root\">\n  <EulerImplicitSolver/>\n  <MechanicalObject name=\"dofs\"/>\n</Node>\n");
+  const Error e =
+      read_error("<Node name=\"root\">\n  <EulerImplicitSolver/>\n  <MechanicalObject name=\"dofs\"/>\n</Node>\n");
   EXPECT_EQ(e.line, 3);
   EXPECT_NE(e.message.find("no positions"), std::string::npos) << e.message;
 }
@@ -287,7 +292,8 @@ TEST_F(SofaSceneFiles, TheCgsTwoLevelPreconditionerIsReadAndABadRefreshNamed) {
     return "<Node name=\"root\">\n  <EulerImplicitSolver/>\n  " + cg +
            "\n  <MeshGmshLoader name=\"l\" filename=\"tet.msh\"/>\n  <MechanicalObject src=\"@l\"/>\n</Node>\n";
   };
-  auto s = read_sofa_scene(write("on.scn", scene("<CGLinearSolver name=\"cg\" coarseCorrection=\"true\" coarseRefreshSteps=\"40\"/>")));
+  auto s = read_sofa_scene(
+      write("on.scn", scene("<CGLinearSolver name=\"cg\" coarseCorrection=\"true\" coarseRefreshSteps=\"40\"/>")));
   ASSERT_TRUE(s.has_value()) << s.error().to_string();
   EXPECT_TRUE(s->models.at(0).config.linear.coarse_correction);
   EXPECT_EQ(s->models.at(0).config.linear.coarse_refresh_steps, 40);
@@ -305,12 +311,13 @@ TEST_F(SofaSceneFiles, TheCgsTwoLevelPreconditionerIsReadAndABadRefreshNamed) {
 
 TEST_F(SofaSceneFiles, APlaceholderPositionTakesTheTopologysNodes) {
   // SOFA resizes a MechanicalObject to its node's topology: position="0 0 0" is a placeholder.
-  auto s = read_sofa_scene(write("scene.scn",
-                                 "<Node name=\"root\">\n  <Node name=\"body\">\n    <EulerImplicitSolver/>\n"
-                                 "    <MeshGmshLoader name=\"l\" filename=\"tet.msh\"/>\n"
-                                 "    <MeshTopology name=\"topo\" src=\"@l\"/>\n"
-                                 "    <MechanicalObject name=\"dofs\" position=\"0 0 0\"/>\n"
-                                 "    <TetrahedronFEMForceField youngModulus=\"1000\" poissonRatio=\"0.3\"/>\n  </Node>\n</Node>\n"));
+  auto s = read_sofa_scene(
+      write("scene.scn",
+            "<Node name=\"root\">\n  <Node name=\"body\">\n    <EulerImplicitSolver/>\n"
+            "    <MeshGmshLoader name=\"l\" filename=\"tet.msh\"/>\n"
+            "    <MeshTopology name=\"topo\" src=\"@l\"/>\n"
+            "    <MechanicalObject name=\"dofs\" position=\"0 0 0\"/>\n"
+            "    <TetrahedronFEMForceField youngModulus=\"1000\" poissonRatio=\"0.3\"/>\n  </Node>\n</Node>\n"));
   ASSERT_TRUE(s.has_value()) << s.error().to_string();
   ASSERT_EQ(s->models.size(), 1u);
   EXPECT_EQ(s->models[0].config.positions.size(), 4u);
@@ -320,13 +327,14 @@ TEST_F(SofaSceneFiles, APlaceholderPositionTakesTheTopologysNodes) {
 
 TEST_F(SofaSceneFiles, LinksToAnObjLoadersOutputsReadItsFile) {
   write("tet.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
-  auto s = read_sofa_scene(write("scene.scn",
-                                 "<Node name=\"root\">\n  <Node name=\"body\">\n    <EulerImplicitSolver/>\n"
-                                 "    <MeshGmshLoader name=\"l\" filename=\"tet.msh\"/>\n"
-                                 "    <MeshOBJLoader name=\"ObjLoader\" filename=\"tet.obj\" translation=\"0 0 1\"/>\n"
-                                 "    <MeshTopology name=\"topo\" tetrahedra=\"@l.tetrahedra\" edges=\"@l.edges\"/>\n"
-                                 "    <MechanicalObject name=\"dofs\" position=\"@ObjLoader.position\"/>\n"
-                                 "    <TetrahedronFEMForceField youngModulus=\"1000\" poissonRatio=\"0.3\"/>\n  </Node>\n</Node>\n"));
+  auto s = read_sofa_scene(
+      write("scene.scn",
+            "<Node name=\"root\">\n  <Node name=\"body\">\n    <EulerImplicitSolver/>\n"
+            "    <MeshGmshLoader name=\"l\" filename=\"tet.msh\"/>\n"
+            "    <MeshOBJLoader name=\"ObjLoader\" filename=\"tet.obj\" translation=\"0 0 1\"/>\n"
+            "    <MeshTopology name=\"topo\" tetrahedra=\"@l.tetrahedra\" edges=\"@l.edges\"/>\n"
+            "    <MechanicalObject name=\"dofs\" position=\"@ObjLoader.position\"/>\n"
+            "    <TetrahedronFEMForceField youngModulus=\"1000\" poissonRatio=\"0.3\"/>\n  </Node>\n</Node>\n"));
   ASSERT_TRUE(s.has_value()) << s.error().to_string();
   ASSERT_EQ(s->models.size(), 1u);
   ASSERT_EQ(s->models[0].config.positions.size(), 4u);
@@ -337,20 +345,24 @@ TEST_F(SofaSceneFiles, RelativeAndAbsoluteLinksResolveAsInSofa) {
   // The loader in a sibling node, reached by "@../", "@/root/..." and "@/..."; "@[-1]" is the
   // component just before.
   for (const std::string& link : {std::string("@../Data/l"), std::string("@/root/Data/l"), std::string("@/Data/l")}) {
-    auto s = read_sofa_scene(write("scene.scn",
-                                   "<Node name=\"root\">\n  <Node name=\"Data\">\n    <MeshGmshLoader name=\"l\" filename=\"tet.msh\"/>\n"
-                                   "  </Node>\n  <Node name=\"body\">\n    <EulerImplicitSolver/>\n"
-                                   "    <MeshTopology name=\"topo\" src=\"" + link + "\"/>\n"
-                                   "    <MechanicalObject name=\"dofs\" position=\"@[-1].position\"/>\n"
-                                   "    <TetrahedronFEMForceField youngModulus=\"1000\"/>\n  </Node>\n</Node>\n"));
+    auto s = read_sofa_scene(
+        write("scene.scn",
+              "<Node name=\"root\">\n  <Node name=\"Data\">\n    <MeshGmshLoader name=\"l\" filename=\"tet.msh\"/>\n"
+              "  </Node>\n  <Node name=\"body\">\n    <EulerImplicitSolver/>\n"
+              "    <MeshTopology name=\"topo\" src=\"" +
+                  link +
+                  "\"/>\n"
+                  "    <MechanicalObject name=\"dofs\" position=\"@[-1].position\"/>\n"
+                  "    <TetrahedronFEMForceField youngModulus=\"1000\"/>\n  </Node>\n</Node>\n"));
     ASSERT_TRUE(s.has_value()) << link << ": " << s.error().to_string();
     ASSERT_EQ(s->models.size(), 1u);
     EXPECT_EQ(s->models[0].config.positions.size(), 4u) << link;
     EXPECT_EQ(s->models[0].config.tets.size(), 1u) << link;
   }
   // A link to a loader output that does not exist names the component, the attribute and data.
-  const Error e = read_error("<Node name=\"root\">\n  <EulerImplicitSolver/>\n  <MeshGmshLoader name=\"l\" filename=\"tet.msh\"/>\n"
-                             "  <MechanicalObject name=\"dofs\" position=\"@l.nosuchdata\"/>\n</Node>\n");
+  const Error e = read_error(
+      "<Node name=\"root\">\n  <EulerImplicitSolver/>\n  <MeshGmshLoader name=\"l\" filename=\"tet.msh\"/>\n"
+      "  <MechanicalObject name=\"dofs\" position=\"@l.nosuchdata\"/>\n</Node>\n");
   EXPECT_EQ(e.line, 4);
   EXPECT_NE(e.message.find("MechanicalObject 'dofs'"), std::string::npos) << e.message;
   EXPECT_NE(e.message.find("nosuchdata"), std::string::npos) << e.message;
@@ -358,20 +370,22 @@ TEST_F(SofaSceneFiles, RelativeAndAbsoluteLinksResolveAsInSofa) {
 
 TEST_F(SofaSceneFiles, AMechanicalObjectTransformsItsPositions) {
   // rotation (degrees about x, then y, then z), then scale, then translation; and the legacy dx.
-  auto s = read_sofa_scene(write("scene.scn",
-                                 "<Node name=\"root\">\n  <Node name=\"body\">\n    <EulerImplicitSolver/>\n"
-                                 "    <MeshGmshLoader name=\"l\" filename=\"tet.msh\"/>\n"
-                                 "    <MechanicalObject name=\"dofs\" src=\"@l\" rotation=\"0 0 90\" scale3d=\"2 3 4\" "
-                                 "translation=\"1 0 0\" dy=\"5\"/>\n"
-                                 "    <TetrahedronFEMForceField youngModulus=\"1000\" poissonRatio=\"0.3\"/>\n  </Node>\n</Node>\n"));
+  auto s = read_sofa_scene(
+      write("scene.scn",
+            "<Node name=\"root\">\n  <Node name=\"body\">\n    <EulerImplicitSolver/>\n"
+            "    <MeshGmshLoader name=\"l\" filename=\"tet.msh\"/>\n"
+            "    <MechanicalObject name=\"dofs\" src=\"@l\" rotation=\"0 0 90\" scale3d=\"2 3 4\" "
+            "translation=\"1 0 0\" dy=\"5\"/>\n"
+            "    <TetrahedronFEMForceField youngModulus=\"1000\" poissonRatio=\"0.3\"/>\n  </Node>\n</Node>\n"));
   ASSERT_TRUE(s.has_value()) << s.error().to_string();
   const auto& x = s->models[0].config.positions;
   // (1,0,0) turned 90° about z: (0,1,0); scaled: (0,3,0); moved by (1,5,0): (1,8,0).
   EXPECT_NEAR((x[1] - Vec3(1, 8, 0)).norm(), 0.0, 1e-12);
   // (0,0,1): (0,0,1) → (0,0,4) → (1,5,4).
   EXPECT_NEAR((x[3] - Vec3(1, 5, 4)).norm(), 0.0, 1e-12);
-  EXPECT_TRUE(s->warnings.empty() || std::none_of(s->warnings.begin(), s->warnings.end(),
-                                                  [](const std::string& w) { return w.find("ignored") != std::string::npos; }));
+  EXPECT_TRUE(s->warnings.empty() || std::none_of(s->warnings.begin(), s->warnings.end(), [](const std::string& w) {
+                return w.find("ignored") != std::string::npos;
+              }));
 }
 
 TEST_F(SofaSceneFiles, HexahedralGridsAreReadWithTheirFineSurfaceAndTheirErrorsNamed) {
@@ -381,13 +395,17 @@ TEST_F(SofaSceneFiles, HexahedralGridsAreReadWithTheirFineSurfaceAndTheirErrorsN
         "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
         "f 1 3 2\nf 1 4 3\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\nf 2 3 7\nf 2 7 6\nf 3 4 8\nf 3 8 7\nf 4 1 5\nf 4 5 8\n");
   const auto scene = [&](const std::string& grid, const std::string& fem) {
-    return "<Node name=\"root\" gravity=\"0 0 0\">\n  <Node name=\"Block\">\n    <EulerImplicitSolver/>\n    <CGLinearSolver/>\n" +
-           grid + "\n    <MechanicalObject name=\"dofs\" position=\"0 0 0\"/>\n    <DiagonalMass massDensity=\"1000\"/>\n" + fem +
+    return "<Node name=\"root\" gravity=\"0 0 0\">\n  <Node name=\"Block\">\n    <EulerImplicitSolver/>\n    "
+           "<CGLinearSolver/>\n" +
+           grid +
+           "\n    <MechanicalObject name=\"dofs\" position=\"0 0 0\"/>\n    <DiagonalMass massDensity=\"1000\"/>\n" +
+           fem +
            "\n    <BoxROI name=\"roi\" box=\"-1 -1 -0.01 2 2 0.01\"/>\n"
            "    <FixedProjectiveConstraint indices=\"@roi.indices\"/>\n  </Node>\n</Node>\n";
   };
-  auto s = read_sofa_scene(write("scene.scn", scene("    <SparseGridTopology n=\"4 4 4\" fileTopology=\"cube.obj\" min=\"0 0 0\" max=\"1 1 1\"/>",
-                                                    "    <HexahedronFEMForceField name=\"FEM\" youngModulus=\"3000\" method=\"polar\"/>")));
+  auto s = read_sofa_scene(write(
+      "scene.scn", scene("    <SparseGridTopology n=\"4 4 4\" fileTopology=\"cube.obj\" min=\"0 0 0\" max=\"1 1 1\"/>",
+                         "    <HexahedronFEMForceField name=\"FEM\" youngModulus=\"3000\" method=\"polar\"/>")));
   ASSERT_TRUE(s.has_value()) << s.error().to_string();
   const mechanics::ModelConfig& c = s->models[0].config;
   EXPECT_EQ(c.positions.size(), 64u);  // the placeholder position gives way to the grid's
@@ -400,7 +418,7 @@ TEST_F(SofaSceneFiles, HexahedralGridsAreReadWithTheirFineSurfaceAndTheirErrorsN
   EXPECT_EQ(c.fixed[0].indices.size(), 16u);
   auto model = mechanics::build_model(c);
   ASSERT_TRUE(model.has_value()) << model.error().to_string();
-  EXPECT_EQ(model->fixed_dofs.size(), 3u * 16u);  // the 16 nodes of the bottom face
+  EXPECT_EQ(model->fixed_dofs.size(), 3u * 16u);      // the 16 nodes of the bottom face
   EXPECT_NEAR(model->total_mass_kg(), 1000.0, 1e-9);  // the cube's volume: no cell is cut by the surface
 
   // fillWeighted (SOFA's default): in the grid's own box (the surface's, 1% larger) the outer
@@ -433,7 +451,8 @@ TEST_F(SofaSceneFiles, HexahedralGridsAreReadWithTheirFineSurfaceAndTheirErrorsN
   EXPECT_EQ(s->models[0].config.positions.size(), 12u);
   EXPECT_FALSE(s->models[0].fine_surface);
   // The state's transform moves the grid (and a sparse grid's fine surface with it).
-  std::string moved = scene("    <SparseGridTopology n=\"4 4 4\" fileTopology=\"cube.obj\"/>", "    <HexahedronFEMForceField/>");
+  std::string moved =
+      scene("    <SparseGridTopology n=\"4 4 4\" fileTopology=\"cube.obj\"/>", "    <HexahedronFEMForceField/>");
   moved.replace(moved.find("position=\"0 0 0\""), 16, "translation=\"0 0 10\"");
   s = read_sofa_scene(write("scene.scn", moved));
   ASSERT_TRUE(s.has_value()) << s.error().to_string();
@@ -443,12 +462,14 @@ TEST_F(SofaSceneFiles, HexahedralGridsAreReadWithTheirFineSurfaceAndTheirErrorsN
   EXPECT_GT(lowest, 9.9);
   EXPECT_NEAR(lowest_surface, 10.0, 1e-12);
   EXPECT_TRUE(s->models[0].config.fixed.empty());  // the BoxROI at z = 0 holds nothing now...
-  EXPECT_TRUE(std::ranges::any_of(s->warnings, [](const std::string& w) { return w.find("holds nothing") != std::string::npos; }));
+  EXPECT_TRUE(std::ranges::any_of(s->warnings,
+                                  [](const std::string& w) { return w.find("holds nothing") != std::string::npos; }));
 
   // Errors name the component and its line: a grid with no cell inside the surface, a
   // per-element list of the wrong length, a hexahedral force field without a grid.
-  Error e = read_error(scene("    <SparseGridTopology name=\"grid\" n=\"4 4 4\" fileTopology=\"cube.obj\" min=\"5 5 5\" max=\"6 6 6\"/>",
-                             "    <HexahedronFEMForceField/>"));
+  Error e = read_error(
+      scene("    <SparseGridTopology name=\"grid\" n=\"4 4 4\" fileTopology=\"cube.obj\" min=\"5 5 5\" max=\"6 6 6\"/>",
+            "    <HexahedronFEMForceField/>"));
   EXPECT_EQ(e.line, 5);
   EXPECT_NE(e.message.find("SparseGridTopology 'grid'"), std::string::npos) << e.message;
   EXPECT_NE(e.message.find("no cell inside the surface"), std::string::npos) << e.message;
@@ -456,9 +477,10 @@ TEST_F(SofaSceneFiles, HexahedralGridsAreReadWithTheirFineSurfaceAndTheirErrorsN
                        "    <HexahedronFEMForceField name=\"FEM\" youngModulus=\"1 2 3\"/>"));
   EXPECT_EQ(e.line, 8);
   EXPECT_NE(e.message.find("3 values; one per hexahedron (27)"), std::string::npos) << e.message;
-  e = read_error("<Node name=\"root\">\n  <Node name=\"Liver\">\n    <EulerImplicitSolver/>\n"
-                 "    <MeshGmshLoader name=\"l\" filename=\"tet.msh\"/>\n    <MechanicalObject src=\"@l\"/>\n"
-                 "    <HexahedronFEMForceField youngModulus=\"3000\"/>\n  </Node>\n</Node>\n");
+  e = read_error(
+      "<Node name=\"root\">\n  <Node name=\"Liver\">\n    <EulerImplicitSolver/>\n"
+      "    <MeshGmshLoader name=\"l\" filename=\"tet.msh\"/>\n    <MechanicalObject src=\"@l\"/>\n"
+      "    <HexahedronFEMForceField youngModulus=\"3000\"/>\n  </Node>\n</Node>\n");
   EXPECT_EQ(e.code, ErrorCode::kUnsupported);
   EXPECT_EQ(e.line, 6);
   EXPECT_NE(e.message.find("needs a hexahedral topology"), std::string::npos) << e.message;
@@ -466,13 +488,14 @@ TEST_F(SofaSceneFiles, HexahedralGridsAreReadWithTheirFineSurfaceAndTheirErrorsN
 
 TEST_F(SofaSceneFiles, AMembraneIsReadWithSofasDefaultsAndItsPerElementLists) {
   write("quad.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n");
-  auto s = read_sofa_scene(write("scene.scn",
-                                 "<Node name=\"root\">\n  <Node name=\"Membrane\">\n    <EulerImplicitSolver/>\n"
-                                 "    <MeshOBJLoader name=\"l\" filename=\"quad.obj\"/>\n"
-                                 "    <TriangleSetTopologyContainer src=\"@l\"/>\n    <MechanicalObject src=\"@l\"/>\n"
-                                 "    <DiagonalMass massDensity=\"2\"/>\n"
-                                 "    <TriangleFEMForceField name=\"membrane\" thickness=\"0.002\" poissonRatio=\"0.3 0.4\"/>\n"
-                                 "    <TriangularFEMForceField name=\"other\" method=\"small\"/>\n  </Node>\n</Node>\n"));
+  auto s = read_sofa_scene(
+      write("scene.scn",
+            "<Node name=\"root\">\n  <Node name=\"Membrane\">\n    <EulerImplicitSolver/>\n"
+            "    <MeshOBJLoader name=\"l\" filename=\"quad.obj\"/>\n"
+            "    <TriangleSetTopologyContainer src=\"@l\"/>\n    <MechanicalObject src=\"@l\"/>\n"
+            "    <DiagonalMass massDensity=\"2\"/>\n"
+            "    <TriangleFEMForceField name=\"membrane\" thickness=\"0.002\" poissonRatio=\"0.3 0.4\"/>\n"
+            "    <TriangularFEMForceField name=\"other\" method=\"small\"/>\n  </Node>\n</Node>\n"));
   ASSERT_TRUE(s.has_value()) << s.error().to_string();
   const mechanics::ModelConfig& c = s->models[0].config;
   ASSERT_EQ(c.triangles.size(), 2u);
@@ -490,21 +513,26 @@ TEST_F(SofaSceneFiles, AMembraneIsReadWithSofasDefaultsAndItsPerElementLists) {
   ASSERT_TRUE(model.has_value()) << model.error().to_string();
   EXPECT_NEAR(model->total_mass_kg(), 2.0, 1e-12);  // DiagonalMass on triangles: density × area
 
-  const Error e = read_error("<Node name=\"root\">\n  <Node name=\"Membrane\">\n    <EulerImplicitSolver/>\n"
-                             "    <MeshOBJLoader name=\"l\" filename=\"quad.obj\"/>\n    <MechanicalObject src=\"@l\"/>\n"
-                             "    <TriangleFEMForceField name=\"membrane\" youngModulus=\"1 2 3\"/>\n  </Node>\n</Node>\n");
+  const Error e = read_error(
+      "<Node name=\"root\">\n  <Node name=\"Membrane\">\n    <EulerImplicitSolver/>\n"
+      "    <MeshOBJLoader name=\"l\" filename=\"quad.obj\"/>\n    <MechanicalObject src=\"@l\"/>\n"
+      "    <TriangleFEMForceField name=\"membrane\" youngModulus=\"1 2 3\"/>\n  </Node>\n</Node>\n");
   EXPECT_EQ(e.line, 6);
   EXPECT_NE(e.message.find("TriangleFEMForceField 'membrane'"), std::string::npos) << e.message;
   EXPECT_NE(e.message.find("3 values; one per triangle (2)"), std::string::npos) << e.message;
 }
 
 TEST_F(SofaSceneFiles, AComponentThatChangesTheResultIsAWarningOfItsOwnAndEachIsNamedOnce) {
-  const std::string body = "    <EulerImplicitSolver/>\n    <MeshGmshLoader name=\"l\" filename=\"tet.msh\"/>\n"
-                           "    <MechanicalObject src=\"@l\"/>\n    <TetrahedronFEMForceField youngModulus=\"1000\"/>\n";
-  auto s = read_sofa_scene(write("scene.scn", "<Node name=\"root\">\n  <RequiredPlugin name=\"p\"/>\n"
-                                              "  <CollisionResponse name=\"response\"/>\n  <Node name=\"a\">\n" + body +
-                                              "    <RestShapeSpringsForceField name=\"anchor\"/>\n  </Node>\n"
-                                              "  <Node name=\"b\">\n" + body + "    <Mystery name=\"m\"/>\n  </Node>\n</Node>\n"));
+  const std::string body =
+      "    <EulerImplicitSolver/>\n    <MeshGmshLoader name=\"l\" filename=\"tet.msh\"/>\n"
+      "    <MechanicalObject src=\"@l\"/>\n    <TetrahedronFEMForceField youngModulus=\"1000\"/>\n";
+  auto s = read_sofa_scene(write("scene.scn",
+                                 "<Node name=\"root\">\n  <RequiredPlugin name=\"p\"/>\n"
+                                 "  <CollisionResponse name=\"response\"/>\n  <Node name=\"a\">\n" +
+                                     body +
+                                     "    <RestShapeSpringsForceField name=\"anchor\"/>\n  </Node>\n"
+                                     "  <Node name=\"b\">\n" +
+                                     body + "    <Mystery name=\"m\"/>\n  </Node>\n</Node>\n"));
   ASSERT_TRUE(s) << s.error().to_string();
   ASSERT_EQ(s->models.size(), 2u);
   // Two bodies: the collision response changes the result; so does a force field left out.
@@ -523,19 +551,22 @@ TEST_F(SofaSceneFiles, AComponentThatChangesTheResultIsAWarningOfItsOwnAndEachIs
 // SOFA refuses a type its factory does not know; so does HoF, naming the line and the closest
 // names (before: listed among "components not simulated", and the liver fell with no forces).
 TEST_F(SofaSceneFiles, AMisspeltComponentIsRefusedWithTheLineAndTheClosestNames) {
-  const Error e = read_error("<Node name=\"root\">\n  <EulerImplicitSolver/>\n  <MeshGmshLoader name=\"l\" filename=\"tet.msh\"/>\n"
-                             "  <MechanicalObject src=\"@l\"/>\n"
-                             "  <TetrahedronFEMForceFeild name=\"FEM\" youngModulus=\"3000\"/>\n</Node>\n");
+  const Error e = read_error(
+      "<Node name=\"root\">\n  <EulerImplicitSolver/>\n  <MeshGmshLoader name=\"l\" filename=\"tet.msh\"/>\n"
+      "  <MechanicalObject src=\"@l\"/>\n"
+      "  <TetrahedronFEMForceFeild name=\"FEM\" youngModulus=\"3000\"/>\n</Node>\n");
   EXPECT_EQ(e.code, ErrorCode::kParse);
   EXPECT_EQ(e.line, 5);
   EXPECT_NE(e.message.find("unknown component type 'TetrahedronFEMForceFeild'"), std::string::npos) << e.message;
   EXPECT_NE(e.message.find("did you mean TetrahedronFEMForceField"), std::string::npos) << e.message;
   // The 2008 syntax too.
-  const Error old = read_error("<Node name=\"root\">\n  <Object type=\"EulerImplicit\"/>\n  <Object type=\"MechanicalObjekt\"/>\n</Node>\n");
+  const Error old = read_error(
+      "<Node name=\"root\">\n  <Object type=\"EulerImplicit\"/>\n  <Object type=\"MechanicalObjekt\"/>\n</Node>\n");
   EXPECT_EQ(old.line, 3);
   EXPECT_NE(old.message.find("did you mean MechanicalObject"), std::string::npos) << old.message;
   // Every component of the bundled and anchor scenes is known (none refused).
-  for (const char* scene : {"/liver.scn", "/TutorialForceFieldLiverFEM.scn", "/history/2008-07-30_14f43fd649/liver.scn"}) {
+  for (const char* scene :
+       {"/liver.scn", "/TutorialForceFieldLiverFEM.scn", "/history/2008-07-30_14f43fd649/liver.scn"}) {
     if (!fs::exists(kAnchors + scene)) continue;
     auto ok = read_sofa_scene(kAnchors + scene);
     EXPECT_TRUE(ok) << scene << ": " << (ok ? "" : ok.error().to_string());
@@ -545,12 +576,15 @@ TEST_F(SofaSceneFiles, AMisspeltComponentIsRefusedWithTheLineAndTheClosestNames)
 // A scene that requires a plugin from outside SOFA may use that plugin's components: they are
 // named in a warning, not refused; a component of SOFA HoF does not simulate is listed as before.
 TEST_F(SofaSceneFiles, AnUnknownTypeFromARequiredPluginIsAWarningNamingThePlugin) {
-  auto s = read_sofa_scene(write("scene.scn", "<Node name=\"root\">\n  <RequiredPlugin name=\"Geomagic\"/>\n"
-                                              "  <GeomagicDriver name=\"device\"/>\n  <EulerImplicitSolver/>\n"
-                                              "  <MeshGmshLoader name=\"l\" filename=\"tet.msh\"/>\n  <MechanicalObject src=\"@l\"/>\n"
-                                              "  <TetrahedronFEMForceField/>\n</Node>\n"));
+  auto s =
+      read_sofa_scene(write("scene.scn",
+                            "<Node name=\"root\">\n  <RequiredPlugin name=\"Geomagic\"/>\n"
+                            "  <GeomagicDriver name=\"device\"/>\n  <EulerImplicitSolver/>\n"
+                            "  <MeshGmshLoader name=\"l\" filename=\"tet.msh\"/>\n  <MechanicalObject src=\"@l\"/>\n"
+                            "  <TetrahedronFEMForceField/>\n</Node>\n"));
   ASSERT_TRUE(s) << s.error().to_string();
-  EXPECT_TRUE(contains(s->warnings, "presumably from the plugin(s) the scene requires (Geomagic)")) << s->warnings.front();
+  EXPECT_TRUE(contains(s->warnings, "presumably from the plugin(s) the scene requires (Geomagic)"))
+      << s->warnings.front();
   EXPECT_TRUE(contains(s->warnings, "GeomagicDriver 'device' (line 3)"));
   // Without the plugin, the same type is refused.
   const Error e = read_error("<Node name=\"root\">\n  <GeomagicDriver name=\"device\"/>\n</Node>\n");
@@ -561,28 +595,34 @@ TEST_F(SofaSceneFiles, AnUnknownTypeFromARequiredPluginIsAWarningNamingThePlugin
 // SOFA warns about an attribute no data of the component takes; so does HoF, with the closest
 // data name. The Triangle FEM tutorial writes totalmass (the data is totalMass).
 TEST_F(SofaSceneFiles, AnUnknownAttributeIsAWarningNamingTheClosestData) {
-  auto s = read_sofa_scene(write("scene.scn", "<Node name=\"root\">\n  <EulerImplicitSolver/>\n"
-                                              "  <MeshGmshLoader name=\"l\" filename=\"tet.msh\"/>\n  <MechanicalObject src=\"@l\"/>\n"
-                                              "  <UniformMass name=\"mass\" totalmass=\"0.5\"/>\n"
-                                              "  <TetrahedronFEMForceField youngModulus=\"3000\" poissonRatio=\"0.3\" method=\"large\"/>\n</Node>\n"));
+  auto s = read_sofa_scene(
+      write("scene.scn",
+            "<Node name=\"root\">\n  <EulerImplicitSolver/>\n"
+            "  <MeshGmshLoader name=\"l\" filename=\"tet.msh\"/>\n  <MechanicalObject src=\"@l\"/>\n"
+            "  <UniformMass name=\"mass\" totalmass=\"0.5\"/>\n"
+            "  <TetrahedronFEMForceField youngModulus=\"3000\" poissonRatio=\"0.3\" method=\"large\"/>\n</Node>\n"));
   ASSERT_TRUE(s) << s.error().to_string();
-  EXPECT_TRUE(contains(s->warnings, "scene.scn:5: UniformMass 'mass' (line 5): attribute 'totalmass' is not a data of "
-                                    "UniformMass and is ignored (SOFA ignores it too); did you mean 'totalMass'?"));
+  EXPECT_TRUE(contains(s->warnings,
+                       "scene.scn:5: UniformMass 'mass' (line 5): attribute 'totalmass' is not a data of "
+                       "UniformMass and is ignored (SOFA ignores it too); did you mean 'totalMass'?"));
   // Ignored indeed: SOFA's default total mass of 1 kg.
   ASSERT_EQ(s->models.size(), 1u);
   EXPECT_DOUBLE_EQ(s->models[0].config.mass.total_mass_kg, 1.0);
   // The data the components take (and src, name, template) raise no warning.
   EXPECT_FALSE(contains(s->warnings, "youngModulus"));
   EXPECT_FALSE(contains(s->warnings, "'src'"));
-  EXPECT_EQ(std::ranges::count_if(s->warnings, [](const std::string& w) { return w.find("is not a data of") != std::string::npos; }), 1);
+  EXPECT_EQ(std::ranges::count_if(s->warnings,
+                                  [](const std::string& w) { return w.find("is not a data of") != std::string::npos; }),
+            1);
 }
 
 // A file the scene names is found as SOFA finds it: the scene's folder (and its parents), then
 // SOFA_DATA_PATH, then share/ and examples/ under SOFA_ROOT; the error says where it looked.
 TEST_F(SofaSceneFiles, FilesAreFoundThroughSofasDataPathAndTheErrorSaysWhereItLooked) {
-  const std::string scene = "<Node name=\"root\">\n  <EulerImplicitSolver/>\n"
-                            "  <MeshGmshLoader name=\"l\" filename=\"mesh/liver.msh\"/>\n  <MechanicalObject src=\"@l\"/>\n"
-                            "  <TetrahedronFEMForceField/>\n</Node>\n";
+  const std::string scene =
+      "<Node name=\"root\">\n  <EulerImplicitSolver/>\n"
+      "  <MeshGmshLoader name=\"l\" filename=\"mesh/liver.msh\"/>\n  <MechanicalObject src=\"@l\"/>\n"
+      "  <TetrahedronFEMForceField/>\n</Node>\n";
   ::unsetenv("SOFA_DATA_PATH");
   ::unsetenv("SOFA_ROOT");
   Error e = read_error(scene);
@@ -615,8 +655,10 @@ TEST_F(SofaSceneFiles, FilesAreFoundThroughSofasDataPathAndTheErrorSaysWhereItLo
 TEST_F(SofaSceneFiles, ACudaTemplateIsSimulatedAsTheCpuSceneWithoutAWarning) {
   const auto scene = [&](const std::string& tmpl) {
     return "<Node name=\"root\">\n  <EulerImplicitSolver/>\n  <MeshGmshLoader name=\"l\" filename=\"tet.msh\"/>\n"
-           "  <MechanicalObject template=\"" + tmpl + "\" src=\"@l\"/>\n  <UniformMass template=\"" + tmpl +
-           "\" totalMass=\"2\"/>\n  <TetrahedronFEMForceField template=\"" + tmpl + "\" youngModulus=\"3000\"/>\n"
+           "  <MechanicalObject template=\"" +
+           tmpl + "\" src=\"@l\"/>\n  <UniformMass template=\"" + tmpl +
+           "\" totalMass=\"2\"/>\n  <TetrahedronFEMForceField template=\"" + tmpl +
+           "\" youngModulus=\"3000\"/>\n"
            "  <FixedProjectiveConstraint indices=\"0\"/>\n</Node>\n";
   };
   auto cpu = read_sofa_scene(write("cpu.scn", scene("Vec3d")));
@@ -637,36 +679,39 @@ TEST_F(SofaSceneFiles, ACudaTemplateIsSimulatedAsTheCpuSceneWithoutAWarning) {
 // A mass in a node that is not a body of HoF's (SOFA's Geomagic scene's instrument, a rigid
 // state) is not "a second mass": no such warning, the instrument's state says why once.
 TEST_F(SofaSceneFiles, TheInstrumentsMassIsNotCalledASecondMass) {
-  auto s = read_sofa_scene(write("scene.scn", "<Node name=\"root\">\n  <Node name=\"Liver\">\n  <EulerImplicitSolver/>\n"
-                                              "  <MeshGmshLoader name=\"l\" filename=\"tet.msh\"/>\n  <MechanicalObject src=\"@l\"/>\n"
-                                              "  <DiagonalMass massDensity=\"1\"/>\n  <TetrahedronFEMForceField/>\n  </Node>\n"
-                                              "  <Node name=\"Instrument\">\n  <EulerImplicitSolver/>\n"
-                                              "  <MechanicalObject name=\"instrumentState\" template=\"Rigid3d\"/>\n"
-                                              "  <UniformMass name=\"mass\" totalMass=\"0.5\"/>\n  </Node>\n</Node>\n"));
+  auto s =
+      read_sofa_scene(write("scene.scn",
+                            "<Node name=\"root\">\n  <Node name=\"Liver\">\n  <EulerImplicitSolver/>\n"
+                            "  <MeshGmshLoader name=\"l\" filename=\"tet.msh\"/>\n  <MechanicalObject src=\"@l\"/>\n"
+                            "  <DiagonalMass massDensity=\"1\"/>\n  <TetrahedronFEMForceField/>\n  </Node>\n"
+                            "  <Node name=\"Instrument\">\n  <EulerImplicitSolver/>\n"
+                            "  <MechanicalObject name=\"instrumentState\" template=\"Rigid3d\"/>\n"
+                            "  <UniformMass name=\"mass\" totalMass=\"0.5\"/>\n  </Node>\n</Node>\n"));
   ASSERT_TRUE(s) << s.error().to_string();
   EXPECT_EQ(s->models.size(), 1u);
   EXPECT_FALSE(contains(s->warnings, "second mass"));
   EXPECT_TRUE(contains(s->warnings, "template Rigid3d is not simulated"));
   EXPECT_TRUE(contains(s->skipped, "UniformMass 'mass' (line 12)"));
   // A second mass in a body's own node is one, and is said.
-  auto twice = read_sofa_scene(write("twice.scn", "<Node name=\"root\">\n  <EulerImplicitSolver/>\n"
-                                                  "  <MeshGmshLoader name=\"l\" filename=\"tet.msh\"/>\n  <MechanicalObject src=\"@l\"/>\n"
-                                                  "  <DiagonalMass massDensity=\"1\"/>\n  <UniformMass name=\"extra\"/>\n"
-                                                  "  <TetrahedronFEMForceField/>\n</Node>\n"));
+  auto twice =
+      read_sofa_scene(write("twice.scn",
+                            "<Node name=\"root\">\n  <EulerImplicitSolver/>\n"
+                            "  <MeshGmshLoader name=\"l\" filename=\"tet.msh\"/>\n  <MechanicalObject src=\"@l\"/>\n"
+                            "  <DiagonalMass massDensity=\"1\"/>\n  <UniformMass name=\"extra\"/>\n"
+                            "  <TetrahedronFEMForceField/>\n</Node>\n"));
   ASSERT_TRUE(twice) << twice.error().to_string();
   EXPECT_TRUE(contains(twice->warnings, "second mass"));
 }
 
 TEST_F(SofaSceneFiles, CgImplicitOf2008IsImplicitEulerWithCg) {
-  auto s = read_sofa_scene(write(
-      "scene.scn",
-      "<Node name=\"root\" dt=\"0.02\">\n"
-      "  <Object type=\"CGImplicit\" iterations=\"10\"/>\n"
-      "  <Object type=\"Mesh\" name=\"m\" filename=\"tet.msh\"/>\n"
-      "  <Object type=\"MechanicalObject\"/>\n"
-      "  <Object type=\"UniformMass\" totalMass=\"2\"/>\n"
-      "  <Object type=\"FixedConstraint\" fixAll=\"1\"/>\n"
-      "</Node>\n"));
+  auto s = read_sofa_scene(write("scene.scn",
+                                 "<Node name=\"root\" dt=\"0.02\">\n"
+                                 "  <Object type=\"CGImplicit\" iterations=\"10\"/>\n"
+                                 "  <Object type=\"Mesh\" name=\"m\" filename=\"tet.msh\"/>\n"
+                                 "  <Object type=\"MechanicalObject\"/>\n"
+                                 "  <Object type=\"UniformMass\" totalMass=\"2\"/>\n"
+                                 "  <Object type=\"FixedConstraint\" fixAll=\"1\"/>\n"
+                                 "</Node>\n"));
   ASSERT_TRUE(s.has_value()) << s.error().to_string();
   ASSERT_EQ(s->models.size(), 1u);
   const auto& c = s->models[0].config;
@@ -687,9 +732,11 @@ TEST(SofaScene, SpringsTakeHofsRuleAsAnExtension) {
   auto scene = [](const std::string& extra) {
     return "<Node name=\"root\">\n  <EulerImplicitSolver/>\n  <CGLinearSolver/>\n"
            "  <MechanicalObject position=\"0 0 0 1 0 0 0 1 0 0 0 1\"/>\n  <MeshTopology tetrahedra=\"0 1 2 3\"/>\n"
-           "  <UniformMass/>\n  <MeshSpringForceField stiffness=\"10\" " + extra + "/>\n</Node>\n";
+           "  <UniformMass/>\n  <MeshSpringForceField stiffness=\"10\" " +
+           extra + "/>\n</Node>\n";
   };
-  auto hof = read_sofa_scene_text(scene("stiffnessRule=\"sameForEverySpring\" tangent=\"clampedTransverse\""), "hof.scn");
+  auto hof =
+      read_sofa_scene_text(scene("stiffnessRule=\"sameForEverySpring\" tangent=\"clampedTransverse\""), "hof.scn");
   ASSERT_TRUE(hof.has_value()) << hof.error().to_string();
   EXPECT_TRUE(hof->warnings.empty());
   const mechanics::MeshSpringConfig& springs = *hof->models.at(0).config.force_fields.at(0).mesh_springs;
@@ -697,7 +744,8 @@ TEST(SofaScene, SpringsTakeHofsRuleAsAnExtension) {
   EXPECT_EQ(springs.tangent, mechanics::SpringTangent::kClampedTransverse);
   auto sofa = read_sofa_scene_text(scene("stiffnessRule=\"dividedByRestLength\" tangent=\"exact\""), "sofa.scn");
   ASSERT_TRUE(sofa.has_value()) << sofa.error().to_string();
-  EXPECT_EQ(sofa->models.at(0).config.force_fields.at(0).mesh_springs->rule, mechanics::SpringStiffnessRule::kDividedByRestLength);
+  EXPECT_EQ(sofa->models.at(0).config.force_fields.at(0).mesh_springs->rule,
+            mechanics::SpringStiffnessRule::kDividedByRestLength);
   EXPECT_EQ(sofa->models.at(0).config.force_fields.at(0).mesh_springs->tangent, mechanics::SpringTangent::kExact);
   auto bad = read_sofa_scene_text(scene("stiffnessRule=\"perSpring\""), "bad.scn");
   ASSERT_FALSE(bad.has_value());

@@ -69,8 +69,11 @@ TEST(SofaWorld, SofasMembraneTutorialMapsItsVisualModelOntoTheTriangles) {
   ASSERT_TRUE(world) << world.error().to_string();
   // Every warning true: totalmass is ignored (as SOFA does); the collision spheres' mapping is
   // part of the collision model, not a mapping whose loss changes the result.
-  EXPECT_TRUE(std::ranges::any_of(world->warnings, [](const std::string& w) { return w.find("'totalmass'") != std::string::npos; }));
-  EXPECT_FALSE(std::ranges::any_of(world->warnings, [](const std::string& w) { return w.find("sphere mapping' (line 24) changes") != std::string::npos; }));
+  EXPECT_TRUE(std::ranges::any_of(world->warnings,
+                                  [](const std::string& w) { return w.find("'totalmass'") != std::string::npos; }));
+  EXPECT_FALSE(std::ranges::any_of(world->warnings, [](const std::string& w) {
+    return w.find("sphere mapping' (line 24) changes") != std::string::npos;
+  }));
   ASSERT_EQ(world->bodies.size(), 1u);
   const coupling::SessionBody& body = world->bodies[0];
   ASSERT_TRUE(body.deformable());
@@ -117,9 +120,8 @@ TEST(SofaWorld, TheDefaultProbeStaysUnderTheDeviceLimitOnEveryBundledAndAnchorSc
     auto session = coupling::Session::make(std::move(world->bodies), std::move(*device), config);
     ASSERT_TRUE(session) << session.error().to_string();
     double peak = 0.0;
-    const coupling::SessionReport report = (*session)->run_virtual(world->probe_press_s, [&](const haptics::HapticSample& s) {
-      peak = std::max(peak, s.requested_force.norm());
-    });
+    const coupling::SessionReport report = (*session)->run_virtual(
+        world->probe_press_s, [&](const haptics::HapticSample& s) { peak = std::max(peak, s.requested_force.norm()); });
     EXPECT_GT(report.contact_time_s, 0.5) << "the probe must touch";
     EXPECT_EQ(report.clamped_contact_ticks, 0);
     EXPECT_LT(peak, limit);
@@ -178,7 +180,8 @@ TEST(SofaWorld, AProjectStatesItsUnitAndASofaSceneIsNeverPresumedMetres) {
   ASSERT_TRUE(unstated) << unstated.error().to_string();
   EXPECT_EQ(unstated->length_unit, "scene units");
   // An X3D scene is in metres (the X3D standard's unit).
-  auto x3d = build_world(write("box.x3d", "<X3D><Scene><Shape><Appearance><SmoothSurface/></Appearance><Box/></Shape></Scene></X3D>"));
+  auto x3d = build_world(
+      write("box.x3d", "<X3D><Scene><Shape><Appearance><SmoothSurface/></Appearance><Box/></Shape></Scene></X3D>"));
   ASSERT_TRUE(x3d) << x3d.error().to_string();
   EXPECT_EQ(x3d->length_unit, "m");
 }

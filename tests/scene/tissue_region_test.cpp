@@ -139,16 +139,19 @@ TEST(TissueRegions, AGmshPhysicalGroupSelectsItsTetrahedra) {
   // Two tetrahedra sharing a face, physical groups 1 and 2.
   const fs::path dir = fs::temp_directory_path() / "hof_tissue_groups";
   fs::create_directories(dir);
-  std::ofstream(dir / "two.msh") << "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n5\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n5 0 0 -1\n"
-                                    "$EndNodes\n$Elements\n2\n1 4 2 1 1 1 2 3 4\n2 4 2 2 2 1 3 2 5\n$EndElements\n";
-  std::ofstream(dir / "two.scn") << "<Node name=\"root\" gravity=\"0 0 0\">\n  <Node name=\"Body\">\n    <EulerImplicitSolver/>\n"
-                                    "    <CGLinearSolver/>\n    <MeshGmshLoader name=\"l\" filename=\"two.msh\"/>\n"
-                                    "    <MechanicalObject src=\"@l\"/>\n    <DiagonalMass massDensity=\"1000\"/>\n"
-                                    "    <TetrahedronFEMForceField name=\"FEM\" youngModulus=\"1000\"/>\n"
-                                    "    <FixedProjectiveConstraint indices=\"0 1 2\"/>\n  </Node>\n</Node>\n";
-  std::ofstream(dir / "two.hof") << "<hof version=\"1\" name=\"groups\">\n  <mechanics scene=\"two.scn\">\n"
-                                    "    <region name=\"hard\" body=\"Body\" shape=\"group\" physicalGroup=\"2\" youngModulus=\"9000\"/>\n"
-                                    "  </mechanics>\n</hof>\n";
+  std::ofstream(dir / "two.msh")
+      << "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n5\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n5 0 0 -1\n"
+         "$EndNodes\n$Elements\n2\n1 4 2 1 1 1 2 3 4\n2 4 2 2 2 1 3 2 5\n$EndElements\n";
+  std::ofstream(dir / "two.scn")
+      << "<Node name=\"root\" gravity=\"0 0 0\">\n  <Node name=\"Body\">\n    <EulerImplicitSolver/>\n"
+         "    <CGLinearSolver/>\n    <MeshGmshLoader name=\"l\" filename=\"two.msh\"/>\n"
+         "    <MechanicalObject src=\"@l\"/>\n    <DiagonalMass massDensity=\"1000\"/>\n"
+         "    <TetrahedronFEMForceField name=\"FEM\" youngModulus=\"1000\"/>\n"
+         "    <FixedProjectiveConstraint indices=\"0 1 2\"/>\n  </Node>\n</Node>\n";
+  std::ofstream(dir / "two.hof")
+      << "<hof version=\"1\" name=\"groups\">\n  <mechanics scene=\"two.scn\">\n"
+         "    <region name=\"hard\" body=\"Body\" shape=\"group\" physicalGroup=\"2\" youngModulus=\"9000\"/>\n"
+         "  </mechanics>\n</hof>\n";
   auto world = build_world(dir / "two.hof");
   ASSERT_TRUE(world) << world.error().to_string();
   const auto& config = *world->bodies[0].config;
@@ -157,7 +160,8 @@ TEST(TissueRegions, AGmshPhysicalGroupSelectsItsTetrahedra) {
   // Round trip of the region through the project file.
   auto project = read_project(dir / "two.hof");
   ASSERT_TRUE(project);
-  EXPECT_NE(to_xml(*project).find("shape=\"group\" physicalGroup=\"2\" youngModulus=\"9000\""), std::string::npos) << to_xml(*project);
+  EXPECT_NE(to_xml(*project).find("shape=\"group\" physicalGroup=\"2\" youngModulus=\"9000\""), std::string::npos)
+      << to_xml(*project);
   fs::remove_all(dir);
 }
 
@@ -179,9 +183,10 @@ TEST(BodyModel, AnX3dDeformableShapeBecomesAMembrane) {
     if (b.config) name = b.name;
   }
   ASSERT_FALSE(name.empty());
-  std::ofstream(dir / "drum.hof") << "<hof version=\"1\" name=\"drum\">\n  <mechanics scene=\"" << x3d.string()
-                                  << "\"/>\n  <haptics device=\"scripted:poke,start=0;0;0.1,direction=0;0;-1,depth=0.01\"/>\n"
-                                  << "  <bodies>\n    <body name=\"" << name << "\" model=\"membrane\"/>\n  </bodies>\n</hof>\n";
+  std::ofstream(dir / "drum.hof")
+      << "<hof version=\"1\" name=\"drum\">\n  <mechanics scene=\"" << x3d.string()
+      << "\"/>\n  <haptics device=\"scripted:poke,start=0;0;0.1,direction=0;0;-1,depth=0.01\"/>\n"
+      << "  <bodies>\n    <body name=\"" << name << "\" model=\"membrane\"/>\n  </bodies>\n</hof>\n";
   auto world = build_world(dir / "drum.hof");
   ASSERT_TRUE(world) << world.error().to_string();
   const coupling::SessionBody* body = nullptr;
@@ -201,12 +206,13 @@ TEST(BodyModel, AnX3dDeformableShapeBecomesAMembrane) {
   EXPECT_NE(world->device.find("scripted:poke"), std::string::npos) << world->device;
 
   // A volume cannot take a surface model: the error names the body.
-  std::ofstream(dir / "bad.hof") << "<hof version=\"1\" name=\"bad\">\n  <mechanics scene=\""
-                                 << (kExamples / "liver-medium-fem.scn").string()
-                                 << "\"/>\n  <bodies>\n    <body name=\"Liver\" model=\"membrane\"/>\n  </bodies>\n</hof>\n";
+  std::ofstream(dir / "bad.hof")
+      << "<hof version=\"1\" name=\"bad\">\n  <mechanics scene=\"" << (kExamples / "liver-medium-fem.scn").string()
+      << "\"/>\n  <bodies>\n    <body name=\"Liver\" model=\"membrane\"/>\n  </bodies>\n</hof>\n";
   auto bad = build_world(dir / "bad.hof");
   ASSERT_FALSE(bad);
-  EXPECT_NE(bad.error().message.find("<body name=\"Liver\" model=\"membrane\">"), std::string::npos) << bad.error().message;
+  EXPECT_NE(bad.error().message.find("<body name=\"Liver\" model=\"membrane\">"), std::string::npos)
+      << bad.error().message;
   fs::remove_all(dir);
 }
 
@@ -246,12 +252,14 @@ TEST(BodyModel, AVolumeBodyFilledWithHexahedraKeepsItsSurfaceMaterialAndSupports
   // The base stays held: every held node of the grid lies near the liver's held base.
   EXPECT_GT(body.model->fixed_dofs.size(), 30u);
   double highest = -1.0;
-  for (const std::int32_t dof : body.model->fixed_dofs) highest = std::max(highest, config.positions[static_cast<std::size_t>(dof / 3)].z());
+  for (const std::int32_t dof : body.model->fixed_dofs)
+    highest = std::max(highest, config.positions[static_cast<std::size_t>(dof / 3)].z());
   EXPECT_LT(highest, 0.0);  // the liver spans z −0.038 to 0.054; its base is held
   // About the same mass: the grid covers the liver within a cell, its surface cells half full.
   auto tet_world = build_world(kExamples / "liver-palpation-medium-fem.hof");
   ASSERT_TRUE(tet_world);
-  EXPECT_NEAR(body.model->total_mass_kg(), tet_world->bodies[0].model->total_mass_kg(), 0.25 * tet_world->bodies[0].model->total_mass_kg())
+  EXPECT_NEAR(body.model->total_mass_kg(), tet_world->bodies[0].model->total_mass_kg(),
+              0.25 * tet_world->bodies[0].model->total_mass_kg())
       << "half-full surface cells (fillWeighted)";
 }
 

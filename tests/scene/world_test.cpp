@@ -1,8 +1,8 @@
 // The one builder: X3D geometry touched where H3D draws it, rigid and deformable bodies,
 // effect-only worlds, SOFA scenes with several bodies, project parameters, the default probe.
 
-#include "hof/scene/device_config.h"
 #include "hof/scene/world.h"
+#include "hof/scene/device_config.h"
 
 #include <gtest/gtest.h>
 
@@ -12,8 +12,8 @@
 #include <fstream>
 
 #include "hof/haptics/device_backends/scripted_device.h"
-#include "hof/scene/model_parameters.h"
 #include "hof/procedures/needle.h"
+#include "hof/scene/model_parameters.h"
 
 namespace hof::scene {
 namespace {
@@ -54,7 +54,8 @@ Touch touch(const fs::path& file, const Vec3& start, const Vec3& direction, doub
   config.haptics.renderer.kind = haptics::RendererKind::kGodObject;
   config.haptics.calibration = haptics::Calibration{};
   config.haptics.realtime_priority = false;
-  auto session = coupling::Session::make(std::move(world.bodies), std::make_unique<haptics::ScriptedDevice>(*scripted), config);
+  auto session =
+      coupling::Session::make(std::move(world.bodies), std::make_unique<haptics::ScriptedDevice>(*scripted), config);
   EXPECT_TRUE(session) << session.error().to_string();
   Touch t;
   const double hold_start = (approach + 0.003) / 0.05 + 0.05;
@@ -98,8 +99,10 @@ TEST(World, X3dRotationAndCentreAreAppliedAsH3dDoes) {
 TEST(World, X3dNestedRotationMovesASphere) {
   // A 1 cm sphere 5 cm along local x, the frame turned a quarter turn about z: centre at
   // (0, 0.05, 0), top at y = 0.06 (the tessellation reaches the local ±x exactly).
-  const auto file = write("sphere.x3d", x3d("<Transform rotation='0 0 1 1.5707963267949'><Transform translation='0.05 0 0'>"
-                                            "<Shape>" + kSurface + "<Sphere radius='0.01'/></Shape></Transform></Transform>"));
+  const auto file =
+      write("sphere.x3d", x3d("<Transform rotation='0 0 1 1.5707963267949'><Transform translation='0.05 0 0'>"
+                              "<Shape>" +
+                              kSurface + "<Sphere radius='0.01'/></Shape></Transform></Transform>"));
   auto world = build_world(file);
   ASSERT_TRUE(world) << world.error().to_string();
   const Touch t = touch(file, Vec3(0.0, 0.1, 0.0), Vec3(0, -1, 0), 0.04);
@@ -110,12 +113,16 @@ TEST(World, X3dNestedRotationMovesASphere) {
 TEST(World, X3dPrimitivesAreTouchedOnTheirSurfaces) {
   // Cylinder (height 4 cm: cap at y = 0.02) at x = 0, cone (apex at y = 0.02) at x = 0.1,
   // an IndexedFaceSet quad at y = 0.01 around x = 0.2.
-  const auto file = write(
-      "primitives.x3d",
-      x3d("<Shape>" + kSurface + "<Cylinder radius='0.01' height='0.04'/></Shape>"
-          "<Transform translation='0.1 0 0'><Shape>" + kSurface + "<Cone bottomRadius='0.02' height='0.04'/></Shape></Transform>"
-          "<Shape>" + kSurface + "<IndexedFaceSet solid='false' coordIndex='0 1 2 3 -1'>"
-          "<Coordinate point='0.19 0.01 -0.01  0.19 0.01 0.01  0.21 0.01 0.01  0.21 0.01 -0.01'/></IndexedFaceSet></Shape>"));
+  const auto file = write("primitives.x3d", x3d("<Shape>" + kSurface +
+                                                "<Cylinder radius='0.01' height='0.04'/></Shape>"
+                                                "<Transform translation='0.1 0 0'><Shape>" +
+                                                kSurface +
+                                                "<Cone bottomRadius='0.02' height='0.04'/></Shape></Transform>"
+                                                "<Shape>" +
+                                                kSurface +
+                                                "<IndexedFaceSet solid='false' coordIndex='0 1 2 3 -1'>"
+                                                "<Coordinate point='0.19 0.01 -0.01  0.19 0.01 0.01  0.21 0.01 0.01  "
+                                                "0.21 0.01 -0.01'/></IndexedFaceSet></Shape>"));
   auto world = build_world(file);
   ASSERT_TRUE(world) << world.error().to_string();
   ASSERT_EQ(world->bodies.size(), 3u);
@@ -137,7 +144,8 @@ TEST(World, X3dPrimitivesAreTouchedOnTheirSurfaces) {
 }
 
 TEST(World, X3dUseOfAShapeIsTouchedInEachPlace) {
-  const auto file = write("use.x3d", x3d("<Shape DEF='Block'>" + kSurface + "<Box size='0.02 0.02 0.02'/></Shape>"
+  const auto file = write("use.x3d", x3d("<Shape DEF='Block'>" + kSurface +
+                                         "<Box size='0.02 0.02 0.02'/></Shape>"
                                          "<Transform translation='0.1 0.05 0'><Shape USE='Block'/></Transform>"));
   auto world = build_world(file);
   ASSERT_TRUE(world) << world.error().to_string();
@@ -157,23 +165,26 @@ TEST(World, X3dHapticLayersHaveAProxyEachAndTheirForcesAdd) {
   // H3D's layered example, softened: a 10 cm box (60 N/m) over a 3 cm sphere (300 N/m). Pressed
   // 3 cm into the box, the device is 1 cm into the sphere: each layer's proxy rests on its own
   // surface and the force is the sum, 60 × 0.03 + 300 × 0.01 = 4.8 N.
-  const auto file = write("layers.x3d",
-                          x3d("<HapticLayeredGroup><Shape><Appearance><SmoothSurface stiffness='60' useRelativeValues='false'/>"
-                              "</Appearance><Box size='0.1 0.1 0.1'/></Shape><Shape><Appearance><SmoothSurface "
-                              "stiffness='300' useRelativeValues='false'/></Appearance><Sphere radius='0.03'/></Shape>"
-                              "</HapticLayeredGroup>"));
+  const auto file =
+      write("layers.x3d",
+            x3d("<HapticLayeredGroup><Shape><Appearance><SmoothSurface stiffness='60' useRelativeValues='false'/>"
+                "</Appearance><Box size='0.1 0.1 0.1'/></Shape><Shape><Appearance><SmoothSurface "
+                "stiffness='300' useRelativeValues='false'/></Appearance><Sphere radius='0.03'/></Shape>"
+                "</HapticLayeredGroup>"));
   auto world = build_world(file);
   ASSERT_TRUE(world) << world.error().to_string();
   ASSERT_EQ(world->bodies.size(), 2u);
   EXPECT_EQ(world->bodies[0].layer, 0);
   EXPECT_EQ(world->bodies[1].layer, 1);
-  const haptics::MotionConfig motion = haptics::MotionConfig::poke(Vec3(0.0, 0.1, 0.0), Vec3(0, -1, 0), 0.05, 0.03, 0.05, 0.3);
+  const haptics::MotionConfig motion =
+      haptics::MotionConfig::poke(Vec3(0.0, 0.1, 0.0), Vec3(0, -1, 0), 0.05, 0.03, 0.05, 0.3);
   coupling::SessionConfig config = world->config;
   config.haptics.renderer.kind = haptics::RendererKind::kGodObject;
   config.haptics.calibration = haptics::Calibration{};
   config.haptics.realtime_priority = false;
-  auto session = coupling::Session::make(std::move(world->bodies),
-                                         std::make_unique<haptics::ScriptedDevice>(*haptics::ScriptedMotion::make(motion)), config);
+  auto session = coupling::Session::make(
+      std::move(world->bodies), std::make_unique<haptics::ScriptedDevice>(*haptics::ScriptedMotion::make(motion)),
+      config);
   ASSERT_TRUE(session) << session.error().to_string();
   EXPECT_EQ((*session)->layer_count(), 2u);
   int only_box = 0, both = 0;
@@ -211,7 +222,8 @@ TEST(World, X3dDeformableShapeIsSimulatedAndItsDefaultsAreListed) {
 }
 
 TEST(World, EffectOnlyX3dSceneBuildsAWorldWithNoBody) {
-  const auto file = write("effects.x3d", x3d("<SpringEffect position='0 0.01 0' springConstant='50'/><ViscosityEffect/>"));
+  const auto file =
+      write("effects.x3d", x3d("<SpringEffect position='0 0.01 0' springConstant='50'/><ViscosityEffect/>"));
   auto world = build_world(file);
   ASSERT_TRUE(world) << world.error().to_string();
   EXPECT_TRUE(world->bodies.empty());
@@ -227,14 +239,16 @@ std::string nothing_to_touch(const std::string& name, const std::string& body) {
   EXPECT_TRUE(world) << (world ? "" : world.error().to_string());
   if (!world) return {};
   EXPECT_TRUE(world->bodies.empty());
-  const auto said = std::ranges::count_if(world->warnings, [](const std::string& w) { return w.find("nothing to touch") != std::string::npos; });
+  const auto said = std::ranges::count_if(
+      world->warnings, [](const std::string& w) { return w.find("nothing to touch") != std::string::npos; });
   EXPECT_EQ(said, 1) << name;
   return world->nothing_to_touch;
 }
 
 TEST(World, X3dShapesWithoutASurfaceAreASeenOnlyWorld) {
-  const auto file = write("nothing.x3d", x3d("<PythonScript url='x.py'/><Shape><Box size='0.1 0.1 0.1'/></Shape>"
-                                             "<Shape><Appearance><Material/></Appearance><Sphere radius='0.05'/></Shape>"));
+  const auto file =
+      write("nothing.x3d", x3d("<PythonScript url='x.py'/><Shape><Box size='0.1 0.1 0.1'/></Shape>"
+                               "<Shape><Appearance><Material/></Appearance><Sphere radius='0.05'/></Shape>"));
   auto world = build_world(file);
   ASSERT_TRUE(world) << world.error().to_string();
   EXPECT_EQ(world->visuals.size(), 2u);  // shown in the window
@@ -245,18 +259,22 @@ TEST(World, X3dShapesWithoutASurfaceAreASeenOnlyWorld) {
 TEST(World, X3dNothingToTouchNamesEachCause) {
   EXPECT_EQ(nothing_to_touch("one_seen.x3d", "<Shape><Box/></Shape>"),
             "nothing to touch: 1 shape is only seen (no haptic surface in its Appearance), and no force effect");
-  EXPECT_EQ(nothing_to_touch("text.x3d", "<Shape DEF='Label'><Appearance><SmoothSurface/></Appearance><Text string='\"a\"'/></Shape>"),
-            "nothing to touch: a haptic surface on no triangles: Label (line 2, no geometry HoF draws), and no force effect");
-  EXPECT_EQ(nothing_to_touch("torque.x3d", "<RotationalSpringEffect desiredAxis='0 1 0'/>"),
-            "nothing to touch: haptic nodes HoF does not model: RotationalSpringEffect (a torque: HoF renders forces only) "
-            "(line 2); no Shape, and no force effect");
+  EXPECT_EQ(
+      nothing_to_touch("text.x3d",
+                       "<Shape DEF='Label'><Appearance><SmoothSurface/></Appearance><Text string='\"a\"'/></Shape>"),
+      "nothing to touch: a haptic surface on no triangles: Label (line 2, no geometry HoF draws), and no force effect");
+  EXPECT_EQ(
+      nothing_to_touch("torque.x3d", "<RotationalSpringEffect desiredAxis='0 1 0'/>"),
+      "nothing to touch: haptic nodes HoF does not model: RotationalSpringEffect (a torque: HoF renders forces only) "
+      "(line 2); no Shape, and no force effect");
   EXPECT_EQ(nothing_to_touch("empty.x3d", ""), "nothing to touch: no Shape, and no force effect");
 }
 
 // H3DViewer opens a settings file (its DeviceInfo becomes the device): HoF opens it too, with
 // nothing to touch; only a root that is no X3D node is not an X3D file.
 TEST(World, X3dSettingsFileOpensWithNothingToTouch) {
-  const fs::path falcon = write("FalconDevice.x3d", "<DeviceInfo><FalconDevice><GodObjectRenderer/></FalconDevice></DeviceInfo>");
+  const fs::path falcon =
+      write("FalconDevice.x3d", "<DeviceInfo><FalconDevice><GodObjectRenderer/></FalconDevice></DeviceInfo>");
   auto world = build_world(falcon);
   ASSERT_TRUE(world) << world.error().to_string();
   EXPECT_TRUE(world->bodies.empty());
@@ -275,24 +293,27 @@ TEST(World, X3dSettingsFileOpensWithNothingToTouch) {
 
 TEST(World, X3dGeometryGroupAndDebugOptionsScenesAreTouchable) {
   // Shaped as H3D's GeometryGroup.x3d and DebugOptions.x3d, which were refused with "no haptic surface".
-  auto group = build_world(write("geometry_group.x3d", x3d("<Shape><Appearance><FrictionalSurface/></Appearance>"
-                                                            "<GeometryGroup><Box size='0.1 0.01 0.1'/><Sphere radius='0.02'/>"
-                                                            "</GeometryGroup></Shape>")));
+  auto group =
+      build_world(write("geometry_group.x3d", x3d("<Shape><Appearance><FrictionalSurface/></Appearance>"
+                                                  "<GeometryGroup><Box size='0.1 0.01 0.1'/><Sphere radius='0.02'/>"
+                                                  "</GeometryGroup></Shape>")));
   ASSERT_TRUE(group) << group.error().to_string();
   ASSERT_EQ(group->bodies.size(), 1u);
   EXPECT_TRUE(group->nothing_to_touch.empty());
-  auto debug = build_world(write("debug_options.x3d", x3d("<GlobalSettings><DebugOptions drawBound='true'/></GlobalSettings>"
-                                                           "<Shape><Extrusion scale='0.05 0.05'/><Appearance><FrictionalSurface/>"
-                                                           "</Appearance></Shape>")));
+  auto debug =
+      build_world(write("debug_options.x3d", x3d("<GlobalSettings><DebugOptions drawBound='true'/></GlobalSettings>"
+                                                 "<Shape><Extrusion scale='0.05 0.05'/><Appearance><FrictionalSurface/>"
+                                                 "</Appearance></Shape>")));
   ASSERT_TRUE(debug) << debug.error().to_string();
   EXPECT_EQ(debug->bodies.size(), 1u);
 }
 
 TEST(World, SofaSceneWithTwoSolvedNodesGivesTwoBodies) {
   const std::string mesh = std::string(HOF_SOURCE_DIR) + "/data/models/liver-simple.msh";
-  const std::string node = "<EulerImplicitSolver/><CGLinearSolver iterations='25'/><MeshGmshLoader name='l' filename='" + mesh +
-                           "'/><MechanicalObject src='@l'/><TetrahedronFEMForceField name='FEM' youngModulus='5000' "
-                           "poissonRatio='0.45'/><DiagonalMass massDensity='1060'/><FixedConstraint indices='0 1 2'/>";
+  const std::string node =
+      "<EulerImplicitSolver/><CGLinearSolver iterations='25'/><MeshGmshLoader name='l' filename='" + mesh +
+      "'/><MechanicalObject src='@l'/><TetrahedronFEMForceField name='FEM' youngModulus='5000' "
+      "poissonRatio='0.45'/><DiagonalMass massDensity='1060'/><FixedConstraint indices='0 1 2'/>";
   const auto file = write("two.scn", "<Node name='root' gravity='0 0 0' dt='0.01'><Node name='Left'>" + node +
                                          "</Node><Node name='Right'>" + node + "</Node></Node>");
   auto world = build_world(file);
@@ -307,13 +328,15 @@ TEST(World, SofaCollisionModelWithoutASolverIsARigidObstacle) {
   // A table under the liver: a TriangleCollisionModel on a state no solver moves.
   write("table.obj", "v -0.2 -0.2 -0.06\nv 0.2 -0.2 -0.06\nv 0.2 0.2 -0.06\nv -0.2 0.2 -0.06\nf 1 2 3\nf 1 3 4\n");
   const std::string mesh = std::string(HOF_SOURCE_DIR) + "/data/models/liver-simple.msh";
-  const auto file = write("table.scn",
-                          "<Node name='root' gravity='0 0 0' dt='0.01'>"
-                          "<Node name='Liver'><EulerImplicitSolver/><CGLinearSolver/><MeshGmshLoader name='l' filename='" +
-                              mesh + "'/><MechanicalObject src='@l'/><TetrahedronFEMForceField name='FEM'/>"
-                              "<DiagonalMass massDensity='1060'/><FixedConstraint indices='0 1 2'/></Node>"
-                              "<Node name='Table'><MeshOBJLoader name='t' filename='table.obj'/><MechanicalObject src='@t'/>"
-                              "<TriangleCollisionModel moving='0' simulated='0'/></Node></Node>");
+  const auto file =
+      write("table.scn",
+            "<Node name='root' gravity='0 0 0' dt='0.01'>"
+            "<Node name='Liver'><EulerImplicitSolver/><CGLinearSolver/><MeshGmshLoader name='l' filename='" +
+                mesh +
+                "'/><MechanicalObject src='@l'/><TetrahedronFEMForceField name='FEM'/>"
+                "<DiagonalMass massDensity='1060'/><FixedConstraint indices='0 1 2'/></Node>"
+                "<Node name='Table'><MeshOBJLoader name='t' filename='table.obj'/><MechanicalObject src='@t'/>"
+                "<TriangleCollisionModel moving='0' simulated='0'/></Node></Node>");
   auto world = build_world(file);
   ASSERT_TRUE(world) << world.error().to_string();
   ASSERT_EQ(world->bodies.size(), 2u);
@@ -419,7 +442,8 @@ TEST(World, ChangesThroughTheCommandSeamAreInTheNextSavedProject) {
   record_changes(world->project, **session);
   ASSERT_TRUE(write_project(world->project, file));
   const std::string saved = to_xml(world->project);
-  EXPECT_NE(saved.find("<set body=\"Liver\" component=\"FEM\" parameter=\"youngModulus\" value=\"7000\"/>"), std::string::npos)
+  EXPECT_NE(saved.find("<set body=\"Liver\" component=\"FEM\" parameter=\"youngModulus\" value=\"7000\"/>"),
+            std::string::npos)
       << saved;
   auto reloaded = build_world(file);
   ASSERT_TRUE(reloaded) << reloaded.error().to_string();
@@ -513,19 +537,17 @@ TEST(World, AShapeOfAGeometryHoFDoesNotModelIsTheNamedReason) {
       << world->nothing_to_touch;
 }
 
-
 // Found on H3D's own examples (issue 35, the survey of 227 scenes): each a message that named
 // the wrong cause, or content that was lost or felt where H3D would not.
 TEST(World, X3dToggleGroupWithHapticsOffIsSeenNotFelt) {
   EXPECT_EQ(nothing_to_touch("toggle_shape.x3d", "<ToggleGroup hapticsOn='false'><Shape>" + kSurface +
                                                      "<Sphere radius='0.05'/></Shape></ToggleGroup>"),
             "nothing to touch: 1 shape is under a ToggleGroup with hapticsOn false, and no force effect");
-  EXPECT_EQ(nothing_to_touch("toggle_effect.x3d",
-                             "<ToggleGroup hapticsOn='false'><TimeFunctionEffect/></ToggleGroup>"),
+  EXPECT_EQ(nothing_to_touch("toggle_effect.x3d", "<ToggleGroup hapticsOn='false'><TimeFunctionEffect/></ToggleGroup>"),
             "nothing to touch: 1 force effect is under a ToggleGroup with hapticsOn false; no Shape");
   // Haptics on (the default): felt as before.
-  auto world = build_world(write("toggle_on.x3d", x3d("<ToggleGroup><Shape>" + kSurface +
-                                                      "<Sphere radius='0.05'/></Shape></ToggleGroup>")));
+  auto world = build_world(
+      write("toggle_on.x3d", x3d("<ToggleGroup><Shape>" + kSurface + "<Sphere radius='0.05'/></Shape></ToggleGroup>")));
   ASSERT_TRUE(world) << world.error().to_string();
   EXPECT_EQ(world->bodies.size(), 1u);
 }
@@ -546,8 +568,9 @@ TEST(World, X3dNodesOfAnotherFileAreNamedWithThatFile) {
   auto world = build_world(write("proto_use.x3d", x3d("<ExternProtoDeclare name='Label' url='\"proto_lib.x3d#Label\"'/>"
                                                       "<ProtoInstance name='Label'/>")));
   ASSERT_TRUE(world) << world.error().to_string();
-  EXPECT_TRUE(std::ranges::any_of(world->skipped, [](const std::string& s) { return s == "PythonScript (proto_lib.x3d line 2)"; }))
-      << world->skipped.size();
+  EXPECT_TRUE(std::ranges::any_of(world->skipped, [](const std::string& s) {
+    return s == "PythonScript (proto_lib.x3d line 2)";
+  })) << world->skipped.size();
 }
 
 // H3D's bumpmap, ThreadExample, DynamicTransform examples: a <Group> root is a scene fragment,
@@ -564,8 +587,8 @@ TEST(World, X3dGroupRootIsAScene) {
 
 TEST(World, X3dInlineOfAClassicVrmlFileIsNotShownAndTheSceneOpens) {
   write("classic.wrl", "#VRML V2.0 utf8\nShape { geometry Box {} }\n");
-  auto world = build_world(write("inline_wrl.x3d", x3d("<Inline url='\"classic.wrl\"'/><Shape>" + kSurface +
-                                                       "<Sphere radius='0.05'/></Shape>")));
+  auto world = build_world(write(
+      "inline_wrl.x3d", x3d("<Inline url='\"classic.wrl\"'/><Shape>" + kSurface + "<Sphere radius='0.05'/></Shape>")));
   ASSERT_TRUE(world) << world.error().to_string();
   EXPECT_EQ(world->bodies.size(), 1u);
   EXPECT_TRUE(std::ranges::any_of(world->warnings, [](const std::string& w) {
@@ -582,7 +605,8 @@ TEST(World, X3dDynamicTransformPlacesItsChildrenWhereItStarts) {
   for (const Vec3& v : world->bodies[0].surface.vertices) centre += v;
   centre /= static_cast<double>(world->bodies[0].surface.vertices.size());
   EXPECT_NEAR(centre.x(), 0.2, 1e-9);
-  EXPECT_TRUE(std::ranges::any_of(world->warnings, [](const std::string& w) { return w.find("motion") != std::string::npos; }));
+  EXPECT_TRUE(
+      std::ranges::any_of(world->warnings, [](const std::string& w) { return w.find("motion") != std::string::npos; }));
 }
 
 TEST(World, X3dOpenHapticsSurfaceIsMagneticOnlyWhenItSaysSo) {
@@ -598,10 +622,11 @@ TEST(World, X3dOpenHapticsSurfaceIsMagneticOnlyWhenItSaysSo) {
 }
 
 TEST(World, X3dDeformableShapeWithOnlyAHapticGeometryIsTouchable) {
-  auto world = build_world(write("deform_haptic.x3d",
-                                 x3d("<DeformableShape>" + kSurface + "<IndexedTriangleSet containerField='hapticGeometry' "
-                                     "index='0 1 2 0 2 3'><Coordinate point='0 0 0 1 0 0 1 1 0 0 1 0'/>"
-                                     "</IndexedTriangleSet></DeformableShape>")));
+  auto world =
+      build_world(write("deform_haptic.x3d", x3d("<DeformableShape>" + kSurface +
+                                                 "<IndexedTriangleSet containerField='hapticGeometry' "
+                                                 "index='0 1 2 0 2 3'><Coordinate point='0 0 0 1 0 0 1 1 0 0 1 0'/>"
+                                                 "</IndexedTriangleSet></DeformableShape>")));
   ASSERT_TRUE(world) << world.error().to_string();
   ASSERT_EQ(world->bodies.size(), 1u);
   EXPECT_TRUE(world->bodies[0].deformable());
@@ -610,7 +635,8 @@ TEST(World, X3dDeformableShapeWithOnlyAHapticGeometryIsTouchable) {
 TEST(World, X3dZeroSizeGeometryIsSaid) {
   auto world = build_world(write("zero.x3d", x3d("<Shape>" + kSurface + "<Sphere radius='0'/></Shape>")));
   ASSERT_TRUE(world) << world.error().to_string();
-  EXPECT_TRUE(std::ranges::any_of(world->warnings, [](const std::string& w) { return w.find("has zero size") != std::string::npos; }));
+  EXPECT_TRUE(std::ranges::any_of(world->warnings,
+                                  [](const std::string& w) { return w.find("has zero size") != std::string::npos; }));
 }
 
 }  // namespace

@@ -387,7 +387,7 @@ TEST(X3dScene, UnsupportedNodesAreListedOnce) {
   EXPECT_TRUE(contains(s.unsupported, "ROUTE (line 4)"));
   EXPECT_TRUE(contains(s.unsupported, "Text (line 5)"));
   EXPECT_EQ(s.warnings.size(), 2u);  // the Inline not found, and the list
-  ASSERT_EQ(s.shapes.size(), 1u);  // listed, not touchable, no geometry
+  ASSERT_EQ(s.shapes.size(), 1u);    // listed, not touchable, no geometry
   EXPECT_FALSE(s.shapes[0].touchable);
   ASSERT_TRUE(s.global_settings && s.global_settings->haptics);
   EXPECT_EQ(s.global_settings->haptics->touchable_face, X3dTouchableFace::kFrontAndBack);  // first wins
@@ -431,17 +431,32 @@ Vec3 normal(const mesh::TriMesh& m, std::size_t i) {
 }
 
 TEST(X3dScene, GroupingNodesAreLookedInto) {
-  const auto shape = [](const std::string& def) { return "<Shape DEF='" + def + "'>" + kTouch + "<Box size='0.1 0.1 0.1'/></Shape>"; };
-  const X3dScene s = load(write_temp("groups.x3d", scene(
-      "<Switch whichChoice='1'>" + shape("SwitchA") + shape("SwitchB") + "</Switch>"
-      "<Switch>" + shape("SwitchNone") + "</Switch>"
-      "<Switch whichChoice='5'>" + shape("SwitchPast") + "</Switch>"
-      "<LOD range='1'>" + shape("LodNear") + shape("LodFar") + "</LOD>"
-      "<Billboard>" + shape("InBillboard") + "</Billboard>"
-      "<Anchor url='\"x.html\"'>" + shape("InAnchor") + "</Anchor>"
-      "<Collision>" + shape("InCollision") + "<Shape DEF='CollisionProxy' containerField='proxy'>" + kTouch +
-      "<Box/></Shape></Collision>"
-      "<StaticGroup>" + shape("InStaticGroup") + "</StaticGroup>")));
+  const auto shape = [](const std::string& def) {
+    return "<Shape DEF='" + def + "'>" + kTouch + "<Box size='0.1 0.1 0.1'/></Shape>";
+  };
+  const X3dScene s = load(write_temp(
+      "groups.x3d", scene("<Switch whichChoice='1'>" + shape("SwitchA") + shape("SwitchB") +
+                          "</Switch>"
+                          "<Switch>" +
+                          shape("SwitchNone") +
+                          "</Switch>"
+                          "<Switch whichChoice='5'>" +
+                          shape("SwitchPast") +
+                          "</Switch>"
+                          "<LOD range='1'>" +
+                          shape("LodNear") + shape("LodFar") +
+                          "</LOD>"
+                          "<Billboard>" +
+                          shape("InBillboard") +
+                          "</Billboard>"
+                          "<Anchor url='\"x.html\"'>" +
+                          shape("InAnchor") +
+                          "</Anchor>"
+                          "<Collision>" +
+                          shape("InCollision") + "<Shape DEF='CollisionProxy' containerField='proxy'>" + kTouch +
+                          "<Box/></Shape></Collision>"
+                          "<StaticGroup>" +
+                          shape("InStaticGroup") + "</StaticGroup>")));
   EXPECT_EQ(touchable_defs(s), (std::vector<std::string>{"SwitchB", "LodNear", "InBillboard", "InAnchor", "InCollision",
                                                          "InStaticGroup"}));
   EXPECT_FALSE(contains(s.unsupported, "Switch"));
@@ -453,7 +468,8 @@ TEST(X3dScene, InlineIsReadBesideTheSceneFirstUrlFound) {
   fs::create_directories(dir / "parts");
   std::ofstream(dir / "parts" / "ball.x3d") << scene("<Shape DEF='Ball'>" + kTouch + "<Sphere radius='0.02'/></Shape>");
   std::ofstream(dir / "main.x3d") << scene(
-      "<Transform translation='0.1 0 0'><Inline url='\"missing.x3d\" \"http://example.org/a.x3d\" \"parts/ball.x3d\"'/></Transform>\n"
+      "<Transform translation='0.1 0 0'><Inline url='\"missing.x3d\" \"http://example.org/a.x3d\" "
+      "\"parts/ball.x3d\"'/></Transform>\n"
       "<Inline url='\"nowhere.x3d\"'/>");
   const X3dScene s = load(dir / "main.x3d");
   ASSERT_EQ(touchable_defs(s), std::vector<std::string>{"Ball"});
@@ -507,7 +523,8 @@ TEST(X3dScene, ProtoInstanceFieldsAreSubstituted) {
 
   expect_error_in("recursive_proto.x3d", scene(R"(<ProtoDeclare name='R'><ProtoBody>
 <Group><ProtoInstance name='R'/></Group></ProtoBody></ProtoDeclare>
-<ProtoInstance name='R'/>)"), "PROTOs instantiated more than 16 deep");
+<ProtoInstance name='R'/>)"),
+                  "PROTOs instantiated more than 16 deep");
 }
 
 TEST(X3dScene, GeometryGroupIsOneTouchableGeometry) {
@@ -528,19 +545,24 @@ TEST(X3dScene, GeometryGroupIsOneTouchableGeometry) {
 }
 
 TEST(X3dScene, ElevationGridFollowsTheSpec) {
-  const X3dScene s = load(write_temp("elevation.x3d", scene(
-      "<Shape>" + kTouch + "<ElevationGrid xDimension='3' zDimension='2' xSpacing='0.5' zSpacing='0.25' "
-      "height='0 0.1 0.2 0.3 0.4 0.5'/></Shape>")));
+  const X3dScene s = load(
+      write_temp("elevation.x3d", scene("<Shape>" + kTouch +
+                                        "<ElevationGrid xDimension='3' zDimension='2' xSpacing='0.5' zSpacing='0.25' "
+                                        "height='0 0.1 0.2 0.3 0.4 0.5'/></Shape>")));
   const mesh::TriMesh& m = s.shapes.at(0).mesh_W;
   ASSERT_EQ(m.vertices.size(), 6u);
-  ASSERT_EQ(m.triangles.size(), 4u);  // (3−1)(2−1) quads
+  ASSERT_EQ(m.triangles.size(), 4u);                          // (3−1)(2−1) quads
   EXPECT_TRUE(m.vertices[5].isApprox(Vec3(1.0, 0.5, 0.25)));  // (i 2, j 1): height[2 + 1·3]
   for (std::size_t i = 0; i < m.triangles.size(); ++i) EXPECT_GT(normal(m, i).y(), 0.0) << i;  // ccw: +y
 }
 
 TEST(X3dScene, ExtrusionDefaultIsAClosedOutwardBox) {
-  const X3dScene s = load(write_temp("extrusion.x3d", scene("<Shape>" + kTouch + "<Extrusion/></Shape>"
-      "<Shape>" + kTouch + "<Extrusion ccw='false' beginCap='false' endCap='false' scale='0.5 0.5'/></Shape>")));
+  const X3dScene s = load(
+      write_temp("extrusion.x3d",
+                 scene("<Shape>" + kTouch +
+                       "<Extrusion/></Shape>"
+                       "<Shape>" +
+                       kTouch + "<Extrusion ccw='false' beginCap='false' endCap='false' scale='0.5 0.5'/></Shape>")));
   // Default: the square ±1 swept along y from 0 to 1, capped: a 2 × 1 × 2 box.
   const mesh::TriMesh& box = s.shapes.at(0).mesh_W;
   EXPECT_EQ(box.triangles.size(), 8u + 2u + 2u);
@@ -561,9 +583,11 @@ TEST(X3dScene, ExtrusionDefaultIsAClosedOutwardBox) {
 TEST(X3dScene, ExtrusionAlongABentSpineKeepsItsSection) {
   // A unit square section swept along a right-angle bend: every ring stays a 0.2 square
   // perpendicular to the spine (the SCP of each point), and the tube has 3 segments.
-  const X3dScene s = load(write_temp("bent.x3d", scene("<Shape>" + kTouch +
-      "<Extrusion crossSection='0.1 0.1 0.1 -0.1 -0.1 -0.1 -0.1 0.1 0.1 0.1' spine='0 0 0 0 1 0 1 1 0 2 1 0' "
-      "beginCap='false' endCap='false'/></Shape>")));
+  const X3dScene s = load(write_temp(
+      "bent.x3d",
+      scene("<Shape>" + kTouch +
+            "<Extrusion crossSection='0.1 0.1 0.1 -0.1 -0.1 -0.1 -0.1 0.1 0.1 0.1' spine='0 0 0 0 1 0 1 1 0 2 1 0' "
+            "beginCap='false' endCap='false'/></Shape>")));
   const mesh::TriMesh& m = s.shapes.at(0).mesh_W;
   ASSERT_EQ(m.vertices.size(), 4u * 5u);
   EXPECT_EQ(m.triangles.size(), 3u * 4u * 2u);
@@ -574,16 +598,30 @@ TEST(X3dScene, ExtrusionAlongABentSpineKeepsItsSection) {
 
 TEST(X3dScene, TriangleAndQuadSetsFollowTheSpec) {
   const std::string square_strip = "<Coordinate point='0 0 0 1 0 0 0 1 0 1 1 0 0 2 0'/>";
-  const X3dScene s = load(write_temp("sets.x3d", scene(
-      "<Shape DEF='T'>" + kTouch + "<TriangleSet><Coordinate point='0 0 0 1 0 0 0 1 0 5 5 5'/></TriangleSet></Shape>"
-      "<Shape DEF='F'>" + kTouch + "<TriangleFanSet fanCount='4 3'><Coordinate point='0 0 0 1 0 0 1 1 0 0 1 0 "
-      "2 0 0 3 0 0 3 1 0'/></TriangleFanSet></Shape>"
-      "<Shape DEF='S'>" + kTouch + "<TriangleStripSet stripCount='5'>" + square_strip + "</TriangleStripSet></Shape>"
-      "<Shape DEF='IT'>" + kTouch + "<IndexedTriangleSet index='0 1 2'>" + square_strip + "</IndexedTriangleSet></Shape>"
-      "<Shape DEF='IF'>" + kTouch + "<IndexedTriangleFanSet index='0 1 3 2 -1 2 3 4'>" + square_strip + "</IndexedTriangleFanSet></Shape>"
-      "<Shape DEF='IS'>" + kTouch + "<IndexedTriangleStripSet index='0 1 2 3 -1 2 3 4'>" + square_strip + "</IndexedTriangleStripSet></Shape>"
-      "<Shape DEF='Q'>" + kTouch + "<QuadSet><Coordinate point='0 0 0 1 0 0 1 1 0 0 1 0'/></QuadSet></Shape>"
-      "<Shape DEF='IQ'>" + kTouch + "<IndexedQuadSet index='0 1 3 2'>" + square_strip + "</IndexedQuadSet></Shape>")));
+  const X3dScene s = load(write_temp(
+      "sets.x3d", scene("<Shape DEF='T'>" + kTouch +
+                        "<TriangleSet><Coordinate point='0 0 0 1 0 0 0 1 0 5 5 5'/></TriangleSet></Shape>"
+                        "<Shape DEF='F'>" +
+                        kTouch +
+                        "<TriangleFanSet fanCount='4 3'><Coordinate point='0 0 0 1 0 0 1 1 0 0 1 0 "
+                        "2 0 0 3 0 0 3 1 0'/></TriangleFanSet></Shape>"
+                        "<Shape DEF='S'>" +
+                        kTouch + "<TriangleStripSet stripCount='5'>" + square_strip +
+                        "</TriangleStripSet></Shape>"
+                        "<Shape DEF='IT'>" +
+                        kTouch + "<IndexedTriangleSet index='0 1 2'>" + square_strip +
+                        "</IndexedTriangleSet></Shape>"
+                        "<Shape DEF='IF'>" +
+                        kTouch + "<IndexedTriangleFanSet index='0 1 3 2 -1 2 3 4'>" + square_strip +
+                        "</IndexedTriangleFanSet></Shape>"
+                        "<Shape DEF='IS'>" +
+                        kTouch + "<IndexedTriangleStripSet index='0 1 2 3 -1 2 3 4'>" + square_strip +
+                        "</IndexedTriangleStripSet></Shape>"
+                        "<Shape DEF='Q'>" +
+                        kTouch +
+                        "<QuadSet><Coordinate point='0 0 0 1 0 0 1 1 0 0 1 0'/></QuadSet></Shape>"
+                        "<Shape DEF='IQ'>" +
+                        kTouch + "<IndexedQuadSet index='0 1 3 2'>" + square_strip + "</IndexedQuadSet></Shape>")));
   const std::vector<std::size_t> expected{1, 2 + 1, 3, 1, 2 + 1, 2 + 1, 2, 2};
   ASSERT_EQ(s.shapes.size(), expected.size());
   for (std::size_t i = 0; i < expected.size(); ++i) {
@@ -591,16 +629,20 @@ TEST(X3dScene, TriangleAndQuadSetsFollowTheSpec) {
     EXPECT_EQ(m.triangles.size(), expected[i]) << s.shapes[i].def;
     // Every triangle of these planar, counter-clockwise sets faces +z (strips alternate
     // their vertex order so that they all do).
-    for (std::size_t k = 0; k < m.triangles.size(); ++k) EXPECT_GT(normal(m, k).z(), 0.99) << s.shapes[i].def << " " << k;
+    for (std::size_t k = 0; k < m.triangles.size(); ++k)
+      EXPECT_GT(normal(m, k).z(), 0.99) << s.shapes[i].def << " " << k;
   }
   EXPECT_TRUE(contains(s.warnings, "TriangleSet: 1 points left over (not a whole triangle): ignored"));
 }
 
 TEST(X3dScene, Disk2DAndRectangle2DAreTwoSidedPlanes) {
-  const X3dScene s = load(write_temp("planar.x3d", scene(
-      "<Shape>" + kTouch + "<Disk2D innerRadius='0.5' outerRadius='1'/></Shape>"
-      "<Shape>" + kTouch + "<Disk2D outerRadius='0.2'/></Shape>"
-      "<Shape>" + kTouch + "<Rectangle2D size='0.2 0.1'/></Shape>")));
+  const X3dScene s = load(write_temp("planar.x3d", scene("<Shape>" + kTouch +
+                                                         "<Disk2D innerRadius='0.5' outerRadius='1'/></Shape>"
+                                                         "<Shape>" +
+                                                         kTouch +
+                                                         "<Disk2D outerRadius='0.2'/></Shape>"
+                                                         "<Shape>" +
+                                                         kTouch + "<Rectangle2D size='0.2 0.1'/></Shape>")));
   ASSERT_EQ(s.shapes.size(), 3u);
   for (const auto& shape : s.shapes) {
     EXPECT_FALSE(shape.solid);  // 19775-1: Geometry2D nodes default to solid FALSE
@@ -662,7 +704,7 @@ TEST(X3dScene, HapticNodesOfTheExamples) {
   magnet.magnets = effects.magnets;
   EXPECT_TRUE(magnet.evaluate(Vec3(1.07, 0, 0), Vec3::Zero()).isApprox(Vec3(-300 * 0.02, 0, 0)));
   EXPECT_TRUE(magnet.evaluate(Vec3(1.085, 0, 0), Vec3::Zero()).isApprox(Vec3(-300 * 0.035, 0, 0)));  // held till 0.04
-  EXPECT_TRUE(magnet.evaluate(Vec3(1.1, 0, 0), Vec3::Zero()).isZero());  // escaped
+  EXPECT_TRUE(magnet.evaluate(Vec3(1.1, 0, 0), Vec3::Zero()).isZero());                              // escaped
   EXPECT_TRUE(magnet.evaluate(Vec3(1.085, 0, 0), Vec3::Zero()).isZero());  // not caught again until 0.03
 }
 
@@ -695,7 +737,8 @@ TEST(X3dScene, CoordinatesAnimatedByACoordinateInterpolatorAreDrawnAtTheFirstKey
   ASSERT_EQ(s.shapes.size(), 1u);
   ASSERT_EQ(s.shapes[0].mesh_W.vertices.size(), 3u);
   EXPECT_TRUE(s.shapes[0].mesh_W.vertices[1].isApprox(Vec3(1, 0, 0)));
-  EXPECT_TRUE(contains(s.warnings, "Coordinate 'C' has no points: a ROUTE (line 8) animates it from CoordinateInterpolator 'I'"));
+  EXPECT_TRUE(contains(s.warnings,
+                       "Coordinate 'C' has no points: a ROUTE (line 8) animates it from CoordinateInterpolator 'I'"));
 }
 
 TEST(X3dScene, ClassicEncodingIsNotRead) {
@@ -720,16 +763,20 @@ TEST(X3dScene, ErrorsCarryFileAndLine) {
       <Coordinate point='0 0 0 1 0 0 0 1 0'/>
     </IndexedTriangleSet>
   </Shape>
-</Scene>)", 3, "index 3 out of range");
-  expect_error("range_ifs.x3d", "<Scene>\n<Shape><IndexedFaceSet coordIndex='0 1 -2'>"
-               "<Coordinate point='0 0 0 1 0 0 0 1 0'/></IndexedFaceSet></Shape></Scene>", 2, "out of range");
+</Scene>)",
+               3, "index 3 out of range");
+  expect_error("range_ifs.x3d",
+               "<Scene>\n<Shape><IndexedFaceSet coordIndex='0 1 -2'>"
+               "<Coordinate point='0 0 0 1 0 0 0 1 0'/></IndexedFaceSet></Shape></Scene>",
+               2, "out of range");
   expect_error("nan.x3d", "<Scene>\n\n<Transform translation='1 x 0'/>\n</Scene>", 3, "'x' is not a number");
-  expect_error("surface.x3d", "<Scene><Shape>\n<Appearance><SmoothSurface stiffness='stiff'/></Appearance></Shape></Scene>", 2,
+  expect_error("surface.x3d",
+               "<Scene><Shape>\n<Appearance><SmoothSurface stiffness='stiff'/></Appearance></Shape></Scene>", 2,
                "stiffness");
   expect_error("use.x3d", "<Scene>\n<Shape>\n<Box USE='NOPE'/>\n</Shape></Scene>", 3, "USE='NOPE'");
   expect_error("use_before_def.x3d", "<Scene>\n<Shape USE='S'/>\n<Shape DEF='S'/></Scene>", 2, "USE='S'");
-  expect_error("enum.x3d", "<Scene><GlobalSettings>\n<HapticsOptions touchableFace='SIDE'/></GlobalSettings></Scene>", 2,
-               "touchableFace");
+  expect_error("enum.x3d", "<Scene><GlobalSettings>\n<HapticsOptions touchableFace='SIDE'/></GlobalSettings></Scene>",
+               2, "touchableFace");
   // Found by fuzz_x3d (the anchor DeformableShape.x3d with an index of 1.33e125): converting
   // an integer-valued number past 2⁶³ was undefined behaviour; now a clear error.
   expect_error("huge_index.x3d", R"(<Scene>
@@ -738,7 +785,8 @@ TEST(X3dScene, ErrorsCarryFileAndLine) {
       <Coordinate point='0 0 0 1 0 0 0 1 0'/>
     </IndexedTriangleSet>
   </Shape>
-</Scene>)", 3, "1.33e+125 is out of range");
+</Scene>)",
+               3, "1.33e+125 is out of range");
   const auto missing = read_x3d_scene("/nonexistent/none.x3d");
   ASSERT_FALSE(missing.has_value());
   EXPECT_EQ(missing.error().code, ErrorCode::kIo);

@@ -19,8 +19,8 @@
 #undef HOF_ALLOCATION_COUNTING
 #endif
 #endif
-#define HOF_SKIP_UNLESS_COUNTING_ALLOCATIONS()                                                     \
-  do {                                                                                            \
+#define HOF_SKIP_UNLESS_COUNTING_ALLOCATIONS()                                                                    \
+  do {                                                                                                            \
     if (!hof::testing::kCountingAllocations) GTEST_SKIP() << "allocations are not counted under ThreadSanitizer"; \
   } while (false)
 

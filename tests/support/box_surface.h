@@ -8,7 +8,8 @@ namespace hof::testing {
 
 inline mesh::TriMesh box_surface(const Vec3& lo, const Vec3& hi) {
   mesh::TriMesh m;
-  for (int i = 0; i < 8; ++i) m.vertices.emplace_back(i & 1 ? hi.x() : lo.x(), i & 2 ? hi.y() : lo.y(), i & 4 ? hi.z() : lo.z());
+  for (int i = 0; i < 8; ++i)
+    m.vertices.emplace_back(i & 1 ? hi.x() : lo.x(), i & 2 ? hi.y() : lo.y(), i & 4 ? hi.z() : lo.z());
   const auto quad = [&](int a, int b, int c, int d) {
     m.triangles.push_back({a, b, c});
     m.triangles.push_back({a, c, d});

@@ -60,18 +60,21 @@ int run_bench(const BenchOptions& options) {
         solve += state.stats.solve_s;
         ++done;
       }
-      rates.push_back(static_cast<double>(per_batch) / std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+      rates.push_back(static_cast<double>(per_batch) /
+                      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
     }
     std::sort(rates.begin(), rates.end());
     const double median = 0.5 * (rates[rates.size() / 2 - 1] + rates[rates.size() / 2]);
     const double n = static_cast<double>(done);
     if (options.json) {
-      std::printf("{\"scene\": \"%s\", \"model\": \"%s\", \"nodes\": %zu, \"tetrahedra\": %zu, \"hexahedra\": %zu, \"triangles\": %zu, \"steps\": %ld, "
-                  "\"steps_per_s\": {\"min\": %.1f, \"median\": %.1f, \"max\": %.1f}, "
-                  "\"split_us\": {\"forces\": %.2f, \"assembly\": %.2f, \"solve\": %.2f}}\n",
-                  scene_path.c_str(), node_path.c_str(), model->node_count(), model->tets.size(), model->hexahedra.size(),
-                  model->tets.empty() && model->hexahedra.empty() ? model->triangles.size() : std::size_t{0}, done, rates.front(), median,
-                  rates.back(), 1e6 * force / n, 1e6 * assembly / n, 1e6 * solve / n);
+      std::printf(
+          "{\"scene\": \"%s\", \"model\": \"%s\", \"nodes\": %zu, \"tetrahedra\": %zu, \"hexahedra\": %zu, "
+          "\"triangles\": %zu, \"steps\": %ld, "
+          "\"steps_per_s\": {\"min\": %.1f, \"median\": %.1f, \"max\": %.1f}, "
+          "\"split_us\": {\"forces\": %.2f, \"assembly\": %.2f, \"solve\": %.2f}}\n",
+          scene_path.c_str(), node_path.c_str(), model->node_count(), model->tets.size(), model->hexahedra.size(),
+          model->tets.empty() && model->hexahedra.empty() ? model->triangles.size() : std::size_t{0}, done,
+          rates.front(), median, rates.back(), 1e6 * force / n, 1e6 * assembly / n, 1e6 * solve / n);
     } else {
       const std::string elements = model->element_summary();
       std::printf("%s: model '%s' (%zu nodes, %s), %ld steps of %.4g s\n", scene_path.c_str(), node_path.c_str(),

@@ -13,10 +13,10 @@
 namespace hof::app {
 
 struct EvaluationOptions {
-  bool quick{false};                        ///< seconds: the smallest liver, few batches (CI)
-  std::string only;                         ///< regular expression on cell names; empty: all
-  std::filesystem::path out{"out/bench"};   ///< where the report is written
-  std::string command_line;                 ///< as typed, for the report
+  bool quick{false};                       ///< seconds: the smallest liver, few batches (CI)
+  std::string only;                        ///< regular expression on cell names; empty: all
+  std::filesystem::path out{"out/bench"};  ///< where the report is written
+  std::string command_line;                ///< as typed, for the report
 };
 
 /// Runs the evaluation. Returns the process exit status: 0, or 1 on bad options or when the

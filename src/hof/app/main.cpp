@@ -5,10 +5,10 @@
 #include <cstdio>
 #include <string>
 
-#include "hof/app/mesh_commands.h"
 #include "hof/app/bench_command.h"
 #include "hof/app/evaluation.h"
 #include "hof/app/gui/gui_app.h"
+#include "hof/app/mesh_commands.h"
 #include "hof/app/run_command.h"
 #include "hof/core/version.h"
 #include "hof/haptics/device_backends/udp_auth.h"
@@ -31,11 +31,12 @@ void add_mesh_commands(CLI::App& app, int& status) {
   info_cmd->callback([&] { status = hof::app::run_mesh_info(info); });
 
   static hof::app::MeshGenerateOptions gen;
-  CLI::App* gen_cmd = mesh->add_subcommand(
-      "generate", "Generate a standard organ model (writes OUT.msh and its surface as OUT.obj)");
+  CLI::App* gen_cmd =
+      mesh->add_subcommand("generate", "Generate a standard organ model (writes OUT.msh and its surface as OUT.obj)");
   gen_cmd->add_option("shape", gen.shape, "Shape to generate")->check(CLI::IsMember({"liver"}))->required();
-  gen_cmd->add_option("-r,--resolution", gen.resolution,
-                      "simple (~600 tets), coarse (~2,500), medium (~10,000) or fine (~40,000)")
+  gen_cmd
+      ->add_option("-r,--resolution", gen.resolution,
+                   "simple (~600 tets), coarse (~2,500), medium (~10,000) or fine (~40,000)")
       ->check(CLI::IsMember({"simple", "coarse", "medium", "fine"}))
       ->capture_default_str();
   gen_cmd->add_option("-o,--output", gen.output, "Output volume mesh (.msh, .vtu)")->required();
@@ -46,14 +47,15 @@ void add_mesh_commands(CLI::App& app, int& status) {
   gen_cmd->callback([&] { status = hof::app::run_mesh_generate(gen); });
 
   static hof::app::MeshTetrahedralizeOptions tet;
-  CLI::App* tet_cmd = mesh->add_subcommand(
-      "tetrahedralize", "Fill a closed triangle surface with quality tetrahedra (TetGen)");
+  CLI::App* tet_cmd =
+      mesh->add_subcommand("tetrahedralize", "Fill a closed triangle surface with quality tetrahedra (TetGen)");
   tet_cmd->add_option("surface", tet.surface, "Closed surface (.obj, .stl, .off, .msh)")->required();
   tet_cmd->add_option("-o,--output", tet.output, "Output volume mesh (.msh, .vtu)")->required();
   tet_cmd->add_option("--max-volume", tet.max_volume_m3, "Largest tetrahedron volume in m^3 (0 = no bound)")
       ->capture_default_str();
-  tet_cmd->add_option("--quality", tet.quality,
-                      "Radius-edge ratio bound (>= 1; smaller is better shaped; 0 = no refinement)")
+  tet_cmd
+      ->add_option("--quality", tet.quality,
+                   "Radius-edge ratio bound (>= 1; smaller is better shaped; 0 = no refinement)")
       ->capture_default_str();
   tet_cmd->add_option("--min-dihedral", tet.min_dihedral_deg, "Dihedral angle to aim for, degrees")
       ->capture_default_str();
@@ -65,8 +67,7 @@ void add_mesh_commands(CLI::App& app, int& status) {
   tet_cmd->callback([&] { status = hof::app::run_mesh_tetrahedralize(tet); });
 
   static hof::app::MeshConvertOptions conv;
-  CLI::App* conv_cmd =
-      mesh->add_subcommand("convert", "Convert between mesh formats (chosen from the extensions)");
+  CLI::App* conv_cmd = mesh->add_subcommand("convert", "Convert between mesh formats (chosen from the extensions)");
   conv_cmd->add_option("input", conv.input, "Input mesh")->required();
   conv_cmd->add_option("output", conv.output, "Output mesh (.msh, .vtu, .obj, .off)")->required();
   conv_cmd->add_option("--msh-version", conv.msh_version, "Gmsh version to write: 2 or 4")
@@ -77,8 +78,9 @@ void add_mesh_commands(CLI::App& app, int& status) {
 }
 
 // The choices of --keep-cpus-awake and of --pin-threads (`hof run` and `hof gui`).
-const std::map<std::string, hof::haptics::KeepAwake> kKeepAwakeModes{
-    {"auto", hof::haptics::KeepAwake::automatic}, {"on", hof::haptics::KeepAwake::on}, {"off", hof::haptics::KeepAwake::off}};
+const std::map<std::string, hof::haptics::KeepAwake> kKeepAwakeModes{{"auto", hof::haptics::KeepAwake::automatic},
+                                                                     {"on", hof::haptics::KeepAwake::on},
+                                                                     {"off", hof::haptics::KeepAwake::off}};
 const std::map<std::string, bool> kOnOff{{"on", true}, {"off", false}};
 
 // `hof run`: a session without a window.
@@ -88,28 +90,38 @@ void add_run_command(CLI::App& app, int& status) {
   static long steps = 0;
   static std::string device;
   static std::string out;
-  CLI::App* run_cmd = app.add_subcommand("run", "Run a haptic session on a project (.hof), SOFA scene (.scn) or X3D scene (.x3d)");
+  CLI::App* run_cmd =
+      app.add_subcommand("run", "Run a haptic session on a project (.hof), SOFA scene (.scn) or X3D scene (.x3d)");
   run_cmd->add_option("file", run.file, "Project (.hof), SOFA scene (.scn) or X3D scene (.x3d)")->required();
   run_cmd->add_flag("--headless", run.headless, "No window (the default; `hof gui` is the window)");
-  run_cmd->add_flag("--deterministic", run.deterministic, "Virtual time: loops in lock-step, identical output every run");
-  auto* seconds_opt = run_cmd->add_option("--seconds", seconds, "Length of the run in seconds (default 5, or a scripted motion's whole length when longer)");
+  run_cmd->add_flag("--deterministic", run.deterministic,
+                    "Virtual time: loops in lock-step, identical output every run");
+  auto* seconds_opt =
+      run_cmd->add_option("--seconds", seconds,
+                          "Length of the run in seconds (default 5, or a scripted motion's whole length when longer)");
   auto* steps_opt = run_cmd->add_option("--steps", steps, "Length of the run in simulation steps");
   seconds_opt->excludes(steps_opt);
-  run_cmd->add_option("--device", device, "Device spec, e.g. scripted:poke, replay:FILE.csv, udp:5005, virtual-hand:poke");
+  run_cmd->add_option("--device", device,
+                      "Device spec, e.g. scripted:poke, replay:FILE.csv, udp:5005, virtual-hand:poke");
   run_cmd->add_option("--out", out, "Folder for telemetry.csv, summary.json, the final state (.vtu) and plots");
-  run_cmd->add_option("--telemetry-rate", run.telemetry_rate_hz, "Rows per second in telemetry.csv (0 = every haptic tick)");
+  run_cmd->add_option("--telemetry-rate", run.telemetry_rate_hz,
+                      "Rows per second in telemetry.csv (0 = every haptic tick)");
   run_cmd->add_flag("-q,--quiet", run.quiet, "No progress output");
-  run_cmd->add_option("--keep-cpus-awake", run.keep_awake,
-                      "auto|on|off: real time, keep the CPUs from halting so the haptic thread wakes on time (auto: on a "
-                      "virtual machine; docs/reliability.md)")
+  run_cmd
+      ->add_option("--keep-cpus-awake", run.keep_awake,
+                   "auto|on|off: real time, keep the CPUs from halting so the haptic thread wakes on time (auto: on a "
+                   "virtual machine; docs/reliability.md)")
       ->transform(CLI::CheckedTransformer(kKeepAwakeModes, CLI::ignore_case))
       ->default_str("auto");
-  run_cmd->add_option("--pin-threads", run.pin_threads,
-                      "on|off: real time, the haptic loop on the last CPU, the simulation on the others (docs/performance.md)")
+  run_cmd
+      ->add_option(
+          "--pin-threads", run.pin_threads,
+          "on|off: real time, the haptic loop on the last CPU, the simulation on the others (docs/performance.md)")
       ->transform(CLI::CheckedTransformer(kOnOff, CLI::ignore_case))
       ->default_str("on");
-  run_cmd->add_option("--sim-threads", run.simulation_threads,
-                      "Real time: the simulation's threads (0 = automatic: every core but one, left to the haptic loop)")
+  run_cmd
+      ->add_option("--sim-threads", run.simulation_threads,
+                   "Real time: the simulation's threads (0 = automatic: every core but one, left to the haptic loop)")
       ->check(CLI::Range(0, 256))
       ->capture_default_str();
   run_cmd->callback([&, seconds_opt, steps_opt] {
@@ -125,17 +137,20 @@ void add_run_command(CLI::App& app, int& status) {
 void add_bench_command(CLI::App& app, int& status) {
   static hof::app::BenchOptions bench;
   static hof::app::EvaluationOptions evaluation;
-  CLI::App* bench_cmd = app.add_subcommand(
-      "bench",
-      "Re-run the thesis' evaluation on this machine (tables, results.json/.csv, plots, report.md), or with --scene time "
-      "one scene's mechanics as fast as it goes (compare with runSofa -g batch -n N)");
-  CLI::Option* scene_opt =
-      bench_cmd->add_option("--scene", bench.scene, "Time this project (.hof), SOFA scene (.scn) or X3D scene (.x3d) alone");
+  CLI::App* bench_cmd =
+      app.add_subcommand("bench",
+                         "Re-run the thesis' evaluation on this machine (tables, results.json/.csv, plots, report.md), "
+                         "or with --scene time "
+                         "one scene's mechanics as fast as it goes (compare with runSofa -g batch -n N)");
+  CLI::Option* scene_opt = bench_cmd->add_option(
+      "--scene", bench.scene, "Time this project (.hof), SOFA scene (.scn) or X3D scene (.x3d) alone");
   bench_cmd->add_option("--steps", bench.steps, "With --scene: simulation steps to time")->capture_default_str();
   bench_cmd->add_option("--threads", bench.threads, "With --scene: threads (0 = all cores)")->capture_default_str();
   bench_cmd->add_flag("--json", bench.json, "With --scene: print the figures as JSON");
-  CLI::Option* quick_opt = bench_cmd->add_flag("--quick", evaluation.quick, "The evaluation in seconds: the smallest liver, short batches");
-  CLI::Option* only_opt = bench_cmd->add_option("--only", evaluation.only, "Only the cells whose name matches this regular expression");
+  CLI::Option* quick_opt =
+      bench_cmd->add_flag("--quick", evaluation.quick, "The evaluation in seconds: the smallest liver, short batches");
+  CLI::Option* only_opt =
+      bench_cmd->add_option("--only", evaluation.only, "Only the cells whose name matches this regular expression");
   CLI::Option* out_opt = bench_cmd->add_option("--out", evaluation.out, "Folder for the report")->capture_default_str();
   for (CLI::Option* o : {quick_opt, only_opt, out_opt}) o->excludes(scene_opt);
   bench_cmd->callback([&status, scene_opt, out_opt] {
@@ -155,22 +170,28 @@ void add_bench_command(CLI::App& app, int& status) {
 void add_gui_command(CLI::App& app, int& status) {
   static hof::app::GuiOptions gui;
   static std::string gui_file, gui_script, gui_size;
-  CLI::App* gui_cmd = app.add_subcommand("gui", "The window: see, touch (the mouse is the stylus when no device is connected), tune, save");
+  CLI::App* gui_cmd = app.add_subcommand(
+      "gui", "The window: see, touch (the mouse is the stylus when no device is connected), tune, save");
   gui_cmd->add_option("file", gui_file, "Project (.hof), SOFA scene (.scn) or X3D scene (.x3d)");
   gui_cmd->add_option("--device", gui.device, "Device spec (default: the project's; the mouse when it has none)");
   gui_cmd->add_option("--script", gui_script, "Run the actions of this file (one per line), then exit");
   gui_cmd->add_option("--size", gui_size, "Window size WIDTHxHEIGHT (default 1280x720)");
   gui_cmd->add_flag("-q,--quiet", gui.quiet, "No messages on the terminal");
-  gui_cmd->add_option("--keep-cpus-awake", gui.keep_awake,
-                      "auto|on|off: keep the CPUs from halting so the haptic thread wakes on time (auto: on a virtual machine)")
+  gui_cmd
+      ->add_option(
+          "--keep-cpus-awake", gui.keep_awake,
+          "auto|on|off: keep the CPUs from halting so the haptic thread wakes on time (auto: on a virtual machine)")
       ->transform(CLI::CheckedTransformer(kKeepAwakeModes, CLI::ignore_case))
       ->default_str("auto");
-  gui_cmd->add_option("--pin-threads", gui.pin_threads,
-                      "on|off: the haptic loop on the last CPU, the simulation on the others")
+  gui_cmd
+      ->add_option("--pin-threads", gui.pin_threads,
+                   "on|off: the haptic loop on the last CPU, the simulation on the others")
       ->transform(CLI::CheckedTransformer(kOnOff, CLI::ignore_case))
       ->default_str("on");
-  gui_cmd->add_option("--sim-threads", gui.simulation_threads,
-                      "The simulation's threads (0 = automatic: every core but one, left to the haptic loop and the window)")
+  gui_cmd
+      ->add_option(
+          "--sim-threads", gui.simulation_threads,
+          "The simulation's threads (0 = automatic: every core but one, left to the haptic loop and the window)")
       ->check(CLI::Range(0, 256))
       ->capture_default_str();
   gui_cmd->callback([&] {
@@ -179,7 +200,8 @@ void add_gui_command(CLI::App& app, int& status) {
     if (!gui_size.empty()) {
       int w = 0, h = 0;
       if (std::sscanf(gui_size.c_str(), "%dx%d", &w, &h) != 2 || w < 320 || h < 240 || w > 8192 || h > 8192) {
-        std::fprintf(stderr, "hof: --size must be WIDTHxHEIGHT within 320x240 and 8192x8192, got '%s'\n", gui_size.c_str());
+        std::fprintf(stderr, "hof: --size must be WIDTHxHEIGHT within 320x240 and 8192x8192, got '%s'\n",
+                     gui_size.c_str());
         status = 2;
         return;
       }

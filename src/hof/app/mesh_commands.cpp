@@ -24,8 +24,7 @@ using detail::fail;
 Expected<mesh::MshVersion> msh_version(int v) {
   if (v == 2) return mesh::MshVersion::k2_2;
   if (v == 4) return mesh::MshVersion::k4_1;
-  return make_error(ErrorCode::kInvalidArgument,
-                    fmt::format("--msh-version must be 2 (v2.2) or 4 (v4.1), got {}", v));
+  return make_error(ErrorCode::kInvalidArgument, fmt::format("--msh-version must be 2 (v2.2) or 4 (v4.1), got {}", v));
 }
 
 // A mesh file's numbers carry no unit (Gmsh, OBJ, STL, OFF, VTU alike): lengths are reported
@@ -48,8 +47,8 @@ Expected<LengthUnit> length_unit(const std::string& name) {
 
 nlohmann::json vec_json(const Vec3& v) { return nlohmann::json::array({v.x(), v.y(), v.z()}); }
 
-nlohmann::json report_json(const std::filesystem::path& file, const mesh::ReadReport& read,
-                           const mesh::MeshReport& r, const LengthUnit& unit) {
+nlohmann::json report_json(const std::filesystem::path& file, const mesh::ReadReport& read, const mesh::MeshReport& r,
+                           const LengthUnit& unit) {
   nlohmann::json j;
   j["file"] = file.string();
   j["format"] = read.format;
@@ -69,7 +68,8 @@ nlohmann::json report_json(const std::filesystem::path& file, const mesh::ReadRe
                   {"area", r.surface.area_m2 * unit.to_m * unit.to_m}};
   // Lengths in metres when the user stated the file's unit, else in the file's own numbers.
   j["length_unit"] = unit.label;
-  j["bounding_box"] = {{"min", vec_json(r.bbox_min * unit.to_m)}, {"max", vec_json(r.bbox_max * unit.to_m)},
+  j["bounding_box"] = {{"min", vec_json(r.bbox_min * unit.to_m)},
+                       {"max", vec_json(r.bbox_max * unit.to_m)},
                        {"size", vec_json((r.bbox_max - r.bbox_min) * unit.to_m)}};
   j["volume"] = r.volume_m3 * unit.volume_to_m3();
   if (r.tets > 0) {
@@ -83,15 +83,14 @@ nlohmann::json report_json(const std::filesystem::path& file, const mesh::ReadRe
                     {"inverted", r.quality.inverted},
                     {"degenerate", r.quality.degenerate}};
   }
-  j["ignored"] = {{"points", read.ignored_points}, {"lines", read.ignored_lines},
-                  {"other", read.ignored_other}};
+  j["ignored"] = {{"points", read.ignored_points}, {"lines", read.ignored_lines}, {"other", read.ignored_other}};
   j["warnings"] = read.warnings;
   j["problems"] = r.problems;
   return j;
 }
 
-void print_report(const std::filesystem::path& file, const mesh::ReadReport& read,
-                  const mesh::MeshReport& r, const LengthUnit& unit) {
+void print_report(const std::filesystem::path& file, const mesh::ReadReport& read, const mesh::MeshReport& r,
+                  const LengthUnit& unit) {
   const Vec3 lo = r.bbox_min * unit.to_m;
   const Vec3 hi = r.bbox_max * unit.to_m;
   const Vec3 size = hi - lo;
@@ -101,13 +100,12 @@ void print_report(const std::filesystem::path& file, const mesh::ReadReport& rea
   fmt::print("  tetrahedra         {}\n", r.tets);
   fmt::print("  triangles in file  {}\n", r.file_triangles);
   fmt::print("  edges              {}\n", r.edges);
-  fmt::print("  surface            {} triangles on {} vertices, {}\n", r.surface_triangles,
-             r.surface_vertices,
+  fmt::print("  surface            {} triangles on {} vertices, {}\n", r.surface_triangles, r.surface_vertices,
              r.surface.closed_outward()    ? "closed, outward"
              : r.surface.closed_manifold() ? "closed, inward"
                                            : "not closed");
-  fmt::print("  bounding box       [{:.4g}, {:.4g}, {:.4g}] to [{:.4g}, {:.4g}, {:.4g}] {}\n", lo.x(), lo.y(),
-             lo.z(), hi.x(), hi.y(), hi.z(), u);
+  fmt::print("  bounding box       [{:.4g}, {:.4g}, {:.4g}] to [{:.4g}, {:.4g}, {:.4g}] {}\n", lo.x(), lo.y(), lo.z(),
+             hi.x(), hi.y(), hi.z(), u);
   fmt::print("  size               {:.4g} x {:.4g} x {:.4g} {}\n", size.x(), size.y(), size.z(), u);
   fmt::print("  volume             {:.6g} {}{}\n", r.volume_m3 * unit.volume_to_m3(), unit.volume_label(),
              r.tets > 0 ? "" : " (enclosed by the triangles)");
@@ -115,15 +113,14 @@ void print_report(const std::filesystem::path& file, const mesh::ReadReport& rea
     const auto& q = r.quality;
     fmt::print("  dihedral angles    min {:.2f} deg, max {:.2f} deg, mean of per-tet min {:.2f} deg\n",
                q.min_dihedral_deg, q.max_dihedral_deg, q.mean_min_dihedral_deg);
-    fmt::print("  radius ratio       min {:.3f}, mean {:.3f} (1 = regular)\n", q.min_radius_ratio,
-               q.mean_radius_ratio);
+    fmt::print("  radius ratio       min {:.3f}, mean {:.3f} (1 = regular)\n", q.min_radius_ratio, q.mean_radius_ratio);
     fmt::print("  tet volume         min {:.4g} {}, max {:.4g} {}\n", q.min_volume_m3 * unit.volume_to_m3(),
                unit.volume_label(), q.max_volume_m3 * unit.volume_to_m3(), unit.volume_label());
     fmt::print("  inverted           {}\n", q.inverted);
   }
   if (read.ignored_points + read.ignored_lines + read.ignored_other > 0) {
-    fmt::print("  ignored elements   {} points, {} lines, {} other\n", read.ignored_points,
-               read.ignored_lines, read.ignored_other);
+    fmt::print("  ignored elements   {} points, {} lines, {} other\n", read.ignored_points, read.ignored_lines,
+               read.ignored_other);
   }
   for (const std::string& w : read.warnings) fmt::print("  warning: {}\n", w);
   if (!unit.stated) {
@@ -137,8 +134,7 @@ void print_report(const std::filesystem::path& file, const mesh::ReadReport& rea
   }
 }
 
-Expected<void> write_with_surface(const mesh::Mesh& m, const std::filesystem::path& output,
-                                  mesh::MshVersion version) {
+Expected<void> write_with_surface(const mesh::Mesh& m, const std::filesystem::path& output, mesh::MshVersion version) {
   if (output.has_parent_path()) {
     std::error_code ec;
     std::filesystem::create_directories(output.parent_path(), ec);
@@ -183,8 +179,7 @@ int run_mesh_generate(const MeshGenerateOptions& options) {
   }
   const auto resolution = mesh::parse_liver_resolution(options.resolution);
   if (!resolution) {
-    return fail(fmt::format("unknown resolution '{}': use simple, coarse, medium or fine",
-                            options.resolution));
+    return fail(fmt::format("unknown resolution '{}': use simple, coarse, medium or fine", options.resolution));
   }
   const auto version = msh_version(options.msh_version);
   if (!version) return fail(version.error());
@@ -192,9 +187,8 @@ int run_mesh_generate(const MeshGenerateOptions& options) {
   if (!liver) return fail(liver.error());
   if (auto ok = write_with_surface(*liver, options.output, *version); !ok) return fail(ok.error());
   if (!options.quiet) {
-    fmt::print(stderr, "wrote {} ({} nodes, {} tetrahedra, {} surface triangles)\n",
-               options.output.string(), liver->nodes.size(), liver->tets.size(),
-               liver->triangles.size());
+    fmt::print(stderr, "wrote {} ({} nodes, {} tetrahedra, {} surface triangles)\n", options.output.string(),
+               liver->nodes.size(), liver->tets.size(), liver->triangles.size());
   }
   return 0;
 }
@@ -220,8 +214,8 @@ int run_mesh_tetrahedralize(const MeshTetrahedralizeOptions& options) {
   if (!volume) return fail(volume.error());
   if (auto ok = write_with_surface(*volume, options.output, *version); !ok) return fail(ok.error());
   if (!options.quiet) {
-    fmt::print(stderr, "wrote {} ({} nodes, {} tetrahedra)\n", options.output.string(),
-               volume->nodes.size(), volume->tets.size());
+    fmt::print(stderr, "wrote {} ({} nodes, {} tetrahedra)\n", options.output.string(), volume->nodes.size(),
+               volume->tets.size());
   }
   return 0;
 }
@@ -239,7 +233,8 @@ int run_mesh_convert(const MeshConvertOptions& options) {
   // an OBJ would be vertices of no face.
   if (ext == ".obj" || ext == ".off" || ext == ".stl") {
     std::vector<mesh::Tri> triangles = out.triangles;
-    if (triangles.empty() && !out.tets.empty()) triangles = mesh::extract_boundary(out.nodes, out.tets).volume_triangles;
+    if (triangles.empty() && !out.tets.empty())
+      triangles = mesh::extract_boundary(out.nodes, out.tets).volume_triangles;
     std::vector<std::int32_t> new_index(out.nodes.size(), -1);
     mesh::Mesh surface;
     for (mesh::Tri& t : triangles) {
@@ -257,8 +252,8 @@ int run_mesh_convert(const MeshConvertOptions& options) {
   }
   if (auto ok = mesh::write_mesh(out, options.output, *version); !ok) return fail(ok.error());
   if (!options.quiet) {
-    fmt::print(stderr, "wrote {} ({} nodes, {} tetrahedra, {} triangles)\n",
-               options.output.string(), out.nodes.size(), out.tets.size(), out.triangles.size());
+    fmt::print(stderr, "wrote {} ({} nodes, {} tetrahedra, {} triangles)\n", options.output.string(), out.nodes.size(),
+               out.tets.size(), out.triangles.size());
   }
   return 0;
 }

@@ -30,7 +30,7 @@ struct MeshTetrahedralizeOptions {
   std::filesystem::path surface;
   std::filesystem::path output;
   double max_volume_m3{0.0};
-  double quality{1.414};          ///< radius-edge ratio bound; 0 = off
+  double quality{1.414};  ///< radius-edge ratio bound; 0 = off
   double min_dihedral_deg{0.0};
   bool preserve_surface{false};
   int msh_version{4};

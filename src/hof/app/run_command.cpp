@@ -2,37 +2,37 @@
 
 #include <fmt/format.h>
 
-#include <algorithm>
-#include <array>
-#include <limits>
-#include <map>
-#include <optional>
-#include <cctype>
-#include <string_view>
-#include <vector>
-#include <cmath>
-#include <cerrno>
-#include <cstdio>
-#include <cstring>
-#include <cstdlib>
-#include <csignal>
-#include <atomic>
 #include <signal.h>
-#include <fstream>
 #include <sys/mman.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
 #include <unistd.h>
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cctype>
+#include <cerrno>
+#include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <limits>
+#include <map>
 #include <nlohmann/json.hpp>
+#include <optional>
+#include <string_view>
+#include <vector>
 
 #include "hof/app/detail/cli_failure.h"
 #include "hof/app/session_recording.h"
-#include "hof/haptics/cpu_keep_awake.h"
 #include "hof/core/file_write.h"
 #include "hof/core/progress.h"
 #include "hof/core/text.h"
 #include "hof/coupling/press_recorder.h"
 #include "hof/coupling/session.h"
+#include "hof/haptics/cpu_keep_awake.h"
 #include "hof/haptics/device.h"
 #include "hof/mechanics/step.h"
 #include "hof/mesh/boundary.h"
@@ -48,8 +48,6 @@ namespace hof::app {
 namespace {
 
 using detail::fail;
-
-
 
 // Ticks whose period exceeded `limit_s` (a missed haptic deadline), from the 1 µs histogram.
 // CPU time the hypervisor gave to other guests while this machine's CPUs wanted to run (the
@@ -90,8 +88,9 @@ std::string finish_telemetry(std::FILE* telemetry, const std::filesystem::path& 
       offset += n;
     }
     if (auto written = write_file_atomically(dir / "telemetry.csv", rows); !written) {
-      problem = fmt::format("the report folder was removed during the run and telemetry.csv could not be written again: {}",
-                            written.error().to_string());
+      problem =
+          fmt::format("the report folder was removed during the run and telemetry.csv could not be written again: {}",
+                      written.error().to_string());
     } else if (problem.empty()) {
       problem = "the report folder was removed during the run: it was made again, with the whole telemetry";
     }
@@ -147,7 +146,8 @@ std::string numeric_option_problem(const RunOptions& options) {
     return fmt::format("--steps must be in [1, 100000000], got {}", *options.steps);
   }
   if (!(options.telemetry_rate_hz >= 0.0 && options.telemetry_rate_hz <= 100000.0)) {
-    return fmt::format("--telemetry-rate must be in [0, 100000] rows/s (0 = every tick), got {}", options.telemetry_rate_hz);
+    return fmt::format("--telemetry-rate must be in [0, 100000] rows/s (0 = every tick), got {}",
+                       options.telemetry_rate_hz);
   }
   return {};
 }
@@ -156,7 +156,8 @@ std::string numeric_option_problem(const RunOptions& options) {
 // ceiling (root, or an unlimited RLIMIT_MEMLOCK).
 bool lock_memory_without_ceiling() {
   rlimit limit{};
-  const bool may_lock = ::geteuid() == 0 || (::getrlimit(RLIMIT_MEMLOCK, &limit) == 0 && limit.rlim_cur == RLIM_INFINITY);
+  const bool may_lock =
+      ::geteuid() == 0 || (::getrlimit(RLIMIT_MEMLOCK, &limit) == 0 && limit.rlim_cur == RLIM_INFINITY);
   return may_lock && ::mlockall(MCL_CURRENT | MCL_FUTURE) == 0;
 }
 
@@ -180,7 +181,8 @@ int write_run_report(const RunOptions& options, RunRecording& recording, const c
     const std::string& problem = conditions.telemetry_problem;
     if (!problem.empty()) {
       std::fprintf(stderr, "hof: warning: %s\n", problem.c_str());
-      if (problem.find("incomplete") != std::string::npos || problem.find("could not") != std::string::npos) report_status = 3;
+      if (problem.find("incomplete") != std::string::npos || problem.find("could not") != std::string::npos)
+        report_status = 3;
     }
     if (!recording.write_report_files(*options.out, report, options.quiet)) report_status = 3;
   }
@@ -203,7 +205,8 @@ int run_session(const RunOptions& options) {
   if (!world) return fail(world.error());
   if (!world->nothing_to_touch.empty()) {
     // Shown by `hof gui`, but a headless run would render nothing: its own status, one line.
-    std::fprintf(stderr, "hof: %s: %s; `hof gui` shows it\n", options.file.c_str(), valid_utf8(world->nothing_to_touch).c_str());
+    std::fprintf(stderr, "hof: %s: %s; `hof gui` shows it\n", options.file.c_str(),
+                 valid_utf8(world->nothing_to_touch).c_str());
     return kExitNothingToTouch;
   }
   for (const std::string& w : world->warnings) {
@@ -234,7 +237,9 @@ int run_session(const RunOptions& options) {
   if (options.out) {
     std::error_code ec;
     std::filesystem::create_directories(*options.out, ec);
-    if (ec) return fail(Error{ErrorCode::kIo, "cannot create the report folder: " + ec.message(), options.out->string(), 0, -1});
+    if (ec)
+      return fail(
+          Error{ErrorCode::kIo, "cannot create the report folder: " + ec.message(), options.out->string(), 0, -1});
     // Read-write: if the folder is removed mid-run the rows are read back from this stream.
     telemetry = std::fopen((*options.out / "telemetry.csv").c_str(), "w+");
     if (!telemetry) return fail(Error{ErrorCode::kIo, "cannot write telemetry.csv", options.out->string(), 0, -1});
@@ -262,12 +267,15 @@ int run_session(const RunOptions& options) {
     if (g_stop_signal) session.request_stop();
     if (progress) progress(what, fraction);
   };
-  const coupling::SessionReport report = options.deterministic ? session.run_virtual(seconds, on_sample, progress_or_stop)
-                                                               : session.run_realtime(seconds, on_sample, progress_or_stop);
+  const coupling::SessionReport report = options.deterministic
+                                             ? session.run_virtual(seconds, on_sample, progress_or_stop)
+                                             : session.run_realtime(seconds, on_sample, progress_or_stop);
   stop_on_signals.reset();
   const int stop_signal = g_stop_signal;
   if (stop_signal) {
-    conditions.stopped_by = stop_signal == SIGINT ? "SIGINT" : stop_signal == SIGTERM ? "SIGTERM" : fmt::format("signal {}", stop_signal);
+    conditions.stopped_by = stop_signal == SIGINT    ? "SIGINT"
+                            : stop_signal == SIGTERM ? "SIGTERM"
+                                                     : fmt::format("signal {}", stop_signal);
     std::fprintf(stderr, "hof: %s: the run stopped after %.3f s of %.3f s; writing the report of what ran\n",
                  conditions.stopped_by.c_str(), report.simulated_s, seconds);
   }
@@ -287,10 +295,11 @@ int run_session(const RunOptions& options) {
 int run_check(const CheckOptions& options) {
   const std::string ext = options.file.extension().string();
   if (std::error_code ec; std::filesystem::is_directory(options.file, ec)) {
-    return fail(Error{ErrorCode::kIo,
-                      "is a folder; hof check takes one file: a project (.hof), a scene (.scn, .x3d) or a mesh (.msh, .obj, "
-                      ".stl, .off, .vtu)",
-                      options.file.string(), 0, -1});
+    return fail(
+        Error{ErrorCode::kIo,
+              "is a folder; hof check takes one file: a project (.hof), a scene (.scn, .x3d) or a mesh (.msh, .obj, "
+              ".stl, .off, .vtu)",
+              options.file.string(), 0, -1});
   }
   if (ext == ".hof" || ext == ".scn" || ext == ".x3d") {
     // The same builder as `hof run`: what run would refuse is an error here.
@@ -304,17 +313,20 @@ int run_check(const CheckOptions& options) {
       touchable += b.surface.triangles.empty() ? 0 : 1;
       if (b.deformable()) {
         const std::string elements = b.model->element_summary();
-        std::printf("  model '%s': %zu nodes, %s, %zu surface triangles (deformable, dt %g s)\n", valid_utf8(b.name).c_str(),
-                    b.model->node_count(), elements.c_str(), b.surface.triangles.size(), b.model->dt_s);
+        std::printf("  model '%s': %zu nodes, %s, %zu surface triangles (deformable, dt %g s)\n",
+                    valid_utf8(b.name).c_str(), b.model->node_count(), elements.c_str(), b.surface.triangles.size(),
+                    b.model->dt_s);
       } else {
-        std::printf("  shape '%s': %zu triangles (rigid, fixed)\n", valid_utf8(b.name).c_str(), b.surface.triangles.size());
+        std::printf("  shape '%s': %zu triangles (rigid, fixed)\n", valid_utf8(b.name).c_str(),
+                    b.surface.triangles.size());
       }
     }
-    std::printf("  %zu touchable, %zu spring / %zu viscosity / %zu constant / %zu magnetic geometry / %zu position function / "
-                "%zu time function force effects\n",
-                touchable, world->config.effects.springs.size(), world->config.effects.viscosities.size(),
-                world->config.effects.constants.size(), world->config.effects.magnets.size(),
-                world->config.effects.position_functions.size(), world->config.effects.time_functions.size());
+    std::printf(
+        "  %zu touchable, %zu spring / %zu viscosity / %zu constant / %zu magnetic geometry / %zu position function / "
+        "%zu time function force effects\n",
+        touchable, world->config.effects.springs.size(), world->config.effects.viscosities.size(),
+        world->config.effects.constants.size(), world->config.effects.magnets.size(),
+        world->config.effects.position_functions.size(), world->config.effects.time_functions.size());
     if (world->project.needle) {
       // Which bodies the needle enters, and with what.
       std::vector<std::string> names;
@@ -342,7 +354,8 @@ int run_check(const CheckOptions& options) {
       std::map<std::string, int> kinds;
       for (const auto& s : world->ignored) ++kinds[s.substr(0, s.find(' '))];
       std::string list;
-      for (const auto& [kind, n] : kinds) list += fmt::format("{}{}{}", list.empty() ? "" : ", ", kind, n > 1 ? fmt::format(" x{}", n) : "");
+      for (const auto& [kind, n] : kinds)
+        list += fmt::format("{}{}{}", list.empty() ? "" : ", ", kind, n > 1 ? fmt::format(" x{}", n) : "");
       std::printf("  not needed in HoF: %zu component(s): %s\n", world->ignored.size(), list.c_str());
     }
     for (const auto& w : world->warnings) std::printf("warning: %s\n", valid_utf8(w).c_str());

@@ -12,14 +12,14 @@
 namespace hof::app {
 
 struct RunOptions {
-  std::filesystem::path file;             ///< .hof project or .scn SOFA scene
+  std::filesystem::path file;  ///< .hof project or .scn SOFA scene
   bool headless{true};
-  bool deterministic{false};              ///< virtual time, lock-step (reproducible)
-  std::optional<double> seconds;          ///< run length (default 5 s)
-  std::optional<long> steps;              ///< or a number of simulation steps
-  std::optional<std::string> device;      ///< overrides the project's device
+  bool deterministic{false};                 ///< virtual time, lock-step (reproducible)
+  std::optional<double> seconds;             ///< run length (default 5 s)
+  std::optional<long> steps;                 ///< or a number of simulation steps
+  std::optional<std::string> device;         ///< overrides the project's device
   std::optional<std::filesystem::path> out;  ///< report folder
-  double telemetry_rate_hz{0.0};          ///< 0 = every haptic tick
+  double telemetry_rate_hz{0.0};             ///< 0 = every haptic tick
   bool quiet{false};
   /// Real time: keep the CPUs from halting (auto: on a virtual machine; cpu_keep_awake.h).
   haptics::KeepAwake keep_awake{haptics::KeepAwake::automatic};

@@ -31,9 +31,9 @@ struct TelemetryRow {
   std::int32_t press{0};      ///< the press the tick belongs to (1, 2, ...; 0 between presses)
   // With a needle mounted:
   double needle_depth_m{0.0};
-  std::int32_t needle_phase{0};  ///< procedures::NeedlePhase
-  double needle_force_n{0.0};       ///< the model's force along the needle
-  double sent_axial_force_n{0.0};   ///< the force sent to the device, along the needle
+  std::int32_t needle_phase{0};    ///< procedures::NeedlePhase
+  double needle_force_n{0.0};      ///< the model's force along the needle
+  double sent_axial_force_n{0.0};  ///< the force sent to the device, along the needle
 };
 
 /// How a run went beyond what the session reports (for summary.json).
@@ -90,7 +90,8 @@ class RunRecording {
   bool write_report_files(const std::filesystem::path& dir, const coupling::SessionReport& report, bool quiet) const;
 
   /// The terminal summary `hof run` prints.
-  void print(const coupling::SessionReport& report, bool deterministic, const std::optional<std::filesystem::path>& out) const;
+  void print(const coupling::SessionReport& report, bool deterministic,
+             const std::optional<std::filesystem::path>& out) const;
   /// The warnings `hof run` prints after the summary (force limit, scheduling, a start inside).
   void print_warnings(const coupling::SessionReport& report, bool deterministic, bool quiet) const;
 

@@ -37,8 +37,7 @@ double surface_area(const Vec3& lo, const Vec3& hi) {
 // Whether (value, triangle) beats the best so far: smaller value, ties to the lower index.
 // The same rule in the tree and in brute force makes both return the same triangle.
 bool better(double value, std::int32_t triangle, double best_value, std::int32_t best_triangle) {
-  return value < best_value ||
-         (value == best_value && (best_triangle < 0 || triangle < best_triangle));
+  return value < best_value || (value == best_value && (best_triangle < 0 || triangle < best_triangle));
 }
 
 }  // namespace
@@ -51,9 +50,8 @@ AabbTree AabbTree::build(const TriangleMeshView& mesh, const AabbTreeOptions& op
   HOF_CHECK(f <= static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max()),
             "AabbTree: more triangles than int32 indices");
   const auto count = static_cast<std::int32_t>(f);
-  const std::int32_t leaf_size = options.use_bound_tree && options.max_triangles_in_leaf >= 1
-                                     ? options.max_triangles_in_leaf
-                                     : count;
+  const std::int32_t leaf_size =
+      options.use_bound_tree && options.max_triangles_in_leaf >= 1 ? options.max_triangles_in_leaf : count;
 
   std::vector<Vec3> centroids(f);
   for (std::int32_t t = 0; t < count; ++t) {
@@ -147,8 +145,7 @@ double AabbTree::fit_boxes(const TriangleMeshView& mesh) {
         }
       }
       if (lo.allFinite() && hi.allFinite()) {  // else the box stays empty (lo > hi)
-        const double pad =
-            kRelativePad * std::fmax(lo.cwiseAbs().maxCoeff(), hi.cwiseAbs().maxCoeff());
+        const double pad = kRelativePad * std::fmax(lo.cwiseAbs().maxCoeff(), hi.cwiseAbs().maxCoeff());
         lo -= Vec3::Constant(pad);
         hi += Vec3::Constant(pad);
       }
@@ -206,8 +203,7 @@ void AabbTree::visit_near(const Vec3& p, const double& bound_d2, Visit&& visit) 
 
 // The same traversal keyed by the time the motion enters each (inflated) box.
 template <class Visit>
-void AabbTree::visit_along(const Vec3& a, const Vec3& d, double inflate, const double& best_t,
-                           Visit&& visit) const {
+void AabbTree::visit_along(const Vec3& a, const Vec3& d, double inflate, const double& best_t, Visit&& visit) const {
   if (nodes_.empty()) return;
   const detail::SlabSegment segment(a, d);
   StackEntry stack[kStackSize];
@@ -227,10 +223,10 @@ void AabbTree::visit_along(const Vec3& a, const Vec3& d, double inflate, const d
     std::int32_t far_child = node.first + 1;
     double near_t = 0.0;
     double far_t = 0.0;
-    const bool near_hit = detail::slab_entry(segment, nodes_[near_child].lo, nodes_[near_child].hi,
-                                             inflate, best_t, near_t);
-    const bool far_hit = detail::slab_entry(segment, nodes_[far_child].lo, nodes_[far_child].hi,
-                                            inflate, best_t, far_t);
+    const bool near_hit =
+        detail::slab_entry(segment, nodes_[near_child].lo, nodes_[near_child].hi, inflate, best_t, near_t);
+    const bool far_hit =
+        detail::slab_entry(segment, nodes_[far_child].lo, nodes_[far_child].hi, inflate, best_t, far_t);
     if (near_hit && far_hit) {
       if (far_t < near_t) {
         std::swap(near_child, far_child);
@@ -246,8 +242,8 @@ void AabbTree::visit_along(const Vec3& a, const Vec3& d, double inflate, const d
   }
 }
 
-ClosestPoint AabbTree::closest_point(const TriangleMeshView& mesh, const Vec3& p,
-                                     double max_distance, TouchableFace face) const {
+ClosestPoint AabbTree::closest_point(const TriangleMeshView& mesh, const Vec3& p, double max_distance,
+                                     TouchableFace face) const {
   ClosestPoint best;
   if (!(max_distance >= 0.0)) return best;
   double best_d2 = max_distance * max_distance;  // inclusive: `better` accepts equality
@@ -258,8 +254,7 @@ ClosestPoint AabbTree::closest_point(const TriangleMeshView& mesh, const Vec3& p
     Vec3 weights;
     const Vec3 point = detail::closest_point_on_triangle(p, p0, p1, p2, weights);
     const double d2 = (p - point).squaredNorm();
-    if (!better(d2, triangle, best_d2, best.triangle) ||
-        !detail::closest_point_counts(p, p0, p1, p2, face)) {
+    if (!better(d2, triangle, best_d2, best.triangle) || !detail::closest_point_counts(p, p0, p1, p2, face)) {
       return;
     }
     best_d2 = d2;
@@ -312,16 +307,16 @@ SweepHit AabbTree::first_hit_segment(const TriangleMeshView& mesh, const Vec3& a
   return best;
 }
 
-SweepHit AabbTree::first_hit_swept_sphere(const TriangleMeshView& mesh, const Vec3& a,
-                                          const Vec3& b, double radius, TouchableFace face) const {
+SweepHit AabbTree::first_hit_swept_sphere(const TriangleMeshView& mesh, const Vec3& a, const Vec3& b, double radius,
+                                          TouchableFace face) const {
   SweepHit best;
   if (!(radius >= 0.0)) return best;
   const Vec3 d = b - a;
   double best_t = 1.0;
   const auto visit = [&](std::int32_t triangle) {
     detail::TriangleContact c;
-    if (!detail::sweep_sphere_triangle(a, d, radius, corner(mesh, triangle, 0),
-                                       corner(mesh, triangle, 1), corner(mesh, triangle, 2), face, c) ||
+    if (!detail::sweep_sphere_triangle(a, d, radius, corner(mesh, triangle, 0), corner(mesh, triangle, 1),
+                                       corner(mesh, triangle, 2), face, c) ||
         !better(c.t, triangle, best_t, best.triangle)) {
       return;
     }
@@ -337,8 +332,7 @@ SweepHit AabbTree::first_hit_swept_sphere(const TriangleMeshView& mesh, const Ve
   return best;
 }
 
-std::size_t AabbTree::triangles_near(const Vec3& center, double radius,
-                                     std::span<std::int32_t> out) const {
+std::size_t AabbTree::triangles_near(const Vec3& center, double radius, std::span<std::int32_t> out) const {
   if (!(radius >= 0.0)) return 0;
   const double bound_d2 = radius * radius;
   std::size_t n = 0;

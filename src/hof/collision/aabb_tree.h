@@ -22,7 +22,7 @@ struct AabbTreeOptions {
   /// refit() reports that a rebuild is due when the summed surface area of the boxes has
   /// grown past this factor of its value at build time (boxes inflated by deformation).
   double rebuild_area_ratio{2.0};
-  bool use_bound_tree{true};     ///< false: brute force over all triangles
+  bool use_bound_tree{true};  ///< false: brute force over all triangles
 };
 
 class AabbTree {
@@ -74,10 +74,10 @@ class AabbTree {
   // Nodes are stored parents before children, so a reverse loop over nodes_ visits children
   // first (refit). An inner node's children are consecutive: `first` and `first + 1`.
   struct Node {
-    Vec3 lo{Vec3::Zero()};   // box, padded by a relative 1e-10 of its coordinates, m
+    Vec3 lo{Vec3::Zero()};  // box, padded by a relative 1e-10 of its coordinates, m
     Vec3 hi{Vec3::Zero()};
-    std::int32_t first{0};   // leaf: first index into triangle_order_; inner: left child
-    std::int32_t count{0};   // leaf: triangle count (>= 1); inner: 0
+    std::int32_t first{0};  // leaf: first index into triangle_order_; inner: left child
+    std::int32_t count{0};  // leaf: triangle count (>= 1); inner: 0
   };
   // Entries of the fixed traversal stack. A median split gives depth <= ceil(log2 F) + 1
   // <= 33 for any int32 triangle count, and nearest-first traversal keeps at most one
@@ -93,8 +93,7 @@ class AabbTree {
   // Calls visit(triangle) for the triangles of every leaf whose box, inflated by `inflate`,
   // the segment a → a + d enters at t <= best_t, nearest entry first; re-reads `best_t`.
   template <class Visit>
-  void visit_along(const Vec3& a, const Vec3& d, double inflate, const double& best_t,
-                   Visit&& visit) const;
+  void visit_along(const Vec3& a, const Vec3& d, double inflate, const double& best_t, Visit&& visit) const;
 
   std::vector<Node> nodes_;
   std::vector<std::int32_t> triangle_order_;

@@ -26,20 +26,20 @@ enum class TouchableFace : std::uint8_t {
 
 /// Nearest point of the surface to a query point.
 struct ClosestPoint {
-  std::int32_t triangle{-1};     ///< −1 when nothing lies within the search distance
-  Vec3 point{Vec3::Zero()};      ///< on the triangle, m
-  Vec3 barycentric{Vec3::Zero()};///< weights of the triangle's vertices a, b, c (sum 1)
-  double distance{0.0};          ///< m
+  std::int32_t triangle{-1};       ///< −1 when nothing lies within the search distance
+  Vec3 point{Vec3::Zero()};        ///< on the triangle, m
+  Vec3 barycentric{Vec3::Zero()};  ///< weights of the triangle's vertices a, b, c (sum 1)
+  double distance{0.0};            ///< m
 };
 
 /// First contact along a motion (segment a→b, or a sphere swept along it).
 struct SweepHit {
-  std::int32_t triangle{-1};     ///< −1 when the motion is free
-  double t{1.0};                 ///< fraction of the motion at first contact, in [0, 1]
-  Vec3 point{Vec3::Zero()};      ///< contact point on the triangle, m
-  Vec3 barycentric{Vec3::Zero()};///< of `point` in the triangle
-  Vec3 normal{Vec3::Zero()};     ///< unit contact normal, pointing toward the moving point/sphere
-  bool front{true};              ///< whether the front face was hit
+  std::int32_t triangle{-1};       ///< −1 when the motion is free
+  double t{1.0};                   ///< fraction of the motion at first contact, in [0, 1]
+  Vec3 point{Vec3::Zero()};        ///< contact point on the triangle, m
+  Vec3 barycentric{Vec3::Zero()};  ///< of `point` in the triangle
+  Vec3 normal{Vec3::Zero()};       ///< unit contact normal, pointing toward the moving point/sphere
+  bool front{true};                ///< whether the front face was hit
 };
 
 }  // namespace hof::collision

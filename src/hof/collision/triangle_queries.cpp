@@ -19,31 +19,32 @@ bool degenerate_with_normal(const Vec3& p0, const Vec3& p1, const Vec3& p2, Vec3
   const Vec3 e02 = p2 - p0;
   const Vec3 e12 = p2 - p1;
   n_raw = e01.cross(e02);
-  const double longest2 =
-      std::max({e01.squaredNorm(), e02.squaredNorm(), e12.squaredNorm()});
+  const double longest2 = std::max({e01.squaredNorm(), e02.squaredNorm(), e12.squaredNorm()});
   const double threshold = kDegenerateRatio * longest2;
   return !(n_raw.squaredNorm() > threshold * threshold);
 }
 
 bool touchable(TouchableFace face, bool front) {
   switch (face) {
-    case TouchableFace::kFront: return front;
-    case TouchableFace::kBack: return !front;
-    case TouchableFace::kFrontAndBack: return true;
+    case TouchableFace::kFront:
+      return front;
+    case TouchableFace::kBack:
+      return !front;
+    case TouchableFace::kFrontAndBack:
+      return true;
   }
   return false;
 }
 
 // Barycentric weights of a point q of the triangle's plane from sub-triangle areas
 // (signed by the face normal); q is inside (boundary included) when all are >= 0.
-bool inside_triangle(const Vec3& q, const Vec3& p0, const Vec3& p1, const Vec3& p2,
-                     const Vec3& n_raw, Vec3& barycentric) {
+bool inside_triangle(const Vec3& q, const Vec3& p0, const Vec3& p1, const Vec3& p2, const Vec3& n_raw,
+                     Vec3& barycentric) {
   const double inv_area2 = 1.0 / n_raw.squaredNorm();
   const Vec3 to0 = p0 - q;
   const Vec3 to1 = p1 - q;
   const Vec3 to2 = p2 - q;
-  barycentric = Vec3(n_raw.dot(to1.cross(to2)), n_raw.dot(to2.cross(to0)), n_raw.dot(to0.cross(to1))) *
-                inv_area2;
+  barycentric = Vec3(n_raw.dot(to1.cross(to2)), n_raw.dot(to2.cross(to0)), n_raw.dot(to0.cross(to1))) * inv_area2;
   return barycentric.minCoeff() >= 0.0;
 }
 
@@ -56,9 +57,8 @@ Vec3 contact_normal(const Vec3& gap, const Vec3& n, const Vec3& d) {
 }
 
 // Accepts a sphere contact that approaches the triangle from a touchable side.
-bool finish_sphere_contact(double t, const Vec3& point, const Vec3& barycentric, const Vec3& m,
-                           const Vec3& n, const Vec3& d, TouchableFace face,
-                           TriangleContact& contact) {
+bool finish_sphere_contact(double t, const Vec3& point, const Vec3& barycentric, const Vec3& m, const Vec3& n,
+                           const Vec3& d, TouchableFace face, TriangleContact& contact) {
   if (!(d.dot(m) < 0.0)) return false;  // sliding along or leaving the triangle
   const double side = m.dot(n);
   const bool front = side > 0.0 || (side == 0.0 && d.dot(n) <= 0.0);
@@ -77,8 +77,7 @@ bool finish_sphere_contact(double t, const Vec3& point, const Vec3& barycentric,
 // face. With ab = p1 − p0, ac = p2 − p0 and the dot products d1..d6 of ab, ac with the
 // vectors from each vertex to p, each region is a sign condition; the three "va, vb, vc"
 // are the unnormalised barycentric weights of p's projection.
-Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& p0, const Vec3& p1, const Vec3& p2,
-                               Vec3& barycentric) {
+Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& p0, const Vec3& p1, const Vec3& p2, Vec3& barycentric) {
   const Vec3 ab = p1 - p0;
   const Vec3 ac = p2 - p0;
   const Vec3 ap = p - p0;
@@ -116,7 +115,7 @@ Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& p0, const Vec3& p1, co
   }
   const double va = d3 * d6 - d5 * d4;
   if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) {  // edge region p1p2
-    const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));       // denominator |p2 − p1|²
+    const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));   // denominator |p2 − p1|²
     barycentric = Vec3(0.0, 1.0 - w, w);
     return p1 + w * (p2 - p1);
   }
@@ -128,8 +127,7 @@ Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& p0, const Vec3& p1, co
   return p0 + v * ab + w * ac;
 }
 
-bool closest_point_counts(const Vec3& p, const Vec3& p0, const Vec3& p1, const Vec3& p2,
-                          TouchableFace face) {
+bool closest_point_counts(const Vec3& p, const Vec3& p0, const Vec3& p1, const Vec3& p2, TouchableFace face) {
   Vec3 n_raw;
   if (degenerate_with_normal(p0, p1, p2, n_raw)) return false;
   return face == TouchableFace::kFrontAndBack || touchable(face, (p - p0).dot(n_raw) >= 0.0);
@@ -137,8 +135,8 @@ bool closest_point_counts(const Vec3& p, const Vec3& p0, const Vec3& p1, const V
 
 // Möller & Trumbore 1997: solve a + t·d = (1−u−v)·p0 + u·p1 + v·p2 by Cramer's rule with
 // scalar triple products. det = (p1−p0)·(d × (p2−p0)) = −d·n, so det > 0 is a front entry.
-bool intersect_segment_triangle(const Vec3& a, const Vec3& d, const Vec3& p0, const Vec3& p1,
-                                const Vec3& p2, TouchableFace face, TriangleContact& contact) {
+bool intersect_segment_triangle(const Vec3& a, const Vec3& d, const Vec3& p0, const Vec3& p1, const Vec3& p2,
+                                TouchableFace face, TriangleContact& contact) {
   const Vec3 e1 = p1 - p0;
   const Vec3 e2 = p2 - p0;
   const Vec3 pvec = d.cross(e2);
@@ -174,9 +172,8 @@ bool intersect_segment_triangle(const Vec3& a, const Vec3& d, const Vec3& p0, co
   return true;
 }
 
-bool sweep_sphere_triangle(const Vec3& a, const Vec3& d, double radius, const Vec3& p0,
-                           const Vec3& p1, const Vec3& p2, TouchableFace face,
-                           TriangleContact& contact) {
+bool sweep_sphere_triangle(const Vec3& a, const Vec3& d, double radius, const Vec3& p0, const Vec3& p1, const Vec3& p2,
+                           TouchableFace face, TriangleContact& contact) {
   if (!(radius >= 0.0)) return false;
   const double r2 = radius * radius;
 
@@ -194,8 +191,7 @@ bool sweep_sphere_triangle(const Vec3& a, const Vec3& d, double radius, const Ve
   if (degenerate_with_normal(p0, p1, p2, n_raw)) return false;
   const Vec3 n = n_raw.normalized();
   if (dist2 < r2) {
-    return finish_sphere_contact(0.0, q0, barycentric, contact_normal(gap0, n, d), n, d, face,
-                                 contact);
+    return finish_sphere_contact(0.0, q0, barycentric, contact_normal(gap0, n, d), n, d, face, contact);
   }
 
   // Face: the signed plane distance s(t) = s0 + t·sd reaches ±radius with the touching point

@@ -35,23 +35,22 @@ struct TriangleContact {
 /// `p` (vertex, edge or face) is found from six dot products. Writes the barycentric weights
 /// of the result to `barycentric` (sum 1). For a degenerate triangle the result may be NaN
 /// (a 0/0 division), never a crash.
-[[nodiscard]] Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& p0, const Vec3& p1,
-                                             const Vec3& p2, Vec3& barycentric);
+[[nodiscard]] Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& p0, const Vec3& p1, const Vec3& p2,
+                                             Vec3& barycentric);
 
 /// Whether a closest point found on this triangle counts for AabbTree::closest_point: the
 /// triangle is not degenerate and `p` lies on a side `face` allows (front: (p − p0)·n ≥ 0,
 /// n = (p1−p0)×(p2−p0)). Checked only for a triangle that would be the new nearest (most
 /// lose on distance first); the point from a degenerate triangle may be NaN, which never wins.
-[[nodiscard]] bool closest_point_counts(const Vec3& p, const Vec3& p0, const Vec3& p1,
-                                        const Vec3& p2, TouchableFace face);
+[[nodiscard]] bool closest_point_counts(const Vec3& p, const Vec3& p0, const Vec3& p1, const Vec3& p2,
+                                        TouchableFace face);
 
 /// Segment a → a + d against a triangle (Möller–Trumbore), both endpoints and the triangle
 /// boundary inclusive. Entering from the front means d·n < 0 (n = (p1−p0)×(p2−p0)); `face`
 /// filters by that. A segment parallel to the plane never hits. Returns false for a
 /// degenerate triangle.
-[[nodiscard]] bool intersect_segment_triangle(const Vec3& a, const Vec3& d, const Vec3& p0,
-                                              const Vec3& p1, const Vec3& p2, TouchableFace face,
-                                              TriangleContact& contact);
+[[nodiscard]] bool intersect_segment_triangle(const Vec3& a, const Vec3& d, const Vec3& p0, const Vec3& p1,
+                                              const Vec3& p2, TouchableFace face, TriangleContact& contact);
 
 /// First contact of a sphere of `radius` (≥ 0) whose centre moves from a to a + d with the
 /// triangle: the face plane (offset by ±radius, contact inside the triangle), the three edge
@@ -64,9 +63,8 @@ struct TriangleContact {
 /// The side: the contact is on the front when the centre lies on the front half-space at
 /// contact (normal·n > 0; on the plane itself, when d·n ≤ 0). For a face contact this is
 /// exactly "the motion enters from the front" (d·n < 0). `face` filters by it.
-[[nodiscard]] bool sweep_sphere_triangle(const Vec3& a, const Vec3& d, double radius,
-                                         const Vec3& p0, const Vec3& p1, const Vec3& p2,
-                                         TouchableFace face, TriangleContact& contact);
+[[nodiscard]] bool sweep_sphere_triangle(const Vec3& a, const Vec3& d, double radius, const Vec3& p0, const Vec3& p1,
+                                         const Vec3& p2, TouchableFace face, TriangleContact& contact);
 
 /// Squared distance from `p` to the box [lo, hi] (0 inside), Ericson §5.1.3. Branch-free
 /// (max instructions): traversal evaluates it twice per node. NaN input gives NaN.
@@ -96,8 +94,8 @@ struct SlabSegment {
 /// (0 when `origin` is inside) and returns true. Boundaries are inclusive. Written without
 /// data-dependent branches (min/max and selects; one test at the end): during traversal the
 /// outcome is unpredictable, and mispredictions would dominate the cost.
-[[nodiscard]] inline bool slab_entry(const SlabSegment& s, const Vec3& lo, const Vec3& hi,
-                                     double inflate, double t_max, double& t_enter) {
+[[nodiscard]] inline bool slab_entry(const SlabSegment& s, const Vec3& lo, const Vec3& hi, double inflate, double t_max,
+                                     double& t_enter) {
   constexpr double kInf = std::numeric_limits<double>::infinity();
   double t0 = 0.0;
   double t1 = t_max;

@@ -16,21 +16,20 @@
 #include <source_location>
 
 namespace hof::detail {
-[[noreturn]] void assertion_failed(const char* condition, const char* message,
-                                   std::source_location where) noexcept;
+[[noreturn]] void assertion_failed(const char* condition, const char* message, std::source_location where) noexcept;
 }  // namespace hof::detail
 
-#define HOF_CHECK(condition, message)                                                      \
-  do {                                                                                     \
-    if (!(condition)) [[unlikely]]                                                         \
+#define HOF_CHECK(condition, message)                                                        \
+  do {                                                                                       \
+    if (!(condition)) [[unlikely]]                                                           \
       ::hof::detail::assertion_failed(#condition, message, std::source_location::current()); \
   } while (false)
 
 #ifdef NDEBUG
 // Not evaluated, but still compiled, so an assertion cannot rot in release builds.
-#define HOF_ASSERT(condition)                    \
-  do {                                           \
-    if (false) static_cast<void>(condition);     \
+#define HOF_ASSERT(condition)                \
+  do {                                       \
+    if (false) static_cast<void>(condition); \
   } while (false)
 #else
 #define HOF_ASSERT(condition) HOF_CHECK(condition, "")

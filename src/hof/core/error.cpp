@@ -4,12 +4,18 @@ namespace hof {
 
 const char* to_string(ErrorCode code) {
   switch (code) {
-    case ErrorCode::kIo: return "I/O error";
-    case ErrorCode::kParse: return "parse error";
-    case ErrorCode::kInvalidMesh: return "invalid mesh";
-    case ErrorCode::kInvalidArgument: return "invalid argument";
-    case ErrorCode::kMeshing: return "meshing failed";
-    case ErrorCode::kUnsupported: return "unsupported";
+    case ErrorCode::kIo:
+      return "I/O error";
+    case ErrorCode::kParse:
+      return "parse error";
+    case ErrorCode::kInvalidMesh:
+      return "invalid mesh";
+    case ErrorCode::kInvalidArgument:
+      return "invalid argument";
+    case ErrorCode::kMeshing:
+      return "meshing failed";
+    case ErrorCode::kUnsupported:
+      return "unsupported";
   }
   return "error";
 }

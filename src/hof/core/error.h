@@ -12,12 +12,12 @@ namespace hof {
 
 /// What kind of failure an Error is. Callers branch on this, never on message text.
 enum class ErrorCode : std::uint8_t {
-  kIo,              ///< a file could not be opened, read or written
-  kParse,           ///< the text or bytes of a file do not follow its format
-  kInvalidMesh,     ///< the file parses but the mesh is unusable (index out of range, NaN, ...)
-  kInvalidArgument, ///< a parameter from the user is out of its valid range
-  kMeshing,         ///< the tetrahedral mesher failed (open or self-intersecting surface, ...)
-  kUnsupported,     ///< a valid input that this version does not handle
+  kIo,               ///< a file could not be opened, read or written
+  kParse,            ///< the text or bytes of a file do not follow its format
+  kInvalidMesh,      ///< the file parses but the mesh is unusable (index out of range, NaN, ...)
+  kInvalidArgument,  ///< a parameter from the user is out of its valid range
+  kMeshing,          ///< the tetrahedral mesher failed (open or self-intersecting surface, ...)
+  kUnsupported,      ///< a valid input that this version does not handle
 };
 
 /// A failure with where it happened. `file` and `line` are filled when known (line is
@@ -38,8 +38,7 @@ template <class T>
 using Expected = std::expected<T, Error>;
 
 /// Shorthand to build the error side of an Expected.
-[[nodiscard]] inline std::unexpected<Error> make_error(ErrorCode code, std::string message,
-                                                       std::string file = {},
+[[nodiscard]] inline std::unexpected<Error> make_error(ErrorCode code, std::string message, std::string file = {},
                                                        std::int64_t line = 0) {
   return std::unexpected<Error>(Error{code, std::move(message), std::move(file), line, -1});
 }

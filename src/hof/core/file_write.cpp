@@ -22,7 +22,7 @@ Expected<void> write_file_atomically(const std::filesystem::path& path, std::str
   // processes saving the same file from sharing a temporary.
   const std::filesystem::path temporary = path.string() + ".tmp-" + std::to_string(::getpid());
   mode_t mode = 0644;
-  if (struct stat existing {}; ::stat(path.c_str(), &existing) == 0) {
+  if (struct stat existing{}; ::stat(path.c_str(), &existing) == 0) {
     if (S_ISDIR(existing.st_mode)) return make_error(ErrorCode::kIo, "is a folder, not a file", path.string());
     mode = existing.st_mode & 07777U;
   }

@@ -27,8 +27,10 @@ struct TerminalProgress {
     last_percent = percent;
     if (!interactive) {
       // A log file gets one line when a task starts and one when it ends.
-      if (new_task) std::fprintf(stderr, "%s ...\n", current_task.c_str());
-      else if (percent == 100) std::fprintf(stderr, "%s done\n", current_task.c_str());
+      if (new_task)
+        std::fprintf(stderr, "%s ...\n", current_task.c_str());
+      else if (percent == 100)
+        std::fprintf(stderr, "%s done\n", current_task.c_str());
       return;
     }
     constexpr int kWidth = 30;

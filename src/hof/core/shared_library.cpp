@@ -22,7 +22,8 @@ void SharedLibrary::Closer::operator()(void* handle) const {
   if (handle) ::dlclose(handle);
 }
 
-Expected<SharedLibrary> SharedLibrary::open(std::span<const std::string> names, std::string_view what, std::string_view install) {
+Expected<SharedLibrary> SharedLibrary::open(std::span<const std::string> names, std::string_view what,
+                                            std::string_view install) {
   std::string tried;
   for (const std::string& name : names) {
     // RTLD_NOW: a library that needs a symbol its own dependencies lack fails here, with the
@@ -41,8 +42,8 @@ Expected<SharedLibrary> SharedLibrary::open(std::span<const std::string> names, 
     if (reason.starts_with(name + ": ")) reason.erase(0, name.size() + 2);
     tried += (tried.empty() ? "" : "; ") + name + " (" + (reason.empty() ? std::string("not found") : reason) + ")";
   }
-  return make_error(ErrorCode::kIo, std::string(what) + " is not installed or not found (tried " + tried + "; searched " +
-                                        search_path() + "). " + std::string(install));
+  return make_error(ErrorCode::kIo, std::string(what) + " is not installed or not found (tried " + tried +
+                                        "; searched " + search_path() + "). " + std::string(install));
 }
 
 Expected<void*> SharedLibrary::lookup(const char* symbol) const {
@@ -50,7 +51,8 @@ Expected<void*> SharedLibrary::lookup(const char* symbol) const {
   void* address = ::dlsym(handle_.get(), symbol);
   if (!address) {
     return make_error(ErrorCode::kUnsupported,
-                      std::string("the library has no function '") + symbol + "' (an SDK version HoF does not know?)", path_);
+                      std::string("the library has no function '") + symbol + "' (an SDK version HoF does not know?)",
+                      path_);
   }
   return address;
 }

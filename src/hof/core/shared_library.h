@@ -22,7 +22,8 @@ class SharedLibrary {
   /// /usr/lib). `what` names the software in errors ("the Force Dimension SDK"), `install`
   /// says how to get it. The error lists every name tried with the loader's reason and the
   /// search path.
-  static Expected<SharedLibrary> open(std::span<const std::string> names, std::string_view what, std::string_view install);
+  static Expected<SharedLibrary> open(std::span<const std::string> names, std::string_view what,
+                                      std::string_view install);
 
   SharedLibrary(SharedLibrary&&) noexcept = default;
   SharedLibrary& operator=(SharedLibrary&&) noexcept = default;

@@ -18,12 +18,14 @@ namespace {
 
 /// A body's new model must keep its mesh: the surface follows the nodes through a mapping made
 /// for this one.
-Expected<void> same_mesh(const std::string& body, const mechanics::ModelConfig& next, const mechanics::ModelConfig& now) {
+Expected<void> same_mesh(const std::string& body, const mechanics::ModelConfig& next,
+                         const mechanics::ModelConfig& now) {
   if (next.positions == now.positions && next.tets == now.tets) return {};
-  return make_error(ErrorCode::kInvalidArgument,
-                    fmt::format("body '{}': the new model has another mesh ({} nodes, {} tetrahedra; the body has {} and {}): "
-                                "reopen the project to change the mesh",
-                                body, next.positions.size(), next.tets.size(), now.positions.size(), now.tets.size()));
+  return make_error(
+      ErrorCode::kInvalidArgument,
+      fmt::format("body '{}': the new model has another mesh ({} nodes, {} tetrahedra; the body has {} and {}): "
+                  "reopen the project to change the mesh",
+                  body, next.positions.size(), next.tets.size(), now.positions.size(), now.tets.size()));
 }
 
 // The world's step: the smallest deformable body's dt (unchanged when there is none).
@@ -101,7 +103,8 @@ Expected<std::size_t> CommandSeam::deformable_body(BodyId body, std::string_view
   }
   // Whether it has mechanics is fixed at construction (the simulation thread may be
   // rebuilding the model right now: its optional is not read here).
-  if (!has_mechanics_[i]) return make_error(ErrorCode::kInvalidArgument, fmt::format("body '{}' is rigid: {}", names_[i], rigid));
+  if (!has_mechanics_[i])
+    return make_error(ErrorCode::kInvalidArgument, fmt::format("body '{}' is rigid: {}", names_[i], rigid));
   return i;
 }
 
@@ -127,10 +130,12 @@ Expected<void> CommandSeam::submit(const Command& submitted) {
       set && fem_reaction_ &&
       set->parameter == mechanics::ParameterRef{{mechanics::ComponentKind::kModel, 0}, mechanics::ParameterId::kDt} &&
       !detail::fem_reaction_step_fits(set->value, haptic_rate_hz_)) {
-    return make_error(ErrorCode::kInvalidArgument,
-                      fmt::format("body '{}': dt {:g} s: coupling fem-reaction needs dt equal to the haptic period, {:g} s",
-                                  static_cast<std::size_t>(set->body) < names_.size() ? names_[static_cast<std::size_t>(set->body)] : "?",
-                                  set->value, 1.0 / haptic_rate_hz_));
+    return make_error(
+        ErrorCode::kInvalidArgument,
+        fmt::format(
+            "body '{}': dt {:g} s: coupling fem-reaction needs dt equal to the haptic period, {:g} s",
+            static_cast<std::size_t>(set->body) < names_.size() ? names_[static_cast<std::size_t>(set->body)] : "?",
+            set->value, 1.0 / haptic_rate_hz_));
   }
   if (auto* device = std::get_if<command::SetDevice>(&command); device && !device->opened) {
     // Opened here, on the caller's thread (a network device may wait for its first packet).
@@ -150,7 +155,8 @@ Expected<void> CommandSeam::submit(const Command& submitted) {
       name = names_[*i];
     }
     auto built = mechanics::build_model(model->config);
-    if (!built) return make_error(ErrorCode::kInvalidArgument, fmt::format("body '{}': {}", name, built.error().message));
+    if (!built)
+      return make_error(ErrorCode::kInvalidArgument, fmt::format("body '{}': {}", name, built.error().message));
     model->built = std::make_shared<mechanics::MechanicalModel>(std::move(*built));
   }
   std::lock_guard lock(mutex_);
@@ -158,10 +164,11 @@ Expected<void> CommandSeam::submit(const Command& submitted) {
   // Room first: a command refused for want of it has changed nothing. (popped_ trails the
   // ring's own count, so room seen here is room the push finds.)
   if (pushed_ - popped_.load(std::memory_order_acquire) >= queue_.capacity()) {
-    return make_error(ErrorCode::kInvalidArgument,
-                      fmt::format("the command queue is full ({} commands wait for the simulation, which is not stepping "
-                                  "or is slower than the commands come): submit again after a step",
-                                  queue_.capacity()));
+    return make_error(
+        ErrorCode::kInvalidArgument,
+        fmt::format("the command queue is full ({} commands wait for the simulation, which is not stepping "
+                    "or is slower than the commands come): submit again after a step",
+                    queue_.capacity()));
   }
   if (auto ok = std::visit([this](auto& c) { return validate(c); }, command); !ok) return ok;
   const std::uint64_t ticket = next_ticket_++;
@@ -169,10 +176,11 @@ Expected<void> CommandSeam::submit(const Command& submitted) {
     // Named as the body's configuration names it now (validate found the body).
     const auto i = static_cast<std::size_t>(set->body);
     const mechanics::ModelConfig& config = validated_configs_[i];
-    accepted_.push_back(Accepted{ticket,
-                                 ParameterChange{names_[i], std::string(mechanics::component_name(config, set->parameter.component)),
-                                                 std::string(mechanics::parameter_name(set->parameter.id)), set->value},
-                                 false});
+    accepted_.push_back(
+        Accepted{ticket,
+                 ParameterChange{names_[i], std::string(mechanics::component_name(config, set->parameter.component)),
+                                 std::string(mechanics::parameter_name(set->parameter.id)), set->value},
+                 false});
   }
   auto* queued = new Queued{ticket, std::move(command)};
   if (!queue_.push(queued)) {  // not reached: the room was checked above, under the same lock
@@ -201,7 +209,8 @@ void CommandSeam::take_reports() const {
         break;
       case Outcome::kModelSwapped:
         // The changes before the new model are part of its config (those queued after it stay).
-        std::erase_if(accepted_, [&](const Accepted& a) { return a.ticket < r.ticket && a.change.body == names_[r.body]; });
+        std::erase_if(accepted_,
+                      [&](const Accepted& a) { return a.ticket < r.ticket && a.change.body == names_[r.body]; });
         break;
     }
   }
@@ -251,14 +260,16 @@ Expected<void> CommandSeam::validate(command::SetCalibration& calibration) {
 
 Expected<void> CommandSeam::validate(command::SingleStep& steps) {
   if (steps.steps < 1 || steps.steps > 1000000) {
-    return make_error(ErrorCode::kInvalidArgument, fmt::format("single step: steps must be in [1, 1000000], got {}", steps.steps));
+    return make_error(ErrorCode::kInvalidArgument,
+                      fmt::format("single step: steps must be in [1, 1000000], got {}", steps.steps));
   }
   return {};
 }
 
 Expected<void> CommandSeam::validate(command::SetMaterial& material) {
   if (!material.body.empty() && find_body(material.body) < 0) {
-    return make_error(ErrorCode::kInvalidArgument, fmt::format("no body '{}' (bodies: {})", material.body, body_names()));
+    return make_error(ErrorCode::kInvalidArgument,
+                      fmt::format("no body '{}' (bodies: {})", material.body, body_names()));
   }
   if (auto ok = haptics::validate(material.material); !ok) return std::unexpected(ok.error());
   for (const std::string& name : names_) {
@@ -274,8 +285,9 @@ Expected<void> CommandSeam::validate(command::SetEffects& effects) {
 
 Expected<void> CommandSeam::validate(command::SetForceLimit& limit) {
   if (!(limit.max_force_n >= 0.0 && std::isfinite(limit.max_force_n))) {
-    return make_error(ErrorCode::kInvalidArgument,
-                      fmt::format("force limit: maxForce must be >= 0 N (0: the device's own), got {}", limit.max_force_n));
+    return make_error(
+        ErrorCode::kInvalidArgument,
+        fmt::format("force limit: maxForce must be >= 0 N (0: the device's own), got {}", limit.max_force_n));
   }
   return {};
 }
@@ -287,10 +299,11 @@ Expected<void> CommandSeam::validate(command::SetRenderer& renderer) {
       !(r.penalty_max_distance_m >= 0.0 && std::isfinite(r.penalty_max_distance_m)) ||
       static_cast<int>(r.kind) > static_cast<int>(haptics::RendererKind::kRuspini) ||
       static_cast<int>(r.touchable_face) > static_cast<int>(collision::TouchableFace::kFrontAndBack)) {
-    return make_error(ErrorCode::kInvalidArgument,
-                      fmt::format("renderer: proxyRadius must be in [0, 1) m, iterations in [1, 64], the ride and penalty "
-                                  "distances finite and >= 0; got {} m, {}, {} m, {} m",
-                                  r.proxy_radius_m, r.max_iterations, r.ride_distance_m, r.penalty_max_distance_m));
+    return make_error(
+        ErrorCode::kInvalidArgument,
+        fmt::format("renderer: proxyRadius must be in [0, 1) m, iterations in [1, 64], the ride and penalty "
+                    "distances finite and >= 0; got {} m, {}, {} m, {} m",
+                    r.proxy_radius_m, r.max_iterations, r.ride_distance_m, r.penalty_max_distance_m));
   }
   return {};
 }
@@ -359,7 +372,8 @@ bool CommandSeam::apply(const command::SetParameter& set, Applying& a) {
     const std::string what = fmt::format("{}/{}{}{} = {}", r.body.name, component, component.empty() ? "" : "/",
                                          mechanics::parameter_name(set.parameter.id), set.value);
     auto ok = mechanics::set_parameter(config, set.parameter, set.value);
-    auto model = ok ? mechanics::build_model(config) : Expected<mechanics::MechanicalModel>(std::unexpected(ok.error()));
+    auto model =
+        ok ? mechanics::build_model(config) : Expected<mechanics::MechanicalModel>(std::unexpected(ok.error()));
     const auto body = static_cast<std::uint32_t>(&r - a.world.bodies.data());
     if (!model) {
       a.log(fmt::format("{} refused: {}", what, model.error().message));
@@ -379,7 +393,8 @@ bool CommandSeam::apply(const command::SetModel& model, Applying& a) {
     if (&r - a.world.bodies.data() != static_cast<std::ptrdiff_t>(model.body) || !r.body.config) continue;
     swap_model(a.world, r, std::move(*model.built), model.config);
     a.log(fmt::format("{} has a new model", r.body.name));
-    tell(Report{applying_ticket_, Outcome::kModelSwapped, static_cast<std::uint32_t>(&r - a.world.bodies.data()), nullptr});
+    tell(Report{applying_ticket_, Outcome::kModelSwapped, static_cast<std::uint32_t>(&r - a.world.bodies.data()),
+                nullptr});
   }
   refresh_dt(a.world);
   return true;
@@ -424,7 +439,8 @@ bool CommandSeam::apply(const command::Reset&, Applying& a) {
 
 bool CommandSeam::apply(const command::SetMaterial& material, Applying& a) {
   for (std::size_t i = 0; i < a.world.bodies.size(); ++i) {
-    if (material.body.empty() || a.world.bodies[i].body.name == material.body) a.world.current_settings.materials[i] = material.material;
+    if (material.body.empty() || a.world.bodies[i].body.name == material.body)
+      a.world.current_settings.materials[i] = material.material;
   }
   a.settings_changed = true;
   a.log(fmt::format("surface of {}", material.body.empty() ? "every body" : material.body));

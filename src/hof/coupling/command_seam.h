@@ -98,9 +98,9 @@ struct SetModel {
   std::shared_ptr<mechanics::MechanicalModel> built;
 };
 }  // namespace command
-using Command = std::variant<command::SetParameter, command::Pause, command::Resume, command::SingleStep, command::Reset,
-                             command::SetMaterial, command::SetEffects, command::SetRenderer, command::SetForceLimit,
-                             command::SetDevice, command::SetModel, command::SetCalibration>;
+using Command = std::variant<command::SetParameter, command::Pause, command::Resume, command::SingleStep,
+                             command::Reset, command::SetMaterial, command::SetEffects, command::SetRenderer,
+                             command::SetForceLimit, command::SetDevice, command::SetModel, command::SetCalibration>;
 
 /// A parameter changed through the seam, as a project saves it (named by the body's
 /// configuration when the change was submitted; "" for the model's own parameters).
@@ -197,7 +197,7 @@ class CommandSeam {
     std::uint64_t ticket{0};
     Command command;
   };
-  void take_reports() const;  // the simulation's reports since the last call (under mutex_)
+  void take_reports() const;   // the simulation's reports since the last call (under mutex_)
   void tell(const Report& r);  // simulation side: a report to the submitting side
 
   // ---- Producer side: under mutex_ (mutable: the const queries read the reports first).
@@ -209,9 +209,9 @@ class CommandSeam {
   std::vector<std::pair<std::string, haptics::SurfaceMaterial>> material_changes_;
   mutable std::vector<mechanics::ModelConfig> validated_configs_;  // configs as the accepted commands leave them
   // ---- The rings (each owned pointer is handed from one side to the other).
-  SpscRing<Queued*> queue_{kCommandQueueCapacity};  // submitting side → simulation
+  SpscRing<Queued*> queue_{kCommandQueueCapacity};           // submitting side → simulation
   mutable SpscRing<Report> reports_{kCommandQueueCapacity};  // simulation → submitting side
-  std::atomic<std::uint64_t> popped_{0};  // commands the simulation has taken off the queue
+  std::atomic<std::uint64_t> popped_{0};                     // commands the simulation has taken off the queue
   // ---- Consumer side (simulation thread only).
   Queued* waiting_{nullptr};  // a command that waits for the next step (a device switch)
   std::uint64_t applying_ticket_{0};

@@ -23,7 +23,8 @@ double PressRecorder::add(const haptics::HapticSample& s) {
   // Indentation: how far the surface at the contact has moved inward since the press began
   // (its displacement from rest, less what it had moved before — a body that sagged under
   // gravity before the probe arrived is not indented by the sag).
-  const double from_rest = (session_.rest_point(s.triangle, s.barycentric, s.layer) - s.contact_point).dot(s.contact_normal);
+  const double from_rest =
+      (session_.rest_point(s.triangle, s.barycentric, s.layer) - s.contact_point).dot(s.contact_normal);
   if (!in_press_) {
     in_press_ = true;
     Press p;

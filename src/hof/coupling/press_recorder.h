@@ -19,10 +19,10 @@ class Session;
 
 /// One press: contact from its first sample to its last.
 struct Press {
-  std::int32_t index{0};              ///< 1-based, in order
-  std::int32_t body{-1};              ///< body pressed (session index), −1 unknown
+  std::int32_t index{0};  ///< 1-based, in order
+  std::int32_t body{-1};  ///< body pressed (session index), −1 unknown
   double start_s{0.0}, end_s{0.0};
-  Vec3 first_contact{Vec3::Zero()};   ///< where the surface was first touched (world, scene units)
+  Vec3 first_contact{Vec3::Zero()};  ///< where the surface was first touched (world, scene units)
   double max_force_n{0.0};
   double max_indentation_m{0.0};
   /// Least-squares stiffness through the origin, F ≈ k·d, over the loading curve (bin means)
@@ -57,7 +57,8 @@ class PressRecorder {
   /// Width of a loading bin and where the stiffness fit starts, metres.
   static constexpr double kBinWidthM = 0.0005;
   static constexpr double kFitFromM = 0.001;
-  /// Contact lost for less than this does not end a press (a sliding probe flickers; tissue springing back catches a retracting probe), s.
+  /// Contact lost for less than this does not end a press (a sliding probe flickers; tissue springing back catches a
+  /// retracting probe), s.
   static constexpr double kGapS = 0.3;
 
  private:

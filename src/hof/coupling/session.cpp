@@ -30,8 +30,8 @@ Expected<std::unique_ptr<Session>> Session::make(SessionBody body, std::unique_p
   return make(std::move(bodies), std::move(device), config);
 }
 
-Expected<std::unique_ptr<Session>> Session::make(std::vector<SessionBody> bodies, std::unique_ptr<haptics::Device> device,
-                                                 const SessionConfig& config) {
+Expected<std::unique_ptr<Session>> Session::make(std::vector<SessionBody> bodies,
+                                                 std::unique_ptr<haptics::Device> device, const SessionConfig& config) {
   if (!device) return make_error(ErrorCode::kInvalidArgument, "session: no device");
   for (const SessionBody& body : bodies) {
     if (body.deformable() && body.mapping.surface_vertex_count() != body.surface.vertices.size()) {
@@ -41,7 +41,8 @@ Expected<std::unique_ptr<Session>> Session::make(std::vector<SessionBody> bodies
     }
     if (body.material) {
       if (auto ok = haptics::validate(*body.material); !ok) {
-        return make_error(ErrorCode::kInvalidArgument, fmt::format("session: body '{}': {}", body.name, ok.error().message));
+        return make_error(ErrorCode::kInvalidArgument,
+                          fmt::format("session: body '{}': {}", body.name, ok.error().message));
       }
     }
   }
@@ -53,10 +54,11 @@ Expected<std::unique_ptr<Session>> Session::make(std::vector<SessionBody> bodies
   if (config.coupling == ContactCoupling::kFemReaction) {
     for (const SessionBody& body : bodies) {
       if (body.deformable() && !detail::fem_reaction_step_fits(body.model->dt_s, config.haptics.rate_hz)) {
-        return make_error(ErrorCode::kInvalidArgument,
-                          fmt::format("session: coupling fem-reaction steps the simulation once per haptic tick: body '{}' has dt "
-                                      "{:g} s, the haptic period is {:g} s (set dt to it, or use another coupling)",
-                                      body.name, body.model->dt_s, 1.0 / config.haptics.rate_hz));
+        return make_error(
+            ErrorCode::kInvalidArgument,
+            fmt::format("session: coupling fem-reaction steps the simulation once per haptic tick: body '{}' has dt "
+                        "{:g} s, the haptic period is {:g} s (set dt to it, or use another coupling)",
+                        body.name, body.model->dt_s, 1.0 / config.haptics.rate_hz));
       }
     }
   }
@@ -96,10 +98,16 @@ Expected<double> Session::parameter(BodyId body, mechanics::ParameterRef paramet
   return seam_->parameter(body, parameter);
 }
 Expected<mechanics::ModelConfig> Session::body_config(BodyId body) const { return seam_->body_config(body); }
-std::vector<ParameterChange> Session::parameter_changes(bool with_queued) const { return seam_->parameter_changes(with_queued); }
-std::vector<std::pair<std::string, haptics::SurfaceMaterial>> Session::material_changes() const { return seam_->material_changes(); }
+std::vector<ParameterChange> Session::parameter_changes(bool with_queued) const {
+  return seam_->parameter_changes(with_queued);
+}
+std::vector<std::pair<std::string, haptics::SurfaceMaterial>> Session::material_changes() const {
+  return seam_->material_changes();
+}
 haptics::Calibration Session::calibration() const { return seam_->calibration(); }
-std::uint64_t Session::calibrations_applied() const { return world_->calibrations_applied.load(std::memory_order_acquire); }
+std::uint64_t Session::calibrations_applied() const {
+  return world_->calibrations_applied.load(std::memory_order_acquire);
+}
 
 // ---- The world, read
 

@@ -68,8 +68,8 @@ enum class ContactCoupling : std::uint8_t {
 struct SessionConfig {
   haptics::HapticLoopConfig haptics;  ///< rate, renderer, surface, safety, calibration
   ContactCoupling coupling{ContactCoupling::kBarycentric};
-  haptics::ForceEffects effects;      ///< H3D force effects added to the contact force
-  collision::AabbTreeOptions tree;    ///< the surfaces' bound tree (H3D useBoundTree, maxTrianglesInLeaf)
+  haptics::ForceEffects effects;    ///< H3D force effects added to the contact force
+  collision::AabbTreeOptions tree;  ///< the surfaces' bound tree (H3D useBoundTree, maxTrianglesInLeaf)
   /// A tool on the stylus (a needle: procedures/needle.h), ticked by the haptic loop, and the
   /// per-step hook that gives its reaction to the tissue. Null: the stylus is a point/sphere.
   std::shared_ptr<haptics::Tool> tool;
@@ -87,8 +87,8 @@ struct SessionConfig {
 struct SessionBody {
   std::string name;
   std::optional<mechanics::MechanicalModel> model;  ///< set for deformable bodies
-  mesh::TriMesh surface;    ///< rest shape of the touchable surface (world frame)
-  SurfaceMapping mapping;   ///< volume → surface (deformable bodies)
+  mesh::TriMesh surface;                            ///< rest shape of the touchable surface (world frame)
+  SurfaceMapping mapping;                           ///< volume → surface (deformable bodies)
   /// Its haptic surface; unset: the session's material (config.haptics.material).
   std::optional<haptics::SurfaceMaterial> material;
   /// What the model was built from: commands that change a parameter rebuild from it.
@@ -118,17 +118,17 @@ struct SessionReport {
   std::int64_t haptic_ticks{0};
   std::int64_t simulation_steps{0};
   double wall_s{0.0};
-  double simulation_steps_per_s{0.0};        ///< achieved (wall clock)
-  int simulation_threads{1};                 ///< threads a body's steps ran on (real time; the last body's)
-  std::string cpu_placement{"not pinned"};   ///< real time: which CPUs the threads were kept on
+  double simulation_steps_per_s{0.0};       ///< achieved (wall clock)
+  int simulation_threads{1};                ///< threads a body's steps ran on (real time; the last body's)
+  std::string cpu_placement{"not pinned"};  ///< real time: which CPUs the threads were kept on
   /// Simulation steps per second of wall time in the thesis' three states (the rate a
   /// graphics loop showing each new shape could reach): untouched and at rest, deforming
   /// without contact, in contact.
   double rate_untouched{0.0}, rate_deforming{0.0}, rate_in_contact{0.0};
   double max_force_n{0.0};
   double contact_time_s{0.0};
-  std::int64_t fall_through_events{0};      ///< steps whose proxy was inside a closed body (not counting a start inside)
-  std::int64_t clamped_contact_ticks{0};    ///< contact ticks whose force was clamped by safety
+  std::int64_t fall_through_events{0};    ///< steps whose proxy was inside a closed body (not counting a start inside)
+  std::int64_t clamped_contact_ticks{0};  ///< contact ticks whose force was clamped by safety
   bool diverged{false};
   std::string divergence;
   /// Why the run ended early because the device failed (unplugged, its SDK in error); empty
@@ -151,8 +151,8 @@ class SessionRunner;
 
 class Session {
  public:
-  static Expected<std::unique_ptr<Session>> make(std::vector<SessionBody> bodies, std::unique_ptr<haptics::Device> device,
-                                                 const SessionConfig& config);
+  static Expected<std::unique_ptr<Session>> make(std::vector<SessionBody> bodies,
+                                                 std::unique_ptr<haptics::Device> device, const SessionConfig& config);
   /// One deformable body (the common case).
   static Expected<std::unique_ptr<Session>> make(SessionBody body, std::unique_ptr<haptics::Device> device,
                                                  const SessionConfig& config);
@@ -160,8 +160,8 @@ class Session {
   Session(const Session&) = delete;
   Session& operator=(const Session&) = delete;
 
-  /// Runs `seconds` of virtual time in lock-step, from where the last virtual run ended. `on_sample` receives every haptic tick's
-  /// sample (for telemetry); `progress` is told how far along the run is.
+  /// Runs `seconds` of virtual time in lock-step, from where the last virtual run ended. `on_sample` receives every
+  /// haptic tick's sample (for telemetry); `progress` is told how far along the run is.
   SessionReport run_virtual(double seconds, const std::function<void(const haptics::HapticSample&)>& on_sample,
                             const ProgressSink& progress = {});
 

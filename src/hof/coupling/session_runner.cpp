@@ -102,8 +102,8 @@ SessionReport SessionRunner::run_virtual(double seconds, const SampleSink& on_sa
         if (on_sample) on_sample(sample);
       }
     }
-    const bool stepped =
-        step_world(world_, seam_, publisher_, report, timer, static_cast<double>(world_.virtual_ticks + tick) * tick_period);
+    const bool stepped = step_world(world_, seam_, publisher_, report, timer,
+                                    static_cast<double>(world_.virtual_ticks + tick) * tick_period);
     // A device that has failed (unplugged, its SDK in error) gives no reading: the force fades
     // as for a divergence, and the run ends, saying why.
     const bool device_failed = loop.device().health() == haptics::DeviceHealth::kFailed;
@@ -114,7 +114,8 @@ SessionReport SessionRunner::run_virtual(double seconds, const SampleSink& on_sa
     }
     ++steps;
     if (progress && (steps % 16 == 0 || tick >= total_ticks)) {
-      progress("haptic session (virtual time)", std::min(1.0, static_cast<double>(tick) / static_cast<double>(total_ticks)));
+      progress("haptic session (virtual time)",
+               std::min(1.0, static_cast<double>(tick) / static_cast<double>(total_ticks)));
     }
   }
   report.haptic_ticks = tick;
@@ -224,14 +225,17 @@ SessionReport SessionRunner::run_realtime(double seconds, const SampleSink& on_s
   haptics::HapticLoop& loop = *world_.loop;
   for (;;) {
     const double elapsed = seconds_between(start, Clock::now());
-    if (elapsed >= seconds || sim_finished_.load(std::memory_order_acquire) || stop_requested_.load(std::memory_order_relaxed)) break;
+    if (elapsed >= seconds || sim_finished_.load(std::memory_order_acquire) ||
+        stop_requested_.load(std::memory_order_relaxed))
+      break;
     // A device that has failed: the haptic loop fades its force out (it gives no reading);
     // once that has had its time, the run ends, saying why.
     if (loop.device().health() == haptics::DeviceHealth::kFailed) {
       if (!device_failed_at) device_failed_at = elapsed;
       const haptics::SafetyConfig& safety = world_.config.haptics.safety;
       const haptics::DeviceSpec& spec = loop.device().spec();
-      const double fade_s = safety.fade_out_s + (spec.max_force_rate_n_per_s > 0.0 ? spec.max_force_n / spec.max_force_rate_n_per_s : 0.0);
+      const double fade_s = safety.fade_out_s +
+                            (spec.max_force_rate_n_per_s > 0.0 ? spec.max_force_n / spec.max_force_rate_n_per_s : 0.0);
       if (elapsed - *device_failed_at > fade_s + 0.01) {
         device_failure = failure_of(loop.device());
         break;

@@ -71,8 +71,9 @@ void SnapshotPublisher::publish(double clock_s) {
   w.contact_ticks_since_publish = 0;
 }
 
-void SnapshotPublisher::make_snapshot_of(std::size_t l, std::span<const Vec3> positions, std::span<const Vec3> velocities,
-                                         const haptics::LocalContactModel& local, double clock_s) {
+void SnapshotPublisher::make_snapshot_of(std::size_t l, std::span<const Vec3> positions,
+                                         std::span<const Vec3> velocities, const haptics::LocalContactModel& local,
+                                         double clock_s) {
   LayerRuntime& layer = *world_.layers[l];
   haptics::SurfaceSnapshot& slot = layer.surfaces.write_slot();
   haptics::update_snapshot(slot, positions, velocities, clock_s);

@@ -12,8 +12,10 @@
 
 namespace hof::coupling {
 
-Expected<SurfaceMapping> SurfaceMapping::by_index(std::span<const Vec3> volume_nodes, std::span<const Vec3> surface_vertices,
-                                                  std::span<const mesh::NodeIndex> surface_to_volume, double tolerance_m) {
+Expected<SurfaceMapping> SurfaceMapping::by_index(std::span<const Vec3> volume_nodes,
+                                                  std::span<const Vec3> surface_vertices,
+                                                  std::span<const mesh::NodeIndex> surface_to_volume,
+                                                  double tolerance_m) {
   if (surface_to_volume.size() != surface_vertices.size()) {
     return make_error(ErrorCode::kInvalidMesh, fmt::format("surface mapping: {} surface vertices but {} volume indices",
                                                            surface_vertices.size(), surface_to_volume.size()));
@@ -24,8 +26,8 @@ Expected<SurfaceMapping> SurfaceMapping::by_index(std::span<const Vec3> volume_n
   for (std::size_t i = 0; i < surface_vertices.size(); ++i) {
     const mesh::NodeIndex n = surface_to_volume[i];
     if (n < 0 || static_cast<std::size_t>(n) >= volume_nodes.size()) {
-      return make_error(ErrorCode::kInvalidMesh, fmt::format("surface mapping: vertex {} maps to node {} of {}", i, n,
-                                                             volume_nodes.size()));
+      return make_error(ErrorCode::kInvalidMesh,
+                        fmt::format("surface mapping: vertex {} maps to node {} of {}", i, n, volume_nodes.size()));
     }
     const double gap = (volume_nodes[n] - surface_vertices[i]).norm();
     if (!(gap <= tolerance_m)) {
@@ -42,7 +44,8 @@ Expected<SurfaceMapping> SurfaceMapping::by_index(std::span<const Vec3> volume_n
   return m;
 }
 
-Expected<SurfaceMapping> SurfaceMapping::barycentric(std::span<const Vec3> volume_nodes, std::span<const mesh::Tet> tets,
+Expected<SurfaceMapping> SurfaceMapping::barycentric(std::span<const Vec3> volume_nodes,
+                                                     std::span<const mesh::Tet> tets,
                                                      std::span<const Vec3> surface_vertices) {
   if (tets.empty()) return make_error(ErrorCode::kInvalidMesh, "barycentric mapping: the volume has no tetrahedra");
   SurfaceMapping m;
@@ -77,7 +80,8 @@ Expected<SurfaceMapping> SurfaceMapping::barycentric(std::span<const Vec3> volum
       }
     }
     if (!std::isfinite(best_score)) {
-      return make_error(ErrorCode::kInvalidMesh, fmt::format("barycentric mapping: surface vertex {} has no tetrahedron", v));
+      return make_error(ErrorCode::kInvalidMesh,
+                        fmt::format("barycentric mapping: surface vertex {} has no tetrahedron", v));
     }
     m.nodes_.push_back({tets[best][0], tets[best][1], tets[best][2], tets[best][3]});
     m.weights_.push_back({best_w[0], best_w[1], best_w[2], best_w[3]});
@@ -89,13 +93,14 @@ Expected<SurfaceMapping> SurfaceMapping::onto_triangles(std::span<const Vec3> vo
                                                         std::span<const mesh::Tri> triangles,
                                                         std::span<const Vec3> surface_vertices) {
   if (triangles.empty()) {
-    return make_error(ErrorCode::kInvalidMesh, "barycentric mapping: the body has neither tetrahedra nor triangles to map onto");
+    return make_error(ErrorCode::kInvalidMesh,
+                      "barycentric mapping: the body has neither tetrahedra nor triangles to map onto");
   }
   for (std::size_t t = 0; t < triangles.size(); ++t)
     for (mesh::NodeIndex i : triangles[t])
       if (i < 0 || static_cast<std::size_t>(i) >= volume_nodes.size())
-        return make_error(ErrorCode::kInvalidMesh, fmt::format("barycentric mapping: triangle {} uses node {} of {}", t, i,
-                                                               volume_nodes.size()));
+        return make_error(ErrorCode::kInvalidMesh, fmt::format("barycentric mapping: triangle {} uses node {} of {}", t,
+                                                               i, volume_nodes.size()));
   const collision::TriangleMeshView view{volume_nodes, triangles};
   const collision::AabbTree tree = collision::AabbTree::build(view);
   SurfaceMapping m;
@@ -107,7 +112,8 @@ Expected<SurfaceMapping> SurfaceMapping::onto_triangles(std::span<const Vec3> vo
     const collision::ClosestPoint c =
         tree.closest_point(view, surface_vertices[v], std::numeric_limits<double>::infinity());
     if (c.triangle < 0 || !c.barycentric.allFinite()) {
-      return make_error(ErrorCode::kInvalidMesh, fmt::format("barycentric mapping: surface vertex {} has no triangle", v));
+      return make_error(ErrorCode::kInvalidMesh,
+                        fmt::format("barycentric mapping: surface vertex {} has no triangle", v));
     }
     const mesh::Tri& tri = triangles[static_cast<std::size_t>(c.triangle)];
     std::array<std::int32_t, kMaxNodesPerVertex> nodes{};
@@ -183,7 +189,8 @@ Expected<SurfaceMapping> SurfaceMapping::trilinear(std::span<const Vec3> volume_
     return std::clamp(static_cast<int>(std::floor((value - lo[axis]) / bin_size[axis])), 0, dims[axis] - 1);
   };
   const auto bin_index = [&](int i, int j, int k) {
-    return static_cast<std::size_t>(i) + static_cast<std::size_t>(dims[0]) * (j + static_cast<std::size_t>(dims[1]) * k);
+    return static_cast<std::size_t>(i) +
+           static_cast<std::size_t>(dims[0]) * (j + static_cast<std::size_t>(dims[1]) * k);
   };
   std::vector<std::int32_t> bin_start(static_cast<std::size_t>(dims[0]) * dims[1] * dims[2] + 1, 0);
   std::vector<std::int32_t> bin_hexes;
@@ -193,8 +200,10 @@ Expected<SurfaceMapping> SurfaceMapping::trilinear(std::span<const Vec3> volume_
       for (int k = bin_of(boxes[h].first.z(), 2); k <= bin_of(boxes[h].second.z(), 2); ++k) {
         for (int j = bin_of(boxes[h].first.y(), 1); j <= bin_of(boxes[h].second.y(), 1); ++j) {
           for (int i = bin_of(boxes[h].first.x(), 0); i <= bin_of(boxes[h].second.x(), 0); ++i) {
-            if (pass == 0) ++bin_start[bin_index(i, j, k) + 1];
-            else bin_hexes[static_cast<std::size_t>(next[bin_index(i, j, k)]++)] = static_cast<std::int32_t>(h);
+            if (pass == 0)
+              ++bin_start[bin_index(i, j, k) + 1];
+            else
+              bin_hexes[static_cast<std::size_t>(next[bin_index(i, j, k)]++)] = static_cast<std::int32_t>(h);
           }
         }
       }
@@ -211,7 +220,9 @@ Expected<SurfaceMapping> SurfaceMapping::trilinear(std::span<const Vec3> volume_
   m.nodes_.reserve(surface_vertices.size());
   m.weights_.reserve(surface_vertices.size());
   // How far outside [−1, 1]³ a point's ξ is (0 inside).
-  const auto outside = [](const Vec3& xi) { return xi.allFinite() ? std::max(0.0, xi.cwiseAbs().maxCoeff() - 1.0) : 1e300; };
+  const auto outside = [](const Vec3& xi) {
+    return xi.allFinite() ? std::max(0.0, xi.cwiseAbs().maxCoeff() - 1.0) : 1e300;
+  };
   for (std::size_t v = 0; v < surface_vertices.size(); ++v) {
     const Vec3& p = surface_vertices[v];
     std::int64_t best = -1;
@@ -224,7 +235,8 @@ Expected<SurfaceMapping> SurfaceMapping::trilinear(std::span<const Vec3> volume_
       for (std::int32_t at = bin_start[b]; at < bin_start[b + 1] && best_score > 1e-9; ++at) {
         const auto h = static_cast<std::size_t>(bin_hexes[static_cast<std::size_t>(at)]);
         const double slack = 1e-9 * (boxes[h].second - boxes[h].first).maxCoeff();
-        if (((p.array() < boxes[h].first.array() - slack) || (p.array() > boxes[h].second.array() + slack)).any()) continue;
+        if (((p.array() < boxes[h].first.array() - slack) || (p.array() > boxes[h].second.array() + slack)).any())
+          continue;
         const Vec3 xi = hex_local_coordinates(volume_nodes, hexes[h], p);
         if (outside(xi) < best_score) {
           best_score = outside(xi);
@@ -282,7 +294,8 @@ void SurfaceMapping::apply(std::span<const double> volume, std::span<Vec3> surfa
   }
 }
 
-void SurfaceMapping::add_vertex_force(std::int32_t surface_vertex, const Vec3& force, std::span<double> volume_forces) const {
+void SurfaceMapping::add_vertex_force(std::int32_t surface_vertex, const Vec3& force,
+                                      std::span<double> volume_forces) const {
   const auto& nodes = nodes_[static_cast<std::size_t>(surface_vertex)];
   const auto& weights = weights_[static_cast<std::size_t>(surface_vertex)];
   for (int k = 0; k < arity_; ++k) {
@@ -292,8 +305,8 @@ void SurfaceMapping::add_vertex_force(std::int32_t surface_vertex, const Vec3& f
 }
 
 std::size_t SurfaceMapping::point_weights(std::span<const std::int32_t> surface_vertices,
-                                         std::span<const double> surface_weights, std::span<std::int32_t> nodes,
-                                         std::span<double> weights) const {
+                                          std::span<const double> surface_weights, std::span<std::int32_t> nodes,
+                                          std::span<double> weights) const {
   std::size_t count = 0;
   for (std::size_t v = 0; v < surface_vertices.size(); ++v) {
     const auto& n = nodes_[static_cast<std::size_t>(surface_vertices[v])];

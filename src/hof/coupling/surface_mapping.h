@@ -26,7 +26,8 @@ class SurfaceMapping {
   /// Identity by index: `surface_to_volume[i]` is the volume node of surface vertex i. Fails
   /// (naming the first vertex) when a surface vertex is farther than `tolerance_m` from its node.
   static Expected<SurfaceMapping> by_index(std::span<const Vec3> volume_nodes, std::span<const Vec3> surface_vertices,
-                                           std::span<const mesh::NodeIndex> surface_to_volume, double tolerance_m = 1e-9);
+                                           std::span<const mesh::NodeIndex> surface_to_volume,
+                                           double tolerance_m = 1e-9);
 
   /// Barycentric: each surface vertex in the tetrahedron that contains it, or else the
   /// nearest one (weights then extrapolate, as SOFA does for points outside).
@@ -37,7 +38,8 @@ class SurfaceMapping {
   /// springs): each surface vertex gets the barycentric weights of its closest point on the
   /// volume's triangles. As in SOFA, a vertex off the triangles' surface follows its projection
   /// (the offset along the normal is not kept). Errors: no triangles, a node out of range.
-  static Expected<SurfaceMapping> onto_triangles(std::span<const Vec3> volume_nodes, std::span<const mesh::Tri> triangles,
+  static Expected<SurfaceMapping> onto_triangles(std::span<const Vec3> volume_nodes,
+                                                 std::span<const mesh::Tri> triangles,
                                                  std::span<const Vec3> surface_vertices);
 
   /// Trilinear: each surface vertex gets the trilinear weights N_c(ξ) of the hexahedron that

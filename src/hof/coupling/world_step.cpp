@@ -33,8 +33,9 @@ bool inside_part(const haptics::SurfacePart& part, const std::vector<mesh::Tri>&
     const double la = a.norm(), lb = b.norm(), lc = c.norm();
     // Single precision is ample for an inside test (each term's error ~1e-7 rad, the sum is
     // compared with 2π), and runs about twice as fast: this test runs after every step.
-    total += 2.0 * static_cast<double>(std::atan2(static_cast<float>(a.dot(b.cross(c))),
-                                                  static_cast<float>(la * lb * lc + a.dot(b) * lc + b.dot(c) * la + c.dot(a) * lb)));
+    total += 2.0 * static_cast<double>(
+                       std::atan2(static_cast<float>(a.dot(b.cross(c))),
+                                  static_cast<float>(la * lb * lc + a.dot(b) * lc + b.dot(c) * la + c.dot(a) * lb)));
   }
   return total / (4.0 * std::numbers::pi) > 0.5;
 }
@@ -69,7 +70,8 @@ std::vector<TripleBuffer<haptics::SurfaceSnapshot>*> build_layers(World& w) {
   const std::size_t layer_count = std::min(numbers.size(), haptics::kMaxLayers);
   for (std::size_t l = 0; l < layer_count; ++l) w.layers.push_back(std::make_unique<LayerRuntime>());
   for (std::size_t i = 0; i < w.bodies.size(); ++i) {
-    const auto at = static_cast<std::size_t>(std::lower_bound(numbers.begin(), numbers.end(), w.bodies[i].body.layer) - numbers.begin());
+    const auto at = static_cast<std::size_t>(std::lower_bound(numbers.begin(), numbers.end(), w.bodies[i].body.layer) -
+                                             numbers.begin());
     w.bodies[i].layer = std::min(at, layer_count - 1);
     w.bodies[i].part = w.layers[w.bodies[i].layer]->bodies.size();
     w.layers[w.bodies[i].layer]->bodies.push_back(i);
@@ -87,7 +89,8 @@ std::vector<TripleBuffer<haptics::SurfaceSnapshot>*> build_layers(World& w) {
     }
     layer->rest = haptics::make_snapshot(surfaces, std::span<const bool>(is_static.get(), layer->bodies.size()),
                                          std::span<const bool>(closed.get(), layer->bodies.size()), w.config.tree);
-    for (std::size_t k = 0; k < layer->bodies.size(); ++k) layer->rest.parts[k].body = static_cast<std::int32_t>(layer->bodies[k]);
+    for (std::size_t k = 0; k < layer->bodies.size(); ++k)
+      layer->rest.parts[k].body = static_cast<std::int32_t>(layer->bodies[k]);
     // Every slot holds the geometry (the producer then only updates positions in place).
     for (auto* buffer : {&layer->surfaces, &layer->graphics}) {
       buffer->write_slot() = layer->rest;
@@ -120,7 +123,8 @@ Vec3 BodyRuntime::fem_reaction(const mesh::Tri& tri, const std::array<double, 3>
   // Room is kept for the triangle's own nodes, appended last.
   const std::size_t room = patch_nodes.capacity() - triangle_nodes.size();
   patch_nodes.clear();
-  for (std::size_t v = 0; v < surface_positions.size() && patch_nodes.size() + SurfaceMapping::kMaxNodesPerVertex <= room; ++v) {
+  for (std::size_t v = 0;
+       v < surface_positions.size() && patch_nodes.size() + SurfaceMapping::kMaxNodesPerVertex <= room; ++v) {
     if ((surface_positions[v] - point).squaredNorm() > radius * radius) continue;
     const std::array<std::int32_t, 1> vertex{static_cast<std::int32_t>(v)};
     const std::array<double, 1> one{1.0};
@@ -129,7 +133,8 @@ Vec3 BodyRuntime::fem_reaction(const mesh::Tri& tri, const std::array<double, 3>
     const std::size_t n = body.mapping.point_weights(vertex, one, vertex_nodes, vertex_weights);
     for (std::size_t k = 0; k < n; ++k) {
       // A held node's elastic force is the support's reaction, not the tool's.
-      if (!body.model->fixed_dof_mask[3 * static_cast<std::size_t>(vertex_nodes[k])]) patch_nodes.push_back(vertex_nodes[k]);
+      if (!body.model->fixed_dof_mask[3 * static_cast<std::size_t>(vertex_nodes[k])])
+        patch_nodes.push_back(vertex_nodes[k]);
     }
   }
   patch_nodes.insert(patch_nodes.end(), triangle_nodes.begin(), triangle_nodes.end());  // always
@@ -137,7 +142,8 @@ Vec3 BodyRuntime::fem_reaction(const mesh::Tri& tri, const std::array<double, 3>
   return mechanics::point_elastic_force(*body.model, state, patch_nodes, patch_weights);
 }
 
-void init_world(World& w, std::vector<SessionBody> bodies, std::unique_ptr<haptics::Device> device, const SessionConfig& config) {
+void init_world(World& w, std::vector<SessionBody> bodies, std::unique_ptr<haptics::Device> device,
+                const SessionConfig& config) {
   w.device = std::move(device);
   w.config = config;
   double dt = std::numeric_limits<double>::infinity();
@@ -180,9 +186,10 @@ void init_world(World& w, std::vector<SessionBody> bodies, std::unique_ptr<hapti
   w.current_settings.effects = w.config.effects;
   w.current_settings.max_force_n = w.config.haptics.safety.max_force_n;
   w.current_settings.calibration = w.config.haptics.calibration;
-  for (const BodyRuntime& r : w.bodies) w.current_settings.materials.push_back(r.body.material.value_or(w.config.haptics.material));
-  w.loop = std::make_unique<haptics::HapticLoop>(*w.device, std::span<TripleBuffer<haptics::SurfaceSnapshot>* const>(buffers),
-                                                 w.config.haptics, &w.settings);
+  for (const BodyRuntime& r : w.bodies)
+    w.current_settings.materials.push_back(r.body.material.value_or(w.config.haptics.material));
+  w.loop = std::make_unique<haptics::HapticLoop>(
+      *w.device, std::span<TripleBuffer<haptics::SurfaceSnapshot>* const>(buffers), w.config.haptics, &w.settings);
   w.loop->set_tool(w.config.tool.get());
   w.last_device = w.device.get();
   publish_settings(w);
@@ -425,7 +432,8 @@ bool advance_bodies(World& w, SessionReport& report) {
       const auto& model = *due[k]->body.model;
       double& largest = due[k]->report.max_displacement_m;
       for (std::size_t i = 0; i < model.node_count(); ++i) {
-        largest = std::max(largest, (due[k]->state.position(static_cast<std::int32_t>(i)) - model.rest_positions[i]).norm());
+        largest =
+            std::max(largest, (due[k]->state.position(static_cast<std::int32_t>(i)) - model.rest_positions[i]).norm());
       }
     }
     if (!ok[k]) {
@@ -444,7 +452,8 @@ haptics::LocalContactModel local_contact_model(World& w, std::size_t l) {
   haptics::LocalContactModel local;
   const LayerRuntime& layer = *w.layers[l];
   const bool touched_here = w.last_body >= 0 && w.bodies[static_cast<std::size_t>(w.last_body)].layer == l;
-  const bool fem_felt = w.config.coupling == ContactCoupling::kCompliance || w.config.coupling == ContactCoupling::kFemReaction;
+  const bool fem_felt =
+      w.config.coupling == ContactCoupling::kCompliance || w.config.coupling == ContactCoupling::kFemReaction;
   if (!fem_felt || !touched_here || w.contact_ticks_since_publish == 0 ||
       !w.bodies[static_cast<std::size_t>(w.last_body)].body.deformable()) {
     return local;

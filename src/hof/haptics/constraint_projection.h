@@ -19,7 +19,7 @@ struct HalfSpace {
 
 /// Nearest point to `goal` inside all `count` (≤ 3) half-spaces. When no candidate is
 /// feasible (planes that cannot all be met), returns `fallback`.
-[[nodiscard]] Vec3 project_onto_half_spaces(const Vec3& goal, const std::array<HalfSpace, 3>& planes,
-                                            std::size_t count, const Vec3& fallback);
+[[nodiscard]] Vec3 project_onto_half_spaces(const Vec3& goal, const std::array<HalfSpace, 3>& planes, std::size_t count,
+                                            const Vec3& fallback);
 
 }  // namespace hof::haptics

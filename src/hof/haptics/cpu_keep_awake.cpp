@@ -16,7 +16,8 @@ bool running_under_hypervisor() {
   std::ifstream cpuinfo("/proc/cpuinfo");
   std::string line;
   while (std::getline(cpuinfo, line)) {
-    if (line.starts_with("flags") && (line.find(" hypervisor ") != std::string::npos || line.ends_with(" hypervisor"))) return true;
+    if (line.starts_with("flags") && (line.find(" hypervisor ") != std::string::npos || line.ends_with(" hypervisor")))
+      return true;
   }
   return false;
 }
@@ -31,7 +32,8 @@ CpuKeepAwake::CpuKeepAwake(KeepAwake mode) {
   // One spinner on each CPU the process may use (left to themselves, two could share one CPU
   // and leave another to halt).
   std::vector<int> allowed = allowed_cpus();
-  const auto cpus = static_cast<unsigned>(allowed.empty() ? std::max(1u, std::thread::hardware_concurrency()) : allowed.size());
+  const auto cpus =
+      static_cast<unsigned>(allowed.empty() ? std::max(1u, std::thread::hardware_concurrency()) : allowed.size());
   threads_.reserve(cpus);
   for (unsigned i = 0; i < cpus; ++i) {
     const int cpu = allowed.empty() ? -1 : allowed[i];

@@ -2,9 +2,9 @@
 /// @file
 /// The haptic device interface: position, velocity, orientation and buttons in; force and
 /// torque out; a specification that the safety layer enforces. Backends are chosen by a typed
-/// configuration (device_config.h; users' spec strings are parsed in scene/device_config.h). read() and write_force() are called from the haptic thread every
-/// tick: they never allocate, lock a mutex, block or do I/O — backends that talk to hardware
-/// or a network do it on their own thread and exchange with the tick through atomics.
+/// configuration (device_config.h; users' spec strings are parsed in scene/device_config.h). read() and write_force()
+/// are called from the haptic thread every tick: they never allocate, lock a mutex, block or do I/O — backends that
+/// talk to hardware or a network do it on their own thread and exchange with the tick through atomics.
 ///
 /// Frames: positions are in the device frame (metres; x right, y up, z toward the user, as
 /// H3D). The haptic loop applies the calibration (H3D positionCalibration /
@@ -24,30 +24,30 @@ namespace hof::haptics {
 /// What the device can do; the safety layer clamps to it (cf. CHAI3D cHapticDeviceInfo).
 struct DeviceSpec {
   std::string model{"virtual"};
-  double max_force_n{8.0};                 ///< |F| never exceeds this at the device
-  double max_stiffness_n_per_m{3000.0};    ///< largest stable rendering stiffness
+  double max_force_n{8.0};               ///< |F| never exceeds this at the device
+  double max_stiffness_n_per_m{3000.0};  ///< largest stable rendering stiffness
   double max_damping_n_s_per_m{20.0};
   double workspace_radius_m{0.08};
   double nominal_rate_hz{1000.0};
-  double max_force_rate_n_per_s{2000.0};   ///< force slew limit (safety)
+  double max_force_rate_n_per_s{2000.0};  ///< force slew limit (safety)
 };
 
 /// One sample from the device, in the device frame.
 struct DeviceReading {
-  double time_s{0.0};                                     ///< device or virtual time of the sample
+  double time_s{0.0};  ///< device or virtual time of the sample
   Vec3 position_m{Vec3::Zero()};
   Vec3 velocity_m_per_s{Vec3::Zero()};
   Eigen::Quaterniond orientation{Eigen::Quaterniond::Identity()};
-  std::uint32_t buttons{0};                               ///< bit 0 = main button
-  bool valid{false};  ///< false when the device has no fresh sample (absent, timed out, ended)
+  std::uint32_t buttons{0};  ///< bit 0 = main button
+  bool valid{false};         ///< false when the device has no fresh sample (absent, timed out, ended)
 };
 
 /// Connection state, readable from any thread.
 enum class DeviceHealth : std::uint8_t {
   kOk,
-  kTimedOut,   ///< no sample within the backend's timeout: the loop fades force to zero
-  kEnded,      ///< a finite source (replay, script) has run out
-  kFailed,     ///< the backend stopped working (socket error, device unplugged)
+  kTimedOut,  ///< no sample within the backend's timeout: the loop fades force to zero
+  kEnded,     ///< a finite source (replay, script) has run out
+  kFailed,    ///< the backend stopped working (socket error, device unplugged)
 };
 
 class Device {

@@ -47,8 +47,8 @@ struct MouseConfig {
   DeviceSpec spec{.model = "mouse"};
 };
 
-using DeviceConfig = std::variant<ReplayConfig, ScriptedConfig, VirtualHandConfig, UdpDeviceConfig, SpacemouseConfig, MouseConfig,
-                                  DhdConfig, OpenHapticsConfig>;
+using DeviceConfig = std::variant<ReplayConfig, ScriptedConfig, VirtualHandConfig, UdpDeviceConfig, SpacemouseConfig,
+                                  MouseConfig, DhdConfig, OpenHapticsConfig>;
 
 /// Opens the device `config` describes. Errors are the backend's own (a missing file, an
 /// invalid motion or hand, an absent device or SDK), without the spec string: the caller that

@@ -57,7 +57,8 @@ class Compiler {
   // Appends an op; `pops` operands replaced by one result.
   void emit(OpCode code, int pops, double value = 0.0, std::uint8_t variable = 0) {
     if (!failure_.empty()) return;
-    if (size_ >= FunctionExpression::kMaxOps) return error(fmt::format("longer than {} operations", FunctionExpression::kMaxOps));
+    if (size_ >= FunctionExpression::kMaxOps)
+      return error(fmt::format("longer than {} operations", FunctionExpression::kMaxOps));
     (*ops_)[size_++] = Op{code, variable, value};
     depth_ += 1 - pops;
     if (depth_ > static_cast<int>(kMaxStack)) return error("nested too deeply");
@@ -67,30 +68,50 @@ class Compiler {
   void expression() {
     term();
     for (;;) {
-      if (accept('+')) { term(); emit(OpCode::kAdd, 2); }
-      else if (accept('-')) { term(); emit(OpCode::kSub, 2); }
-      else return;
+      if (accept('+')) {
+        term();
+        emit(OpCode::kAdd, 2);
+      } else if (accept('-')) {
+        term();
+        emit(OpCode::kSub, 2);
+      } else
+        return;
     }
   }
   // term := unary (('*' | '/') unary)*
   void term() {
     unary();
     for (;;) {
-      if (accept('*')) { unary(); emit(OpCode::kMul, 2); }
-      else if (accept('/')) { unary(); emit(OpCode::kDiv, 2); }
-      else return;
+      if (accept('*')) {
+        unary();
+        emit(OpCode::kMul, 2);
+      } else if (accept('/')) {
+        unary();
+        emit(OpCode::kDiv, 2);
+      } else
+        return;
     }
   }
   // unary := '-' unary | '+' unary | power
   void unary() {
-    if (accept('-')) { unary(); emit(OpCode::kNeg, 1); return; }
-    if (accept('+')) { unary(); return; }
+    if (accept('-')) {
+      unary();
+      emit(OpCode::kNeg, 1);
+      return;
+    }
+    if (accept('+')) {
+      unary();
+      return;
+    }
     power();
   }
   // power := primary ('^' unary)?   (right-associative: 2^3^2 = 2^9)
   void power() {
     primary();
-    if (accept('^')) { unary(); emit(OpCode::kPow, 2); }
+    if (accept('^')) {
+      unary();
+      emit(OpCode::kPow, 2);
+    }
   }
   void primary() {
     skip_space();
@@ -109,7 +130,8 @@ class Compiler {
       emit(OpCode::kConst, 0, v);
       return;
     }
-    if (!std::isalpha(static_cast<unsigned char>(c)) && c != '_') return error(fmt::format("unexpected '{}' at character {}", c, i_ + 1));
+    if (!std::isalpha(static_cast<unsigned char>(c)) && c != '_')
+      return error(fmt::format("unexpected '{}' at character {}", c, i_ + 1));
     const std::size_t start = i_;
     while (i_ < text_.size() && (std::isalnum(static_cast<unsigned char>(text_[i_])) || text_[i_] == '_')) ++i_;
     const std::string_view name = text_.substr(start, i_ - start);
@@ -124,8 +146,8 @@ class Compiler {
       return;
     }
     static constexpr std::pair<std::string_view, OpCode> kOne[] = {
-        {"sin", OpCode::kSin},   {"cos", OpCode::kCos},   {"tan", OpCode::kTan},  {"asin", OpCode::kAsin},
-        {"acos", OpCode::kAcos}, {"atan", OpCode::kAtan}, {"exp", OpCode::kExp},  {"log", OpCode::kLog},
+        {"sin", OpCode::kSin},   {"cos", OpCode::kCos},   {"tan", OpCode::kTan},     {"asin", OpCode::kAsin},
+        {"acos", OpCode::kAcos}, {"atan", OpCode::kAtan}, {"exp", OpCode::kExp},     {"log", OpCode::kLog},
         {"sqrt", OpCode::kSqrt}, {"abs", OpCode::kAbs},   {"floor", OpCode::kFloor}, {"ceil", OpCode::kCeil}};
     static constexpr std::pair<std::string_view, OpCode> kTwo[] = {
         {"min", OpCode::kMin}, {"max", OpCode::kMax}, {"atan2", OpCode::kAtan2}, {"pow", OpCode::kPow}};
@@ -169,7 +191,8 @@ Expected<FunctionExpression> FunctionExpression::make(std::string_view text, std
   FunctionExpression f;
   Compiler compiler(text, variables);
   f.size_ = compiler.compile(f.ops_);
-  if (!compiler.failure().empty()) return make_error(ErrorCode::kParse, fmt::format("'{}': {}", text, compiler.failure()));
+  if (!compiler.failure().empty())
+    return make_error(ErrorCode::kParse, fmt::format("'{}': {}", text, compiler.failure()));
   return f;
 }
 
@@ -179,39 +202,88 @@ double FunctionExpression::evaluate(std::span<const double> values) const {
   for (std::size_t k = 0; k < size_; ++k) {
     const Op& op = ops_[k];
     switch (op.code) {
-      case OpCode::kConst: stack[top++] = op.value; continue;
-      case OpCode::kVar: stack[top++] = op.variable < values.size() ? values[op.variable] : 0.0; continue;
-      default: break;
+      case OpCode::kConst:
+        stack[top++] = op.value;
+        continue;
+      case OpCode::kVar:
+        stack[top++] = op.variable < values.size() ? values[op.variable] : 0.0;
+        continue;
+      default:
+        break;
     }
     double& a = stack[top - 1];
     switch (op.code) {
-      case OpCode::kNeg: a = -a; continue;
-      case OpCode::kSin: a = std::sin(a); continue;
-      case OpCode::kCos: a = std::cos(a); continue;
-      case OpCode::kTan: a = std::tan(a); continue;
-      case OpCode::kAsin: a = std::asin(a); continue;
-      case OpCode::kAcos: a = std::acos(a); continue;
-      case OpCode::kAtan: a = std::atan(a); continue;
-      case OpCode::kExp: a = std::exp(a); continue;
-      case OpCode::kLog: a = std::log(a); continue;
-      case OpCode::kSqrt: a = std::sqrt(a); continue;
-      case OpCode::kAbs: a = std::abs(a); continue;
-      case OpCode::kFloor: a = std::floor(a); continue;
-      case OpCode::kCeil: a = std::ceil(a); continue;
-      default: break;
+      case OpCode::kNeg:
+        a = -a;
+        continue;
+      case OpCode::kSin:
+        a = std::sin(a);
+        continue;
+      case OpCode::kCos:
+        a = std::cos(a);
+        continue;
+      case OpCode::kTan:
+        a = std::tan(a);
+        continue;
+      case OpCode::kAsin:
+        a = std::asin(a);
+        continue;
+      case OpCode::kAcos:
+        a = std::acos(a);
+        continue;
+      case OpCode::kAtan:
+        a = std::atan(a);
+        continue;
+      case OpCode::kExp:
+        a = std::exp(a);
+        continue;
+      case OpCode::kLog:
+        a = std::log(a);
+        continue;
+      case OpCode::kSqrt:
+        a = std::sqrt(a);
+        continue;
+      case OpCode::kAbs:
+        a = std::abs(a);
+        continue;
+      case OpCode::kFloor:
+        a = std::floor(a);
+        continue;
+      case OpCode::kCeil:
+        a = std::ceil(a);
+        continue;
+      default:
+        break;
     }
     const double b = stack[--top];
     double& l = stack[top - 1];
     switch (op.code) {
-      case OpCode::kAdd: l += b; break;
-      case OpCode::kSub: l -= b; break;
-      case OpCode::kMul: l *= b; break;
-      case OpCode::kDiv: l /= b; break;
-      case OpCode::kPow: l = std::pow(l, b); break;
-      case OpCode::kMin: l = std::min(l, b); break;
-      case OpCode::kMax: l = std::max(l, b); break;
-      case OpCode::kAtan2: l = std::atan2(l, b); break;
-      default: break;
+      case OpCode::kAdd:
+        l += b;
+        break;
+      case OpCode::kSub:
+        l -= b;
+        break;
+      case OpCode::kMul:
+        l *= b;
+        break;
+      case OpCode::kDiv:
+        l /= b;
+        break;
+      case OpCode::kPow:
+        l = std::pow(l, b);
+        break;
+      case OpCode::kMin:
+        l = std::min(l, b);
+        break;
+      case OpCode::kMax:
+        l = std::max(l, b);
+        break;
+      case OpCode::kAtan2:
+        l = std::atan2(l, b);
+        break;
+      default:
+        break;
     }
   }
   return top > 0 ? stack[top - 1] : 0.0;

@@ -30,8 +30,29 @@ class FunctionExpression {
   [[nodiscard]] double evaluate(std::span<const double> values) const;
 
   enum class OpCode : std::uint8_t {
-    kConst, kVar, kAdd, kSub, kMul, kDiv, kPow, kNeg, kSin, kCos, kTan, kAsin, kAcos, kAtan, kExp, kLog, kSqrt, kAbs,
-    kFloor, kCeil, kMin, kMax, kAtan2
+    kConst,
+    kVar,
+    kAdd,
+    kSub,
+    kMul,
+    kDiv,
+    kPow,
+    kNeg,
+    kSin,
+    kCos,
+    kTan,
+    kAsin,
+    kAcos,
+    kAtan,
+    kExp,
+    kLog,
+    kSqrt,
+    kAbs,
+    kFloor,
+    kCeil,
+    kMin,
+    kMax,
+    kAtan2
   };
   struct Op {
     OpCode code{OpCode::kConst};

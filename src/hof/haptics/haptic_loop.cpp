@@ -4,8 +4,8 @@
 #include <sched.h>
 #include <time.h>
 
-#include <Eigen/SVD>
 #include <fmt/format.h>
+#include <Eigen/SVD>
 
 #include <algorithm>
 #include <array>
@@ -45,7 +45,8 @@ inline void cpu_relax() {
 Vec3 Calibration::vector_to_device(const Vec3& v) const {
   // Forces go back to the device by the rotation part of the calibration: a scaling
   // calibration (a Falcon's workspace blown up 3×) must not scale the force.
-  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(position.topLeftCorner<3, 3>(), Eigen::ComputeFullU | Eigen::ComputeFullV);
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(position.topLeftCorner<3, 3>(),
+                                              Eigen::ComputeFullU | Eigen::ComputeFullV);
   Eigen::Matrix3d u = svd.matrixU();
   if ((u * svd.matrixV().transpose()).determinant() < 0.0) u.col(2) = -u.col(2);
   return (u * svd.matrixV().transpose()).transpose() * v;
@@ -55,18 +56,22 @@ Expected<void> validate_effects(const ForceEffects& effects) {
   if (effects.springs.size() > kMaxEffectsEach || effects.viscosities.size() > kMaxEffectsEach ||
       effects.constants.size() > kMaxEffectsEach || effects.magnets.size() > kMaxEffectsEach ||
       effects.position_functions.size() > kMaxEffectsEach || effects.time_functions.size() > kMaxEffectsEach) {
-    return make_error(ErrorCode::kInvalidArgument, fmt::format("force effects: at most {} of each kind", kMaxEffectsEach));
+    return make_error(ErrorCode::kInvalidArgument,
+                      fmt::format("force effects: at most {} of each kind", kMaxEffectsEach));
   }
   for (const SpringEffect& e : effects.springs) {
     if (!e.position_m.allFinite() || !(e.spring_constant_n_per_m >= 0.0) || !std::isfinite(e.spring_constant_n_per_m) ||
         !(e.start_distance_m >= 0.0) || !(e.escape_distance_m >= 0.0) || !(e.damping_n_s_per_m >= 0.0)) {
-      return make_error(ErrorCode::kInvalidArgument, "SpringEffect: position must be finite, springConstant, "
-                                                     "startDistance, escapeDistance and damping >= 0");
+      return make_error(ErrorCode::kInvalidArgument,
+                        "SpringEffect: position must be finite, springConstant, "
+                        "startDistance, escapeDistance and damping >= 0");
     }
   }
   for (const ViscosityEffect& e : effects.viscosities) {
-    if (!(e.viscosity_pa_s >= 0.0) || !(e.radius_m >= 0.0) || !(e.damping_factor >= 0.0) || !std::isfinite(e.viscosity_pa_s)) {
-      return make_error(ErrorCode::kInvalidArgument, "ViscosityEffect: viscosity, radius and dampingFactor must be >= 0");
+    if (!(e.viscosity_pa_s >= 0.0) || !(e.radius_m >= 0.0) || !(e.damping_factor >= 0.0) ||
+        !std::isfinite(e.viscosity_pa_s)) {
+      return make_error(ErrorCode::kInvalidArgument,
+                        "ViscosityEffect: viscosity, radius and dampingFactor must be >= 0");
     }
   }
   for (const ConstantForceEffect& e : effects.constants) {
@@ -77,26 +82,30 @@ Expected<void> validate_effects(const ForceEffects& effects) {
   for (const MagneticGeometryEffect& e : effects.magnets) {
     if (!e.surface || !(e.spring_constant_n_per_m >= 0.0) || !std::isfinite(e.spring_constant_n_per_m) ||
         !(e.start_distance_m >= 0.0) || !(e.escape_distance_m >= 0.0)) {
-      return make_error(ErrorCode::kInvalidArgument, "MagneticGeometryEffect: a surface, and springConstant, startDistance "
-                                                     "and escapeDistance >= 0, are needed");
+      return make_error(ErrorCode::kInvalidArgument,
+                        "MagneticGeometryEffect: a surface, and springConstant, startDistance "
+                        "and escapeDistance >= 0, are needed");
     }
     magnet_triangles += e.surface->triangles.size();
   }
   if (magnet_triangles > kMaxMagnetTriangles) {
-    return make_error(ErrorCode::kInvalidArgument, fmt::format("MagneticGeometryEffect: {} triangles in all, at most {} (the "
-                                                               "closest point is searched over each in every haptic tick)",
-                                                               magnet_triangles, kMaxMagnetTriangles));
+    return make_error(ErrorCode::kInvalidArgument,
+                      fmt::format("MagneticGeometryEffect: {} triangles in all, at most {} (the "
+                                  "closest point is searched over each in every haptic tick)",
+                                  magnet_triangles, kMaxMagnetTriangles));
   }
   return {};
 }
 
 HapticLoop::HapticLoop(Device& device, TripleBuffer<SurfaceSnapshot>& surfaces, const HapticLoopConfig& config,
                        TripleBuffer<HapticSettings>* settings)
-    : HapticLoop(device, std::span<TripleBuffer<SurfaceSnapshot>* const>(std::array{&surfaces}.data(), 1), config, settings) {}
+    : HapticLoop(device, std::span<TripleBuffer<SurfaceSnapshot>* const>(std::array{&surfaces}.data(), 1), config,
+                 settings) {}
 
-HapticLoop::HapticLoop(Device& device, std::span<TripleBuffer<SurfaceSnapshot>* const> layers, const HapticLoopConfig& config,
-                       TripleBuffer<HapticSettings>* settings)
-    : layers_(layers.begin(), layers.begin() + static_cast<std::ptrdiff_t>(std::clamp<std::size_t>(layers.size(), 1, kMaxLayers))),
+HapticLoop::HapticLoop(Device& device, std::span<TripleBuffer<SurfaceSnapshot>* const> layers,
+                       const HapticLoopConfig& config, TripleBuffer<HapticSettings>* settings)
+    : layers_(layers.begin(),
+              layers.begin() + static_cast<std::ptrdiff_t>(std::clamp<std::size_t>(layers.size(), 1, kMaxLayers))),
       config_(config),
       renderers_(layers_.size(), HapticRenderer(config.renderer, config.material, device.spec().max_stiffness_n_per_m)),
       have_surface_(layers_.size(), 0),
@@ -106,7 +115,8 @@ HapticLoop::HapticLoop(Device& device, std::span<TripleBuffer<SurfaceSnapshot>* 
       settings_(settings),
       last_renderer_(config.renderer),
       max_force_n_(config.safety.max_force_n) {
-  bindings_.push_back(std::make_unique<DeviceBinding>(DeviceBinding{&device, SafetyFilter(device.spec(), config_.safety)}));
+  bindings_.push_back(
+      std::make_unique<DeviceBinding>(DeviceBinding{&device, SafetyFilter(device.spec(), config_.safety)}));
   binding_.store(bindings_.back().get(), std::memory_order_release);
   // Room for changed effects, so that taking new settings in the tick never allocates.
   effects_.springs.reserve(kMaxEffectsEach);
@@ -185,7 +195,8 @@ void HapticLoop::take_settings() {
 
 bool HapticLoop::switch_device(Device& device) {
   if (pending_.load(std::memory_order_acquire) != nullptr) return false;
-  bindings_.push_back(std::make_unique<DeviceBinding>(DeviceBinding{&device, SafetyFilter(device.spec(), config_.safety)}));
+  bindings_.push_back(
+      std::make_unique<DeviceBinding>(DeviceBinding{&device, SafetyFilter(device.spec(), config_.safety)}));
   pending_.store(bindings_.back().get(), std::memory_order_release);
   return true;
 }
@@ -227,7 +238,7 @@ void HapticLoop::tick_impl(double time_s, double period_s, bool overrun) {
   // only rounding or scale, and is normalised for the tool (its axis).
   const double orientation_norm = reading.orientation.coeffs().norm();
   const bool finite = reading.valid && reading.position_m.allFinite() && reading.velocity_m_per_s.allFinite() &&
-                     std::isfinite(orientation_norm) && orientation_norm > 0.0;
+                      std::isfinite(orientation_norm) && orientation_norm > 0.0;
   // A jump of metres in one tick (see SafetyConfig::max_reading_jump_m): far from the last
   // reading rendered and from the one before. Rendering it would drag the proxy across the
   // scene (sliding along every surface in the way) and back the next tick, with a force at the
@@ -279,7 +290,8 @@ void HapticLoop::tick_impl(double time_s, double period_s, bool overrun) {
       input.dt_s = dt;
       input.position = x;
       input.velocity = v;
-      input.orientation = config_.calibration.orientation * Eigen::Quaterniond(reading.orientation.coeffs() / orientation_norm);
+      input.orientation =
+          config_.calibration.orientation * Eigen::Quaterniond(reading.orientation.coeffs() / orientation_norm);
       input.contacts = std::span<const ContactState>(contacts.data(), layers_.size());
       input.surfaces = std::span<const SurfaceSnapshot* const>(surfaces.data(), layers_.size());
       input.max_stiffness_n_per_m = device.spec().max_stiffness_n_per_m / world_scale_;
@@ -300,7 +312,7 @@ void HapticLoop::tick_impl(double time_s, double period_s, bool overrun) {
   double age = 0.0;
   for (std::size_t l = 0; l < layers_.size(); ++l) {
     const SurfaceSnapshot& surface = layers_[l]->read();
-    age = std::max(age, !have_surface_[l] ? std::numeric_limits<double>::infinity()
+    age = std::max(age, !have_surface_[l]   ? std::numeric_limits<double>::infinity()
                         : surface.is_static ? 0.0
                                             : time_s - surface.time_s);
   }
@@ -406,7 +418,8 @@ void HapticLoop::run_thread() {
     sched_param param{};
     param.sched_priority = std::min(80, sched_get_priority_max(SCHED_FIFO));
     const bool granted = pthread_setschedparam(pthread_self(), SCHED_FIFO, &param) == 0;
-    scheduling_.store(static_cast<int>(granted ? Scheduling::realtime : Scheduling::refused), std::memory_order_release);
+    scheduling_.store(static_cast<int>(granted ? Scheduling::realtime : Scheduling::refused),
+                      std::memory_order_release);
   } else {
     scheduling_.store(static_cast<int>(Scheduling::not_requested), std::memory_order_release);
   }

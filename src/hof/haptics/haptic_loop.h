@@ -13,8 +13,8 @@
 #include <cstdint>
 #include <memory>
 #include <span>
-#include <vector>
 #include <thread>
+#include <vector>
 
 #include "hof/core/spsc_ring.h"
 #include "hof/core/triple_buffer.h"
@@ -56,11 +56,11 @@ struct HapticLoopConfig {
 /// slot each time. Force effects are copied into the loop's own storage, which holds up to
 /// kMaxEffectsEach of each kind (validate_effects() refuses more).
 struct HapticSettings {
-  bool valid{false};                        ///< false: the loop keeps its construction config
+  bool valid{false};  ///< false: the loop keeps its construction config
   RendererConfig renderer;
-  std::vector<SurfaceMaterial> materials;   ///< per snapshot part (body); empty: config material
+  std::vector<SurfaceMaterial> materials;  ///< per snapshot part (body); empty: config material
   ForceEffects effects;
-  double max_force_n{0.0};                  ///< the user's force limit (SafetyConfig::max_force_n)
+  double max_force_n{0.0};  ///< the user's force limit (SafetyConfig::max_force_n)
   /// Device → world. A change restarts the proxy at the next reading (as a device switch does:
   /// the stylus jumps in the world, and must not be pulled back through a surface).
   Calibration calibration;
@@ -80,9 +80,9 @@ struct HapticContact {
   struct Layer {
     Vec3 proxy{Vec3::Zero()};
     bool contact{false};
-    std::int32_t triangle{-1};        ///< in this layer's snapshot
+    std::int32_t triangle{-1};  ///< in this layer's snapshot
     Vec3 barycentric{Vec3::Zero()};
-    Vec3 force{Vec3::Zero()};         ///< this layer's share of the force sent to the device, world, N
+    Vec3 force{Vec3::Zero()};  ///< this layer's share of the force sent to the device, world, N
     /// The force whose opposite the tissue takes: `force`, except with the FEM-reaction
     /// coupling, where it is the renderer's spring (ContactState::coupling_force), as safety
     /// scales what is sent.
@@ -92,9 +92,9 @@ struct HapticContact {
   ToolState tool;
   std::uint64_t tick{0};
   double time_s{0.0};
-  bool valid{false};                  ///< the device gave a reading (proxies meaningful)
-  Vec3 force{Vec3::Zero()};           ///< sent to the device, world, N
-  bool clamped{false};                ///< the requested force exceeded the device's limit
+  bool valid{false};         ///< the device gave a reading (proxies meaningful)
+  Vec3 force{Vec3::Zero()};  ///< sent to the device, world, N
+  bool clamped{false};       ///< the requested force exceeded the device's limit
   std::array<Layer, kMaxLayers> layers{};
   std::uint8_t layer_count{1};
 };
@@ -106,11 +106,11 @@ struct HapticSample {
   Vec3 device{Vec3::Zero()};
   Vec3 device_velocity{Vec3::Zero()};
   Vec3 proxy{Vec3::Zero()};
-  Vec3 force{Vec3::Zero()};          ///< sent to the device (after safety), world frame, N
-  Vec3 requested_force{Vec3::Zero()};///< before safety
+  Vec3 force{Vec3::Zero()};            ///< sent to the device (after safety), world frame, N
+  Vec3 requested_force{Vec3::Zero()};  ///< before safety
   bool contact{false};
-  std::int32_t layer{0};             ///< the layer of the contact below (the first in contact)
-  std::int32_t triangle{-1};         ///< in that layer's snapshot
+  std::int32_t layer{0};      ///< the layer of the contact below (the first in contact)
+  std::int32_t triangle{-1};  ///< in that layer's snapshot
   Vec3 barycentric{Vec3::Zero()};
   Vec3 contact_point{Vec3::Zero()};
   Vec3 contact_normal{Vec3::Zero()};
@@ -119,7 +119,7 @@ struct HapticSample {
   double period_s{0.0};
   std::uint32_t buttons{0};
   bool valid{false};
-  ToolState tool;                    ///< the mounted tool's state (tool.active false: none)
+  ToolState tool;  ///< the mounted tool's state (tool.active false: none)
 };
 
 class HapticLoop {
@@ -193,7 +193,9 @@ class HapticLoop {
   /// deadline misses on a loaded machine are expected, not a defect).
   /// `device_servo`: the device's own servo loop calls the ticks (Device::start_servo).
   enum class Scheduling : int { not_started, not_requested, realtime, refused, device_servo };
-  [[nodiscard]] Scheduling scheduling() const { return static_cast<Scheduling>(scheduling_.load(std::memory_order_acquire)); }
+  [[nodiscard]] Scheduling scheduling() const {
+    return static_cast<Scheduling>(scheduling_.load(std::memory_order_acquire));
+  }
 
  private:
   void run_thread();
@@ -212,8 +214,8 @@ class HapticLoop {
     SafetyFilter safety;
   };
   std::vector<std::unique_ptr<DeviceBinding>> bindings_;  // every binding made (producer side)
-  std::atomic<DeviceBinding*> binding_{nullptr};         // the ticks' (written only by the tick)
-  std::atomic<DeviceBinding*> pending_{nullptr};         // a switch waiting for the next tick
+  std::atomic<DeviceBinding*> binding_{nullptr};          // the ticks' (written only by the tick)
+  std::atomic<DeviceBinding*> pending_{nullptr};          // a switch waiting for the next tick
   std::vector<TripleBuffer<SurfaceSnapshot>*> layers_;
   HapticLoopConfig config_;
   std::vector<HapticRenderer> renderers_;
@@ -234,7 +236,7 @@ class HapticLoop {
   std::atomic<bool> pinned_{false};
   std::thread thread_;
   Eigen::Matrix3d world_to_device_{Eigen::Matrix3d::Identity()};
-  double world_scale_{1.0};       // world units per metre of device travel
+  double world_scale_{1.0};  // world units per metre of device travel
   Tool* tool_{nullptr};
   double last_time_s_{-1.0};
   double origin_s_{0.0};  // real-time mode: CLOCK_MONOTONIC at start(), s

@@ -101,8 +101,8 @@ void HapticRenderer::apply_local_model(const Vec3& device, const SurfaceSnapshot
 
 void HapticRenderer::update_penalty(const Vec3& device, const SurfaceSnapshot& surface) {
   // Force toward the nearest surface point, when the device is behind that point's face.
-  const collision::ClosestPoint near = surface.tree.closest_point(surface.view(), device, config_.penalty_max_distance_m,
-                                                                  collision::TouchableFace::kFrontAndBack);
+  const collision::ClosestPoint near = surface.tree.closest_point(
+      surface.view(), device, config_.penalty_max_distance_m, collision::TouchableFace::kFrontAndBack);
   contact_.in_contact = false;
   contact_.proxy = device;
   if (near.triangle < 0) return;
@@ -117,7 +117,8 @@ void HapticRenderer::update_penalty(const Vec3& device, const SurfaceSnapshot& s
 }
 
 void HapticRenderer::carry_with_surface(const SurfaceSnapshot& surface) {
-  if (!anchor_.valid || anchor_.triangle < 0 || static_cast<std::size_t>(anchor_.triangle) >= surface.triangles.size()) {
+  if (!anchor_.valid || anchor_.triangle < 0 ||
+      static_cast<std::size_t>(anchor_.triangle) >= surface.triangles.size()) {
     return;
   }
   const Vec3 n = surface.face_normal(anchor_.triangle);
@@ -285,8 +286,8 @@ void HapticRenderer::update_proxy(const Vec3& device, const SurfaceSnapshot& sur
   // Contact point and normal: the surface point nearest the proxy.
   contact_.in_contact = in_contact;
   if (in_contact) {
-    const collision::ClosestPoint near = surface.tree.closest_point(
-        surface.view(), proxy_, radius_ + 1e-3, collision::TouchableFace::kFrontAndBack);
+    const collision::ClosestPoint near =
+        surface.tree.closest_point(surface.view(), proxy_, radius_ + 1e-3, collision::TouchableFace::kFrontAndBack);
     if (near.triangle >= 0) {
       contact_.triangle = near.triangle;
       contact_.barycentric = near.barycentric;

@@ -33,7 +33,7 @@ struct RendererConfig {
   double proxy_radius_m{0.0025};  ///< Ruspini only (H3D default 0.0025 m)
   bool force_shading{true};       ///< Ruspini: interpolated normals (two-pass)
   collision::TouchableFace touchable_face{collision::TouchableFace::kFront};
-  int max_iterations{8};          ///< constraint iterations per tick
+  int max_iterations{8};                ///< constraint iterations per tick
   double penalty_max_distance_m{0.05};  ///< penalty: how deep it still pushes back
   /// When not touching, the proxy is carried with the surface if it is within this distance
   /// of it (H3D dynamicMode: shapes move the proxy with them).
@@ -45,13 +45,13 @@ struct RendererConfig {
 /// What a tick produced.
 struct ContactState {
   bool in_contact{false};
-  std::int32_t triangle{-1};          ///< contact triangle in the snapshot
-  Vec3 barycentric{Vec3::Zero()};     ///< contact point's weights in that triangle
-  Vec3 point{Vec3::Zero()};           ///< contact point on the surface, world, m
-  Vec3 normal{Vec3::Zero()};          ///< surface normal there (shaded when shading is on)
-  Vec3 proxy{Vec3::Zero()};           ///< proxy position (sphere centre for Ruspini), world, m
-  Vec3 force{Vec3::Zero()};           ///< force on the device, world, N (before safety)
-  double penetration_m{0.0};          ///< |proxy − device| along the normal
+  std::int32_t triangle{-1};       ///< contact triangle in the snapshot
+  Vec3 barycentric{Vec3::Zero()};  ///< contact point's weights in that triangle
+  Vec3 point{Vec3::Zero()};        ///< contact point on the surface, world, m
+  Vec3 normal{Vec3::Zero()};       ///< surface normal there (shaded when shading is on)
+  Vec3 proxy{Vec3::Zero()};        ///< proxy position (sphere centre for Ruspini), world, m
+  Vec3 force{Vec3::Zero()};        ///< force on the device, world, N (before safety)
+  double penetration_m{0.0};       ///< |proxy − device| along the normal
   /// The force on the device as the tissue takes it (the tissue feels its opposite): the same
   /// as `force`, except with the FEM-reaction coupling, where `force` is the tissue's own
   /// reaction and this is the renderer's spring that drags the contact point along.
@@ -67,8 +67,8 @@ class HapticRenderer {
 
   /// One tick. `surface_changed` tells that `surface` is a new snapshot since the last call
   /// (the proxy is then carried with the surface). Returns the contact and its force.
-  const ContactState& update(const Vec3& device_position, const Vec3& device_velocity,
-                             const SurfaceSnapshot& surface, bool surface_changed, double dt);
+  const ContactState& update(const Vec3& device_position, const Vec3& device_velocity, const SurfaceSnapshot& surface,
+                             bool surface_changed, double dt);
 
   [[nodiscard]] const ContactState& contact() const { return contact_; }
   [[nodiscard]] const RendererConfig& config() const { return config_; }
@@ -91,7 +91,9 @@ class HapticRenderer {
   /// too: they scale with it.
   void set_world_scale(double world_per_device_m);
   /// Stiffness of the material in contact, N per world unit (N/m in a metre world).
-  [[nodiscard]] double stiffness_n_per_m() const { return active_.stiffness_n_per_m(device_max_stiffness_) / world_scale_; }
+  [[nodiscard]] double stiffness_n_per_m() const {
+    return active_.stiffness_n_per_m(device_max_stiffness_) / world_scale_;
+  }
 
  private:
   struct Anchor {

@@ -11,7 +11,8 @@ void PeriodStats::record(double period_s, bool overrun) {
   if (!(period_s >= 0.0)) return;
   // Nearest microsecond: bin b holds [b − 0.5, b + 0.5) µs, so that a period of exactly 1 ms
   // computed as a difference of times (0.000999999… s) is counted as 1000 µs.
-  const auto bin = static_cast<std::size_t>(std::min(std::round(period_s / kBinWidth), static_cast<double>(bins_.size() - 1)));
+  const auto bin =
+      static_cast<std::size_t>(std::min(std::round(period_s / kBinWidth), static_cast<double>(bins_.size() - 1)));
   ++bins_[bin];
   ++count_;
   if (overrun) ++overruns_;

@@ -13,7 +13,8 @@ SafetyFilter::SafetyFilter(const DeviceSpec& spec, const SafetyConfig& config) :
 
 void SafetyFilter::set_max_force(double max_force_n) {
   config_.max_force_n = max_force_n;
-  limit_n_ = max_force_n > 0.0 && std::isfinite(max_force_n) ? std::min(max_force_n, spec_.max_force_n) : spec_.max_force_n;
+  limit_n_ =
+      max_force_n > 0.0 && std::isfinite(max_force_n) ? std::min(max_force_n, spec_.max_force_n) : spec_.max_force_n;
 }
 
 void SafetyFilter::reset() {
@@ -22,8 +23,7 @@ void SafetyFilter::reset() {
   last_.setZero();
 }
 
-Vec3 SafetyFilter::filter(const Vec3& requested, Reading reading, double snapshot_age_s, bool overrunning,
-                          double dt) {
+Vec3 SafetyFilter::filter(const Vec3& requested, Reading reading, double snapshot_age_s, bool overrunning, double dt) {
   if (!(dt > 0.0) || !std::isfinite(dt)) dt = 1e-3;
   consecutive_overruns_ = overrunning ? consecutive_overruns_ + 1 : 0;
   Vec3 force = requested;

@@ -35,11 +35,12 @@ struct SafetyConfig {
 
 /// Counters of what the filter had to do (read by reports; written by the haptic thread).
 struct SafetyCounters {
-  std::uint64_t non_finite{0};   ///< ticks with a NaN/Inf force or a garbage reading (NaN/Inf, zero quaternion, a jump of metres)
-  std::uint64_t no_reading{0};   ///< ticks without a device sample (absent, timed out, script ended)
-  std::uint64_t clamped{0};      ///< ticks whose force exceeded the device maximum
-  std::uint64_t rate_limited{0}; ///< ticks whose force change exceeded the slew limit
-  std::uint64_t watchdog{0};     ///< ticks faded by the watchdog
+  std::uint64_t non_finite{
+      0};  ///< ticks with a NaN/Inf force or a garbage reading (NaN/Inf, zero quaternion, a jump of metres)
+  std::uint64_t no_reading{0};    ///< ticks without a device sample (absent, timed out, script ended)
+  std::uint64_t clamped{0};       ///< ticks whose force exceeded the device maximum
+  std::uint64_t rate_limited{0};  ///< ticks whose force change exceeded the slew limit
+  std::uint64_t watchdog{0};      ///< ticks faded by the watchdog
 };
 
 class SafetyFilter {

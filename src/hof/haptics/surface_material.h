@@ -25,7 +25,7 @@ struct SurfaceMaterial {
   /// H3D `stiffness`: a fraction of the device's max stiffness when use_relative_values
   /// (H3D default 0.5, relative), else N/m.
   double stiffness{0.5};
-  double damping_n_s_per_m{0.0};  ///< H3D `damping` (always absolute)
+  double damping_n_s_per_m{0.0};   ///< H3D `damping` (always absolute)
   bool use_relative_values{true};  ///< H3D `useRelativeValues`
   double static_friction{0.1};     ///< H3D `staticFriction` (FrictionalSurface default)
   double dynamic_friction{0.4};    ///< H3D `dynamicFriction`

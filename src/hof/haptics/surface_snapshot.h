@@ -19,11 +19,11 @@ namespace hof::haptics {
 /// reaction, F = K (p_free − device), at 1 kHz instead of a rigid-wall spring.
 struct LocalContactModel {
   bool valid{false};
-  std::int32_t triangle{-1};             ///< contact triangle of the snapshot
-  Vec3 barycentric{Vec3::Zero()};        ///< contact point in it
-  Mat3 compliance{Mat3::Zero()};         ///< C, m/N
-  Mat3 stiffness{Mat3::Zero()};          ///< K = C⁻¹, N/m
-  Vec3 applied_force{Vec3::Zero()};      ///< force the simulation applied there (on the tissue), N
+  std::int32_t triangle{-1};         ///< contact triangle of the snapshot
+  Vec3 barycentric{Vec3::Zero()};    ///< contact point in it
+  Mat3 compliance{Mat3::Zero()};     ///< C, m/N
+  Mat3 stiffness{Mat3::Zero()};      ///< K = C⁻¹, N/m
+  Vec3 applied_force{Vec3::Zero()};  ///< force the simulation applied there (on the tissue), N
   /// FEM-reaction coupling: `reaction` (the tissue's elastic force at the contact after the
   /// last step, N) is felt as it is while in contact; the compliance fields are unused.
   bool direct{false};
@@ -43,17 +43,17 @@ struct SurfacePart {
 };
 
 struct SurfaceSnapshot {
-  std::vector<Vec3> vertices;         ///< (V) world frame, m
-  std::vector<Vec3> velocities;       ///< (V) m/s
-  std::vector<Vec3> vertex_normals;   ///< (V) unit, area-weighted average of face normals
-  std::vector<mesh::Tri> triangles;   ///< (F) fixed for the life of the scene
+  std::vector<Vec3> vertices;        ///< (V) world frame, m
+  std::vector<Vec3> velocities;      ///< (V) m/s
+  std::vector<Vec3> vertex_normals;  ///< (V) unit, area-weighted average of face normals
+  std::vector<mesh::Tri> triangles;  ///< (F) fixed for the life of the scene
   collision::AabbTree tree;
-  double time_s{0.0};                 ///< simulation time the positions belong to
-  std::uint64_t sequence{0};          ///< increases with every publish
-  double refit_s{0.0};                ///< time spent refitting this snapshot's tree
+  double time_s{0.0};         ///< simulation time the positions belong to
+  std::uint64_t sequence{0};  ///< increases with every publish
+  double refit_s{0.0};        ///< time spent refitting this snapshot's tree
   /// Geometry that never changes (no simulation behind it): never considered stale.
   bool is_static{false};
-  LocalContactModel local;            ///< compliance coupling (invalid otherwise)
+  LocalContactModel local;  ///< compliance coupling (invalid otherwise)
   /// Per body (world order); one part covering everything when built from a single surface.
   std::vector<SurfacePart> parts;
 
@@ -92,7 +92,8 @@ struct SurfaceSnapshot {
 /// ones), under one bound tree: the haptic loop renders one proxy against all of them.
 /// `closed[i]` tells which surfaces have an inside.
 [[nodiscard]] SurfaceSnapshot make_snapshot(std::span<const mesh::TriMesh> surfaces, std::span<const bool> is_static,
-                                            std::span<const bool> closed, const collision::AabbTreeOptions& options = {});
+                                            std::span<const bool> closed,
+                                            const collision::AabbTreeOptions& options = {});
 
 /// Producer side: new positions (and velocities, or zero when empty) for the same topology;
 /// recomputes vertex normals and refits the tree (rebuilding it when refit degrades it).

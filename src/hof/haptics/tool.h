@@ -22,20 +22,20 @@ namespace hof::haptics {
 /// What a tool did in one tick (world frame, SI). A plain value: copied into samples and
 /// contacts, never allocated.
 struct ToolState {
-  bool active{false};         ///< a tool is mounted (false: the columns below mean nothing)
-  std::uint8_t phase{0};      ///< the tool's own phase number (procedures::NeedlePhase for the needle)
-  bool touched{false};        ///< the tool is in contact with a body it can enter
-  bool broken{false};         ///< the body's capsule (its outer layer) is broken
-  std::int32_t body{-1};      ///< the world's body index the tool is in (or touches), -1: none
-  std::int32_t layer{-1};     ///< the haptic layer of that body
-  double depth_m{0.0};        ///< tip depth along the axis below the entry point, m
-  double axial_force_n{0.0};  ///< the model's force along the axis; > 0 resists insertion
+  bool active{false};                  ///< a tool is mounted (false: the columns below mean nothing)
+  std::uint8_t phase{0};               ///< the tool's own phase number (procedures::NeedlePhase for the needle)
+  bool touched{false};                 ///< the tool is in contact with a body it can enter
+  bool broken{false};                  ///< the body's capsule (its outer layer) is broken
+  std::int32_t body{-1};               ///< the world's body index the tool is in (or touches), -1: none
+  std::int32_t layer{-1};              ///< the haptic layer of that body
+  double depth_m{0.0};                 ///< tip depth along the axis below the entry point, m
+  double axial_force_n{0.0};           ///< the model's force along the axis; > 0 resists insertion
   double axial_velocity_m_per_s{0.0};  ///< the tool's (filtered) velocity along the axis, > 0 inward
-  Vec3 tip{Vec3::Zero()};     ///< the tool's tip
-  Vec3 entry{Vec3::Zero()};   ///< where it entered the body (fixed at first contact)
-  Vec3 axis{Vec3::Zero()};    ///< unit insertion direction (into the body)
-  Vec3 normal{Vec3::Zero()};  ///< the surface's outward normal at the entry point
-  Vec3 force{Vec3::Zero()};   ///< the tool's force on the hand (axial and lateral), N
+  Vec3 tip{Vec3::Zero()};              ///< the tool's tip
+  Vec3 entry{Vec3::Zero()};            ///< where it entered the body (fixed at first contact)
+  Vec3 axis{Vec3::Zero()};             ///< unit insertion direction (into the body)
+  Vec3 normal{Vec3::Zero()};           ///< the surface's outward normal at the entry point
+  Vec3 force{Vec3::Zero()};            ///< the tool's force on the hand (axial and lateral), N
 };
 
 /// What the loop gives a tool each tick.
@@ -45,9 +45,9 @@ struct ToolTickInput {
   Vec3 position{Vec3::Zero()};  ///< the device's position in the world (the tool's tip)
   Vec3 velocity{Vec3::Zero()};
   Eigen::Quaterniond orientation{Eigen::Quaterniond::Identity()};  ///< device orientation, world
-  std::span<const ContactState> contacts;             ///< each layer's contact this tick
-  std::span<const SurfaceSnapshot* const> surfaces;   ///< each layer's snapshot (null: none yet)
-  double max_stiffness_n_per_m{3000.0};               ///< the device's stable stiffness, N per world unit
+  std::span<const ContactState> contacts;                          ///< each layer's contact this tick
+  std::span<const SurfaceSnapshot* const> surfaces;                ///< each layer's snapshot (null: none yet)
+  double max_stiffness_n_per_m{3000.0};                            ///< the device's stable stiffness, N per world unit
 };
 
 class Tool {

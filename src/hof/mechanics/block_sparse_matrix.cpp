@@ -12,8 +12,8 @@
 
 namespace hof::mechanics {
 
-BlockSparseMatrix BlockSparseMatrix::from_pairs(
-    std::int32_t block_rows, const std::vector<std::pair<std::int32_t, std::int32_t>>& pairs) {
+BlockSparseMatrix BlockSparseMatrix::from_pairs(std::int32_t block_rows,
+                                                const std::vector<std::pair<std::int32_t, std::int32_t>>& pairs) {
   std::vector<std::pair<std::int32_t, std::int32_t>> entries;
   entries.reserve(pairs.size() * 2 + static_cast<std::size_t>(block_rows));
   for (std::int32_t i = 0; i < block_rows; ++i) entries.emplace_back(i, i);
@@ -85,7 +85,8 @@ static void multiply_block_rows(const std::int64_t* row_start, const std::int32_
       a1 = _mm256_fmadd_pd(_mm256_loadu_pd(a + 4), _mm256_broadcast_sd(xa + 1), a1);
       a2 = _mm256_fmadd_pd(_mm256_loadu_pd(a + 8), _mm256_broadcast_sd(xa + 2), a2);
     }
-    const __m256d sum = _mm256_add_pd(_mm256_add_pd(_mm256_add_pd(a0, b0), _mm256_add_pd(a1, b1)), _mm256_add_pd(a2, b2));
+    const __m256d sum =
+        _mm256_add_pd(_mm256_add_pd(_mm256_add_pd(a0, b0), _mm256_add_pd(a1, b1)), _mm256_add_pd(a2, b2));
     alignas(32) double out[4];
     _mm256_store_pd(out, sum);
     ys[3 * r] = out[0];
@@ -141,7 +142,8 @@ void BlockSparseMatrix::prepare_single_precision() {
   values_single_.assign(pair_columns_.size() * 12, 0.0f);
   single_offset_.assign(columns_.size(), 0);
   for (std::size_t k = 0; k < pair_slots_.size(); ++k) {
-    if (pair_slots_[k] >= 0) single_offset_[static_cast<std::size_t>(pair_slots_[k])] = static_cast<std::int64_t>(24 * (k / 2) + 4 * (k % 2));
+    if (pair_slots_[k] >= 0)
+      single_offset_[static_cast<std::size_t>(pair_slots_[k])] = static_cast<std::int64_t>(24 * (k / 2) + 4 * (k % 2));
   }
 }
 
@@ -229,8 +231,8 @@ void BlockSparseMatrix::multiply_single_rows(const float* x4, const std::int32_t
       acc1 = _mm256_fmadd_ps(_mm256_load_ps(v + 8), _mm256_permute_ps(xa, 0x55), acc1);
       acc2 = _mm256_fmadd_ps(_mm256_load_ps(v + 16), _mm256_permute_ps(xa, 0xAA), acc2);
     }
-    const __m256 sum8 = _mm256_add_ps(_mm256_add_ps(_mm256_add_ps(acc0, bcc0), _mm256_add_ps(acc1, bcc1)),
-                                      _mm256_add_ps(acc2, bcc2));
+    const __m256 sum8 =
+        _mm256_add_ps(_mm256_add_ps(_mm256_add_ps(acc0, bcc0), _mm256_add_ps(acc1, bcc1)), _mm256_add_ps(acc2, bcc2));
     const __m128 sum4 = _mm_add_ps(_mm256_castps256_ps128(sum8), _mm256_extractf128_ps(sum8, 1));
     alignas(16) float out[4];
     _mm_store_ps(out, sum4);

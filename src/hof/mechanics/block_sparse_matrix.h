@@ -49,7 +49,9 @@ class BlockSparseMatrix {
     return ConstBlockRef(values_.data() + kBlockStride * slot);
   }
   /// Index in values() of entry (i, j) of the block at `slot`.
-  [[nodiscard]] static std::int64_t value_index(std::int64_t slot, int i, int j) { return kBlockStride * slot + 4 * j + i; }
+  [[nodiscard]] static std::int64_t value_index(std::int64_t slot, int i, int j) {
+    return kBlockStride * slot + 4 * j + i;
+  }
   [[nodiscard]] double* values() { return values_.data(); }
   [[nodiscard]] const double* values() const { return values_.data(); }
   [[nodiscard]] const std::vector<std::int64_t>& row_start() const { return row_start_; }
@@ -88,7 +90,9 @@ class BlockSparseMatrix {
   /// The single-precision block at `slot`: entry (i, q) at [8q + i]. For assembling straight
   /// into the copy (the double values are then not kept).
   [[nodiscard]] float* single_block(std::int64_t slot) { return values_single_.data() + single_offset_[slot]; }
-  [[nodiscard]] const float* single_block(std::int64_t slot) const { return values_single_.data() + single_offset_[slot]; }
+  [[nodiscard]] const float* single_block(std::int64_t slot) const {
+    return values_single_.data() + single_offset_[slot];
+  }
   /// Row stride of a single-precision block's columns.
   static constexpr std::int64_t kSingleColumnStride = 8;
 
@@ -120,10 +124,10 @@ class BlockSparseMatrix {
   std::vector<double> values_;              // (12*blocks) column-major padded 3x3 blocks
   // Single-precision copy: per block row, its blocks in pairs (an odd row ends with a zero
   // block), 24 floats a pair: column q of both blocks in floats [8q, 8q+8).
-  std::vector<std::int64_t> pair_start_;    // (rows+1) first pair of each block row
-  std::vector<std::int32_t> pair_columns_;  // (2*pairs) block column of each pair member
-  std::vector<std::int64_t> pair_slots_;    // (2*pairs) source slot, -1 for padding
-  std::vector<std::int64_t> single_offset_; // (blocks) first float of each slot's block
+  std::vector<std::int64_t> pair_start_;     // (rows+1) first pair of each block row
+  std::vector<std::int32_t> pair_columns_;   // (2*pairs) block column of each pair member
+  std::vector<std::int64_t> pair_slots_;     // (2*pairs) source slot, -1 for padding
+  std::vector<std::int64_t> single_offset_;  // (blocks) first float of each slot's block
   std::vector<float, Eigen::aligned_allocator<float>> values_single_;
 };
 

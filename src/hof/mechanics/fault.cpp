@@ -10,10 +10,14 @@ namespace {
 
 const char* solver_type(OdeSolverKind kind) {
   switch (kind) {
-    case OdeSolverKind::kEulerExplicit: return "EulerExplicitSolver";
-    case OdeSolverKind::kRungeKutta4: return "RungeKutta4Solver";
-    case OdeSolverKind::kStatic: return "StaticSolver";
-    case OdeSolverKind::kEulerImplicit: return "EulerImplicitSolver";
+    case OdeSolverKind::kEulerExplicit:
+      return "EulerExplicitSolver";
+    case OdeSolverKind::kRungeKutta4:
+      return "RungeKutta4Solver";
+    case OdeSolverKind::kStatic:
+      return "StaticSolver";
+    case OdeSolverKind::kEulerImplicit:
+      return "EulerImplicitSolver";
   }
   return "solver";
 }
@@ -26,10 +30,12 @@ std::string ode_solver(const MechanicalModel& model) {
 
 FaultText describe_fault(const MechanicalModel& model, const Fault& fault) {
   switch (fault.kind) {
-    case FaultKind::kNone: return {};
+    case FaultKind::kNone:
+      return {};
     case FaultKind::kLinearSolveFailed: {
       const char* type = model.linear.kind == LinearSolverKind::kSparseLdlt ? "SparseLDLSolver" : "CGLinearSolver";
-      return {fmt::format("{} '{}'", type, model.linear.name), "the linear solve broke down (singular or non-finite system)"};
+      return {fmt::format("{} '{}'", type, model.linear.name),
+              "the linear solve broke down (singular or non-finite system)"};
     }
     case FaultKind::kNonFiniteNode:
       return {ode_solver(model), fmt::format("node {} has a non-finite position or velocity", fault.index)};

@@ -22,9 +22,9 @@ enum class FaultKind : std::uint8_t {
 
 struct Fault {
   FaultKind kind{FaultKind::kNone};
-  std::int64_t index{-1};   ///< the node or element (−1: none)
-  std::int32_t field{-1};   ///< kInvertedElement: the force field (index into model.force_fields)
-  double value{0.0};        ///< kRunawayNode: the speed, m/s
+  std::int64_t index{-1};  ///< the node or element (−1: none)
+  std::int32_t field{-1};  ///< kInvertedElement: the force field (index into model.force_fields)
+  double value{0.0};       ///< kRunawayNode: the speed, m/s
 };
 
 /// The component a fault names (e.g. "TetrahedronFEMForceField 'FEM'") and the sentence that

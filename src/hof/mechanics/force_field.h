@@ -47,8 +47,8 @@ struct SpringState {
 
 /// What a membrane (triangle FEM) field keeps per state.
 struct MembraneState {
-  std::vector<Mat3> frames;           ///< (T) each triangle's current in-plane frame (first two columns)
-  std::vector<double> voigt_stress;   ///< (3T) each triangle's in-plane stress (xx, yy, xy), Pa·m
+  std::vector<Mat3> frames;          ///< (T) each triangle's current in-plane frame (first two columns)
+  std::vector<double> voigt_stress;  ///< (3T) each triangle's in-plane stress (xx, yy, xy), Pa·m
 };
 
 /// What a Neo-Hookean field keeps per state: each element's tangent dP/dF.

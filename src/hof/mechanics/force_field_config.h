@@ -49,9 +49,9 @@ struct TriangleFemConfig {
   /// thickness 1.
   std::string sofa_type{"TriangleFEMForceField"};
   double young_modulus_pa{1000.0};
-  double poisson_ratio{0.3};   ///< must be in (−1, 0.5)
-  double thickness_m{1.0};     ///< SOFA default 1: stiffness per area is E·thickness
-  bool plane_strain{false};    ///< SOFA `planeStrain`: plane strain instead of plane stress
+  double poisson_ratio{0.3};            ///< must be in (−1, 0.5)
+  double thickness_m{1.0};              ///< SOFA default 1: stiffness per area is E·thickness
+  bool plane_strain{false};             ///< SOFA `planeStrain`: plane strain instead of plane stress
   FemMethod method{FemMethod::kLarge};  ///< small or large (polar is taken as large)
   /// Rest shape as a fraction of the given one (SOFA TriangularFEMForceFieldOptim `restScale`):
   /// below 1 the membrane starts in tension — a drum skin, which a flat sheet needs to resist
@@ -118,9 +118,9 @@ struct MeshSpringConfig {
 };
 
 struct ConstantForceConfig {
-  std::vector<std::int32_t> indices;   ///< nodes the forces act on
-  std::vector<Vec3> forces;            ///< N, one per index (or one for all)
-  std::optional<Vec3> total_force;     ///< N, split equally over `indices` (overrides `forces`)
+  std::vector<std::int32_t> indices;  ///< nodes the forces act on
+  std::vector<Vec3> forces;           ///< N, one per index (or one for all)
+  std::optional<Vec3> total_force;    ///< N, split equally over `indices` (overrides `forces`)
 };
 
 }  // namespace hof::mechanics

@@ -7,15 +7,15 @@
 #include <cmath>
 #include <numeric>
 
-#include "hof/mechanics/detail/workspace_setup.h"
-#include "hof/mechanics/detail/linear_solve.h"
-#include "hof/mechanics/mechanical_state.h"
 #include "hof/mechanics/detail/constant_force_field.h"
 #include "hof/mechanics/detail/hexahedron_fem_force_field.h"
+#include "hof/mechanics/detail/linear_solve.h"
 #include "hof/mechanics/detail/mesh_spring_force_field.h"
 #include "hof/mechanics/detail/neo_hookean_force_field.h"
 #include "hof/mechanics/detail/tetrahedron_fem_force_field.h"
 #include "hof/mechanics/detail/triangle_fem_force_field.h"
+#include "hof/mechanics/detail/workspace_setup.h"
+#include "hof/mechanics/mechanical_state.h"
 #include "hof/mesh/hex_grid.h"
 #include "hof/mesh/tet_geometry.h"
 
@@ -32,12 +32,14 @@ Expected<std::vector<double>> build_masses(const ModelConfig& c) {
   if (c.mass.kind == MassKind::kUniform) {
     if (c.mass.vertex_mass_kg) {
       if (!(*c.mass.vertex_mass_kg > 0.0)) {
-        return make_error(ErrorCode::kInvalidArgument, fmt::format("{}: vertexMass must be > 0 kg, got {}", who, *c.mass.vertex_mass_kg));
+        return make_error(ErrorCode::kInvalidArgument,
+                          fmt::format("{}: vertexMass must be > 0 kg, got {}", who, *c.mass.vertex_mass_kg));
       }
       std::fill(mass.begin(), mass.end(), *c.mass.vertex_mass_kg);
     } else {
       if (!(c.mass.total_mass_kg > 0.0) || !std::isfinite(c.mass.total_mass_kg)) {
-        return make_error(ErrorCode::kInvalidArgument, fmt::format("{}: totalMass must be > 0 kg, got {}", who, c.mass.total_mass_kg));
+        return make_error(ErrorCode::kInvalidArgument,
+                          fmt::format("{}: totalMass must be > 0 kg, got {}", who, c.mass.total_mass_kg));
       }
       std::fill(mass.begin(), mass.end(), c.mass.total_mass_kg / static_cast<double>(n));
     }
@@ -63,18 +65,22 @@ Expected<std::vector<double>> build_masses(const ModelConfig& c) {
     return make_error(ErrorCode::kInvalidArgument,
                       fmt::format("{}: massDensity has {} values for {} {} (give one, or one per element)", who,
                                   densities.size(), elements,
-                                  on_hexahedra ? "hexahedra" : on_triangles ? "triangles" : "tetrahedra"));
+                                  on_hexahedra   ? "hexahedra"
+                                  : on_triangles ? "triangles"
+                                                 : "tetrahedra"));
   }
   auto density = [&](std::size_t e) -> Expected<double> {
     if (densities.empty() || densities[e] == 0.0) return c.mass.mass_density_kg_per_m3;
     if (!(densities[e] > 0.0) || !std::isfinite(densities[e])) {
-      return make_error(ErrorCode::kInvalidArgument, fmt::format("{}: massDensity of element {} must be > 0, got {}", who, e, densities[e]));
+      return make_error(ErrorCode::kInvalidArgument,
+                        fmt::format("{}: massDensity of element {} must be > 0, got {}", who, e, densities[e]));
     }
     return densities[e];
   };
   if (!c.element_fill.empty() && (!on_hexahedra || c.element_fill.size() != elements)) {
-    return make_error(ErrorCode::kInvalidArgument, fmt::format("model '{}': a fill fraction per hexahedron is needed ({} for {} elements)",
-                                                               c.name, c.element_fill.size(), elements));
+    return make_error(ErrorCode::kInvalidArgument,
+                      fmt::format("model '{}': a fill fraction per hexahedron is needed ({} for {} elements)", c.name,
+                                  c.element_fill.size(), elements));
   }
   for (std::size_t e = 0; e < elements; ++e) {
     auto rho = density(e);
@@ -90,11 +96,12 @@ Expected<std::vector<double>> build_masses(const ModelConfig& c) {
       for (mesh::NodeIndex i : h) mass[static_cast<std::size_t>(i)] += eighth;
     } else if (on_triangles) {
       const mesh::Tri& t = c.triangles[e];
-      const double third = *rho * 0.5 *
-                           (c.positions[static_cast<std::size_t>(t[1])] - c.positions[static_cast<std::size_t>(t[0])])
-                               .cross(c.positions[static_cast<std::size_t>(t[2])] - c.positions[static_cast<std::size_t>(t[0])])
-                               .norm() /
-                           3.0;
+      const double third =
+          *rho * 0.5 *
+          (c.positions[static_cast<std::size_t>(t[1])] - c.positions[static_cast<std::size_t>(t[0])])
+              .cross(c.positions[static_cast<std::size_t>(t[2])] - c.positions[static_cast<std::size_t>(t[0])])
+              .norm() /
+          3.0;
       for (mesh::NodeIndex i : t) mass[static_cast<std::size_t>(i)] += third;
     } else {
       const auto p = mesh::tet_corners(c.positions, c.tets[e]);
@@ -105,7 +112,8 @@ Expected<std::vector<double>> build_masses(const ModelConfig& c) {
   if (c.mass.diagonal_total_mass_kg) {
     const double total = std::accumulate(mass.begin(), mass.end(), 0.0);
     const double target = *c.mass.diagonal_total_mass_kg;
-    if (!(target > 0.0)) return make_error(ErrorCode::kInvalidArgument, fmt::format("{}: totalMass must be > 0 kg", who));
+    if (!(target > 0.0))
+      return make_error(ErrorCode::kInvalidArgument, fmt::format("{}: totalMass must be > 0 kg", who));
     for (double& m : mass) m *= target / total;
   }
   for (std::size_t i = 0; i < n; ++i) {
@@ -123,26 +131,28 @@ Expected<std::vector<double>> build_masses(const ModelConfig& c) {
 // distinct ratio over its elements: the fields' fast assembly shares one λ/μ ratio, and the
 // sum of the parts is the whole (each element belongs to exactly one part).
 template <class Config>
-Expected<std::vector<std::pair<Config, std::vector<mesh::Tet>>>> split_by_poisson_ratio(const Config& config,
-                                                                                       const std::vector<mesh::Tet>& tets,
-                                                                                       const std::string& who) {
+Expected<std::vector<std::pair<Config, std::vector<mesh::Tet>>>> split_by_poisson_ratio(
+    const Config& config, const std::vector<mesh::Tet>& tets, const std::string& who) {
   std::vector<std::pair<Config, std::vector<mesh::Tet>>> parts;
   if (config.element_poisson_ratio.empty()) {
     parts.emplace_back(config, tets);
     return parts;
   }
   if (config.element_poisson_ratio.size() != tets.size()) {
-    return make_error(ErrorCode::kInvalidArgument, fmt::format("{}: poissonRatio has {} values for {} tetrahedra (give one, or one per tetrahedron)",
-                                                               who, config.element_poisson_ratio.size(), tets.size()));
+    return make_error(ErrorCode::kInvalidArgument,
+                      fmt::format("{}: poissonRatio has {} values for {} tetrahedra (give one, or one per tetrahedron)",
+                                  who, config.element_poisson_ratio.size(), tets.size()));
   }
   if (!config.element_young_modulus_pa.empty() && config.element_young_modulus_pa.size() != tets.size()) {
-    return make_error(ErrorCode::kInvalidArgument, fmt::format("{}: youngModulus has {} values for {} tetrahedra (give one, or one per tetrahedron)",
-                                                               who, config.element_young_modulus_pa.size(), tets.size()));
+    return make_error(ErrorCode::kInvalidArgument,
+                      fmt::format("{}: youngModulus has {} values for {} tetrahedra (give one, or one per tetrahedron)",
+                                  who, config.element_young_modulus_pa.size(), tets.size()));
   }
   for (std::size_t t = 0; t < tets.size(); ++t) {
     const double nu = config.element_poisson_ratio[t] == 0.0 ? config.poisson_ratio : config.element_poisson_ratio[t];
     if (!(nu > -1.0 && nu < 0.5)) {
-      return make_error(ErrorCode::kInvalidArgument, fmt::format("{}: poissonRatio of tetrahedron {} must be in (-1, 0.5), got {}", who, t, nu));
+      return make_error(ErrorCode::kInvalidArgument,
+                        fmt::format("{}: poissonRatio of tetrahedron {} must be in (-1, 0.5), got {}", who, t, nu));
     }
     auto part = std::find_if(parts.begin(), parts.end(), [&](const auto& p) { return p.first.poisson_ratio == nu; });
     if (part == parts.end()) {
@@ -154,7 +164,8 @@ Expected<std::vector<std::pair<Config, std::vector<mesh::Tet>>>> split_by_poisso
       part = std::prev(parts.end());
     }
     part->second.push_back(tets[t]);
-    if (!config.element_young_modulus_pa.empty()) part->first.element_young_modulus_pa.push_back(config.element_young_modulus_pa[t]);
+    if (!config.element_young_modulus_pa.empty())
+      part->first.element_young_modulus_pa.push_back(config.element_young_modulus_pa[t]);
   }
   return parts;
 }
@@ -166,7 +177,8 @@ Expected<void> check_config(const ModelConfig& c) {
   if (n == 0) return make_error(ErrorCode::kInvalidArgument, fmt::format("model '{}': no nodes", c.name));
   for (std::size_t i = 0; i < n; ++i) {
     if (!c.positions[i].allFinite()) {
-      return make_error(ErrorCode::kInvalidMesh, fmt::format("model '{}': node {} has a non-finite position", c.name, i));
+      return make_error(ErrorCode::kInvalidMesh,
+                        fmt::format("model '{}': node {} has a non-finite position", c.name, i));
     }
   }
   for (std::size_t t = 0; t < c.tets.size(); ++t) {
@@ -200,16 +212,19 @@ Expected<void> check_config(const ModelConfig& c) {
     return make_error(ErrorCode::kInvalidArgument, fmt::format("model '{}': gravity is not finite", c.name));
   }
   if (c.ode.rayleigh_mass < 0.0 || c.ode.rayleigh_stiffness < 0.0) {
-    return make_error(ErrorCode::kInvalidArgument,
-                      fmt::format("EulerImplicitSolver '{}': rayleighStiffness and rayleighMass must be >= 0", c.ode.name));
+    return make_error(
+        ErrorCode::kInvalidArgument,
+        fmt::format("EulerImplicitSolver '{}': rayleighStiffness and rayleighMass must be >= 0", c.ode.name));
   }
   if (c.ode.kind == OdeSolverKind::kStatic && c.ode.newton_iterations < 1) {
-    return make_error(ErrorCode::kInvalidArgument, fmt::format("StaticSolver '{}': newton_iterations must be >= 1", c.ode.name));
+    return make_error(ErrorCode::kInvalidArgument,
+                      fmt::format("StaticSolver '{}': newton_iterations must be >= 1", c.ode.name));
   }
   if (c.linear.kind == LinearSolverKind::kConjugateGradient &&
       (c.linear.iterations < 1 || !(c.linear.tolerance >= 0.0) || !(c.linear.threshold >= 0.0))) {
-    return make_error(ErrorCode::kInvalidArgument,
-                      fmt::format("CGLinearSolver '{}': iterations must be >= 1, tolerance and threshold >= 0", c.linear.name));
+    return make_error(
+        ErrorCode::kInvalidArgument,
+        fmt::format("CGLinearSolver '{}': iterations must be >= 1, tolerance and threshold >= 0", c.linear.name));
   }
 
   return {};
@@ -220,7 +235,8 @@ Expected<void> build_force_fields(const ModelConfig& c, MechanicalModel& m) {
   const std::size_t n = c.positions.size();
   for (const ForceFieldConfig& f : c.force_fields) {
     if (f.tetrahedron_fem) {
-      auto parts = split_by_poisson_ratio(*f.tetrahedron_fem, c.tets, fmt::format("TetrahedronFEMForceField '{}'", f.name));
+      auto parts =
+          split_by_poisson_ratio(*f.tetrahedron_fem, c.tets, fmt::format("TetrahedronFEMForceField '{}'", f.name));
       if (!parts) return std::unexpected(parts.error());
       for (const auto& [config, tets] : *parts) {
         auto field = TetrahedronFemForceField::make(c.positions, tets, config, f.name);
@@ -243,11 +259,14 @@ Expected<void> build_force_fields(const ModelConfig& c, MechanicalModel& m) {
       // A partly filled cell (element_fill) is that fraction as stiff, at whatever modulus.
       HexahedronFemConfig hex = *f.hexahedron_fem;
       if (!c.element_fill.empty()) {
-        if (hex.element_young_modulus_pa.size() != c.hexahedra.size()) hex.element_young_modulus_pa.assign(c.hexahedra.size(), 0.0);
+        if (hex.element_young_modulus_pa.size() != c.hexahedra.size())
+          hex.element_young_modulus_pa.assign(c.hexahedra.size(), 0.0);
         for (std::size_t e = 0; e < c.hexahedra.size(); ++e) {
           const double fill = c.element_fill[e];
           if (!(fill > 0.0 && fill <= 1.0)) {
-            return make_error(ErrorCode::kInvalidArgument, fmt::format("model '{}': fill of hexahedron {} must be in (0, 1], got {}", c.name, e, fill));
+            return make_error(
+                ErrorCode::kInvalidArgument,
+                fmt::format("model '{}': fill of hexahedron {} must be in (0, 1], got {}", c.name, e, fill));
           }
           double& young = hex.element_young_modulus_pa[e];
           young = (young == 0.0 ? hex.young_modulus_pa : young) * fill;
@@ -265,7 +284,8 @@ Expected<void> build_force_fields(const ModelConfig& c, MechanicalModel& m) {
       if (!field) return std::unexpected(field.error());
       m.force_fields.push_back(std::move(*field));
     } else {
-      return make_error(ErrorCode::kInvalidArgument, fmt::format("model '{}': force field '{}' has no type", c.name, f.name));
+      return make_error(ErrorCode::kInvalidArgument,
+                        fmt::format("model '{}': force field '{}' has no type", c.name, f.name));
     }
   }
 
@@ -287,9 +307,10 @@ Expected<void> build_supports(const ModelConfig& c, MechanicalModel& m) {
     }
     for (std::int32_t i : fixed.indices) {
       if (i < 0 || static_cast<std::size_t>(i) >= n) {
-        return make_error(ErrorCode::kInvalidArgument,
-                          fmt::format("FixedProjectiveConstraint '{}': index {} is out of range (the model has {} nodes)",
-                                      fixed.name, i, n));
+        return make_error(
+            ErrorCode::kInvalidArgument,
+            fmt::format("FixedProjectiveConstraint '{}': index {} is out of range (the model has {} nodes)", fixed.name,
+                        i, n));
       }
       hold(static_cast<std::size_t>(i));
     }
@@ -371,8 +392,9 @@ void detail::size_workspace(const MechanicalModel& model, MechanicalState& s) {
   const Eigen::Index dofs = 3 * static_cast<Eigen::Index>(model.node_count());
   if (!s.work) s.work = std::make_unique<detail::SolverWorkspace>();
   detail::SolverWorkspace& w = *s.work;
-  for (Eigen::VectorXd* vec : {&w.b, &w.dv, &w.cg_previous, &w.r, &w.p, &w.z, &w.ap, &w.az, &w.diag_inv, &w.x_saved, &w.v_saved, &w.k1x,
-                               &w.k1v, &w.k2x, &w.k2v, &w.k3x, &w.k3v, &w.k4x, &w.k4v, &w.xt, &w.vt}) {
+  for (Eigen::VectorXd* vec :
+       {&w.b,   &w.dv,  &w.cg_previous, &w.r,   &w.p,   &w.z,   &w.ap,  &w.az,  &w.diag_inv, &w.x_saved, &w.v_saved,
+        &w.k1x, &w.k1v, &w.k2x,         &w.k2v, &w.k3x, &w.k3v, &w.k4x, &w.k4v, &w.xt,       &w.vt}) {
     *vec = Eigen::VectorXd::Zero(dofs);
   }
   w.partials.assign(1024, 0.0);
@@ -391,10 +413,12 @@ MechanicalState make_state(const MechanicalModel& model) {
   s.v = Eigen::VectorXd::Zero(dofs);
   s.f = Eigen::VectorXd::Zero(dofs);
   s.external_force = Eigen::VectorXd::Zero(dofs);
-  for (std::size_t i = 0; i < model.node_count(); ++i) s.x.segment<3>(3 * static_cast<Eigen::Index>(i)) = model.rest_positions[i];
+  for (std::size_t i = 0; i < model.node_count(); ++i)
+    s.x.segment<3>(3 * static_cast<Eigen::Index>(i)) = model.rest_positions[i];
   for (const auto& field : model.force_fields) s.field_states.push_back(field->make_state());
   s.work = std::make_unique<detail::SolverWorkspace>();
-  s.work->arena = std::make_unique<tbb::task_arena>(model.threads > 0 ? model.threads : int{tbb::task_arena::automatic});
+  s.work->arena =
+      std::make_unique<tbb::task_arena>(model.threads > 0 ? model.threads : int{tbb::task_arena::automatic});
   detail::size_workspace(model, s);
   return s;
 }

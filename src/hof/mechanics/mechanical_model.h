@@ -32,9 +32,9 @@ enum class MassKind : std::uint8_t {
 struct MassConfig {
   MassKind kind{MassKind::kDiagonal};
   std::string name{"mass"};
-  double total_mass_kg{1.0};                 ///< UniformMass totalMass (SOFA default 1)
-  std::optional<double> vertex_mass_kg;      ///< UniformMass vertexMass (overrides totalMass)
-  double mass_density_kg_per_m3{1.0};        ///< DiagonalMass massDensity (SOFA default 1)
+  double total_mass_kg{1.0};                     ///< UniformMass totalMass (SOFA default 1)
+  std::optional<double> vertex_mass_kg;          ///< UniformMass vertexMass (overrides totalMass)
+  double mass_density_kg_per_m3{1.0};            ///< DiagonalMass massDensity (SOFA default 1)
   std::optional<double> diagonal_total_mass_kg;  ///< DiagonalMass totalMass: rescales the lumped masses
   /// DiagonalMass: per volume element (tetrahedron, or hexahedron in a hexahedral model),
   /// kg/m³; 0 = massDensity. Empty: massDensity everywhere (tissue regions fill it).
@@ -58,7 +58,7 @@ struct ForceFieldConfig {
   std::optional<TetrahedronFemConfig> tetrahedron_fem;
   std::optional<NeoHookeanConfig> neo_hookean;
   std::optional<ConstantForceConfig> constant_force;
-  std::optional<TriangleFemConfig> triangle_fem;  ///< membrane FEM on `triangles`
+  std::optional<TriangleFemConfig> triangle_fem;      ///< membrane FEM on `triangles`
   std::optional<HexahedronFemConfig> hexahedron_fem;  ///< hexahedral FEM on `hexahedra`
 };
 
@@ -83,12 +83,12 @@ enum class OdeSolverKind : std::uint8_t {
 struct OdeSolverConfig {
   OdeSolverKind kind{OdeSolverKind::kEulerImplicit};
   std::string name{"odesolver"};
-  bool symplectic{true};            ///< explicit Euler: update v first, then x with the new v
-  double rayleigh_stiffness{0.0};   ///< implicit Euler r_K (SOFA default 0; liver.scn 0.1)
-  double rayleigh_mass{0.0};        ///< implicit Euler r_M (SOFA default 0; liver.scn 0.1)
-  int newton_iterations{10};        ///< static solver
-  double newton_residual_tolerance_n{1e-6};  ///< static solver: stop when |f| (N) is below
-  double newton_correction_tolerance{1e-10}; ///< static solver: stop when |Δx| / |x| is below
+  bool symplectic{true};                      ///< explicit Euler: update v first, then x with the new v
+  double rayleigh_stiffness{0.0};             ///< implicit Euler r_K (SOFA default 0; liver.scn 0.1)
+  double rayleigh_mass{0.0};                  ///< implicit Euler r_M (SOFA default 0; liver.scn 0.1)
+  int newton_iterations{10};                  ///< static solver
+  double newton_residual_tolerance_n{1e-6};   ///< static solver: stop when |f| (N) is below
+  double newton_correction_tolerance{1e-10};  ///< static solver: stop when |Δx| / |x| is below
   /// Implicit Euler: assemble A = αM + βK every this many steps and reuse it in between. The
   /// forces are evaluated afresh every step, so the step still converges to the right
   /// motion and equilibria are exact; only the linearisation lags by up to N−1 steps, which at
@@ -104,10 +104,10 @@ enum class LinearSolverKind : std::uint8_t {
 struct LinearSolverConfig {
   LinearSolverKind kind{LinearSolverKind::kConjugateGradient};
   std::string name{"linearsolver"};
-  int iterations{25};          ///< CG maximum iterations (SOFA default 25)
-  double tolerance{1e-5};      ///< CG stops when |r|²/|b|² is below (SOFA semantics)
-  double threshold{1e-5};      ///< CG stops when pᵀAp falls below threshold × its first value
-  bool block_jacobi{false};    ///< precondition CG with the inverse 3x3 diagonal blocks
+  int iterations{25};        ///< CG maximum iterations (SOFA default 25)
+  double tolerance{1e-5};    ///< CG stops when |r|²/|b|² is below (SOFA semantics)
+  double threshold{1e-5};    ///< CG stops when pᵀAp falls below threshold × its first value
+  bool block_jacobi{false};  ///< precondition CG with the inverse 3x3 diagonal blocks
   /// CG multiplies with a single-precision copy of the matrix (vectors and sums stay double):
   /// half the memory traffic. The solution then solves a system perturbed by ~1e-7 relative,
   /// far below what 25 iterations resolve; equilibria are unaffected (they do not depend on
@@ -162,10 +162,10 @@ inline void use_haptic_rate_solver(LinearSolverConfig& linear, OdeSolverConfig& 
 
 struct ModelConfig {
   std::string name{"model"};
-  std::vector<Vec3> positions;           ///< (N) rest positions, m
-  std::vector<mesh::Tet> tets;           ///< topology (may be empty for spring-only surfaces)
-  std::vector<mesh::Hex> hexahedra;      ///< hexahedral topology (SOFA corner order; grids)
-  std::vector<mesh::Tri> triangles;      ///< surface triangles (springs or membrane FEM on surfaces)
+  std::vector<Vec3> positions;       ///< (N) rest positions, m
+  std::vector<mesh::Tet> tets;       ///< topology (may be empty for spring-only surfaces)
+  std::vector<mesh::Hex> hexahedra;  ///< hexahedral topology (SOFA corner order; grids)
+  std::vector<mesh::Tri> triangles;  ///< surface triangles (springs or membrane FEM on surfaces)
   /// Empty, or a tag per volume element (Gmsh physical group): what tissue regions select by.
   std::vector<std::int32_t> element_regions;
   /// Empty, or per hexahedron the fraction of the cell the body fills (SOFA's sparse grid
@@ -192,23 +192,23 @@ struct ModelConfig {
 
 struct MechanicalModel {
   std::string name;
-  std::vector<Vec3> rest_positions;                   ///< (N) m
+  std::vector<Vec3> rest_positions;  ///< (N) m
   std::vector<mesh::Tet> tets;
   std::vector<mesh::Hex> hexahedra;
   std::vector<mesh::Tri> triangles;
-  std::vector<double> node_mass_kg;                   ///< (N) lumped mass per node
+  std::vector<double> node_mass_kg;  ///< (N) lumped mass per node
   std::string mass_name;
   std::vector<std::unique_ptr<ForceField>> force_fields;
-  std::vector<std::int32_t> fixed_dofs;               ///< sorted, unique degrees of freedom (3·node + axis)
-  std::vector<std::uint8_t> fixed_dof_mask;           ///< (3N) 1 where the dof is held
+  std::vector<std::int32_t> fixed_dofs;      ///< sorted, unique degrees of freedom (3·node + axis)
+  std::vector<std::uint8_t> fixed_dof_mask;  ///< (3N) 1 where the dof is held
   OdeSolverConfig ode;
   LinearSolverConfig linear;
   Vec3 gravity_m_per_s2{Vec3::Zero()};
   double dt_s{0.01};
   double max_speed_m_per_s{100.0};
   int threads{0};
-  BlockSparseMatrix pattern;                          ///< system-matrix pattern (values unused)
-  bool needs_matrix{false};                           ///< implicit or static solver
+  BlockSparseMatrix pattern;  ///< system-matrix pattern (values unused)
+  bool needs_matrix{false};   ///< implicit or static solver
 
   [[nodiscard]] std::size_t node_count() const { return rest_positions.size(); }
   /// What the model is made of, for reports: "N hexahedra", "N tetrahedra" or, for a surface

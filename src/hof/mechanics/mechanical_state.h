@@ -21,11 +21,11 @@ struct MechanicalModel;
 /// Why and where a model stopped. Once diverged, step() does nothing until reset().
 struct Divergence {
   bool diverged{false};
-  std::int64_t step{-1};       ///< step index at which it was detected
-  Fault fault;                 ///< what and where, as data
+  std::int64_t step{-1};  ///< step index at which it was detected
+  Fault fault;            ///< what and where, as data
   // The fault in words (describe_fault), made once when step() reports it.
-  std::string component;       ///< e.g. "TetrahedronFEMForceField 'FEM'" or "EulerExplicitSolver"
-  std::string reason;          ///< one sentence
+  std::string component;  ///< e.g. "TetrahedronFEMForceField 'FEM'" or "EulerExplicitSolver"
+  std::string reason;     ///< one sentence
 };
 
 /// Timings and solver figures of the last step (for benchmarks and reports).
@@ -65,8 +65,12 @@ struct MechanicalState {
   std::unique_ptr<detail::SolverWorkspace> work;
 
   /// Node i's position / velocity.
-  [[nodiscard]] Eigen::Vector3d position(std::int32_t i) const { return x.segment<3>(3 * static_cast<Eigen::Index>(i)); }
-  [[nodiscard]] Eigen::Vector3d velocity(std::int32_t i) const { return v.segment<3>(3 * static_cast<Eigen::Index>(i)); }
+  [[nodiscard]] Eigen::Vector3d position(std::int32_t i) const {
+    return x.segment<3>(3 * static_cast<Eigen::Index>(i));
+  }
+  [[nodiscard]] Eigen::Vector3d velocity(std::int32_t i) const {
+    return v.segment<3>(3 * static_cast<Eigen::Index>(i));
+  }
 };
 
 /// A state at rest for `model`, with all scratch sized.

@@ -27,20 +27,26 @@ struct Slot {
 
 // The one table of names, in ParameterId's order.
 constexpr std::array<std::string_view, kParameterCount> kNames{
-    "dt",        "maxSpeed",         "gravityX",   "gravityY",         "gravityZ",           "stiffness",
-    "damping",   "restLengthScale",  "youngModulus", "poissonRatio",   "thickness",          "restScale",
-    "rayleighStiffness", "rayleighMass", "matrixReuseSteps", "iterations", "warmStart",     "coarseCorrection",
-    "coarseRefreshSteps", "tolerance", "threshold",  "totalMass",        "massDensity"};
+    "dt",         "maxSpeed",  "gravityX",          "gravityY",           "gravityZ",
+    "stiffness",  "damping",   "restLengthScale",   "youngModulus",       "poissonRatio",
+    "thickness",  "restScale", "rayleighStiffness", "rayleighMass",       "matrixReuseSteps",
+    "iterations", "warmStart", "coarseCorrection",  "coarseRefreshSteps", "tolerance",
+    "threshold",  "totalMass", "massDensity"};
 static_assert(static_cast<std::size_t>(ParameterId::kMassDensity) + 1 == kParameterCount);
 
 // The kind of component, as messages name it.
 std::string_view kind_name(ComponentKind kind) {
   switch (kind) {
-    case ComponentKind::kModel: return "model";
-    case ComponentKind::kForceField: return "force field";
-    case ComponentKind::kOdeSolver: return "ODE solver";
-    case ComponentKind::kLinearSolver: return "linear solver";
-    case ComponentKind::kMass: return "mass";
+    case ComponentKind::kModel:
+      return "model";
+    case ComponentKind::kForceField:
+      return "force field";
+    case ComponentKind::kOdeSolver:
+      return "ODE solver";
+    case ComponentKind::kLinearSolver:
+      return "linear solver";
+    case ComponentKind::kMass:
+      return "mass";
   }
   return "component";
 }
@@ -50,12 +56,18 @@ constexpr double inf = std::numeric_limits<double>::infinity();
 // Each component's slots; nullopt when the component has no parameter `id`.
 std::optional<Slot> model_slot(ModelConfig& c, ParameterId id) {
   switch (id) {
-    case ParameterId::kDt: return Slot{&c.dt_s, 0.0, 1.0, true, false, "s"};
-    case ParameterId::kMaxSpeed: return Slot{&c.max_speed_m_per_s, 0.0, inf, true, false, "m/s"};
-    case ParameterId::kGravityX: return Slot{&c.gravity_m_per_s2.x(), -inf, inf, false, false, "m/s^2"};
-    case ParameterId::kGravityY: return Slot{&c.gravity_m_per_s2.y(), -inf, inf, false, false, "m/s^2"};
-    case ParameterId::kGravityZ: return Slot{&c.gravity_m_per_s2.z(), -inf, inf, false, false, "m/s^2"};
-    default: break;
+    case ParameterId::kDt:
+      return Slot{&c.dt_s, 0.0, 1.0, true, false, "s"};
+    case ParameterId::kMaxSpeed:
+      return Slot{&c.max_speed_m_per_s, 0.0, inf, true, false, "m/s"};
+    case ParameterId::kGravityX:
+      return Slot{&c.gravity_m_per_s2.x(), -inf, inf, false, false, "m/s^2"};
+    case ParameterId::kGravityY:
+      return Slot{&c.gravity_m_per_s2.y(), -inf, inf, false, false, "m/s^2"};
+    case ParameterId::kGravityZ:
+      return Slot{&c.gravity_m_per_s2.z(), -inf, inf, false, false, "m/s^2"};
+    default:
+      break;
   }
   return std::nullopt;
 }
@@ -65,40 +77,58 @@ std::optional<Slot> force_field_slot(ForceFieldConfig& f, ParameterId id) {
     // Under SOFA's rule the value is divided by each spring's rest length: N per unit strain.
     const bool per_strain = f.mesh_springs->rule == SpringStiffnessRule::kDividedByRestLength;
     switch (id) {
-      case ParameterId::kStiffness: return Slot{&f.mesh_springs->stiffness_n_per_m, 0.0, inf, false, false, per_strain ? "N" : "N/m"};
-      case ParameterId::kDamping: return Slot{&f.mesh_springs->damping_n_s_per_m, 0.0, inf, false, false, per_strain ? "N s" : "N s/m"};
-      case ParameterId::kRestLengthScale: return Slot{&f.mesh_springs->rest_length_scale, 0.0, 2.0, true, false, ""};
-      default: break;
+      case ParameterId::kStiffness:
+        return Slot{&f.mesh_springs->stiffness_n_per_m, 0.0, inf, false, false, per_strain ? "N" : "N/m"};
+      case ParameterId::kDamping:
+        return Slot{&f.mesh_springs->damping_n_s_per_m, 0.0, inf, false, false, per_strain ? "N s" : "N s/m"};
+      case ParameterId::kRestLengthScale:
+        return Slot{&f.mesh_springs->rest_length_scale, 0.0, 2.0, true, false, ""};
+      default:
+        break;
     }
   }
   if (f.tetrahedron_fem) {
     switch (id) {
-      case ParameterId::kYoungModulus: return Slot{&f.tetrahedron_fem->young_modulus_pa, 0.0, inf, true, false, "Pa"};
-      case ParameterId::kPoissonRatio: return Slot{&f.tetrahedron_fem->poisson_ratio, -1.0, 0.5, true, false, "", true};
-      default: break;
+      case ParameterId::kYoungModulus:
+        return Slot{&f.tetrahedron_fem->young_modulus_pa, 0.0, inf, true, false, "Pa"};
+      case ParameterId::kPoissonRatio:
+        return Slot{&f.tetrahedron_fem->poisson_ratio, -1.0, 0.5, true, false, "", true};
+      default:
+        break;
     }
   }
   if (f.neo_hookean) {
     switch (id) {
-      case ParameterId::kYoungModulus: return Slot{&f.neo_hookean->young_modulus_pa, 0.0, inf, true, false, "Pa"};
-      case ParameterId::kPoissonRatio: return Slot{&f.neo_hookean->poisson_ratio, -1.0, 0.5, true, false, "", true};
-      default: break;
+      case ParameterId::kYoungModulus:
+        return Slot{&f.neo_hookean->young_modulus_pa, 0.0, inf, true, false, "Pa"};
+      case ParameterId::kPoissonRatio:
+        return Slot{&f.neo_hookean->poisson_ratio, -1.0, 0.5, true, false, "", true};
+      default:
+        break;
     }
   }
   if (f.hexahedron_fem) {
     switch (id) {
-      case ParameterId::kYoungModulus: return Slot{&f.hexahedron_fem->young_modulus_pa, 0.0, inf, true, false, "Pa"};
-      case ParameterId::kPoissonRatio: return Slot{&f.hexahedron_fem->poisson_ratio, -1.0, 0.5, true, false, "", true};
-      default: break;
+      case ParameterId::kYoungModulus:
+        return Slot{&f.hexahedron_fem->young_modulus_pa, 0.0, inf, true, false, "Pa"};
+      case ParameterId::kPoissonRatio:
+        return Slot{&f.hexahedron_fem->poisson_ratio, -1.0, 0.5, true, false, "", true};
+      default:
+        break;
     }
   }
   if (f.triangle_fem) {
     switch (id) {
-      case ParameterId::kYoungModulus: return Slot{&f.triangle_fem->young_modulus_pa, 0.0, inf, true, false, "Pa"};
-      case ParameterId::kPoissonRatio: return Slot{&f.triangle_fem->poisson_ratio, -1.0, 0.5, true, false, "", true};
-      case ParameterId::kThickness: return Slot{&f.triangle_fem->thickness_m, 0.0, inf, true, false, "m"};
-      case ParameterId::kRestScale: return Slot{&f.triangle_fem->rest_scale, 0.0, 2.0, true, false, ""};
-      default: break;
+      case ParameterId::kYoungModulus:
+        return Slot{&f.triangle_fem->young_modulus_pa, 0.0, inf, true, false, "Pa"};
+      case ParameterId::kPoissonRatio:
+        return Slot{&f.triangle_fem->poisson_ratio, -1.0, 0.5, true, false, "", true};
+      case ParameterId::kThickness:
+        return Slot{&f.triangle_fem->thickness_m, 0.0, inf, true, false, "m"};
+      case ParameterId::kRestScale:
+        return Slot{&f.triangle_fem->rest_scale, 0.0, 2.0, true, false, ""};
+      default:
+        break;
     }
   }
   return std::nullopt;
@@ -106,13 +136,16 @@ std::optional<Slot> force_field_slot(ForceFieldConfig& f, ParameterId id) {
 
 std::optional<Slot> ode_slot(ModelConfig& c, ParameterId id, double& scratch) {
   switch (id) {
-    case ParameterId::kRayleighStiffness: return Slot{&c.ode.rayleigh_stiffness, 0.0, inf, false, false, ""};
-    case ParameterId::kRayleighMass: return Slot{&c.ode.rayleigh_mass, 0.0, inf, false, false, "1/s"};
+    case ParameterId::kRayleighStiffness:
+      return Slot{&c.ode.rayleigh_stiffness, 0.0, inf, false, false, ""};
+    case ParameterId::kRayleighMass:
+      return Slot{&c.ode.rayleigh_mass, 0.0, inf, false, false, "1/s"};
     case ParameterId::kMatrixReuseSteps: {
       scratch = static_cast<double>(c.ode.matrix_reuse_steps);
       return Slot{&scratch, 1.0, 1000.0, false, true, "", false, &c.ode.matrix_reuse_steps};
     }
-    default: break;
+    default:
+      break;
   }
   return std::nullopt;
 }
@@ -136,9 +169,12 @@ std::optional<Slot> linear_slot(ModelConfig& c, ParameterId id, int& integer_sto
       scratch = static_cast<double>(c.linear.coarse_refresh_steps);
       return Slot{&scratch, 1.0, 100000.0, false, true, "", false, &c.linear.coarse_refresh_steps};
     }
-    case ParameterId::kTolerance: return Slot{&c.linear.tolerance, 0.0, inf, false, false, ""};
-    case ParameterId::kThreshold: return Slot{&c.linear.threshold, 0.0, inf, false, false, ""};
-    default: break;
+    case ParameterId::kTolerance:
+      return Slot{&c.linear.tolerance, 0.0, inf, false, false, ""};
+    case ParameterId::kThreshold:
+      return Slot{&c.linear.threshold, 0.0, inf, false, false, ""};
+    default:
+      break;
   }
   return std::nullopt;
 }
@@ -153,8 +189,10 @@ std::optional<Slot> mass_slot(ModelConfig& c, ParameterId id) {
       }
       return Slot{target, 0.0, inf, true, false, "kg"};
     }
-    case ParameterId::kMassDensity: return Slot{&c.mass.mass_density_kg_per_m3, 0.0, inf, true, false, "kg/m^3"};
-    default: break;
+    case ParameterId::kMassDensity:
+      return Slot{&c.mass.mass_density_kg_per_m3, 0.0, inf, true, false, "kg/m^3"};
+    default:
+      break;
   }
   return std::nullopt;
 }
@@ -164,23 +202,31 @@ std::optional<Slot> mass_slot(ModelConfig& c, ParameterId id) {
 Expected<Slot> find_slot(ModelConfig& c, ParameterRef ref, int& integer_storage, double& scratch) {
   std::optional<Slot> slot;
   switch (ref.component.kind) {
-    case ComponentKind::kModel: slot = model_slot(c, ref.id); break;
+    case ComponentKind::kModel:
+      slot = model_slot(c, ref.id);
+      break;
     case ComponentKind::kForceField:
       if (ref.component.index >= c.force_fields.size()) {
-        return make_error(ErrorCode::kInvalidArgument,
-                          fmt::format("no force field #{} (the model has {})", ref.component.index, c.force_fields.size()),
-                          c.name);
+        return make_error(
+            ErrorCode::kInvalidArgument,
+            fmt::format("no force field #{} (the model has {})", ref.component.index, c.force_fields.size()), c.name);
       }
       slot = force_field_slot(c.force_fields[ref.component.index], ref.id);
       break;
-    case ComponentKind::kOdeSolver: slot = ode_slot(c, ref.id, scratch); break;
-    case ComponentKind::kLinearSolver: slot = linear_slot(c, ref.id, integer_storage, scratch); break;
-    case ComponentKind::kMass: slot = mass_slot(c, ref.id); break;
+    case ComponentKind::kOdeSolver:
+      slot = ode_slot(c, ref.id, scratch);
+      break;
+    case ComponentKind::kLinearSolver:
+      slot = linear_slot(c, ref.id, integer_storage, scratch);
+      break;
+    case ComponentKind::kMass:
+      slot = mass_slot(c, ref.id);
+      break;
   }
   if (!slot) {
     return make_error(ErrorCode::kInvalidArgument,
-                      fmt::format("{} '{}' has no parameter '{}'", kind_name(ref.component.kind), component_name(c, ref.component),
-                                  parameter_name(ref.id)),
+                      fmt::format("{} '{}' has no parameter '{}'", kind_name(ref.component.kind),
+                                  component_name(c, ref.component), parameter_name(ref.id)),
                       c.name);
   }
   return *slot;
@@ -195,13 +241,17 @@ std::string_view parameter_name(ParameterId id) {
 
 std::string_view component_name(const ModelConfig& config, ComponentRef component) {
   switch (component.kind) {
-    case ComponentKind::kModel: return {};
+    case ComponentKind::kModel:
+      return {};
     case ComponentKind::kForceField:
       return component.index < config.force_fields.size() ? std::string_view(config.force_fields[component.index].name)
                                                           : std::string_view("?");
-    case ComponentKind::kOdeSolver: return config.ode.name;
-    case ComponentKind::kLinearSolver: return config.linear.name;
-    case ComponentKind::kMass: return config.mass.name;
+    case ComponentKind::kOdeSolver:
+      return config.ode.name;
+    case ComponentKind::kLinearSolver:
+      return config.linear.name;
+    case ComponentKind::kMass:
+      return config.mass.name;
   }
   return "?";
 }
@@ -217,17 +267,18 @@ Expected<void> set_parameter(ModelConfig& config, ParameterRef parameter, double
                                              : fmt::format("{}/{}", component, parameter_name(parameter.id));
   const bool below = slot->lo_open ? !(value > slot->lo) : !(value >= slot->lo);
   const bool above = slot->hi_open ? !(value < slot->hi) : !(value <= slot->hi);
-  if (!std::isfinite(value) || below || above ||
-      (slot->integer && value != std::floor(value))) {
+  if (!std::isfinite(value) || below || above || (slot->integer && value != std::floor(value))) {
     const bool unbounded = slot->hi == std::numeric_limits<double>::infinity();
     const std::string lower = slot->lo == -std::numeric_limits<double>::infinity()
                                   ? std::string("finite")
                                   : fmt::format("{} {}", slot->lo_open ? ">" : ">=", slot->lo);
-    const std::string upper = unbounded ? std::string() : fmt::format(" and {} {}", slot->hi_open ? "<" : "<=", slot->hi);
-    return make_error(ErrorCode::kInvalidArgument,
-                      fmt::format("{} = {} is out of range: it must be {}{}{}{}", name, value, lower, upper,
-                                  slot->integer ? ", an integer" : "", *slot->unit ? fmt::format(" ({})", slot->unit) : ""),
-                      config.name);
+    const std::string upper =
+        unbounded ? std::string() : fmt::format(" and {} {}", slot->hi_open ? "<" : "<=", slot->hi);
+    return make_error(
+        ErrorCode::kInvalidArgument,
+        fmt::format("{} = {} is out of range: it must be {}{}{}{}", name, value, lower, upper,
+                    slot->integer ? ", an integer" : "", *slot->unit ? fmt::format(" ({})", slot->unit) : ""),
+        config.name);
   }
   *slot->value = value;
   if (slot->integer_target) *slot->integer_target = static_cast<int>(value);
@@ -256,11 +307,13 @@ std::vector<ParameterRef> parameter_refs(const ModelConfig& c) {
     const ForceFieldConfig& f = c.force_fields[i];
     const ComponentRef field{ComponentKind::kForceField, i};
     if (f.mesh_springs) add(field, {kStiffness, kDamping, kRestLengthScale});
-    if (f.tetrahedron_fem || f.neo_hookean || f.triangle_fem || f.hexahedron_fem) add(field, {kYoungModulus, kPoissonRatio});
+    if (f.tetrahedron_fem || f.neo_hookean || f.triangle_fem || f.hexahedron_fem)
+      add(field, {kYoungModulus, kPoissonRatio});
     if (f.triangle_fem) add(field, {kThickness, kRestScale});
   }
   add({ComponentKind::kOdeSolver, 0}, {kRayleighStiffness, kRayleighMass, kMatrixReuseSteps});
-  add({ComponentKind::kLinearSolver, 0}, {kIterations, kTolerance, kThreshold, kWarmStart, kCoarseCorrection, kCoarseRefreshSteps});
+  add({ComponentKind::kLinearSolver, 0},
+      {kIterations, kTolerance, kThreshold, kWarmStart, kCoarseCorrection, kCoarseRefreshSteps});
   add({ComponentKind::kMass, 0}, {kTotalMass, kMassDensity});
   return refs;
 }

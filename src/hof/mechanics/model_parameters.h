@@ -25,6 +25,8 @@ namespace hof::mechanics {
 
 /// The parameters a component may have, by what they are; their names (SOFA's data names)
 /// are in one table (parameter_name). Which component has which is set_parameter's business.
+// One line per component, as the table reads:
+// clang-format off
 enum class ParameterId : std::uint8_t {
   kDt, kMaxSpeed, kGravityX, kGravityY, kGravityZ,                          // the model itself
   kStiffness, kDamping, kRestLengthScale,                                   // mesh springs
@@ -33,6 +35,7 @@ enum class ParameterId : std::uint8_t {
   kIterations, kWarmStart, kCoarseCorrection, kCoarseRefreshSteps, kTolerance, kThreshold,  // the linear solver
   kTotalMass, kMassDensity,                                                 // the mass
 };
+// clang-format on
 inline constexpr std::size_t kParameterCount = 23;
 
 /// Which component of a model a parameter belongs to: the model itself, one of its force

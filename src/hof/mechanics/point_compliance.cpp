@@ -2,8 +2,8 @@
 #include "hof/mechanics/detail/solver_workspace.h"
 
 #include "hof/mechanics/detail/assembly.h"
-#include "hof/mechanics/forces.h"
 #include "hof/mechanics/detail/vector_kernels.h"
+#include "hof/mechanics/forces.h"
 
 namespace hof::mechanics {
 
@@ -59,7 +59,8 @@ bool compute_point_compliance(const MechanicalModel& model, MechanicalState& sta
     }
     if (!converged || !w.dv.allFinite()) return false;
     Vec3 column = Vec3::Zero();
-    for (std::size_t i = 0; i < nodes.size(); ++i) column += weights[i] * w.dv.segment<3>(3 * static_cast<Eigen::Index>(nodes[i]));
+    for (std::size_t i = 0; i < nodes.size(); ++i)
+      column += weights[i] * w.dv.segment<3>(3 * static_cast<Eigen::Index>(nodes[i]));
     compliance.col(axis) = column;
   }
   // The true compliance is symmetric; remove the solver's round-off asymmetry.

@@ -17,8 +17,7 @@ namespace hof::mechanics {
 /// block-Jacobi-preconditioned CG to 1e-10 relative residual in the state's scratch (call it
 /// between steps; no allocation). Returns false when the body is not held (singular
 /// stiffness) or the solve fails or needs more than `max_iterations` per axis.
-bool compute_point_compliance(const MechanicalModel& model, MechanicalState& state,
-                              std::span<const std::int32_t> nodes, std::span<const double> weights, Mat3& compliance,
-                              int max_iterations = 5000);
+bool compute_point_compliance(const MechanicalModel& model, MechanicalState& state, std::span<const std::int32_t> nodes,
+                              std::span<const double> weights, Mat3& compliance, int max_iterations = 5000);
 
 }  // namespace hof::mechanics

@@ -45,10 +45,14 @@ bool run_stages(const MechanicalModel& model, MechanicalState& state) {
   state.stats.force_s = detail::seconds_since(t0);
   // Stage 2, the integrator: assembly and solve when implicit, then x and v advance.
   switch (model.ode.kind) {
-    case OdeSolverKind::kEulerExplicit: return detail::explicit_euler_step(model, state);
-    case OdeSolverKind::kRungeKutta4: return detail::runge_kutta4_step(model, state);
-    case OdeSolverKind::kStatic: return detail::static_step(model, state);
-    case OdeSolverKind::kEulerImplicit: return detail::implicit_euler_step(model, state);
+    case OdeSolverKind::kEulerExplicit:
+      return detail::explicit_euler_step(model, state);
+    case OdeSolverKind::kRungeKutta4:
+      return detail::runge_kutta4_step(model, state);
+    case OdeSolverKind::kStatic:
+      return detail::static_step(model, state);
+    case OdeSolverKind::kEulerImplicit:
+      return detail::implicit_euler_step(model, state);
   }
   return true;
 }

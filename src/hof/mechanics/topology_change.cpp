@@ -73,7 +73,8 @@ bool incremental_path_applies(const MechanicalModel& model, const TopologyChange
 Expected<std::vector<std::int32_t>> check_element_map(const MechanicalModel& model, const TopologyChange& change) {
   std::vector<std::int32_t> new_of_old(model.node_count(), -1);
   for (std::size_t i = 0; i < change.old_node.size(); ++i) {
-    if (change.old_node[i] >= 0) new_of_old[static_cast<std::size_t>(change.old_node[i])] = static_cast<std::int32_t>(i);
+    if (change.old_node[i] >= 0)
+      new_of_old[static_cast<std::size_t>(change.old_node[i])] = static_cast<std::int32_t>(i);
   }
   std::vector<std::uint8_t> taken(model.tets.size(), 0);
   for (std::size_t t = 0; t < change.old_tet.size(); ++t) {
@@ -86,9 +87,11 @@ Expected<std::vector<std::int32_t>> check_element_map(const MechanicalModel& mod
     }
     taken[static_cast<std::size_t>(o)] = 1;
     for (int corner = 0; corner < 4; ++corner) {
-      if (new_of_old[static_cast<std::size_t>(model.tets[static_cast<std::size_t>(o)][corner])] != change.config.tets[t][corner]) {
+      if (new_of_old[static_cast<std::size_t>(model.tets[static_cast<std::size_t>(o)][corner])] !=
+          change.config.tets[t][corner]) {
         return make_error(ErrorCode::kInvalidArgument,
-                          fmt::format("model '{}': a topology change keeps tetrahedron {} as {} with other corners", model.name, o, t));
+                          fmt::format("model '{}': a topology change keeps tetrahedron {} as {} with other corners",
+                                      model.name, o, t));
       }
     }
   }
@@ -107,7 +110,8 @@ Expected<std::vector<double>> incremental_masses(const MechanicalModel& model, c
   if (c.mass.kind == MassKind::kUniform) {
     const double each = c.mass.vertex_mass_kg ? *c.mass.vertex_mass_kg : c.mass.total_mass_kg / static_cast<double>(n);
     if (!(each > 0.0) || !std::isfinite(each)) {
-      return make_error(ErrorCode::kInvalidArgument, fmt::format("UniformMass '{}': the node mass must be > 0 kg", c.mass.name));
+      return make_error(ErrorCode::kInvalidArgument,
+                        fmt::format("UniformMass '{}': the node mass must be > 0 kg", c.mass.name));
     }
     std::fill(mass.begin(), mass.end(), each);
     return mass;
@@ -124,7 +128,8 @@ Expected<std::vector<double>> incremental_masses(const MechanicalModel& model, c
   for (std::size_t o = 0; o < model.tets.size(); ++o) {
     if (kept[o]) continue;
     for (mesh::NodeIndex i : model.tets[o]) {
-      if (const std::int32_t j = new_of_old[static_cast<std::size_t>(i)]; j >= 0) touched[static_cast<std::size_t>(j)] = 1;
+      if (const std::int32_t j = new_of_old[static_cast<std::size_t>(i)]; j >= 0)
+        touched[static_cast<std::size_t>(j)] = 1;
     }
   }
   for (std::size_t i = 0; i < n; ++i) {
@@ -133,12 +138,15 @@ Expected<std::vector<double>> incremental_masses(const MechanicalModel& model, c
   }
   const std::vector<double>& densities = c.mass.element_mass_density_kg_per_m3;
   if (!densities.empty() && densities.size() != c.tets.size()) {
-    return make_error(ErrorCode::kInvalidArgument, fmt::format("DiagonalMass '{}': massDensity has {} values for {} tetrahedra",
-                                                               c.mass.name, densities.size(), c.tets.size()));
+    return make_error(ErrorCode::kInvalidArgument,
+                      fmt::format("DiagonalMass '{}': massDensity has {} values for {} tetrahedra", c.mass.name,
+                                  densities.size(), c.tets.size()));
   }
   for (std::size_t t = 0; t < c.tets.size(); ++t) {
     const mesh::Tet& tet = c.tets[t];
-    if (!std::any_of(tet.begin(), tet.end(), [&](mesh::NodeIndex i) { return touched[static_cast<std::size_t>(i)] != 0; })) continue;
+    if (!std::any_of(tet.begin(), tet.end(),
+                     [&](mesh::NodeIndex i) { return touched[static_cast<std::size_t>(i)] != 0; }))
+      continue;
     const double rho = densities.empty() || densities[t] == 0.0 ? c.mass.mass_density_kg_per_m3 : densities[t];
     const auto p = mesh::tet_corners(c.positions, tet);
     const double quarter = rho * std::abs(mesh::tet_signed_volume(p[0], p[1], p[2], p[3])) / 4.0;
@@ -149,9 +157,10 @@ Expected<std::vector<double>> incremental_masses(const MechanicalModel& model, c
   for (std::size_t i = 0; i < n; ++i) {
     remassed += touched[i];
     if (!(mass[i] > 0.0)) {
-      return make_error(ErrorCode::kInvalidMesh, fmt::format("DiagonalMass '{}': node {} belongs to no element after the change "
-                                                             "and gets no mass; remove it with its last element",
-                                                             c.mass.name, i));
+      return make_error(ErrorCode::kInvalidMesh,
+                        fmt::format("DiagonalMass '{}': node {} belongs to no element after the change "
+                                    "and gets no mass; remove it with its last element",
+                                    c.mass.name, i));
     }
   }
   return mass;
@@ -164,12 +173,14 @@ void incremental_supports(const MechanicalModel& model, const TopologyChange& ch
   next.fixed_dof_mask.assign(3 * n, 0);
   for (std::size_t i = 0; i < n; ++i) {
     if (const std::int32_t o = change.old_node[i]; o >= 0) {
-      for (std::size_t a = 0; a < 3; ++a) next.fixed_dof_mask[3 * i + a] = model.fixed_dof_mask[3 * static_cast<std::size_t>(o) + a];
+      for (std::size_t a = 0; a < 3; ++a)
+        next.fixed_dof_mask[3 * i + a] = model.fixed_dof_mask[3 * static_cast<std::size_t>(o) + a];
       continue;
     }
     const Vec3& p = change.config.positions[i];
     for (const FixedConstraintConfig& fixed : change.config.fixed) {
-      const bool named = std::find(fixed.indices.begin(), fixed.indices.end(), static_cast<std::int32_t>(i)) != fixed.indices.end();
+      const bool named =
+          std::find(fixed.indices.begin(), fixed.indices.end(), static_cast<std::int32_t>(i)) != fixed.indices.end();
       const bool boxed =
           fixed.box && (p.array() >= fixed.box->first.array()).all() && (p.array() <= fixed.box->second.array()).all();
       if (!(fixed.fix_all || named || boxed)) continue;
@@ -301,7 +312,8 @@ TopologyChange tetrahedra_change(const ModelConfig& before, const std::vector<st
   // Surface triangles go with their nodes; the faces a cut opens are the caller's to add.
   c.triangles.clear();
   for (mesh::Tri t : before.triangles) {
-    if (std::all_of(t.begin(), t.end(), [&](mesh::NodeIndex i) { return new_of_old[static_cast<std::size_t>(i)] >= 0; })) {
+    if (std::all_of(t.begin(), t.end(),
+                    [&](mesh::NodeIndex i) { return new_of_old[static_cast<std::size_t>(i)] >= 0; })) {
       for (mesh::NodeIndex& i : t) i = new_of_old[static_cast<std::size_t>(i)];
       c.triangles.push_back(t);
     }
@@ -325,7 +337,8 @@ TopologyChange tetrahedra_change(const ModelConfig& before, const std::vector<st
         std::vector<Vec3> forces;
         for (std::size_t k = 0; k < constant.indices.size(); ++k) {
           const std::int32_t i = constant.indices[k];
-          if (i >= 0 && static_cast<std::size_t>(i) < new_of_old.size() && new_of_old[static_cast<std::size_t>(i)] >= 0) {
+          if (i >= 0 && static_cast<std::size_t>(i) < new_of_old.size() &&
+              new_of_old[static_cast<std::size_t>(i)] >= 0) {
             forces.push_back(constant.forces[k]);
           }
         }
@@ -353,8 +366,9 @@ Expected<TopologyChangeReport> apply_topology_change(MechanicalModel& model, Mec
   for (std::size_t i = 0; i < new_n; ++i) {
     const std::int32_t o = change.old_node[i];
     if (o < -1 || o >= static_cast<std::int64_t>(old_n)) {
-      return make_error(ErrorCode::kInvalidArgument,
-                        fmt::format("model '{}': a topology change maps node {} to node {} of {}", model.name, i, o, old_n));
+      return make_error(
+          ErrorCode::kInvalidArgument,
+          fmt::format("model '{}': a topology change maps node {} to node {} of {}", model.name, i, o, old_n));
     }
     if (o == -1) {
       ++report.added_nodes;
@@ -374,11 +388,13 @@ Expected<TopologyChangeReport> apply_topology_change(MechanicalModel& model, Mec
   // Incremental when the change says where its elements were and the body is one that path
   // knows; else the force fields' element data, the lumped masses, the supports and the
   // pattern are those of the new mesh built whole (build_model: each a pass over its elements).
-  auto built = incremental_path_applies(model, change) ? incremental_model(model, change, report) : build_model(change.config);
+  auto built =
+      incremental_path_applies(model, change) ? incremental_model(model, change, report) : build_model(change.config);
   if (!built) return std::unexpected(built.error());
   MechanicalModel& next = *built;
   if (!report.incremental) {
-    report.elements_rebuilt = change.config.tets.size() + change.config.hexahedra.size() + change.config.triangles.size();
+    report.elements_rebuilt =
+        change.config.tets.size() + change.config.hexahedra.size() + change.config.triangles.size();
   }
 
   MechanicalState mapped = map_physical_state(next, state, change.old_node);
@@ -386,8 +402,8 @@ Expected<TopologyChangeReport> apply_topology_change(MechanicalModel& model, Mec
   // neither changed (a change of elements that couples the same nodes) the symbolic
   // factorisation, the CG's thread plan and the coarse space's aggregates are kept; only what
   // was formed from the old values is marked stale.
-  report.pattern_changed = !(identity && next.needs_matrix == model.needs_matrix && next.linear.kind == model.linear.kind &&
-                             same_pattern(next.pattern, model.pattern));
+  report.pattern_changed = !(identity && next.needs_matrix == model.needs_matrix &&
+                             next.linear.kind == model.linear.kind && same_pattern(next.pattern, model.pattern));
   if (report.pattern_changed) {
     mapped.work = std::make_unique<detail::SolverWorkspace>();
     mapped.work->arena = std::move(state.work->arena);  // the thread setting stays the body's

@@ -12,7 +12,8 @@ namespace hof::mechanics {
 double von_mises_from_stretches(const Vec3& stretches, double lambda, double mu) {
   const Vec3 strain = stretches - Vec3::Ones();
   const Vec3 s = Vec3::Constant(lambda * strain.sum()) + 2.0 * mu * strain;
-  return std::sqrt(0.5 * ((s[0] - s[1]) * (s[0] - s[1]) + (s[1] - s[2]) * (s[1] - s[2]) + (s[2] - s[0]) * (s[2] - s[0])));
+  return std::sqrt(0.5 *
+                   ((s[0] - s[1]) * (s[0] - s[1]) + (s[1] - s[2]) * (s[1] - s[2]) + (s[2] - s[0]) * (s[2] - s[0])));
 }
 
 VonMisesStress::VonMisesStress(const ModelConfig& config) {
@@ -51,11 +52,14 @@ VonMisesStress::VonMisesStress(const ModelConfig& config) {
     Element e{};
     e.nodes = rest->nodes;
     Mat3 dm;
-    for (int c = 0; c < 3; ++c) dm.col(c) = config.positions[static_cast<std::size_t>(e.nodes[c + 1])] - config.positions[static_cast<std::size_t>(e.nodes[0])];
+    for (int c = 0; c < 3; ++c)
+      dm.col(c) = config.positions[static_cast<std::size_t>(e.nodes[c + 1])] -
+                  config.positions[static_cast<std::size_t>(e.nodes[0])];
     e.rest_inverse = dm.inverse();
     e.volume = rest->volume;
     // A tissue region's own Poisson ratio changes λ/μ, its modulus scales both.
-    const double nu = per_element_poisson->empty() || (*per_element_poisson)[t] == 0.0 ? poisson : (*per_element_poisson)[t];
+    const double nu =
+        per_element_poisson->empty() || (*per_element_poisson)[t] == 0.0 ? poisson : (*per_element_poisson)[t];
     const Lame lame = lame_parameters(young, nu);
     e.lambda = (*weights)[t] * lame.lambda;
     e.mu = (*weights)[t] * lame.mu;
@@ -69,7 +73,10 @@ void VonMisesStress::element_stress(std::span<const double> x, std::vector<doubl
   if (x.size() < 3 * node_volume_.size()) return;
   for (std::size_t i = 0; i < elements_.size(); ++i) {
     const Element& e = elements_[i];
-    const auto at = [&](std::int32_t n) { return Vec3(x[3 * static_cast<std::size_t>(n)], x[3 * static_cast<std::size_t>(n) + 1], x[3 * static_cast<std::size_t>(n) + 2]); };
+    const auto at = [&](std::int32_t n) {
+      return Vec3(x[3 * static_cast<std::size_t>(n)], x[3 * static_cast<std::size_t>(n) + 1],
+                  x[3 * static_cast<std::size_t>(n) + 2]);
+    };
     const Vec3 x0 = at(e.nodes[0]);
     Mat3 ds;
     for (int c = 0; c < 3; ++c) ds.col(c) = at(e.nodes[c + 1]) - x0;
@@ -87,7 +94,8 @@ void VonMisesStress::node_stress(std::span<const double> x, std::vector<double>&
   element_stress(x, scratch_);
   out.assign(node_volume_.size(), 0.0);
   for (std::size_t i = 0; i < elements_.size(); ++i) {
-    for (const std::int32_t n : elements_[i].nodes) out[static_cast<std::size_t>(n)] += elements_[i].volume * scratch_[i];
+    for (const std::int32_t n : elements_[i].nodes)
+      out[static_cast<std::size_t>(n)] += elements_[i].volume * scratch_[i];
   }
   for (std::size_t n = 0; n < out.size(); ++n) {
     if (node_volume_[n] > 0.0) out[n] /= node_volume_[n];

@@ -33,8 +33,7 @@ BoundarySurface extract_boundary(const std::vector<Vec3>& nodes, const std::vect
     }
   }
   std::sort(faces.begin(), faces.end(), [](const FaceRecord& a, const FaceRecord& b) {
-    return a.key != b.key ? a.key < b.key
-                          : (a.tet != b.tet ? a.tet < b.tet : a.local_face < b.local_face);
+    return a.key != b.key ? a.key < b.key : (a.tet != b.tet ? a.tet < b.tet : a.local_face < b.local_face);
   });
 
   BoundarySurface out;

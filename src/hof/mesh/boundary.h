@@ -32,8 +32,7 @@ struct BoundarySurface {
 
 /// Extracts the faces that belong to exactly one tetrahedron. Deterministic: triangles come
 /// in order of (tet index, local face). Indices must be valid (checked by the readers).
-[[nodiscard]] BoundarySurface extract_boundary(const std::vector<Vec3>& nodes,
-                                               const std::vector<Tet>& tets);
+[[nodiscard]] BoundarySurface extract_boundary(const std::vector<Vec3>& nodes, const std::vector<Tet>& tets);
 
 /// Completes a boundary whose volume_triangles (and triangle_tet) are filled and whose
 /// volume_to_surface marks every node they use (any value ≥ 0, −1 elsewhere): numbers the

@@ -27,15 +27,14 @@ double grid_coordinate(const Vec3& min, const Vec3& max, const std::array<int, 3
 
 Expected<void> check_grid(const char* who, const std::array<int, 3>& n, const Vec3& min, const Vec3& max) {
   if (n[0] < 2 || n[1] < 2 || n[2] < 2) {
-    return make_error(ErrorCode::kInvalidArgument,
-                      fmt::format("{}: n = ({}, {}, {}): every axis needs at least 2 nodes (one cell)", who, n[0],
-                                  n[1], n[2]));
+    return make_error(
+        ErrorCode::kInvalidArgument,
+        fmt::format("{}: n = ({}, {}, {}): every axis needs at least 2 nodes (one cell)", who, n[0], n[1], n[2]));
   }
   const std::int64_t nodes = std::int64_t{n[0]} * n[1] * n[2];
   if (nodes > kMaxGridNodes) {
-    return make_error(ErrorCode::kInvalidArgument,
-                      fmt::format("{}: n = ({}, {}, {}) makes {} nodes, more than {}", who, n[0], n[1], n[2], nodes,
-                                  kMaxGridNodes));
+    return make_error(ErrorCode::kInvalidArgument, fmt::format("{}: n = ({}, {}, {}) makes {} nodes, more than {}", who,
+                                                               n[0], n[1], n[2], nodes, kMaxGridNodes));
   }
   if (!min.allFinite() || !max.allFinite()) {
     return make_error(ErrorCode::kInvalidArgument, fmt::format("{}: the box corners are not finite", who));
@@ -52,7 +51,9 @@ Expected<void> check_grid(const char* who, const std::array<int, 3>& n, const Ve
 
 // The eight nodes of cell (i, j, k) in Hex order, as full-grid node indices.
 Hex cell_hex(const std::array<int, 3>& n, int i, int j, int k) {
-  auto at = [&](int di, int dj, int dk) { return static_cast<NodeIndex>((i + di) + n[0] * ((j + dj) + n[1] * (k + dk))); };
+  auto at = [&](int di, int dj, int dk) {
+    return static_cast<NodeIndex>((i + di) + n[0] * ((j + dj) + n[1] * (k + dk)));
+  };
   return {at(0, 0, 0), at(1, 0, 0), at(1, 1, 0), at(0, 1, 0), at(0, 0, 1), at(1, 0, 1), at(1, 1, 1), at(0, 1, 1)};
 }
 
@@ -181,15 +182,16 @@ Expected<HexGrid> sparse_grid(const TriMesh& surface, std::array<int, 3> n,
   for (std::size_t t = 0; t < surface.triangles.size(); ++t) {
     for (NodeIndex i : surface.triangles[t]) {
       if (i < 0 || static_cast<std::size_t>(i) >= surface.vertices.size()) {
-        return make_error(ErrorCode::kInvalidMesh, fmt::format("{}: triangle {} uses vertex {} of {}", who, t, i,
-                                                               surface.vertices.size()));
+        return make_error(ErrorCode::kInvalidMesh,
+                          fmt::format("{}: triangle {} uses vertex {} of {}", who, t, i, surface.vertices.size()));
       }
     }
   }
   Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity());
   Vec3 hi = -lo;
   for (const Vec3& p : surface.vertices) {
-    if (!p.allFinite()) return make_error(ErrorCode::kInvalidMesh, fmt::format("{}: a surface vertex is not finite", who));
+    if (!p.allFinite())
+      return make_error(ErrorCode::kInvalidMesh, fmt::format("{}: a surface vertex is not finite", who));
     lo = lo.cwiseMin(p);
     hi = hi.cwiseMax(p);
   }
@@ -208,7 +210,8 @@ Expected<HexGrid> sparse_grid(const TriMesh& surface, std::array<int, 3> n,
   const std::array<int, 3> cells = {n[0] - 1, n[1] - 1, n[2] - 1};
   const Vec3 h((hi.x() - lo.x()) / cells[0], (hi.y() - lo.y()) / cells[1], (hi.z() - lo.z()) / cells[2]);
   const auto cell_index = [&](int i, int j, int k) {
-    return static_cast<std::size_t>(i) + static_cast<std::size_t>(cells[0]) * (j + static_cast<std::size_t>(cells[1]) * k);
+    return static_cast<std::size_t>(i) +
+           static_cast<std::size_t>(cells[0]) * (j + static_cast<std::size_t>(cells[1]) * k);
   };
   // Per cell: 0 empty, kSurfaceCell (the surface passes through it) or kInsideCell.
   constexpr std::uint8_t kSurfaceCell = 1, kInsideCell = 2;
@@ -351,7 +354,8 @@ Expected<HexGrid> sparse_grid(const TriMesh& surface, std::array<int, 3> n,
   for (int i = 0; i < n[0]; ++i) {
     for (int j = 0; j < n[1]; ++j) {
       for (int k = 0; k < n[2]; ++k) {
-        NodeIndex& slot = renumber[static_cast<std::size_t>(i) + static_cast<std::size_t>(n[0]) * (j + static_cast<std::size_t>(n[1]) * k)];
+        NodeIndex& slot = renumber[static_cast<std::size_t>(i) +
+                                   static_cast<std::size_t>(n[0]) * (j + static_cast<std::size_t>(n[1]) * k)];
         if (slot < 0) continue;
         slot = static_cast<NodeIndex>(grid.nodes.size());
         grid.nodes.emplace_back(grid_coordinate(lo, hi, n, 0, i), grid_coordinate(lo, hi, n, 1, j),

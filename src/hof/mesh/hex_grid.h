@@ -31,10 +31,10 @@ inline constexpr std::array<std::array<int, 3>, 8> kHexCornerSigns = {
 
 /// A grid of hexahedral cells (regular, or the kept cells of a sparse grid).
 struct HexGrid {
-  std::vector<Vec3> nodes;  ///< (N) node positions, m
-  std::vector<Hex> hexes;   ///< (H) hexahedra, positively oriented
-  Vec3 min{Vec3::Zero()};   ///< box corner of the full grid, m
-  Vec3 max{Vec3::Zero()};   ///< opposite box corner, m
+  std::vector<Vec3> nodes;        ///< (N) node positions, m
+  std::vector<Hex> hexes;         ///< (H) hexahedra, positively oriented
+  Vec3 min{Vec3::Zero()};         ///< box corner of the full grid, m
+  Vec3 max{Vec3::Zero()};         ///< opposite box corner, m
   std::array<int, 3> n{2, 2, 2};  ///< nodes per axis of the full grid (SOFA's `n`); cells n−1
   /// (H) the cell of each hexahedron in the full grid, i + (n₀−1)(j + (n₁−1)k).
   std::vector<std::int32_t> hex_cells;

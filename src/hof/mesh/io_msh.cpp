@@ -9,12 +9,12 @@
 /// unknown type number is an error. Every count is checked against the bytes left in the
 /// file before it sizes anything.
 
-#include <bit>
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <climits>
-#include <limits>
 #include <cstring>
+#include <limits>
 #include <map>
 #include <string>
 #include <utility>
@@ -42,25 +42,25 @@ constexpr std::uint16_t kVariable = 0xffff;
 
 /// Node count per Gmsh element type number (Gmsh's GmshDefines.h, MSH_*); 0 = no such type.
 constexpr std::array<std::uint16_t, 141> kGmshNodeCount = {
-    0,                                                         // 0: none
-    2,   3,   4,   4,   8,   6,   5,   3,   6,   9,            // 1-10
-    10,  27,  18,  14,  1,   8,   20,  15,  13,  9,            // 11-20
-    10,  12,  15,  15,  21,  4,   5,   6,   20,  35,           // 21-30
-    56,  22,  28,  kVariable, kVariable, 16, 25, 36, 12, 16,   // 31-40
-    20,  28,  36,  45,  55,  66,  49,  64,  81,  100,          // 41-50
-    121, 18,  21,  24,  27,  30,  24,  28,  32,  36,           // 51-60
-    40,  7,   8,   9,   10,  11,  0,   0,   0,   0,            // 61-70
-    84,  120, 165, 220, 286, 0,   0,   0,   34,  40,           // 71-80
-    46,  52,  58,  1,   1,   1,   1,   1,   1,   40,           // 81-90
-    75,  64,  125, 216, 343, 512, 729, 1000, 32, 44,           // 91-100
-    56,  68,  80,  92,  104, 126, 196, 288, 405, 550,          // 101-110
-    24,  33,  42,  51,  60,  69,  78,  30,  55,  91,           // 111-120
-    140, 204, 285, 385, 21,  29,  37,  45,  53,  61,           // 121-130
-    69,  1,   kVariable, kVariable, kVariable, kVariable, 16, 4, 5, 4,  // 131-140
+    0,                                                                          // 0: none
+    2,   3,   4,         4,         8,         6,         5,   3,    6,   9,    // 1-10
+    10,  27,  18,        14,        1,         8,         20,  15,   13,  9,    // 11-20
+    10,  12,  15,        15,        21,        4,         5,   6,    20,  35,   // 21-30
+    56,  22,  28,        kVariable, kVariable, 16,        25,  36,   12,  16,   // 31-40
+    20,  28,  36,        45,        55,        66,        49,  64,   81,  100,  // 41-50
+    121, 18,  21,        24,        27,        30,        24,  28,   32,  36,   // 51-60
+    40,  7,   8,         9,         10,        11,        0,   0,    0,   0,    // 61-70
+    84,  120, 165,       220,       286,       0,         0,   0,    34,  40,   // 71-80
+    46,  52,  58,        1,         1,         1,         1,   1,    1,   40,   // 81-90
+    75,  64,  125,       216,       343,       512,       729, 1000, 32,  44,   // 91-100
+    56,  68,  80,        92,        104,       126,       196, 288,  405, 550,  // 101-110
+    24,  33,  42,        51,        60,        69,        78,  30,   55,  91,   // 111-120
+    140, 204, 285,       385,       21,        29,        37,  45,   53,  61,   // 121-130
+    69,  1,   kVariable, kVariable, kVariable, kVariable, 16,  4,    5,   4,    // 131-140
 };
 static_assert(kGmshNodeCount[4] == 4 && kGmshNodeCount[15] == 1 && kGmshNodeCount[71] == 84 &&
-              kGmshNodeCount[79] == 34 && kGmshNodeCount[92] == 64 &&
-              kGmshNodeCount[132] == 1 && kGmshNodeCount[140] == 4);
+              kGmshNodeCount[79] == 34 && kGmshNodeCount[92] == 64 && kGmshNodeCount[132] == 1 &&
+              kGmshNodeCount[140] == 4);
 
 /// What the reader does with an element type.
 enum class ElementKind : std::uint8_t { kUnknown, kUnsupported, kPoint, kLine, kTriangle, kTet, kOther };
@@ -76,12 +76,25 @@ ElementInfo element_info(std::int64_t type) {
   if (nodes == 0) return {};
   if (nodes == kVariable) return {0, ElementKind::kUnsupported};
   switch (type) {
-    case 2: return {3, ElementKind::kTriangle};
-    case 4: return {4, ElementKind::kTet};
-    case 15: return {1, ElementKind::kPoint};
-    case 1: case 8: case 26: case 27: case 28: case 62: case 63: case 64: case 65: case 66:
+    case 2:
+      return {3, ElementKind::kTriangle};
+    case 4:
+      return {4, ElementKind::kTet};
+    case 15:
+      return {1, ElementKind::kPoint};
+    case 1:
+    case 8:
+    case 26:
+    case 27:
+    case 28:
+    case 62:
+    case 63:
+    case 64:
+    case 65:
+    case 66:
       return {nodes, ElementKind::kLine};
-    default: return {nodes, ElementKind::kOther};
+    default:
+      return {nodes, ElementKind::kOther};
   }
 }
 
@@ -103,8 +116,7 @@ struct IgnoredType {
 class MshReader {
  public:
   MshReader(std::string_view text, std::string file, const ProgressSink& progress)
-      : sc_(text, std::move(file)), progress_(progress),
-        task_("Reading " + sc_.file()) {}
+      : sc_(text, std::move(file)), progress_(progress), task_("Reading " + sc_.file()) {}
 
   Expected<ReadResult> run();
 
@@ -122,10 +134,9 @@ class MshReader {
   void finish_nodes(std::string_view end_marker, std::int64_t section_line);
   void expect_end(std::string_view end_marker, const std::string& what);
   ElementInfo check_type(std::int64_t type, std::size_t byte_offset);
-  void add_element(std::int64_t type, const ElementInfo& info, std::int64_t region,
-                   const std::int64_t* node_tags, std::size_t byte_offset);
-  void add_count_context(std::int64_t index, std::int64_t count, const char* what,
-                         const char* section);
+  void add_element(std::int64_t type, const ElementInfo& info, std::int64_t region, const std::int64_t* node_tags,
+                   std::size_t byte_offset);
+  void add_count_context(std::int64_t index, std::int64_t count, const char* what, const char* section);
   void tick();
 
   std::int32_t read_i32(std::size_t pos) const {
@@ -173,10 +184,9 @@ void MshReader::tick() {
   }
 }
 
-void MshReader::add_count_context(std::int64_t index, std::int64_t count, const char* what,
-                                  const char* section) {
-  std::string context = std::string(what) + " " + std::to_string(index + 1) + " of " +
-                        std::to_string(count) + " in " + section;
+void MshReader::add_count_context(std::int64_t index, std::int64_t count, const char* what, const char* section) {
+  std::string context =
+      std::string(what) + " " + std::to_string(index + 1) + " of " + std::to_string(count) + " in " + section;
   // A section marker where data was expected means the section is shorter than its count.
   if (sc_.token_start() < sc_.text().size() && sc_.text()[sc_.token_start()] == '$') {
     context += "; the section ends early, so its count is wrong";
@@ -195,15 +205,13 @@ Expected<ReadResult> MshReader::run() {
   } else if (first == "$MeshFormat") {
     read_format();
   } else {
-    sc_.fail(ErrorCode::kParse, "not a Gmsh mesh file: expected $MeshFormat or $NOD, found " +
-                                    quoted(first));
+    sc_.fail(ErrorCode::kParse, "not a Gmsh mesh file: expected $MeshFormat or $NOD, found " + quoted(first));
   }
   while (!sc_.failed()) {
     const std::string_view name = sc_.next();
     if (name.empty()) break;
     if (name.front() != '$') {
-      sc_.fail(ErrorCode::kParse,
-               "expected a section such as $Nodes or $Elements, found " + quoted(name));
+      sc_.fail(ErrorCode::kParse, "expected a section such as $Nodes or $Elements, found " + quoted(name));
       break;
     }
     handle_section(name);
@@ -226,11 +234,11 @@ Expected<ReadResult> MshReader::run() {
 
   for (const auto& [type, ignored] : ignored_) {
     std::string where = sc_.file();
-    where += ignored.byte_offset >= 0 ? ": byte " + std::to_string(ignored.byte_offset)
-                                      : ":" + std::to_string(ignored.line);
+    where +=
+        ignored.byte_offset >= 0 ? ": byte " + std::to_string(ignored.byte_offset) : ":" + std::to_string(ignored.line);
     result_.report.warnings.push_back(
-        where + ": ignored " + std::to_string(ignored.count) + " element(s) of Gmsh type " +
-        std::to_string(type) + " (" + std::to_string(element_info(type).nodes) +
+        where + ": ignored " + std::to_string(ignored.count) + " element(s) of Gmsh type " + std::to_string(type) +
+        " (" + std::to_string(element_info(type).nodes) +
         " nodes); only 3-node triangles (type 2) and 4-node tetrahedra (type 4) are kept");
   }
   if (progress_) progress_(task_, 1.0);
@@ -242,16 +250,14 @@ void MshReader::read_format() {
   const std::string_view version_token = sc_.next();
   double version = 0.0;
   if (detail::parse_real(version_token, version) != detail::RealParse::kOk) {
-    sc_.fail(ErrorCode::kParse, "expected the Gmsh format version (e.g. 2.2 or 4.1), found " +
-                                    quoted(version_token));
+    sc_.fail(ErrorCode::kParse, "expected the Gmsh format version (e.g. 2.2 or 4.1), found " + quoted(version_token));
     return;
   }
   const std::int64_t file_type = sc_.integer("file type (0 = ASCII, 1 = binary)");
   const std::int64_t data_size = sc_.integer("data size");
   if (sc_.failed()) return;
   if (file_type != 0 && file_type != 1) {
-    sc_.fail(ErrorCode::kParse, "file type must be 0 (ASCII) or 1 (binary), found " +
-                                    std::to_string(file_type));
+    sc_.fail(ErrorCode::kParse, "file type must be 0 (ASCII) or 1 (binary), found " + std::to_string(file_type));
     return;
   }
   const bool binary = file_type == 1;
@@ -265,8 +271,8 @@ void MshReader::read_format() {
       return;
     }
   } else {
-    sc_.fail(ErrorCode::kUnsupported, "Gmsh format version " + std::string(version_token) +
-                                          " is not supported (readable: 1, 2.x, 4.1)");
+    sc_.fail(ErrorCode::kUnsupported,
+             "Gmsh format version " + std::string(version_token) + " is not supported (readable: 1, 2.x, 4.1)");
     return;
   }
   if (data_size != 8) {
@@ -306,10 +312,18 @@ void MshReader::handle_section(std::string_view name) {
       return;
     }
     switch (flavor_) {
-      case Flavor::kV1: read_nodes_v12("$ENDNOD"); break;
-      case Flavor::kV2Ascii: read_nodes_v12("$EndNodes"); break;
-      case Flavor::kV2Binary: read_nodes_v2_binary(); break;
-      case Flavor::kV41Ascii: read_nodes_v41(); break;
+      case Flavor::kV1:
+        read_nodes_v12("$ENDNOD");
+        break;
+      case Flavor::kV2Ascii:
+        read_nodes_v12("$EndNodes");
+        break;
+      case Flavor::kV2Binary:
+        read_nodes_v2_binary();
+        break;
+      case Flavor::kV41Ascii:
+        read_nodes_v41();
+        break;
     }
     have_nodes_ = !sc_.failed();
   } else if (is_elements) {
@@ -322,10 +336,18 @@ void MshReader::handle_section(std::string_view name) {
       return;
     }
     switch (flavor_) {
-      case Flavor::kV1: read_elements_v1(); break;
-      case Flavor::kV2Ascii: read_elements_v2(); break;
-      case Flavor::kV2Binary: read_elements_v2_binary(); break;
-      case Flavor::kV41Ascii: read_elements_v41(); break;
+      case Flavor::kV1:
+        read_elements_v1();
+        break;
+      case Flavor::kV2Ascii:
+        read_elements_v2();
+        break;
+      case Flavor::kV2Binary:
+        read_elements_v2_binary();
+        break;
+      case Flavor::kV41Ascii:
+        read_elements_v41();
+        break;
     }
     have_elements_ = true;
   } else {
@@ -355,9 +377,8 @@ void MshReader::skip_section(std::string_view name) {
     }
     p = start;
   }
-  sc_.fail(ErrorCode::kParse, "unexpected end of file: section " + std::string(name) +
-                                  " (line " + std::to_string(section_line) +
-                                  ") is not closed by " + end_marker);
+  sc_.fail(ErrorCode::kParse, "unexpected end of file: section " + std::string(name) + " (line " +
+                                  std::to_string(section_line) + ") is not closed by " + end_marker);
 }
 
 void MshReader::expect_end(std::string_view end_marker, const std::string& what) {
@@ -365,11 +386,10 @@ void MshReader::expect_end(std::string_view end_marker, const std::string& what)
   const std::string_view token = sc_.next();
   if (iequals(token, end_marker)) return;
   if (token.empty()) {
-    sc_.fail(ErrorCode::kParse, "unexpected end of file: " + what + " is not closed by " +
-                                    std::string(end_marker));
+    sc_.fail(ErrorCode::kParse, "unexpected end of file: " + what + " is not closed by " + std::string(end_marker));
   } else {
-    sc_.fail(ErrorCode::kParse, "expected " + std::string(end_marker) + " to close " + what +
-                                    ", found " + quoted(token) + "; the count is wrong");
+    sc_.fail(ErrorCode::kParse, "expected " + std::string(end_marker) + " to close " + what + ", found " +
+                                    quoted(token) + "; the count is wrong");
   }
 }
 
@@ -425,8 +445,7 @@ void MshReader::read_nodes_v2_binary() {
   sc_.skip_line();
   const std::size_t start = sc_.pos();
   if (!count_fits(count, kNodeBytes, sc_.bytes_left()) || count > INT32_MAX) {
-    sc_.fail(ErrorCode::kParse,
-             detail::impossible_count("node count", count, kNodeBytes, sc_.bytes_left()));
+    sc_.fail(ErrorCode::kParse, detail::impossible_count("node count", count, kNodeBytes, sc_.bytes_left()));
     return;
   }
   auto& nodes = result_.mesh.nodes;
@@ -441,8 +460,8 @@ void MshReader::read_nodes_v2_binary() {
       return;
     }
     if (!p.allFinite()) {
-      sc_.fail_at_byte(ErrorCode::kInvalidMesh,
-                       "node " + std::to_string(tag) + " has a NaN or infinite coordinate", pos);
+      sc_.fail_at_byte(ErrorCode::kInvalidMesh, "node " + std::to_string(tag) + " has a NaN or infinite coordinate",
+                       pos);
       return;
     }
     node_tags_.push_back(tag);
@@ -464,8 +483,7 @@ void MshReader::read_nodes_v41() {
   if (sc_.failed()) return;
   // Shortest block header "0 1 0 1\n"; shortest node "1\n" + "0 0 0\n".
   if (!count_fits(blocks, 8, sc_.bytes_left())) {
-    sc_.fail(ErrorCode::kParse,
-             detail::impossible_count("node block count", blocks, 8, sc_.bytes_left()));
+    sc_.fail(ErrorCode::kParse, detail::impossible_count("node block count", blocks, 8, sc_.bytes_left()));
     return;
   }
   if (!count_fits(count, 8, sc_.bytes_left()) || count > INT32_MAX) {
@@ -482,8 +500,8 @@ void MshReader::read_nodes_v41() {
     const std::int64_t parametric = sc_.integer("parametric flag");
     const std::int64_t in_block = sc_.integer("number of nodes in block");
     if (!sc_.failed() && (dim < 0 || dim > 3 || parametric < 0 || parametric > 1)) {
-      sc_.fail(ErrorCode::kParse, "bad node block header: dimension " + std::to_string(dim) +
-                                      ", parametric " + std::to_string(parametric));
+      sc_.fail(ErrorCode::kParse, "bad node block header: dimension " + std::to_string(dim) + ", parametric " +
+                                      std::to_string(parametric));
     }
     if (!sc_.failed() && (in_block < 0 || in_block > count - read)) {
       sc_.fail(ErrorCode::kParse, "node blocks hold more than the " + std::to_string(count) +
@@ -520,8 +538,7 @@ void MshReader::read_nodes_v41() {
     read += in_block;
   }
   if (read != count) {
-    sc_.fail(ErrorCode::kParse, "node blocks hold " + std::to_string(read) +
-                                    " nodes but the $Nodes header announces " +
+    sc_.fail(ErrorCode::kParse, "node blocks hold " + std::to_string(read) + " nodes but the $Nodes header announces " +
                                     std::to_string(count) + "; the count is wrong");
     return;
   }
@@ -536,8 +553,7 @@ ElementInfo MshReader::check_type(std::int64_t type, std::size_t byte_offset) {
     message = "unknown Gmsh element type " + std::to_string(type);
   } else if (info.kind == ElementKind::kUnsupported) {
     code = ErrorCode::kUnsupported;
-    message = "Gmsh element type " + std::to_string(type) +
-              " (polygon, polyhedron or sub-element) is not supported";
+    message = "Gmsh element type " + std::to_string(type) + " (polygon, polyhedron or sub-element) is not supported";
   } else {
     return info;
   }
@@ -563,8 +579,8 @@ void MshReader::add_element(std::int64_t type, const ElementInfo& info, std::int
     for (int k = 0; k < n; ++k) {
       out[k] = tag_map_.find(node_tags[k]);
       if (out[k] < 0) {
-        fail(ErrorCode::kInvalidMesh, "element refers to node tag " + std::to_string(node_tags[k]) +
-                                          ", which is not in the node section");
+        fail(ErrorCode::kInvalidMesh,
+             "element refers to node tag " + std::to_string(node_tags[k]) + ", which is not in the node section");
         return false;
       }
     }
@@ -591,8 +607,12 @@ void MshReader::add_element(std::int64_t type, const ElementInfo& info, std::int
       mesh.triangle_regions.push_back(static_cast<std::int32_t>(region));
       break;
     }
-    case ElementKind::kPoint: ++result_.report.ignored_points; break;
-    case ElementKind::kLine: ++result_.report.ignored_lines; break;
+    case ElementKind::kPoint:
+      ++result_.report.ignored_points;
+      break;
+    case ElementKind::kLine:
+      ++result_.report.ignored_lines;
+      break;
     case ElementKind::kOther: {
       ++result_.report.ignored_other;
       IgnoredType& ignored = ignored_[type];
@@ -603,7 +623,8 @@ void MshReader::add_element(std::int64_t type, const ElementInfo& info, std::int
       break;
     }
     case ElementKind::kUnknown:
-    case ElementKind::kUnsupported: break;  // rejected by check_type
+    case ElementKind::kUnsupported:
+      break;  // rejected by check_type
   }
 }
 
@@ -626,9 +647,8 @@ void MshReader::read_elements_v1() {
     ElementInfo info;
     if (!sc_.failed()) info = check_type(type, kNoByte);
     if (!sc_.failed() && node_count != info.nodes) {
-      sc_.fail(ErrorCode::kParse, "element of type " + std::to_string(type) + " has " +
-                                      std::to_string(info.nodes) + " nodes, the line says " +
-                                      std::to_string(node_count));
+      sc_.fail(ErrorCode::kParse, "element of type " + std::to_string(type) + " has " + std::to_string(info.nodes) +
+                                      " nodes, the line says " + std::to_string(node_count));
     }
     for (int k = 0; k < info.nodes && !sc_.failed(); ++k) {
       element_nodes_[static_cast<std::size_t>(k)] = sc_.integer("node number");
@@ -707,18 +727,19 @@ void MshReader::read_elements_v2_binary() {
     if (sc_.failed()) return;
     if (in_block <= 0 || in_block > count - read || tag_count < 0) {
       sc_.fail_at_byte(ErrorCode::kParse,
-                       "bad binary element block header: " + std::to_string(in_block) +
-                           " elements with " + std::to_string(tag_count) + " tags (" +
-                           std::to_string(count - read) + " elements left to read)",
+                       "bad binary element block header: " + std::to_string(in_block) + " elements with " +
+                           std::to_string(tag_count) + " tags (" + std::to_string(count - read) +
+                           " elements left to read)",
                        pos);
       return;
     }
     pos += 12;
     const std::int64_t element_bytes = 4 * (1 + tag_count + info.nodes);
     if (!count_fits(in_block, element_bytes, text.size() - pos)) {
-      sc_.fail_at_byte(ErrorCode::kParse, "unexpected end of file: a binary element block of " +
-                                              std::to_string(in_block) + " elements is cut off",
-                       pos);
+      sc_.fail_at_byte(
+          ErrorCode::kParse,
+          "unexpected end of file: a binary element block of " + std::to_string(in_block) + " elements is cut off",
+          pos);
       return;
     }
     for (std::int64_t e = 0; e < in_block; ++e) {
@@ -750,8 +771,7 @@ void MshReader::read_elements_v41() {
   if (sc_.failed()) return;
   // Shortest block header "0 1 15 1\n"; shortest element "1 1\n".
   if (!count_fits(blocks, 8, sc_.bytes_left())) {
-    sc_.fail(ErrorCode::kParse,
-             detail::impossible_count("element block count", blocks, 8, sc_.bytes_left()));
+    sc_.fail(ErrorCode::kParse, detail::impossible_count("element block count", blocks, 8, sc_.bytes_left()));
     return;
   }
   if (!count_fits(count, 4, sc_.bytes_left())) {
@@ -793,8 +813,8 @@ void MshReader::read_elements_v41() {
   }
   if (read != count) {
     sc_.fail(ErrorCode::kParse, "element blocks hold " + std::to_string(read) +
-                                    " elements but the $Elements header announces " +
-                                    std::to_string(count) + "; the count is wrong");
+                                    " elements but the $Elements header announces " + std::to_string(count) +
+                                    "; the count is wrong");
     return;
   }
   expect_end("$EndElements", "$Elements section (line " + std::to_string(section_line) + ")");

@@ -96,8 +96,7 @@ std::map<std::int32_t, Bounds> region_bounds(const Mesh& mesh, const std::vector
 /// Element blocks of v4.1: one per run of consecutive elements with the same region, so
 /// the element order survives a round trip even when regions interleave.
 template <class Element>
-void append_v41_blocks(std::string& out, std::int64_t& tag, int dim, int type,
-                       const std::vector<Element>& elements,
+void append_v41_blocks(std::string& out, std::int64_t& tag, int dim, int type, const std::vector<Element>& elements,
                        const std::vector<std::int32_t>& regions) {
   std::size_t begin = 0;
   while (begin < elements.size()) {
@@ -194,8 +193,7 @@ std::string format_v41(const Mesh& mesh) {
 
   const auto elements = static_cast<std::int64_t>(mesh.triangles.size() + mesh.tets.size());
   out += "$Elements\n";
-  detail::append_int(out, count_runs(mesh.triangles, mesh.triangle_regions) +
-                              count_runs(mesh.tets, mesh.tet_regions));
+  detail::append_int(out, count_runs(mesh.triangles, mesh.triangle_regions) + count_runs(mesh.tets, mesh.tet_regions));
   out += ' ';
   detail::append_int(out, elements);
   out += elements > 0 ? " 1 " : " 0 ";
@@ -212,8 +210,7 @@ std::string format_v41(const Mesh& mesh) {
 
 Expected<void> write_msh(const Mesh& mesh, const std::filesystem::path& path, MshVersion version) {
   if (auto ok = detail::check_mesh_for_write(mesh, path); !ok) return ok;
-  return detail::write_whole_file(path, version == MshVersion::k2_2 ? format_v22(mesh)
-                                                                    : format_v41(mesh));
+  return detail::write_whole_file(path, version == MshVersion::k2_2 ? format_v22(mesh) : format_v41(mesh));
 }
 
 }  // namespace hof::mesh

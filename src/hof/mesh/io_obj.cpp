@@ -24,10 +24,9 @@ using detail::quoted;
 
 /// OBJ statements that are valid but hold nothing HoF keeps.
 constexpr std::array<std::string_view, 30> kIgnoredStatements = {
-    "vp",     "o",      "g",     "s",      "mg",     "usemtl",    "mtllib", "usemap",
-    "maplib", "lod",    "bevel", "c_interp", "d_interp", "shadow_obj", "trace_obj", "ctech",
-    "stech",  "cstype", "deg",   "bmat",   "step",   "curv",      "curv2",  "surf",
-    "parm",   "trim",   "hole",  "scrv",   "sp",     "end",
+    "vp",    "o",        "g",        "s",          "mg",        "usemtl", "mtllib", "usemap", "maplib", "lod",
+    "bevel", "c_interp", "d_interp", "shadow_obj", "trace_obj", "ctech",  "stech",  "cstype", "deg",    "bmat",
+    "step",  "curv",     "curv2",    "surf",       "parm",      "trim",   "hole",   "scrv",   "sp",     "end",
 };
 
 /// One corner of a face: vertex index and normal index (-1 when absent), 0-based.
@@ -44,8 +43,8 @@ class ObjReader {
 
  private:
   Expected<void> statement(std::string_view line);
-  Expected<void> read_vector(detail::Tokens& tokens, std::string_view keyword, int min_values,
-                             int max_values, Vec3* out);
+  Expected<void> read_vector(detail::Tokens& tokens, std::string_view keyword, int min_values, int max_values,
+                             Vec3* out);
   Expected<Corner> corner(std::string_view token);
   Expected<std::int64_t> resolve(std::string_view text, std::int64_t defined, const char* what);
 
@@ -176,45 +175,42 @@ Expected<void> ObjReader::statement(std::string_view line) {
     }
     return {};
   }
-  if (std::find(kIgnoredStatements.begin(), kIgnoredStatements.end(), keyword) !=
-      kIgnoredStatements.end()) {
+  if (std::find(kIgnoredStatements.begin(), kIgnoredStatements.end(), keyword) != kIgnoredStatements.end()) {
     return {};
   }
   return fail(ErrorCode::kParse, "unknown OBJ statement " + quoted(keyword));
 }
 
-Expected<void> ObjReader::read_vector(detail::Tokens& tokens, std::string_view keyword,
-                                      int min_values, int max_values, Vec3* out) {
+Expected<void> ObjReader::read_vector(detail::Tokens& tokens, std::string_view keyword, int min_values, int max_values,
+                                      Vec3* out) {
   int count = 0;
   for (std::string_view token = tokens.next(); !token.empty(); token = tokens.next()) {
     if (count == max_values) {
-      return fail(ErrorCode::kParse, "'" + std::string(keyword) + "' has more than " +
-                                         std::to_string(max_values) + " values");
+      return fail(ErrorCode::kParse,
+                  "'" + std::string(keyword) + "' has more than " + std::to_string(max_values) + " values");
     }
     double value = 0.0;
     switch (detail::parse_real(token, value)) {
-      case detail::RealParse::kOk: break;
+      case detail::RealParse::kOk:
+        break;
       case detail::RealParse::kNotFinite:
-        return fail(ErrorCode::kInvalidMesh, "'" + std::string(keyword) + "' value " +
-                                                 quoted(token) + " is not a finite number");
+        return fail(ErrorCode::kInvalidMesh,
+                    "'" + std::string(keyword) + "' value " + quoted(token) + " is not a finite number");
       case detail::RealParse::kNotANumber:
-        return fail(ErrorCode::kParse, "'" + std::string(keyword) + "' value " + quoted(token) +
-                                           " is not a number");
+        return fail(ErrorCode::kParse, "'" + std::string(keyword) + "' value " + quoted(token) + " is not a number");
     }
     if (out != nullptr && count < 3) (*out)[count] = value;
     ++count;
   }
   if (count < min_values) {
-    return fail(ErrorCode::kParse, "'" + std::string(keyword) + "' needs " +
-                                       std::to_string(min_values) + " values, found " +
-                                       std::to_string(count));
+    return fail(ErrorCode::kParse, "'" + std::string(keyword) + "' needs " + std::to_string(min_values) +
+                                       " values, found " + std::to_string(count));
   }
   return {};
 }
 
 /// 1-based (or negative, counted back from the last defined) index → 0-based index.
-Expected<std::int64_t> ObjReader::resolve(std::string_view text, std::int64_t defined,
-                                          const char* what) {
+Expected<std::int64_t> ObjReader::resolve(std::string_view text, std::int64_t defined, const char* what) {
   std::int64_t index = 0;
   if (!detail::parse_int(text, index)) {
     return fail(ErrorCode::kParse, std::string(what) + " index " + quoted(text) + " is not an integer");
@@ -223,8 +219,7 @@ Expected<std::int64_t> ObjReader::resolve(std::string_view text, std::int64_t de
   const std::int64_t resolved = index > 0 ? index - 1 : defined + index;
   if (resolved < 0 || resolved >= defined) {
     return fail(ErrorCode::kInvalidMesh, std::string(what) + " index " + std::to_string(index) +
-                                             " is out of range: " + std::to_string(defined) +
-                                             " defined so far");
+                                             " is out of range: " + std::to_string(defined) + " defined so far");
   }
   return resolved;
 }
@@ -237,8 +232,7 @@ Expected<Corner> ObjReader::corner(std::string_view token) {
   std::string_view n_text;
   if (slash1 != std::string_view::npos) {
     const std::size_t slash2 = token.find('/', slash1 + 1);
-    t_text = token.substr(slash1 + 1, slash2 == std::string_view::npos ? std::string_view::npos
-                                                                       : slash2 - slash1 - 1);
+    t_text = token.substr(slash1 + 1, slash2 == std::string_view::npos ? std::string_view::npos : slash2 - slash1 - 1);
     if (slash2 != std::string_view::npos) {
       n_text = token.substr(slash2 + 1);
       if (n_text.empty() || n_text.find('/') != std::string_view::npos) {

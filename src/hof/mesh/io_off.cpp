@@ -56,8 +56,8 @@ Expected<ReadResult> read_off(const std::filesystem::path& path) {
     return sc.unexpected_error();
   }
   if (dimensional || detail::iequals(sc.peek(), "BINARY")) {
-    sc.fail(ErrorCode::kUnsupported, "only 3-D ASCII OFF is supported, not " + quoted(keyword) +
-                                         (dimensional ? "" : " BINARY"));
+    sc.fail(ErrorCode::kUnsupported,
+            "only 3-D ASCII OFF is supported, not " + quoted(keyword) + (dimensional ? "" : " BINARY"));
     return sc.unexpected_error();
   }
 
@@ -119,8 +119,8 @@ Expected<ReadResult> read_off(const std::filesystem::path& path) {
   }
   if (!sc.at_end()) {
     sc.next();
-    sc.fail(ErrorCode::kParse, "data after the last of the " + std::to_string(face_count) +
-                                   " faces: the face count is wrong");
+    sc.fail(ErrorCode::kParse,
+            "data after the last of the " + std::to_string(face_count) + " faces: the face count is wrong");
     return sc.unexpected_error();
   }
   return result;

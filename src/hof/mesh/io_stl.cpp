@@ -44,8 +44,7 @@ class Welder {
   explicit Welder(Mesh& mesh) : mesh_(mesh) {}
 
   NodeIndex add(const Vec3& p) {
-    const PositionKey key{{std::bit_cast<std::uint64_t>(p.x() + 0.0),
-                           std::bit_cast<std::uint64_t>(p.y() + 0.0),
+    const PositionKey key{{std::bit_cast<std::uint64_t>(p.x() + 0.0), std::bit_cast<std::uint64_t>(p.y() + 0.0),
                            std::bit_cast<std::uint64_t>(p.z() + 0.0)}};
     const auto [it, inserted] = index_.try_emplace(key, static_cast<NodeIndex>(mesh_.nodes.size()));
     if (inserted) mesh_.nodes.push_back(p);
@@ -91,8 +90,7 @@ Expected<ReadResult> read_binary(std::string_view bytes, const std::string& file
                    read_le_float(bytes.data() + at + 8));
       if (!p.allFinite()) {
         return detail::make_byte_error(ErrorCode::kInvalidMesh,
-                                       "triangle " + std::to_string(i) +
-                                           " has a NaN or infinite vertex coordinate",
+                                       "triangle " + std::to_string(i) + " has a NaN or infinite vertex coordinate",
                                        file, static_cast<std::int64_t>(at));
       }
       tri[c] = welder.add(p);
@@ -100,8 +98,8 @@ Expected<ReadResult> read_binary(std::string_view bytes, const std::string& file
     welder.triangle(tri);
   }
   if (count == 0) {
-    return detail::make_byte_error(ErrorCode::kInvalidMesh, "binary STL holds no triangles",
-                                   file, static_cast<std::int64_t>(kHeaderBytes));
+    return detail::make_byte_error(ErrorCode::kInvalidMesh, "binary STL holds no triangles", file,
+                                   static_cast<std::int64_t>(kHeaderBytes));
   }
   if (welder.degenerate() > 0) {
     result.report.warnings.push_back(file + ": " + std::to_string(welder.degenerate()) +
@@ -129,9 +127,8 @@ Expected<ReadResult> read_ascii(std::string_view text, const std::string& file) 
       continue;
     }
     if (!detail::iequals(token, "facet")) {
-      sc.fail(ErrorCode::kParse,
-              token.empty() ? std::string("unexpected end of file: no 'endsolid'")
-                            : "expected 'facet' or 'endsolid', found " + quoted(token));
+      sc.fail(ErrorCode::kParse, token.empty() ? std::string("unexpected end of file: no 'endsolid'")
+                                               : "expected 'facet' or 'endsolid', found " + quoted(token));
       break;
     }
     sc.expect("normal");
@@ -184,17 +181,16 @@ Expected<ReadResult> read_stl(const std::filesystem::path& path) {
   if (detail::iequals(start, "solid")) return read_ascii(data, file);
   if (data.size() >= kBinaryPrefix) {
     const std::uint64_t count = read_le32(data.data() + kHeaderBytes);
-    return detail::make_byte_error(
-        ErrorCode::kParse,
-        "not an STL file: it does not start with 'solid' (ASCII) and its size " +
-            std::to_string(data.size()) + " does not match a binary STL of " +
-            std::to_string(count) + " triangles (" +
-            std::to_string(kBinaryPrefix + kBinaryTriangleBytes * count) + " bytes)",
-        file, static_cast<std::int64_t>(kHeaderBytes));
+    return detail::make_byte_error(ErrorCode::kParse,
+                                   "not an STL file: it does not start with 'solid' (ASCII) and its size " +
+                                       std::to_string(data.size()) + " does not match a binary STL of " +
+                                       std::to_string(count) + " triangles (" +
+                                       std::to_string(kBinaryPrefix + kBinaryTriangleBytes * count) + " bytes)",
+                                   file, static_cast<std::int64_t>(kHeaderBytes));
   }
   return make_error(ErrorCode::kParse,
-                    "not an STL file: it does not start with 'solid' and is too short (" +
-                        std::to_string(data.size()) + " bytes) for a binary STL",
+                    "not an STL file: it does not start with 'solid' and is too short (" + std::to_string(data.size()) +
+                        " bytes) for a binary STL",
                     file, 1);
 }
 

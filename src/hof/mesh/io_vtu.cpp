@@ -11,8 +11,8 @@
 #include <pugixml.hpp>
 
 #include "hof/mesh/detail/text_reader.h"
-#include "hof/mesh/xml_depth.h"
 #include "hof/mesh/mesh_io.h"
+#include "hof/mesh/xml_depth.h"
 
 namespace hof::mesh {
 
@@ -54,16 +54,15 @@ class VtuReader {
     const auto end = text_.begin() + std::min(static_cast<std::size_t>(offset), text_.size());
     return 1 + static_cast<std::int64_t>(std::count(text_.begin(), end, '\n'));
   }
-  std::unexpected<Error> fail_at(const pugi::xml_node& node, ErrorCode code,
-                                 std::string message) const {
+  std::unexpected<Error> fail_at(const pugi::xml_node& node, ErrorCode code, std::string message) const {
     return make_error(code, std::move(message), file_, line_at(node.offset_debug()));
   }
   Expected<void> read_values(const pugi::xml_node& array, std::int64_t expected, bool integers,
                              std::vector<double>& reals, std::vector<std::int64_t>& ints) const;
   Expected<std::int64_t> count_attribute(const pugi::xml_node& node, const char* name) const;
   std::int64_t value_line(const pugi::xml_node& array, std::int64_t index) const;
-  std::unexpected<Error> fail_at_value(const pugi::xml_node& array, std::int64_t index,
-                                       ErrorCode code, std::string message) const {
+  std::unexpected<Error> fail_at_value(const pugi::xml_node& array, std::int64_t index, ErrorCode code,
+                                       std::string message) const {
     return make_error(code, std::move(message), file_, value_line(array, index));
   }
 
@@ -71,20 +70,19 @@ class VtuReader {
   std::string file_;
 };
 
-Expected<std::int64_t> VtuReader::count_attribute(const pugi::xml_node& node,
-                                                  const char* name) const {
+Expected<std::int64_t> VtuReader::count_attribute(const pugi::xml_node& node, const char* name) const {
   const pugi::xml_attribute attribute = node.attribute(name);
   std::int64_t value = 0;
   if (!attribute) return fail_at(node, ErrorCode::kParse, std::string("missing attribute ") + name);
   if (!detail::parse_int(attribute.value(), value) || value < 0) {
-    return fail_at(node, ErrorCode::kParse, std::string("attribute ") + name + "=" +
-                                                quoted(attribute.value()) + " is not a count");
+    return fail_at(node, ErrorCode::kParse,
+                   std::string("attribute ") + name + "=" + quoted(attribute.value()) + " is not a count");
   }
   // Each value needs at least two characters of text: a bound on any honest count.
   if (!detail::count_fits(value, 2, text_.size())) {
-    return fail_at(node, ErrorCode::kParse, std::string("attribute ") + name + "=" +
-                                                std::to_string(value) +
-                                                " is impossible for the file's size");
+    return fail_at(
+        node, ErrorCode::kParse,
+        std::string("attribute ") + name + "=" + std::to_string(value) + " is impossible for the file's size");
   }
   return value;
 }
@@ -109,23 +107,22 @@ std::int64_t VtuReader::value_line(const pugi::xml_node& array, std::int64_t ind
 }
 
 /// Parses the text of one DataArray: exactly `expected` numbers, integers or finite reals.
-Expected<void> VtuReader::read_values(const pugi::xml_node& array, std::int64_t expected,
-                                      bool integers, std::vector<double>& reals,
-                                      std::vector<std::int64_t>& ints) const {
+Expected<void> VtuReader::read_values(const pugi::xml_node& array, std::int64_t expected, bool integers,
+                                      std::vector<double>& reals, std::vector<std::int64_t>& ints) const {
   const std::string name = array.attribute("Name").value();
   const std::string_view format = array.attribute("format").value();
   if (!format.empty() && format != "ascii") {
-    return fail_at(array, ErrorCode::kUnsupported, "DataArray '" + name + "' has format=" +
-                                                       quoted(format) + "; only ascii is supported");
+    return fail_at(array, ErrorCode::kUnsupported,
+                   "DataArray '" + name + "' has format=" + quoted(format) + "; only ascii is supported");
   }
   // Scan the first text child in place, so line numbers count from where it starts.
   const pugi::xml_node data = text_child(array);
   const std::string_view values = data ? data.value() : "";
   detail::Scanner sc(values, file_, '\0', data ? line_at(data.offset_debug()) : line_at(array.offset_debug()));
   if (!detail::count_fits(expected, 2, values.size() + 1)) {
-    return fail_at(array, ErrorCode::kParse, "DataArray '" + name + "' should hold " +
-                                                 std::to_string(expected) + " values but its text has only " +
-                                                 std::to_string(values.size()) + " characters");
+    return fail_at(array, ErrorCode::kParse,
+                   "DataArray '" + name + "' should hold " + std::to_string(expected) +
+                       " values but its text has only " + std::to_string(values.size()) + " characters");
   }
   if (integers) {
     ints.reserve(static_cast<std::size_t>(expected));
@@ -135,8 +132,9 @@ Expected<void> VtuReader::read_values(const pugi::xml_node& array, std::int64_t 
   const std::string what = "value of DataArray '" + name + "'";
   for (std::int64_t i = 0; i < expected; ++i) {
     if (sc.at_end()) {
-      return fail_at(array, ErrorCode::kParse, "DataArray '" + name + "' holds " + std::to_string(i) +
-                                                   " values, expected " + std::to_string(expected));
+      return fail_at(
+          array, ErrorCode::kParse,
+          "DataArray '" + name + "' holds " + std::to_string(i) + " values, expected " + std::to_string(expected));
     }
     if (integers) {
       ints.push_back(sc.integer(what));
@@ -150,8 +148,8 @@ Expected<void> VtuReader::read_values(const pugi::xml_node& array, std::int64_t 
   }
   if (!sc.at_end()) {
     sc.next();
-    sc.fail(ErrorCode::kParse, "DataArray '" + name + "' holds more than the " +
-                                   std::to_string(expected) + " values expected");
+    sc.fail(ErrorCode::kParse,
+            "DataArray '" + name + "' holds more than the " + std::to_string(expected) + " values expected");
     return sc.unexpected_error();
   }
   return {};
@@ -202,15 +200,17 @@ Expected<ReadResult> VtuReader::run() {
 Expected<pugi::xml_node> VtuReader::find_piece(pugi::xml_document& doc) const {
   // Without parse_eol pugixml leaves the text bytes where they were, so offset_debug()
   // gives true positions for line numbers.
-  const pugi::xml_parse_result parsed = doc.load_buffer(
-      text_.data(), text_.size(), pugi::parse_default & ~pugi::parse_eol, pugi::encoding_utf8);
+  const pugi::xml_parse_result parsed =
+      doc.load_buffer(text_.data(), text_.size(), pugi::parse_default & ~pugi::parse_eol, pugi::encoding_utf8);
   if (!parsed) {
-    return make_error(ErrorCode::kParse, std::string("not valid XML: ") + parsed.description(),
-                      file_, line_at(parsed.offset));
+    return make_error(ErrorCode::kParse, std::string("not valid XML: ") + parsed.description(), file_,
+                      line_at(parsed.offset));
   }
   if (const pugi::xml_node deep = first_too_deep_element(doc)) {
-    return make_error(ErrorCode::kParse, "<" + std::string(deep.name()) + "> is nested deeper than " + std::to_string(kMaxXmlDepth) + " levels",
-                      file_, line_at(deep.offset_debug()));
+    return make_error(
+        ErrorCode::kParse,
+        "<" + std::string(deep.name()) + "> is nested deeper than " + std::to_string(kMaxXmlDepth) + " levels", file_,
+        line_at(deep.offset_debug()));
   }
   const pugi::xml_node root = doc.child("VTKFile");
   if (!root) {
@@ -218,8 +218,8 @@ Expected<pugi::xml_node> VtuReader::find_piece(pugi::xml_document& doc) const {
                       line_at(doc.first_child().offset_debug()));
   }
   if (std::string_view(root.attribute("type").value()) != "UnstructuredGrid") {
-    return fail_at(root, ErrorCode::kUnsupported, "VTKFile type=" + quoted(root.attribute("type").value()) +
-                                                      "; only UnstructuredGrid is supported");
+    return fail_at(root, ErrorCode::kUnsupported,
+                   "VTKFile type=" + quoted(root.attribute("type").value()) + "; only UnstructuredGrid is supported");
   }
   const pugi::xml_node grid = root.child("UnstructuredGrid");
   if (!grid) return fail_at(root, ErrorCode::kParse, "no <UnstructuredGrid> element");
@@ -259,8 +259,10 @@ Expected<VtuReader::Cells> VtuReader::read_cells(const pugi::xml_node& piece, st
                    "<Cells> needs DataArrays 'connectivity', 'offsets' and 'types'");
   }
   std::vector<double> reals;  // unused: the cells' arrays are integers
-  if (auto ok = read_values(out.offsets_array, cell_count, true, reals, out.offsets); !ok) return std::unexpected(ok.error());
-  if (auto ok = read_values(out.types_array, cell_count, true, reals, out.types); !ok) return std::unexpected(ok.error());
+  if (auto ok = read_values(out.offsets_array, cell_count, true, reals, out.offsets); !ok)
+    return std::unexpected(ok.error());
+  if (auto ok = read_values(out.types_array, cell_count, true, reals, out.types); !ok)
+    return std::unexpected(ok.error());
   std::int64_t previous = 0;
   for (std::size_t c = 0; c < out.offsets.size(); ++c) {
     if (out.offsets[c] < previous) {
@@ -276,7 +278,8 @@ Expected<VtuReader::Cells> VtuReader::read_cells(const pugi::xml_node& piece, st
 }
 
 // The optional per-cell regions (empty without a CellData "region" array).
-Expected<std::vector<std::int64_t>> VtuReader::read_regions(const pugi::xml_node& piece, std::int64_t cell_count) const {
+Expected<std::vector<std::int64_t>> VtuReader::read_regions(const pugi::xml_node& piece,
+                                                            std::int64_t cell_count) const {
   std::vector<std::int64_t> regions;
   if (const pugi::xml_node region_array = data_array(piece.child("CellData"), "region")) {
     std::vector<double> reals;  // unused: regions are integers
@@ -313,8 +316,8 @@ Expected<void> VtuReader::read_normals(const pugi::xml_node& piece, std::int64_t
 
 // Keeps the tetrahedra and triangles (with their regions) and counts the cells of other
 // types, with a warning per type that is neither a point nor a line.
-Expected<void> VtuReader::keep_cells(const Cells& cells, const std::vector<std::int64_t>& regions, std::int64_t point_count,
-                                     ReadResult& result) const {
+Expected<void> VtuReader::keep_cells(const Cells& cells, const std::vector<std::int64_t>& regions,
+                                     std::int64_t point_count, ReadResult& result) const {
   Mesh& mesh = result.mesh;
   std::map<std::int64_t, std::int64_t> other_types;
   std::int64_t begin = 0;
@@ -324,8 +327,8 @@ Expected<void> VtuReader::keep_cells(const Cells& cells, const std::vector<std::
     const std::int64_t expected_size = type == kVtkTetra ? 4 : type == kVtkTriangle ? 3 : -1;
     if (expected_size > 0 && size != expected_size) {
       return fail_at_value(cells.offsets_array, static_cast<std::int64_t>(c), ErrorCode::kInvalidMesh,
-                     "cell " + std::to_string(c) + " of type " + std::to_string(type) + " has " +
-                         std::to_string(size) + " points instead of " + std::to_string(expected_size));
+                           "cell " + std::to_string(c) + " of type " + std::to_string(type) + " has " +
+                               std::to_string(size) + " points instead of " + std::to_string(expected_size));
     }
     if (expected_size > 0) {
       std::array<NodeIndex, 4> v{};
@@ -333,8 +336,8 @@ Expected<void> VtuReader::keep_cells(const Cells& cells, const std::vector<std::
         const std::int64_t index = cells.connectivity[static_cast<std::size_t>(begin + k)];
         if (index < 0 || index >= point_count) {
           return fail_at_value(cells.connectivity_array, begin + k, ErrorCode::kInvalidMesh,
-                         "cell " + std::to_string(c) + " refers to point " + std::to_string(index) +
-                             ", but there are " + std::to_string(point_count) + " points");
+                               "cell " + std::to_string(c) + " refers to point " + std::to_string(index) +
+                                   ", but there are " + std::to_string(point_count) + " points");
         }
         v[static_cast<std::size_t>(k)] = static_cast<NodeIndex>(index);
       }
@@ -390,11 +393,12 @@ Expected<void> write_vtu(const Mesh& mesh, const std::filesystem::path& path) {
   const std::size_t cells = mesh.tets.size() + mesh.triangles.size();
   std::string out;
   out.reserve(80 * mesh.nodes.size() * (mesh.normals.empty() ? 1 : 2) + 48 * cells + 1024);
-  out += "<?xml version=\"1.0\"?>\n"
-         "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" "
-         "header_type=\"UInt64\">\n"
-         "  <UnstructuredGrid>\n"
-         "    <Piece NumberOfPoints=\"";
+  out +=
+      "<?xml version=\"1.0\"?>\n"
+      "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" "
+      "header_type=\"UInt64\">\n"
+      "  <UnstructuredGrid>\n"
+      "    <Piece NumberOfPoints=\"";
   detail::append_int(out, static_cast<std::int64_t>(mesh.nodes.size()));
   out += "\" NumberOfCells=\"";
   detail::append_int(out, static_cast<std::int64_t>(cells));
@@ -402,14 +406,16 @@ Expected<void> write_vtu(const Mesh& mesh, const std::filesystem::path& path) {
 
   // VTK's schema orders a Piece as PointData, CellData, Points, Cells.
   if (!mesh.normals.empty()) {
-    out += "      <PointData Normals=\"normals\">\n"
-           "        <DataArray type=\"Float64\" Name=\"normals\" NumberOfComponents=\"3\" format=\"ascii\">\n";
+    out +=
+        "      <PointData Normals=\"normals\">\n"
+        "        <DataArray type=\"Float64\" Name=\"normals\" NumberOfComponents=\"3\" format=\"ascii\">\n";
     append_vectors(out, mesh.normals);
     out += "        </DataArray>\n      </PointData>\n";
   }
   if (!mesh.tet_regions.empty() || !mesh.triangle_regions.empty()) {
-    out += "      <CellData Scalars=\"region\">\n"
-           "        <DataArray type=\"Int32\" Name=\"region\" format=\"ascii\">\n";
+    out +=
+        "      <CellData Scalars=\"region\">\n"
+        "        <DataArray type=\"Int32\" Name=\"region\" format=\"ascii\">\n";
     for (std::size_t i = 0; i < mesh.tets.size(); ++i) {
       out += "          ";
       detail::append_int(out, mesh.tet_regions.empty() ? 0 : mesh.tet_regions[i]);
@@ -422,12 +428,14 @@ Expected<void> write_vtu(const Mesh& mesh, const std::filesystem::path& path) {
     }
     out += "        </DataArray>\n      </CellData>\n";
   }
-  out += "      <Points>\n"
-         "        <DataArray type=\"Float64\" Name=\"Points\" NumberOfComponents=\"3\" format=\"ascii\">\n";
+  out +=
+      "      <Points>\n"
+      "        <DataArray type=\"Float64\" Name=\"Points\" NumberOfComponents=\"3\" format=\"ascii\">\n";
   append_vectors(out, mesh.nodes);
-  out += "        </DataArray>\n      </Points>\n"
-         "      <Cells>\n"
-         "        <DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n";
+  out +=
+      "        </DataArray>\n      </Points>\n"
+      "      <Cells>\n"
+      "        <DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n";
   const auto append_cell = [&](const NodeIndex* nodes, int n) {
     out += "          ";
     for (int k = 0; k < n; ++k) {
@@ -438,8 +446,9 @@ Expected<void> write_vtu(const Mesh& mesh, const std::filesystem::path& path) {
   };
   for (const Tet& t : mesh.tets) append_cell(t.data(), 4);
   for (const Tri& t : mesh.triangles) append_cell(t.data(), 3);
-  out += "        </DataArray>\n"
-         "        <DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n";
+  out +=
+      "        </DataArray>\n"
+      "        <DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n";
   std::int64_t offset = 0;
   const auto append_offset = [&](std::int64_t size) {
     offset += size;
@@ -449,15 +458,17 @@ Expected<void> write_vtu(const Mesh& mesh, const std::filesystem::path& path) {
   };
   for (std::size_t i = 0; i < mesh.tets.size(); ++i) append_offset(4);
   for (std::size_t i = 0; i < mesh.triangles.size(); ++i) append_offset(3);
-  out += "        </DataArray>\n"
-         "        <DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n";
+  out +=
+      "        </DataArray>\n"
+      "        <DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n";
   for (std::size_t i = 0; i < mesh.tets.size(); ++i) out += "          10\n";
   for (std::size_t i = 0; i < mesh.triangles.size(); ++i) out += "          5\n";
-  out += "        </DataArray>\n"
-         "      </Cells>\n"
-         "    </Piece>\n"
-         "  </UnstructuredGrid>\n"
-         "</VTKFile>\n";
+  out +=
+      "        </DataArray>\n"
+      "      </Cells>\n"
+      "    </Piece>\n"
+      "  </UnstructuredGrid>\n"
+      "</VTKFile>\n";
   return detail::write_whole_file(path, out);
 }
 

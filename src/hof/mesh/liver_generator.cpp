@@ -1,22 +1,22 @@
 #include "hof/mesh/liver_generator.h"
 
-#include <array>
-#include <cmath>
 #include <fmt/format.h>
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <map>
 
 #include "hof/mesh/boundary.h"
-#include "hof/mesh/tetrahedralize.h"
 #include "hof/mesh/tet_geometry.h"
+#include "hof/mesh/tetrahedralize.h"
 
 namespace hof::mesh {
 
 namespace {
 
 struct Ellipsoid {
-  Vec3 center;      // m
-  Vec3 semi_axes;   // m
+  Vec3 center;     // m
+  Vec3 semi_axes;  // m
 };
 
 // The liver in an anatomical frame: x to the patient's left (the small left lobe is at
@@ -26,9 +26,9 @@ struct Ellipsoid {
 // Volumes: right lobe ≈ 1.2 L, left lobe ≈ 0.3 L, caudate ≈ 0.2 L — an adult liver is
 // about 1.5 L and 0.15–0.2 m across (Gray's Anatomy, 41st ed.).
 const std::array<Ellipsoid, 3> kLobes = {{
-    {{0.030, 0.000, 0.000}, {0.075, 0.070, 0.055}},     // right lobe
-    {{-0.050, 0.010, 0.008}, {0.065, 0.045, 0.026}},    // left lobe, thin and tapering
-    {{0.010, -0.025, -0.015}, {0.040, 0.040, 0.035}},   // caudate/quadrate bulge
+    {{0.030, 0.000, 0.000}, {0.075, 0.070, 0.055}},    // right lobe
+    {{-0.050, 0.010, 0.008}, {0.065, 0.045, 0.026}},   // left lobe, thin and tapering
+    {{0.010, -0.025, -0.015}, {0.040, 0.040, 0.035}},  // caudate/quadrate bulge
 }};
 
 // Blending width of the smooth union (dimensionless, in units of the ellipsoid "radius").
@@ -76,12 +76,12 @@ Vec3 shape_map(Vec3 p) {
 // Icosahedron with outward-wound faces.
 void icosahedron(std::vector<Vec3>& v, std::vector<Tri>& f) {
   const double t = (1.0 + std::sqrt(5.0)) / 2.0;
-  v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
-       {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+  v = {{-1, t, 0},  {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t},  {0, 1, t},
+       {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
   for (Vec3& p : v) p.normalize();
-  f = {{0, 11, 5}, {0, 5, 1}, {0, 1, 7}, {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
-       {11, 10, 2}, {10, 7, 6}, {7, 1, 8}, {3, 9, 4}, {3, 4, 2}, {3, 2, 6}, {3, 6, 8},
-       {3, 8, 9}, {4, 9, 5}, {2, 4, 11}, {6, 2, 10}, {8, 6, 7}, {9, 8, 1}};
+  f = {{0, 11, 5},  {0, 5, 1},  {0, 1, 7},  {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+       {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
+       {3, 8, 9},   {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
   for (Tri& tri : f) {
     const Vec3 n = (v[tri[1]] - v[tri[0]]).cross(v[tri[2]] - v[tri[0]]);
     if (n.dot(v[tri[0]] + v[tri[1]] + v[tri[2]]) < 0.0) std::swap(tri[1], tri[2]);
@@ -124,8 +124,7 @@ TriMesh geodesic_sphere(int frequency) {
       for (int j = 0; j + i < n; ++j) {
         out.triangles.push_back({vertex(face, i, j), vertex(face, i + 1, j), vertex(face, i, j + 1)});
         if (i + j < n - 1) {
-          out.triangles.push_back(
-              {vertex(face, i + 1, j), vertex(face, i + 1, j + 1), vertex(face, i, j + 1)});
+          out.triangles.push_back({vertex(face, i + 1, j), vertex(face, i + 1, j + 1), vertex(face, i, j + 1)});
         }
       }
     }
@@ -143,10 +142,14 @@ struct ResolutionPlan {
 
 ResolutionPlan plan(LiverResolution r) {
   switch (r) {
-    case LiverResolution::kSimple: return {600, 4};
-    case LiverResolution::kCoarse: return {2500, 7};
-    case LiverResolution::kMedium: return {10000, 13};
-    case LiverResolution::kFine: return {40000, 24};
+    case LiverResolution::kSimple:
+      return {600, 4};
+    case LiverResolution::kCoarse:
+      return {2500, 7};
+    case LiverResolution::kMedium:
+      return {10000, 13};
+    case LiverResolution::kFine:
+      return {40000, 24};
   }
   return {600, 4};
 }
@@ -176,7 +179,8 @@ Mesh renumber_for_locality(const Mesh& in) {
   std::vector<std::pair<std::uint32_t, NodeIndex>> keyed(in.nodes.size());
   for (std::size_t i = 0; i < in.nodes.size(); ++i) {
     const Vec3 q = (in.nodes[i] - lo).cwiseProduct(scale);
-    const auto code = spread_bits(static_cast<std::uint32_t>(q.x())) | (spread_bits(static_cast<std::uint32_t>(q.y())) << 1) |
+    const auto code = spread_bits(static_cast<std::uint32_t>(q.x())) |
+                      (spread_bits(static_cast<std::uint32_t>(q.y())) << 1) |
                       (spread_bits(static_cast<std::uint32_t>(q.z())) << 2);
     keyed[i] = {code, static_cast<NodeIndex>(i)};
   }
@@ -204,17 +208,21 @@ std::int64_t target_tet_count(LiverResolution resolution) { return plan(resoluti
 
 std::string_view to_string(LiverResolution resolution) {
   switch (resolution) {
-    case LiverResolution::kSimple: return "simple";
-    case LiverResolution::kCoarse: return "coarse";
-    case LiverResolution::kMedium: return "medium";
-    case LiverResolution::kFine: return "fine";
+    case LiverResolution::kSimple:
+      return "simple";
+    case LiverResolution::kCoarse:
+      return "coarse";
+    case LiverResolution::kMedium:
+      return "medium";
+    case LiverResolution::kFine:
+      return "fine";
   }
   return "simple";
 }
 
 std::optional<LiverResolution> parse_liver_resolution(std::string_view name) {
-  for (LiverResolution r : {LiverResolution::kSimple, LiverResolution::kCoarse,
-                            LiverResolution::kMedium, LiverResolution::kFine}) {
+  for (LiverResolution r :
+       {LiverResolution::kSimple, LiverResolution::kCoarse, LiverResolution::kMedium, LiverResolution::kFine}) {
     if (name == to_string(r)) return r;
   }
   return std::nullopt;

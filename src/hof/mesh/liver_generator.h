@@ -42,7 +42,6 @@ enum class LiverResolution : std::uint8_t {
 /// The tetrahedral liver at a standard resolution, with its outward boundary as triangles.
 /// Meshes with TetGen (quality bound, surface preserved); the count follows from the surface
 /// sampling chosen per resolution.
-[[nodiscard]] Expected<Mesh> generate_liver(LiverResolution resolution,
-                                            const ProgressSink& progress = {});
+[[nodiscard]] Expected<Mesh> generate_liver(LiverResolution resolution, const ProgressSink& progress = {});
 
 }  // namespace hof::mesh

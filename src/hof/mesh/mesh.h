@@ -23,12 +23,12 @@ using Tri = std::array<NodeIndex, 3>;
 
 /// A mesh as read from or written to a file.
 struct Mesh {
-  std::vector<Vec3> nodes;                   ///< (N) node positions, m
-  std::vector<Tet> tets;                     ///< (T) tetrahedra
-  std::vector<Tri> triangles;                ///< (F) triangles (surface or stand-alone)
-  std::vector<std::int32_t> tet_regions;     ///< empty, or (T) region/physical tag per tet
-  std::vector<std::int32_t> triangle_regions;///< empty, or (F) region/physical tag per triangle
-  std::vector<Vec3> normals;                 ///< empty, or (N) unit normal per node (OBJ `vn`)
+  std::vector<Vec3> nodes;                     ///< (N) node positions, m
+  std::vector<Tet> tets;                       ///< (T) tetrahedra
+  std::vector<Tri> triangles;                  ///< (F) triangles (surface or stand-alone)
+  std::vector<std::int32_t> tet_regions;       ///< empty, or (T) region/physical tag per tet
+  std::vector<std::int32_t> triangle_regions;  ///< empty, or (F) region/physical tag per triangle
+  std::vector<Vec3> normals;                   ///< empty, or (N) unit normal per node (OBJ `vn`)
 
   friend bool operator==(const Mesh&, const Mesh&) = default;
 };

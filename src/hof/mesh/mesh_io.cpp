@@ -98,28 +98,29 @@ Expected<void> check_mesh_for_write(const Mesh& mesh, const std::filesystem::pat
   const auto in_range = [n](NodeIndex v) { return v >= 0 && v < n; };
   for (std::size_t t = 0; t < mesh.tets.size(); ++t) {
     for (const NodeIndex v : mesh.tets[t]) {
-      if (!in_range(v)) return fail("tetrahedron " + std::to_string(t) + " uses node " +
-                                    std::to_string(v) + " of " + std::to_string(n));
+      if (!in_range(v))
+        return fail("tetrahedron " + std::to_string(t) + " uses node " + std::to_string(v) + " of " +
+                    std::to_string(n));
     }
   }
   for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
     for (const NodeIndex v : mesh.triangles[t]) {
-      if (!in_range(v)) return fail("triangle " + std::to_string(t) + " uses node " +
-                                    std::to_string(v) + " of " + std::to_string(n));
+      if (!in_range(v))
+        return fail("triangle " + std::to_string(t) + " uses node " + std::to_string(v) + " of " + std::to_string(n));
     }
   }
   if (!mesh.tet_regions.empty() && mesh.tet_regions.size() != mesh.tets.size()) {
-    return fail("tet_regions has " + std::to_string(mesh.tet_regions.size()) +
-                " entries for " + std::to_string(mesh.tets.size()) + " tetrahedra");
+    return fail("tet_regions has " + std::to_string(mesh.tet_regions.size()) + " entries for " +
+                std::to_string(mesh.tets.size()) + " tetrahedra");
   }
   if (!mesh.triangle_regions.empty() && mesh.triangle_regions.size() != mesh.triangles.size()) {
-    return fail("triangle_regions has " + std::to_string(mesh.triangle_regions.size()) +
-                " entries for " + std::to_string(mesh.triangles.size()) + " triangles");
+    return fail("triangle_regions has " + std::to_string(mesh.triangle_regions.size()) + " entries for " +
+                std::to_string(mesh.triangles.size()) + " triangles");
   }
   if (!mesh.normals.empty()) {
     if (mesh.normals.size() != mesh.nodes.size()) {
-      return fail("normals has " + std::to_string(mesh.normals.size()) + " entries for " +
-                  std::to_string(n) + " nodes");
+      return fail("normals has " + std::to_string(mesh.normals.size()) + " entries for " + std::to_string(n) +
+                  " nodes");
     }
     for (std::size_t i = 0; i < mesh.normals.size(); ++i) {
       if (!mesh.normals[i].allFinite()) return fail("normal " + std::to_string(i) + " is not finite");
@@ -152,23 +153,29 @@ std::unexpected<Error> unknown_extension(const std::filesystem::path& path) {
   }
 
   const std::string ext = path.extension().string();
-  return make_error(ErrorCode::kUnsupported,
-                    (ext.empty() ? std::string("file has no extension")
-                                 : "unknown mesh file extension " + detail::quoted(ext)) +
-                        "; expected .msh, .obj, .stl, .off or .vtu",
-                    path.string());
+  return make_error(
+      ErrorCode::kUnsupported,
+      (ext.empty() ? std::string("file has no extension") : "unknown mesh file extension " + detail::quoted(ext)) +
+          "; expected .msh, .obj, .stl, .off or .vtu",
+      path.string());
 }
 
 }  // namespace
 
 Expected<ReadResult> read_mesh(const std::filesystem::path& path, const ProgressSink& progress) {
   switch (format_of(path)) {
-    case Format::kMsh: return read_msh(path, progress);
-    case Format::kObj: return read_obj(path);
-    case Format::kStl: return read_stl(path);
-    case Format::kOff: return read_off(path);
-    case Format::kVtu: return read_vtu(path);
-    case Format::kUnknown: break;
+    case Format::kMsh:
+      return read_msh(path, progress);
+    case Format::kObj:
+      return read_obj(path);
+    case Format::kStl:
+      return read_stl(path);
+    case Format::kOff:
+      return read_off(path);
+    case Format::kVtu:
+      return read_vtu(path);
+    case Format::kUnknown:
+      break;
   }
   // A mistyped path is said to be missing, not to have the wrong extension.
   std::error_code ec;
@@ -176,17 +183,21 @@ Expected<ReadResult> read_mesh(const std::filesystem::path& path, const Progress
   return unknown_extension(path);
 }
 
-Expected<void> write_mesh(const Mesh& mesh, const std::filesystem::path& path,
-                          MshVersion msh_version) {
+Expected<void> write_mesh(const Mesh& mesh, const std::filesystem::path& path, MshVersion msh_version) {
   switch (format_of(path)) {
-    case Format::kMsh: return write_msh(mesh, path, msh_version);
-    case Format::kObj: return write_obj(mesh, path);
-    case Format::kOff: return write_off(mesh, path);
-    case Format::kVtu: return write_vtu(mesh, path);
+    case Format::kMsh:
+      return write_msh(mesh, path, msh_version);
+    case Format::kObj:
+      return write_obj(mesh, path);
+    case Format::kOff:
+      return write_off(mesh, path);
+    case Format::kVtu:
+      return write_vtu(mesh, path);
     case Format::kStl:
-      return make_error(ErrorCode::kUnsupported,
-                        "writing STL is not supported; write .obj or .off instead", path.string());
-    case Format::kUnknown: break;
+      return make_error(ErrorCode::kUnsupported, "writing STL is not supported; write .obj or .off instead",
+                        path.string());
+    case Format::kUnknown:
+      break;
   }
   return unknown_extension(path);
 }

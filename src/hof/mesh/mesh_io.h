@@ -23,11 +23,11 @@ namespace hof::mesh {
 
 /// What a reader met besides what it kept.
 struct ReadReport {
-  std::string format;                  ///< e.g. "gmsh-1", "gmsh-2.2-ascii", "gmsh-4.1-ascii", "obj"
-  std::int64_t ignored_points{0};      ///< point elements skipped
-  std::int64_t ignored_lines{0};       ///< line elements skipped
-  std::int64_t ignored_other{0};       ///< other element types skipped (quads, hexahedra, ...)
-  std::vector<std::string> warnings;   ///< one line each, "FILE:LINE: ..." where known
+  std::string format;                 ///< e.g. "gmsh-1", "gmsh-2.2-ascii", "gmsh-4.1-ascii", "obj"
+  std::int64_t ignored_points{0};     ///< point elements skipped
+  std::int64_t ignored_lines{0};      ///< line elements skipped
+  std::int64_t ignored_other{0};      ///< other element types skipped (quads, hexahedra, ...)
+  std::vector<std::string> warnings;  ///< one line each, "FILE:LINE: ..." where known
 };
 
 struct ReadResult {
@@ -39,10 +39,8 @@ struct ReadResult {
 enum class MshVersion : std::uint8_t { k2_2, k4_1 };
 
 /// Reads any supported format, chosen by extension (case-insensitive).
-[[nodiscard]] Expected<ReadResult> read_mesh(const std::filesystem::path& path,
-                                             const ProgressSink& progress = {});
-[[nodiscard]] Expected<ReadResult> read_msh(const std::filesystem::path& path,
-                                            const ProgressSink& progress = {});
+[[nodiscard]] Expected<ReadResult> read_mesh(const std::filesystem::path& path, const ProgressSink& progress = {});
+[[nodiscard]] Expected<ReadResult> read_msh(const std::filesystem::path& path, const ProgressSink& progress = {});
 [[nodiscard]] Expected<ReadResult> read_obj(const std::filesystem::path& path);
 [[nodiscard]] Expected<ReadResult> read_stl(const std::filesystem::path& path);
 [[nodiscard]] Expected<ReadResult> read_off(const std::filesystem::path& path);
@@ -53,8 +51,7 @@ enum class MshVersion : std::uint8_t { k2_2, k4_1 };
 /// them is an error (extract the boundary first).
 [[nodiscard]] Expected<void> write_mesh(const Mesh& mesh, const std::filesystem::path& path,
                                         MshVersion msh_version = MshVersion::k4_1);
-[[nodiscard]] Expected<void> write_msh(const Mesh& mesh, const std::filesystem::path& path,
-                                       MshVersion version);
+[[nodiscard]] Expected<void> write_msh(const Mesh& mesh, const std::filesystem::path& path, MshVersion version);
 [[nodiscard]] Expected<void> write_obj(const Mesh& mesh, const std::filesystem::path& path);
 [[nodiscard]] Expected<void> write_off(const Mesh& mesh, const std::filesystem::path& path);
 [[nodiscard]] Expected<void> write_vtu(const Mesh& mesh, const std::filesystem::path& path);

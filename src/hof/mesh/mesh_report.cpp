@@ -1,8 +1,8 @@
 #include "hof/mesh/mesh_report.h"
 
+#include <fmt/format.h>
 #include <algorithm>
 #include <cmath>
-#include <fmt/format.h>
 #include <limits>
 #include <numbers>
 
@@ -64,8 +64,7 @@ QualitySummary summarize_quality(const std::vector<Vec3>& nodes, const std::vect
   return q;
 }
 
-std::vector<std::int32_t> find_inverted_tets(const std::vector<Vec3>& nodes,
-                                             const std::vector<Tet>& tets) {
+std::vector<std::int32_t> find_inverted_tets(const std::vector<Vec3>& nodes, const std::vector<Tet>& tets) {
   std::vector<std::int32_t> out;
   for (std::size_t i = 0; i < tets.size(); ++i) {
     const auto c = tet_corners(nodes, tets[i]);
@@ -115,8 +114,7 @@ MeshReport make_mesh_report(const Mesh& mesh) {
       r.problems.push_back(fmt::format("{} degenerate tetrahedra (zero volume)", r.quality.degenerate));
     }
     if (boundary.non_manifold_faces > 0) {
-      r.problems.push_back(
-          fmt::format("{} faces shared by more than two tetrahedra", boundary.non_manifold_faces));
+      r.problems.push_back(fmt::format("{} faces shared by more than two tetrahedra", boundary.non_manifold_faces));
     }
   } else {
     r.edges = static_cast<std::int64_t>(triangle_edges(mesh.triangles).size());
@@ -140,8 +138,7 @@ MeshReport make_mesh_report(const Mesh& mesh) {
       r.problems.push_back(fmt::format("{} non-manifold vertices", s.non_manifold_vertices));
     }
     if (s.misoriented_edges > 0) {
-      r.problems.push_back(fmt::format("{} edges with inconsistent triangle orientation",
-                                       s.misoriented_edges));
+      r.problems.push_back(fmt::format("{} edges with inconsistent triangle orientation", s.misoriented_edges));
     }
     if (s.degenerate_triangles > 0) {
       r.problems.push_back(fmt::format("{} degenerate triangles", s.degenerate_triangles));

@@ -27,8 +27,7 @@ struct QualitySummary {
 };
 
 /// Per-tet quality for a histogram or a colour map.
-[[nodiscard]] QualitySummary summarize_quality(const std::vector<Vec3>& nodes,
-                                               const std::vector<Tet>& tets);
+[[nodiscard]] QualitySummary summarize_quality(const std::vector<Vec3>& nodes, const std::vector<Tet>& tets);
 
 /// Indices of tetrahedra whose signed volume is negative (inverted) or whose volume is
 /// negligible compared with their size (degenerate).
@@ -38,17 +37,17 @@ struct QualitySummary {
 struct MeshReport {
   std::int64_t nodes{0};
   std::int64_t tets{0};
-  std::int64_t file_triangles{0};   ///< triangles stored in the file
-  std::int64_t edges{0};            ///< unique edges of the tets (or of the triangles)
-  std::int64_t surface_triangles{0};///< boundary triangles (tets) or file triangles
+  std::int64_t file_triangles{0};     ///< triangles stored in the file
+  std::int64_t edges{0};              ///< unique edges of the tets (or of the triangles)
+  std::int64_t surface_triangles{0};  ///< boundary triangles (tets) or file triangles
   std::int64_t surface_vertices{0};
-  std::int64_t unused_nodes{0};     ///< nodes referenced by no element
+  std::int64_t unused_nodes{0};  ///< nodes referenced by no element
   Vec3 bbox_min{Vec3::Zero()};
   Vec3 bbox_max{Vec3::Zero()};
-  double volume_m3{0.0};            ///< sum of tet volumes, or enclosed by the triangles
-  QualitySummary quality;           ///< meaningful when tets > 0
-  SurfaceCheck surface;             ///< of the boundary (tets) or of the triangles
-  std::vector<std::string> problems;///< one sentence each; empty when the mesh is sound
+  double volume_m3{0.0};              ///< sum of tet volumes, or enclosed by the triangles
+  QualitySummary quality;             ///< meaningful when tets > 0
+  SurfaceCheck surface;               ///< of the boundary (tets) or of the triangles
+  std::vector<std::string> problems;  ///< one sentence each; empty when the mesh is sound
 };
 
 /// Computes the report. For a mesh with tetrahedra, the surface is the extracted boundary;

@@ -28,10 +28,10 @@ class UnionFind {
 };
 
 struct HalfEdge {
-  NodeIndex lo, hi;   // undirected key
-  bool forward;       // traversed lo→hi by its triangle
+  NodeIndex lo, hi;  // undirected key
+  bool forward;      // traversed lo→hi by its triangle
   std::int32_t tri;
-  std::int8_t corner; // local index of `lo`'s corner... unused for orientation
+  std::int8_t corner;  // local index of `lo`'s corner... unused for orientation
 };
 
 }  // namespace
@@ -59,8 +59,8 @@ SurfaceCheck check_surface(const std::vector<Vec3>& vertices, const std::vector<
     for (int i = 0; i < 3; ++i) {
       const NodeIndex u = tri[i], v = tri[(i + 1) % 3];
       used[u] = 1;
-      half_edges.push_back({std::min(u, v), std::max(u, v), u < v, static_cast<std::int32_t>(t),
-                            static_cast<std::int8_t>(i)});
+      half_edges.push_back(
+          {std::min(u, v), std::max(u, v), u < v, static_cast<std::int32_t>(t), static_cast<std::int8_t>(i)});
     }
   }
   out.vertices_used = std::count(used.begin(), used.end(), 1);
@@ -83,8 +83,7 @@ SurfaceCheck check_surface(const std::vector<Vec3>& vertices, const std::vector<
   };
   for (std::size_t i = 0; i < half_edges.size();) {
     std::size_t j = i + 1;
-    while (j < half_edges.size() && half_edges[j].lo == half_edges[i].lo &&
-           half_edges[j].hi == half_edges[i].hi) {
+    while (j < half_edges.size() && half_edges[j].lo == half_edges[i].lo && half_edges[j].hi == half_edges[i].hi) {
       ++j;
     }
     const HalfEdge& e = half_edges[i];

@@ -31,18 +31,15 @@ struct SurfaceCheck {
 
   /// Closed, edge- and vertex-manifold, consistently oriented and without degenerate faces.
   [[nodiscard]] bool closed_manifold() const {
-    return boundary_edges == 0 && non_manifold_edges == 0 && misoriented_edges == 0 &&
-           non_manifold_vertices == 0 && degenerate_triangles == 0 && triangles > 0;
+    return boundary_edges == 0 && non_manifold_edges == 0 && misoriented_edges == 0 && non_manifold_vertices == 0 &&
+           degenerate_triangles == 0 && triangles > 0;
   }
   /// closed_manifold() and enclosing a positive volume (normals point out).
   [[nodiscard]] bool closed_outward() const { return closed_manifold() && signed_volume_m3 > 0.0; }
 };
 
 /// Checks `triangles` over `vertices`. Indices must be in range.
-[[nodiscard]] SurfaceCheck check_surface(const std::vector<Vec3>& vertices,
-                                         const std::vector<Tri>& triangles);
-[[nodiscard]] inline SurfaceCheck check_surface(const TriMesh& m) {
-  return check_surface(m.vertices, m.triangles);
-}
+[[nodiscard]] SurfaceCheck check_surface(const std::vector<Vec3>& vertices, const std::vector<Tri>& triangles);
+[[nodiscard]] inline SurfaceCheck check_surface(const TriMesh& m) { return check_surface(m.vertices, m.triangles); }
 
 }  // namespace hof::mesh

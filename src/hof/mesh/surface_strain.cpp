@@ -4,7 +4,8 @@
 
 namespace hof::mesh {
 
-double triangle_green_strain(const Vec3& a0, const Vec3& a1, const Vec3& a2, const Vec3& b0, const Vec3& b1, const Vec3& b2) {
+double triangle_green_strain(const Vec3& a0, const Vec3& a1, const Vec3& a2, const Vec3& b0, const Vec3& b1,
+                             const Vec3& b2) {
   // Edge metrics G = DᵀD of the rest and current edge matrices D = [p1 − p0, p2 − p0].
   const Vec3 r1 = a1 - a0, r2 = a2 - a0, c1 = b1 - b0, c2 = b2 - b0;
   Eigen::Matrix2d g0, g;
@@ -26,7 +27,8 @@ void vertex_strain_magnitude(std::span<const Vec3> rest, std::span<const Vec3> c
   std::vector<int> count(current.size(), 0);
   if (rest.size() != current.size()) return;
   for (const Tri& t : triangles) {
-    const auto i = static_cast<std::size_t>(t[0]), j = static_cast<std::size_t>(t[1]), k = static_cast<std::size_t>(t[2]);
+    const auto i = static_cast<std::size_t>(t[0]), j = static_cast<std::size_t>(t[1]),
+               k = static_cast<std::size_t>(t[2]);
     if (i >= rest.size() || j >= rest.size() || k >= rest.size()) continue;
     const double e = std::abs(triangle_green_strain(rest[i], rest[j], rest[k], current[i], current[j], current[k]));
     for (const std::size_t v : {i, j, k}) {

@@ -16,8 +16,8 @@ namespace hof::mesh {
 
 /// The principal Green strain of largest magnitude (signed: > 0 stretched, < 0 compressed)
 /// of the triangle (a0, a1, a2) at rest now at (b0, b1, b2); 0 for a degenerate rest triangle.
-[[nodiscard]] double triangle_green_strain(const Vec3& a0, const Vec3& a1, const Vec3& a2, const Vec3& b0, const Vec3& b1,
-                                           const Vec3& b2);
+[[nodiscard]] double triangle_green_strain(const Vec3& a0, const Vec3& a1, const Vec3& a2, const Vec3& b0,
+                                           const Vec3& b1, const Vec3& b2);
 
 /// Per vertex: the mean magnitude of its triangles' strains (written to `out`, resized).
 void vertex_strain_magnitude(std::span<const Vec3> rest, std::span<const Vec3> current, std::span<const Tri> triangles,

@@ -15,13 +15,11 @@ namespace hof::mesh {
 
 /// The six dihedral angles (radians, in [0, π]) at the edges 01, 02, 03, 12, 13, 23.
 /// Degenerate (zero-area) faces give 0 for the angles they take part in.
-[[nodiscard]] std::array<double, 6> tet_dihedral_angles(const Vec3& a, const Vec3& b,
-                                                        const Vec3& c, const Vec3& d);
+[[nodiscard]] std::array<double, 6> tet_dihedral_angles(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d);
 
 /// Smallest dihedral angle (radians). A regular tetrahedron has acos(1/3) ≈ 70.53°;
 /// slivers approach 0.
-[[nodiscard]] double tet_min_dihedral_angle(const Vec3& a, const Vec3& b, const Vec3& c,
-                                            const Vec3& d);
+[[nodiscard]] double tet_min_dihedral_angle(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d);
 
 /// Normalised radius ratio 3·r_in / R_circ in [0, 1]: 1 for a regular tetrahedron, 0 for a
 /// degenerate one (Shewchuk, "What is a good linear finite element?", 2002).

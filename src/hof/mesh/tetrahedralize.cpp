@@ -1,16 +1,16 @@
 #include "hof/mesh/tetrahedralize.h"
 
-#include <tetgen.h>
 #include <sys/wait.h>
+#include <tetgen.h>
 #include <unistd.h>
 
 #include <cerrno>
 #include <cstring>
 #include <vector>
 
+#include <fmt/format.h>
 #include <cmath>
 #include <cstdio>
-#include <fmt/format.h>
 
 #include "hof/mesh/boundary.h"
 #include "hof/mesh/surface_check.h"
@@ -63,8 +63,10 @@ bool write_all(int fd, const void* data, std::size_t size) {
   const std::int64_t ntets = code == 0 && out.numberofcorners == 4 ? out.numberoftetrahedra : 0;
   bool ok = write_all(result_fd, &code, sizeof code) && write_all(result_fd, &npoints, sizeof npoints) &&
             write_all(result_fd, &ntets, sizeof ntets);
-  if (ok && npoints > 0) ok = write_all(result_fd, out.pointlist, sizeof(double) * 3 * static_cast<std::size_t>(npoints));
-  if (ok && ntets > 0) ok = write_all(result_fd, out.tetrahedronlist, sizeof(int) * 4 * static_cast<std::size_t>(ntets));
+  if (ok && npoints > 0)
+    ok = write_all(result_fd, out.pointlist, sizeof(double) * 3 * static_cast<std::size_t>(npoints));
+  if (ok && ntets > 0)
+    ok = write_all(result_fd, out.tetrahedronlist, sizeof(int) * 4 * static_cast<std::size_t>(ntets));
   ::_exit(ok ? 0 : 3);
 }
 
@@ -95,19 +97,32 @@ std::string tetgen_diagnosis(int code, const std::string& printed) {
     code = 3;
   }
   switch (code) {
-    case 1: meaning = "out of memory"; break;
-    case 2: meaning = "internal error in TetGen"; break;
-    case 3: meaning = "the surface intersects itself"; break;
-    case 4: meaning = "the surface has a very small feature (nearly coincident vertices or faces)"; break;
-    case 5: meaning = "two facets of the surface are very close to each other"; break;
-    case 10: meaning = "TetGen rejected the input"; break;
-    default: meaning = code > 0 ? fmt::format("TetGen failed with code {}", code) : "TetGen failed"; break;
+    case 1:
+      meaning = "out of memory";
+      break;
+    case 2:
+      meaning = "internal error in TetGen";
+      break;
+    case 3:
+      meaning = "the surface intersects itself";
+      break;
+    case 4:
+      meaning = "the surface has a very small feature (nearly coincident vertices or faces)";
+      break;
+    case 5:
+      meaning = "two facets of the surface are very close to each other";
+      break;
+    case 10:
+      meaning = "TetGen rejected the input";
+      break;
+    default:
+      meaning = code > 0 ? fmt::format("TetGen failed with code {}", code) : "TetGen failed";
+      break;
   }
   return lines.empty() ? meaning : meaning + " (TetGen: " + lines + ")";
 }
 
-Expected<ChildResult> run_tetgen_isolated(tetgenio& in, const std::string& switches,
-                                          const std::string& source_name) {
+Expected<ChildResult> run_tetgen_isolated(tetgenio& in, const std::string& switches, const std::string& source_name) {
   int fds[2];
   std::FILE* text = std::tmpfile();
   if (text == nullptr || ::pipe(fds) != 0) {
@@ -143,8 +158,8 @@ Expected<ChildResult> run_tetgen_isolated(tetgenio& in, const std::string& switc
   std::fclose(text);
 
   // -d mode lists the intersecting facets ("Facet #3 intersects facet #17 ...").
-  if (const std::size_t at = printed.find("Facet #"); at != std::string::npos &&
-                                                      printed.find("intersects facet", at) != std::string::npos) {
+  if (const std::size_t at = printed.find("Facet #");
+      at != std::string::npos && printed.find("intersects facet", at) != std::string::npos) {
     std::size_t pairs = 0;
     for (std::size_t i = at; (i = printed.find("intersects facet", i)) != std::string::npos; ++i) ++pairs;
     const std::string first = printed.substr(at, printed.find('\n', at) - at);
@@ -168,8 +183,7 @@ Expected<ChildResult> run_tetgen_isolated(tetgenio& in, const std::string& switc
       return make_error(ErrorCode::kMeshing,
                         fmt::format("{}: meshing failed: {}", source_name, tetgen_diagnosis(code, printed)));
     }
-    if (npoints >= 0 && ntets >= 0 && bytes.size() == expected && WIFEXITED(status) &&
-        WEXITSTATUS(status) == 0) {
+    if (npoints >= 0 && ntets >= 0 && bytes.size() == expected && WIFEXITED(status) && WEXITSTATUS(status) == 0) {
       result.points.resize(3 * static_cast<std::size_t>(npoints));
       result.tets.resize(4 * static_cast<std::size_t>(ntets));
       std::memcpy(result.points.data(), bytes.data() + kHeader, sizeof(double) * result.points.size());
@@ -199,22 +213,20 @@ Expected<Mesh> tetrahedralize(const TriMesh& surface, const TetrahedralizeOption
                                   options.radius_edge_ratio));
   }
   if (!(options.min_dihedral_deg >= 0.0 && options.min_dihedral_deg < 30.0)) {
-    return make_error(ErrorCode::kInvalidArgument,
-                      fmt::format("minimum dihedral angle must be in [0, 30) degrees, got {}",
-                                  options.min_dihedral_deg));
+    return make_error(
+        ErrorCode::kInvalidArgument,
+        fmt::format("minimum dihedral angle must be in [0, 30) degrees, got {}", options.min_dihedral_deg));
   }
   for (std::size_t i = 0; i < surface.vertices.size(); ++i) {
     if (!surface.vertices[i].allFinite()) {
-      return make_error(ErrorCode::kMeshing,
-                        fmt::format("{}: vertex {} has a non-finite coordinate", source_name, i));
+      return make_error(ErrorCode::kMeshing, fmt::format("{}: vertex {} has a non-finite coordinate", source_name, i));
     }
   }
   for (std::size_t t = 0; t < surface.triangles.size(); ++t) {
     for (NodeIndex v : surface.triangles[t]) {
       if (v < 0 || static_cast<std::size_t>(v) >= surface.vertices.size()) {
-        return make_error(ErrorCode::kMeshing,
-                          fmt::format("{}: triangle {} refers to vertex {} of {}", source_name, t, v,
-                                      surface.vertices.size()));
+        return make_error(ErrorCode::kMeshing, fmt::format("{}: triangle {} refers to vertex {} of {}", source_name, t,
+                                                           v, surface.vertices.size()));
       }
     }
   }
@@ -231,15 +243,13 @@ Expected<Mesh> tetrahedralize(const TriMesh& surface, const TetrahedralizeOption
       return make_error(ErrorCode::kMeshing, fmt::format("{}: the surface has no triangles", source_name));
     }
     if (check.boundary_edges > 0) {
-      return make_error(ErrorCode::kMeshing,
-                        fmt::format("{}: the surface is not closed: {} edges belong to only one "
-                                    "triangle{}",
-                                    source_name, check.boundary_edges, where));
+      return make_error(ErrorCode::kMeshing, fmt::format("{}: the surface is not closed: {} edges belong to only one "
+                                                         "triangle{}",
+                                                         source_name, check.boundary_edges, where));
     }
     if (check.degenerate_triangles > 0) {
-      return make_error(ErrorCode::kMeshing,
-                        fmt::format("{}: {} degenerate triangles (zero area or a repeated vertex)",
-                                    source_name, check.degenerate_triangles));
+      return make_error(ErrorCode::kMeshing, fmt::format("{}: {} degenerate triangles (zero area or a repeated vertex)",
+                                                         source_name, check.degenerate_triangles));
     }
     return make_error(ErrorCode::kMeshing,
                       fmt::format("{}: the surface is not a 2-manifold: {} edges shared by 3+ "
@@ -290,8 +300,7 @@ Expected<Mesh> tetrahedralize(const TriMesh& surface, const TetrahedralizeOption
   const std::size_t npoints = result->points.size() / 3;
   const std::size_t ntets = result->tets.size() / 4;
   if (ntets == 0) {
-    return make_error(ErrorCode::kMeshing,
-                      fmt::format("{}: TetGen produced no linear tetrahedra", source_name));
+    return make_error(ErrorCode::kMeshing, fmt::format("{}: TetGen produced no linear tetrahedra", source_name));
   }
 
   Mesh mesh;

@@ -28,8 +28,7 @@ struct TetrahedralizeOptions {
 /// the outward boundary in volume-node indices. `source_name` names the input in errors.
 /// Errors: kInvalidArgument for bad options; kMeshing for an open, non-manifold or
 /// self-intersecting surface, with the offending edge or TetGen's own diagnosis.
-[[nodiscard]] Expected<Mesh> tetrahedralize(const TriMesh& surface,
-                                            const TetrahedralizeOptions& options,
+[[nodiscard]] Expected<Mesh> tetrahedralize(const TriMesh& surface, const TetrahedralizeOptions& options,
                                             const std::string& source_name = "surface");
 
 }  // namespace hof::mesh

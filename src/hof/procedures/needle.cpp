@@ -9,9 +9,12 @@ namespace hof::procedures {
 
 std::string_view axis_name(NeedleAxis axis) {
   switch (axis) {
-    case NeedleAxis::kMotion: return "motion";
-    case NeedleAxis::kNormal: return "normal";
-    case NeedleAxis::kStylus: return "stylus";
+    case NeedleAxis::kMotion:
+      return "motion";
+    case NeedleAxis::kNormal:
+      return "normal";
+    case NeedleAxis::kStylus:
+      return "stylus";
   }
   return "motion";
 }
@@ -20,16 +23,21 @@ Expected<void> validate(const NeedleConfig& config) {
   const NeedleGeometry& g = config.geometry;
   for (double v : {g.length_m, g.shaft_diameter_m, g.tip_diameter_m, g.syringe_diameter_m, g.syringe_length_m}) {
     if (!(v > 0.0 && std::isfinite(v))) {
-      return make_error(ErrorCode::kInvalidArgument,
-                        fmt::format("needle: length, shaftDiameter, tipDiameter, syringeDiameter and syringeLength must be > 0 m, got {}", v));
+      return make_error(
+          ErrorCode::kInvalidArgument,
+          fmt::format(
+              "needle: length, shaftDiameter, tipDiameter, syringeDiameter and syringeLength must be > 0 m, got {}",
+              v));
     }
   }
   if (!(g.tip_length_m >= 0.0 && g.tip_length_m <= g.length_m)) {
-    return make_error(ErrorCode::kInvalidArgument,
-                      fmt::format("needle: tipLength must be in [0, length] = [0, {}] m, got {}", g.length_m, g.tip_length_m));
+    return make_error(
+        ErrorCode::kInvalidArgument,
+        fmt::format("needle: tipLength must be in [0, length] = [0, {}] m, got {}", g.length_m, g.tip_length_m));
   }
   if (!(config.velocity_filter_s >= 0.0 && config.velocity_filter_s <= 1.0)) {
-    return make_error(ErrorCode::kInvalidArgument, fmt::format("needle: velocityFilter must be in [0, 1] s, got {}", config.velocity_filter_s));
+    return make_error(ErrorCode::kInvalidArgument,
+                      fmt::format("needle: velocityFilter must be in [0, 1] s, got {}", config.velocity_filter_s));
   }
   if (auto ok = validate(config.tissue, "needle tissue"); !ok) return ok;
   for (const auto& [name, set] : config.bodies) {
@@ -38,11 +46,13 @@ Expected<void> validate(const NeedleConfig& config) {
   return {};
 }
 
-std::vector<TissueNeedleParameters> parameters_by_body(const NeedleConfig& config, const std::vector<std::string>& body_names,
+std::vector<TissueNeedleParameters> parameters_by_body(const NeedleConfig& config,
+                                                       const std::vector<std::string>& body_names,
                                                        const std::vector<bool>& deformable) {
   std::vector<TissueNeedleParameters> out;
   for (std::size_t i = 0; i < body_names.size(); ++i) {
-    const auto own = std::find_if(config.bodies.begin(), config.bodies.end(), [&](const auto& b) { return b.first == body_names[i]; });
+    const auto own = std::find_if(config.bodies.begin(), config.bodies.end(),
+                                  [&](const auto& b) { return b.first == body_names[i]; });
     if (own != config.bodies.end()) {
       out.push_back(own->second);
     } else {
@@ -54,25 +64,30 @@ std::vector<TissueNeedleParameters> parameters_by_body(const NeedleConfig& confi
 }
 
 Expected<std::shared_ptr<NeedleTool>> NeedleTool::make(const NeedleConfig& config, std::vector<std::string> body_names,
-                                                        std::vector<bool> deformable, double metres_per_unit) {
+                                                       std::vector<bool> deformable, double metres_per_unit) {
   if (auto ok = validate(config); !ok) return std::unexpected(ok.error());
   if (!(metres_per_unit > 0.0 && std::isfinite(metres_per_unit))) {
-    return make_error(ErrorCode::kInvalidArgument, fmt::format("needle: the length unit must be > 0 m, got {}", metres_per_unit));
+    return make_error(ErrorCode::kInvalidArgument,
+                      fmt::format("needle: the length unit must be > 0 m, got {}", metres_per_unit));
   }
   for (const auto& [name, set] : config.bodies) {
     if (std::find(body_names.begin(), body_names.end(), name) == body_names.end()) {
       std::string names;
       for (const auto& n : body_names) names += (names.empty() ? "" : ", ") + n;
-      return make_error(ErrorCode::kInvalidArgument,
-                        fmt::format("needle: no body '{}' for its tissue (bodies: {})", name, names.empty() ? "none" : names));
+      return make_error(ErrorCode::kInvalidArgument, fmt::format("needle: no body '{}' for its tissue (bodies: {})",
+                                                                 name, names.empty() ? "none" : names));
     }
   }
-  return std::shared_ptr<NeedleTool>(new NeedleTool(config, std::move(body_names), std::move(deformable), metres_per_unit));
+  return std::shared_ptr<NeedleTool>(
+      new NeedleTool(config, std::move(body_names), std::move(deformable), metres_per_unit));
 }
 
 NeedleTool::NeedleTool(const NeedleConfig& config, std::vector<std::string> body_names, std::vector<bool> deformable,
                        double metres_per_unit)
-    : config_(config), body_names_(std::move(body_names)), deformable_(std::move(deformable)), metres_per_unit_(metres_per_unit) {
+    : config_(config),
+      body_names_(std::move(body_names)),
+      deformable_(std::move(deformable)),
+      metres_per_unit_(metres_per_unit) {
   spread_radius_ = std::make_unique<std::atomic<double>[]>(std::max<std::size_t>(1, body_names_.size()));
   resolve();
   // Every slot the tick may read holds the settings.
@@ -86,7 +101,8 @@ void NeedleTool::resolve() {
   producer_resolved_.axis = config_.axis;
   producer_resolved_.velocity_filter_s = config_.velocity_filter_s;
   producer_resolved_.bodies = parameters_by_body(config_, body_names_, deformable_);
-  for (std::size_t i = 0; i < body_names_.size(); ++i) spread_radius_[i].store(producer_resolved_.bodies[i].spread_radius_m / metres_per_unit_);
+  for (std::size_t i = 0; i < body_names_.size(); ++i)
+    spread_radius_[i].store(producer_resolved_.bodies[i].spread_radius_m / metres_per_unit_);
   if (body_names_.empty()) spread_radius_[0].store(config_.tissue.spread_radius_m / metres_per_unit_);
 }
 
@@ -238,7 +254,8 @@ void NeedleTool::reenter_or_rearm(const haptics::ToolTickInput& in, std::span<Ve
 void NeedleTool::engage(const haptics::ToolTickInput& in, const Resolved& settings) {
   for (std::size_t l = 0; l < in.contacts.size(); ++l) {
     const std::int32_t b = touched_body(in, l);
-    if (b < 0 || static_cast<std::size_t>(b) >= settings.bodies.size() || !settings.bodies[static_cast<std::size_t>(b)].pierceable) {
+    if (b < 0 || static_cast<std::size_t>(b) >= settings.bodies.size() ||
+        !settings.bodies[static_cast<std::size_t>(b)].pierceable) {
       continue;
     }
     const haptics::ContactState& c = in.contacts[l];
@@ -302,8 +319,10 @@ double NeedleTool::inserted_force(const TissueNeedleParameters& p, double d, dou
   }
   phase_ = next;
   switch (phase_) {
-    case NeedlePhase::kRelaxation: return relaxation_force(p, relax_force_n_, time_s - relax_start_s_);
-    case NeedlePhase::kExtraction: return extraction_force(p, d, v, held_n_);
+    case NeedlePhase::kRelaxation:
+      return relaxation_force(p, relax_force_n_, time_s - relax_start_s_);
+    case NeedlePhase::kExtraction:
+      return extraction_force(p, d, v, held_n_);
     default: {
       // New tissue is cut beyond the deepest point so far; before it the path exists.
       const double f = d >= max_depth_m_ ? post_puncture_force(p, d, v, held_n_) : reinsertion_force(p, d, v, held_n_);
@@ -355,8 +374,9 @@ void NeedleTissueCoupling::add_tissue_forces(const haptics::ToolState& tool, con
   }
 }
 
-void NeedleTissueCoupling::spread(const Vec3& point, const Vec3& force, double radius, const mechanics::MechanicalState& state,
-                                  std::size_t nodes, std::span<double> forces) {
+void NeedleTissueCoupling::spread(const Vec3& point, const Vec3& force, double radius,
+                                  const mechanics::MechanicalState& state, std::size_t nodes,
+                                  std::span<double> forces) {
   near_.clear();
   double reach2 = radius * radius;
   for (std::size_t i = 0; i < nodes; ++i) {
@@ -368,7 +388,8 @@ void NeedleTissueCoupling::spread(const Vec3& point, const Vec3& force, double r
     // A coarse mesh or a small radius: the four nearest nodes, reach widened to include them.
     near_.clear();
     for (std::size_t i = 0; i < nodes; ++i) {
-      near_.emplace_back((state.position(static_cast<std::int32_t>(i)) - point).squaredNorm(), static_cast<std::int32_t>(i));
+      near_.emplace_back((state.position(static_cast<std::int32_t>(i)) - point).squaredNorm(),
+                         static_cast<std::int32_t>(i));
     }
     const std::size_t keep = std::min(kAtLeast, near_.size());
     std::nth_element(near_.begin(), near_.begin() + static_cast<std::ptrdiff_t>(keep - 1), near_.end());

@@ -70,7 +70,7 @@ struct NeedleConfig {
   /// and feeds the friction (a real device's velocity estimate is noisy: unfiltered, a still
   /// needle would flicker between relaxation, insertion and extraction), s; 0: unfiltered.
   double velocity_filter_s{0.01};
-  TissueNeedleParameters tissue;  ///< every deformable body without its own set
+  TissueNeedleParameters tissue;                                       ///< every deformable body without its own set
   std::vector<std::pair<std::string, TissueNeedleParameters>> bodies;  ///< by body name
   bool operator==(const NeedleConfig&) const = default;
 };
@@ -88,7 +88,7 @@ class NeedleTool final : public haptics::Tool {
   /// `body_names` and `deformable` describe the world's bodies, by index. The parameters are
   /// SI; `metres_per_unit` is the world's length unit in metres (1e-3 for a scene in mm).
   static Expected<std::shared_ptr<NeedleTool>> make(const NeedleConfig& config, std::vector<std::string> body_names,
-                                                     std::vector<bool> deformable, double metres_per_unit = 1.0);
+                                                    std::vector<bool> deformable, double metres_per_unit = 1.0);
 
   Vec3 tick(const haptics::ToolTickInput& input, std::span<Vec3> layer_forces, haptics::ToolState& state) override;
   void restart() override;
@@ -105,7 +105,8 @@ class NeedleTool final : public haptics::Tool {
   [[nodiscard]] double metres_per_unit() const { return metres_per_unit_; }
 
  private:
-  NeedleTool(const NeedleConfig& config, std::vector<std::string> body_names, std::vector<bool> deformable, double metres_per_unit);
+  NeedleTool(const NeedleConfig& config, std::vector<std::string> body_names, std::vector<bool> deformable,
+             double metres_per_unit);
   struct Resolved {
     NeedleAxis axis{NeedleAxis::kMotion};
     double velocity_filter_s{0.01};
@@ -119,14 +120,15 @@ class NeedleTool final : public haptics::Tool {
   void engage(const haptics::ToolTickInput& in, const Resolved& settings);
   double capsule_force(const TissueNeedleParameters& p, double d, double v);
   double inserted_force(const TissueNeedleParameters& p, double d, double v, double time_s);
-  Vec3 publish(const haptics::ToolTickInput& in, haptics::ToolState& st, double depth_m, double v_m, double f, const Vec3& force) const;
+  Vec3 publish(const haptics::ToolTickInput& in, haptics::ToolState& st, double depth_m, double v_m, double f,
+               const Vec3& force) const;
 
-  NeedleConfig config_;                 // producer side
+  NeedleConfig config_;  // producer side
   std::vector<std::string> body_names_;
   std::vector<bool> deformable_;
   double metres_per_unit_{1.0};
   Resolved producer_resolved_;
-  TripleBuffer<Resolved> settings_;     // producer → tick
+  TripleBuffer<Resolved> settings_;                       // producer → tick
   std::unique_ptr<std::atomic<double>[]> spread_radius_;  // producer → the simulation's coupling
   // Tick state.
   bool engaged_{false};
@@ -136,16 +138,16 @@ class NeedleTool final : public haptics::Tool {
   bool rearmed_{true};
   std::int32_t withdrawn_from_{-1};
   std::int32_t withdrawn_layer_{-1};
-  double max_depth_m_{0.0};     // the deepest point of the path cut so far
+  double max_depth_m_{0.0};  // the deepest point of the path cut so far
   bool have_velocity_{false};
-  Vec3 velocity_{Vec3::Zero()}; // the tip's filtered velocity, world units/s
+  Vec3 velocity_{Vec3::Zero()};  // the tip's filtered velocity, world units/s
   NeedlePhase phase_{NeedlePhase::kFree};
   std::int32_t body_{-1};
   std::int32_t layer_{-1};
   Vec3 entry_{Vec3::Zero()}, axis_{Vec3::Zero()}, normal_{Vec3::Zero()};
-  double held_n_{0.0};          // the axial force of the last tick (Karnopp's stuck force)
-  double relax_start_s_{0.0};   // when relaxation began
-  double relax_force_n_{0.0};   // the force it began with
+  double held_n_{0.0};         // the axial force of the last tick (Karnopp's stuck force)
+  double relax_start_s_{0.0};  // when relaxation began
+  double relax_force_n_{0.0};  // the force it began with
 };
 
 class NeedleTissueCoupling final : public coupling::ToolTissueCoupling {
@@ -157,8 +159,8 @@ class NeedleTissueCoupling final : public coupling::ToolTissueCoupling {
 
  private:
   // Adds `force` spread over the nodes around `point`.
-  void spread(const Vec3& point, const Vec3& force, double radius, const mechanics::MechanicalState& state, std::size_t nodes,
-              std::span<double> forces);
+  void spread(const Vec3& point, const Vec3& force, double radius, const mechanics::MechanicalState& state,
+              std::size_t nodes, std::span<double> forces);
   std::shared_ptr<const NeedleTool> tool_;
   std::vector<std::pair<double, std::int32_t>> near_;  // scratch: (squared distance, node)
 };

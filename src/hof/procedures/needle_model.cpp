@@ -10,13 +10,20 @@ namespace hof::procedures {
 
 std::string_view phase_name(NeedlePhase phase) {
   switch (phase) {
-    case NeedlePhase::kFree: return "free";
-    case NeedlePhase::kTouching: return "touching";
-    case NeedlePhase::kPrePuncture: return "pre-puncture";
-    case NeedlePhase::kPunctured: return "punctured";
-    case NeedlePhase::kRelaxation: return "relaxation";
-    case NeedlePhase::kExtraction: return "extraction";
-    case NeedlePhase::kOut: return "out";
+    case NeedlePhase::kFree:
+      return "free";
+    case NeedlePhase::kTouching:
+      return "touching";
+    case NeedlePhase::kPrePuncture:
+      return "pre-puncture";
+    case NeedlePhase::kPunctured:
+      return "punctured";
+    case NeedlePhase::kRelaxation:
+      return "relaxation";
+    case NeedlePhase::kExtraction:
+      return "extraction";
+    case NeedlePhase::kOut:
+      return "out";
   }
   return "unknown";
 }
@@ -51,7 +58,8 @@ double karnopp_force(const KarnoppFriction& k, double inserted_m, double v, doub
   const double length = std::max(0.0, inserted_m);
   const double half_band = 0.5 * k.velocity_band_m_per_s;
   if (v >= half_band) return finite_or_max(length * (k.static_positive_n_per_m + k.damping_positive_n_s_per_m2 * v));
-  if (v <= -half_band) return finite_or_max(length * (k.static_negative_n_per_m + k.damping_negative_n_s_per_m2 * std::abs(v)));
+  if (v <= -half_band)
+    return finite_or_max(length * (k.static_negative_n_per_m + k.damping_negative_n_s_per_m2 * std::abs(v)));
   const double low = std::min(length * k.static_negative_n_per_m, length * k.static_positive_n_per_m);
   const double high = std::max(length * k.static_negative_n_per_m, length * k.static_positive_n_per_m);
   return std::clamp(std::isfinite(held_n) ? held_n : 0.0, low, high);
@@ -86,7 +94,8 @@ double relaxation_force(const TissueNeedleParameters& p, double f0_n, double ela
 
 Expected<void> validate(const TissueNeedleParameters& p, std::string_view what) {
   const auto bad = [&](std::string_view attribute, std::string_view rule, double value) {
-    return make_error(ErrorCode::kInvalidArgument, fmt::format("{}: {} must be {}, got {}", what, attribute, rule, value));
+    return make_error(ErrorCode::kInvalidArgument,
+                      fmt::format("{}: {} must be {}, got {}", what, attribute, rule, value));
   };
   const auto finite = [](double v) { return std::isfinite(v); };
   for (const auto& [name, theta] : {std::pair{"fungPre", p.fung_pre}, std::pair{"fungPost", p.fung_post}}) {
@@ -99,18 +108,22 @@ Expected<void> validate(const TissueNeedleParameters& p, std::string_view what) 
   }
   for (double v : {p.friction.static_positive_n_per_m, p.friction.damping_positive_n_s_per_m2}) {
     // Friction resists the motion: a wrong sign would push the hand along (energy in).
-    if (!(finite(v) && v >= 0.0)) return bad("friction", "Cp, bp >= 0 and Cn, bn <= 0 (N/m, N s/m2; Maurin: 0.121 -0.117 3200 -1600)", v);
+    if (!(finite(v) && v >= 0.0))
+      return bad("friction", "Cp, bp >= 0 and Cn, bn <= 0 (N/m, N s/m2; Maurin: 0.121 -0.117 3200 -1600)", v);
   }
   for (double v : {p.friction.static_negative_n_per_m, p.friction.damping_negative_n_s_per_m2}) {
-    if (!(finite(v) && v <= 0.0)) return bad("friction", "Cp, bp >= 0 and Cn, bn <= 0 (N/m, N s/m2; Maurin: 0.121 -0.117 3200 -1600)", v);
+    if (!(finite(v) && v <= 0.0))
+      return bad("friction", "Cp, bp >= 0 and Cn, bn <= 0 (N/m, N s/m2; Maurin: 0.121 -0.117 3200 -1600)", v);
   }
   if (!(p.friction.velocity_band_m_per_s >= 0.0 && finite(p.friction.velocity_band_m_per_s))) {
     return bad("frictionVelocityBand", ">= 0 m/s", p.friction.velocity_band_m_per_s);
   }
   if (!finite(p.cutting_force_n)) return bad("cuttingForce", "finite (N)", p.cutting_force_n);
   if (!(p.capsule_m > 0.0 && finite(p.capsule_m))) return bad("capsule", "> 0 m", p.capsule_m);
-  if (!(p.puncture_force_n > 0.0 && finite(p.puncture_force_n))) return bad("punctureForce", "> 0 N (a large value: by depth only)", p.puncture_force_n);
-  if (!(p.relaxation_time_s > 0.0 && finite(p.relaxation_time_s))) return bad("relaxationTime", "> 0 s", p.relaxation_time_s);
+  if (!(p.puncture_force_n > 0.0 && finite(p.puncture_force_n)))
+    return bad("punctureForce", "> 0 N (a large value: by depth only)", p.puncture_force_n);
+  if (!(p.relaxation_time_s > 0.0 && finite(p.relaxation_time_s)))
+    return bad("relaxationTime", "> 0 s", p.relaxation_time_s);
   if (!(p.lateral_stiffness_n_per_m >= 0.0 && finite(p.lateral_stiffness_n_per_m))) {
     return bad("lateralStiffness", ">= 0 N/m", p.lateral_stiffness_n_per_m);
   }
@@ -118,7 +131,8 @@ Expected<void> validate(const TissueNeedleParameters& p, std::string_view what) 
     return bad("lateralDamping", ">= 0 N s/m", p.lateral_damping_n_s_per_m);
   }
   if (!(p.spread_radius_m > 0.0 && finite(p.spread_radius_m))) return bad("spreadRadius", "> 0 m", p.spread_radius_m);
-  if (!(p.path_tolerance_m > 0.0 && finite(p.path_tolerance_m))) return bad("pathTolerance", "> 0 m", p.path_tolerance_m);
+  if (!(p.path_tolerance_m > 0.0 && finite(p.path_tolerance_m)))
+    return bad("pathTolerance", "> 0 m", p.path_tolerance_m);
   return {};
 }
 

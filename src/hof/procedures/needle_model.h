@@ -86,19 +86,19 @@ struct FungParameters {
 /// f(d) = a0 + a1·d + a2·d².
 struct StiffnessPolynomial {
   double a0_n{0.0};
-  double a1_n_per_m{2.0};       ///< 0.002 N/mm
-  double a2_n_per_m2{2300.0};   ///< 0.0023 N/mm²
+  double a1_n_per_m{2.0};      ///< 0.002 N/mm
+  double a2_n_per_m2{2300.0};  ///< 0.0023 N/mm²
   bool operator==(const StiffnessPolynomial&) const = default;
 };
 [[nodiscard]] double stiffness_force(const StiffnessPolynomial& p, double depth_m);
 
 /// Karnopp friction per unit inserted length (see the file comment).
 struct KarnoppFriction {
-  double static_positive_n_per_m{0.121};      ///< Cp = Dp (0.121 mN/mm)
-  double static_negative_n_per_m{-0.117};     ///< Cn = Dn (−0.117 mN/mm)
-  double damping_positive_n_s_per_m2{3200.0};  ///< bp (3.2 mN·s/mm²)
-  double damping_negative_n_s_per_m2{-1600.0}; ///< bn (−1.6 mN·s/mm²)
-  double velocity_band_m_per_s{0.002};        ///< Δv: |v| < Δv/2 sticks (and counts as still)
+  double static_positive_n_per_m{0.121};        ///< Cp = Dp (0.121 mN/mm)
+  double static_negative_n_per_m{-0.117};       ///< Cn = Dn (−0.117 mN/mm)
+  double damping_positive_n_s_per_m2{3200.0};   ///< bp (3.2 mN·s/mm²)
+  double damping_negative_n_s_per_m2{-1600.0};  ///< bn (−1.6 mN·s/mm²)
+  double velocity_band_m_per_s{0.002};          ///< Δv: |v| < Δv/2 sticks (and counts as still)
   bool operator==(const KarnoppFriction&) const = default;
 };
 /// Friction on a shaft of inserted length `inserted_m` moving at axial velocity `v`; `held_n`
@@ -115,14 +115,14 @@ struct TissueNeedleParameters {
   FungParameters fung_pre{};
   FungParameters fung_post{-31.0, 1.7, 0.01961, -3.39};
   StiffnessPolynomial stiffness{};
-  double cutting_force_n{0.0};          ///< Simone–Okamura after puncture, at the tip
+  double cutting_force_n{0.0};  ///< Simone–Okamura after puncture, at the tip
   KarnoppFriction friction{};
-  double capsule_m{0.02};               ///< depth at which the capsule breaks
-  double puncture_force_n{3.0};         ///< or the force at which it breaks (first reached)
-  double relaxation_time_s{2.0};        ///< time constant of the decay while still
+  double capsule_m{0.02};                   ///< depth at which the capsule breaks
+  double puncture_force_n{3.0};             ///< or the force at which it breaks (first reached)
+  double relaxation_time_s{2.0};            ///< time constant of the decay while still
   double lateral_stiffness_n_per_m{500.0};  ///< the tissue holding the shaft on its path (≤ the device's)
   double lateral_damping_n_s_per_m{1.0};
-  double spread_radius_m{0.01};         ///< the reaction's reach around the path in the tissue
+  double spread_radius_m{0.01};  ///< the reaction's reach around the path in the tissue
   /// How far the tip may leave its path sideways before the needle tears out of it (the
   /// needle is then withdrawn: a rigid needle cannot move across the tissue).
   double path_tolerance_m{0.02};

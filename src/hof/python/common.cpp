@@ -7,7 +7,8 @@ PyObject* hof_error_type = nullptr;
 [[noreturn]] void raise(const Error& e) {
   const std::string text = e.to_string();
   if (e.code == ErrorCode::kIo) {
-    const bool missing = e.message.find("no such file") != std::string::npos || e.message.find("not found") != std::string::npos;
+    const bool missing =
+        e.message.find("no such file") != std::string::npos || e.message.find("not found") != std::string::npos;
     PyErr_SetString(missing ? PyExc_FileNotFoundError : PyExc_OSError, text.c_str());
   } else if (e.code == ErrorCode::kInvalidArgument) {
     PyErr_SetString(PyExc_ValueError, text.c_str());
@@ -47,15 +48,20 @@ std::vector<Vec3> points_from(const py::handle& object, const char* what) {
     a = {};
   }
   if (!a || a.ndim() != 2 || a.shape(1) != 3) {
-    const std::string shape = a ? fmt::format("an array of shape {}", py::str(py::tuple(py::cast(std::vector<py::ssize_t>(a.shape(), a.shape() + a.ndim())))).cast<std::string>())
-                                : std::string("not an array of numbers");
-    throw py::value_error(fmt::format("{} must be an (n, 3) array of float64 coordinates in metres, got {}", what, shape));
+    const std::string shape =
+        a ? fmt::format("an array of shape {}",
+                        py::str(py::tuple(py::cast(std::vector<py::ssize_t>(a.shape(), a.shape() + a.ndim()))))
+                            .cast<std::string>())
+          : std::string("not an array of numbers");
+    throw py::value_error(
+        fmt::format("{} must be an (n, 3) array of float64 coordinates in metres, got {}", what, shape));
   }
   std::vector<Vec3> out(static_cast<std::size_t>(a.shape(0)));
   auto view = a.unchecked<2>();
   for (py::ssize_t i = 0; i < a.shape(0); ++i) {
     out[static_cast<std::size_t>(i)] = Vec3(view(i, 0), view(i, 1), view(i, 2));
-    if (!out[static_cast<std::size_t>(i)].allFinite()) throw py::value_error(fmt::format("{}: row {} is not finite", what, i));
+    if (!out[static_cast<std::size_t>(i)].allFinite())
+      throw py::value_error(fmt::format("{}: row {} is not finite", what, i));
   }
   return out;
 }

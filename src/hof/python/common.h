@@ -107,7 +107,8 @@ std::vector<Vec3> points_from(const py::handle& object, const char* what);
 template <std::size_t K>
 std::vector<std::array<std::int32_t, K>> indices_from(const py::handle& object, const char* what, std::size_t count) {
   py::array a = py::array::ensure(object);
-  if (!a || !(a.dtype().kind() == 'i' || a.dtype().kind() == 'u') || a.ndim() != 2 || a.shape(1) != static_cast<py::ssize_t>(K)) {
+  if (!a || !(a.dtype().kind() == 'i' || a.dtype().kind() == 'u') || a.ndim() != 2 ||
+      a.shape(1) != static_cast<py::ssize_t>(K)) {
     throw py::value_error(fmt::format("{} must be an (m, {}) array of integer node indices (int32)", what, K));
   }
   auto ints = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>::ensure(a);

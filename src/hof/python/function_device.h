@@ -38,7 +38,8 @@ class FunctionDevice final : public haptics::Device {
       }
       r.position_m = Vec3(numbers.data()[0], numbers.data()[1], numbers.data()[2]);
       if (!r.position_m.allFinite()) {
-        throw py::value_error(fmt::format("the device function returned {} at t = {} s: not finite", py::repr(value).cast<std::string>(), time_s));
+        throw py::value_error(fmt::format("the device function returned {} at t = {} s: not finite",
+                                          py::repr(value).cast<std::string>(), time_s));
       }
     } catch (py::error_already_set& e) {
       e.restore();
@@ -49,7 +50,8 @@ class FunctionDevice final : public haptics::Device {
       fail();
       return r;
     }
-    r.velocity_m_per_s = has_last_ && time_s > last_time_ ? Vec3((r.position_m - last_) / (time_s - last_time_)) : Vec3::Zero();
+    r.velocity_m_per_s =
+        has_last_ && time_s > last_time_ ? Vec3((r.position_m - last_) / (time_s - last_time_)) : Vec3::Zero();
     last_ = r.position_m;
     last_time_ = time_s;
     has_last_ = true;

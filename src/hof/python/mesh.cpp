@@ -1,6 +1,5 @@
 // hof.mesh: mesh files, reports, meshing and the standard livers.
 
-
 #include <filesystem>
 
 #include "hof/mesh/liver_generator.h"
@@ -65,7 +64,8 @@ py::dict mesh_info(const PyMesh& m) {
 void bind_mesh(py::module_& module) {
   py::module_ mesh_module = module.def_submodule("mesh", "Mesh files, reports, meshing and the standard livers.");
   py::class_<PyMesh>(mesh_module, "Mesh", "A mesh: nodes (n, 3) m, tets (m, 4) and triangles (f, 3) int32 (copies).")
-      .def(py::init(&mesh_from_arrays), py::arg("nodes"), py::arg("tets") = py::none(), py::arg("triangles") = py::none())
+      .def(py::init(&mesh_from_arrays), py::arg("nodes"), py::arg("tets") = py::none(),
+           py::arg("triangles") = py::none())
       .def_property_readonly("nodes", [](const PyMesh& m) { return points_array(m.mesh.nodes); })
       .def_property_readonly("tets", [](const PyMesh& m) { return index_array(m.mesh.tets); })
       .def_property_readonly("triangles", [](const PyMesh& m) { return index_array(m.mesh.triangles); })
@@ -111,7 +111,8 @@ void bind_mesh(py::module_& module) {
   mesh_module.def(
       "tetrahedralize",
       [](const PyMesh& surface, double max_volume, double radius_edge_ratio) {
-        if (surface.mesh.triangles.empty()) throw py::value_error("tetrahedralize needs a closed triangle surface (the mesh has no triangles)");
+        if (surface.mesh.triangles.empty())
+          throw py::value_error("tetrahedralize needs a closed triangle surface (the mesh has no triangles)");
         mesh::TetrahedralizeOptions options;
         options.max_volume_m3 = max_volume;
         options.radius_edge_ratio = radius_edge_ratio;

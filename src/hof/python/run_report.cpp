@@ -38,12 +38,14 @@ py::dict columns(const app::RunRecording& recording, const Telemetry& telemetry,
   number("period", [](const Row& r) { return r.period_s; });
   number("indentation", [](const Row& r) { return r.indentation_m; });
   py::list bodies;
-  for (const Row& r : telemetry.rows) bodies.append(r.body >= 0 ? session.body(static_cast<std::size_t>(r.body)).name : std::string());
+  for (const Row& r : telemetry.rows)
+    bodies.append(r.body >= 0 ? session.body(static_cast<std::size_t>(r.body)).name : std::string());
   d["body"] = py::module_::import("numpy").attr("array")(bodies, "str");
   if (recording.needle_mounted()) {
     number("depth", [](const Row& r) { return r.needle_depth_m; });
     py::list phases;
-    for (const Row& r : telemetry.rows) phases.append(std::string(procedures::phase_name(static_cast<procedures::NeedlePhase>(r.needle_phase))));
+    for (const Row& r : telemetry.rows)
+      phases.append(std::string(procedures::phase_name(static_cast<procedures::NeedlePhase>(r.needle_phase))));
     d["phase"] = py::module_::import("numpy").attr("array")(phases, "str");
     number("needle_force", [](const Row& r) { return r.needle_force_n; });
     number("sent_axial_force", [](const Row& r) { return r.sent_axial_force_n; });
@@ -55,8 +57,9 @@ py::dict columns(const app::RunRecording& recording, const Telemetry& telemetry,
 }
 
 // The report folder `hof run --out` writes: telemetry.csv, summary.json, the shapes, the plots.
-void write_report(const std::filesystem::path& dir, const app::RunRecording& recording, const coupling::SessionReport& report,
-                  const std::string& summary, const Telemetry& telemetry, bool quiet) {
+void write_report(const std::filesystem::path& dir, const app::RunRecording& recording,
+                  const coupling::SessionReport& report, const std::string& summary, const Telemetry& telemetry,
+                  bool quiet) {
   py::gil_scoped_release release;
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);

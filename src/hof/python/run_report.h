@@ -24,7 +24,8 @@ struct Telemetry {
 py::dict columns(const app::RunRecording& recording, const Telemetry& telemetry, const coupling::Session& session);
 
 // The report folder `hof run --out` writes: telemetry.csv, summary.json, the shapes, the plots.
-void write_report(const std::filesystem::path& dir, const app::RunRecording& recording, const coupling::SessionReport& report,
-                  const std::string& summary, const Telemetry& telemetry, bool quiet);
+void write_report(const std::filesystem::path& dir, const app::RunRecording& recording,
+                  const coupling::SessionReport& report, const std::string& summary, const Telemetry& telemetry,
+                  bool quiet);
 
 }  // namespace hof::python

@@ -2,7 +2,6 @@
 // the same Session and the same run recording as `hof run`, its state as numpy arrays, its
 // settings through the command seam.
 
-
 #include <cmath>
 #include <filesystem>
 #include <memory>
@@ -12,12 +11,12 @@
 
 #include "hof/app/session_recording.h"
 #include "hof/coupling/session.h"
-#include "hof/scene/model_parameters.h"
 #include "hof/python/bindings.h"
 #include "hof/python/common.h"
 #include "hof/python/function_device.h"
 #include "hof/python/run_report.h"
 #include "hof/scene/device_config.h"
+#include "hof/scene/model_parameters.h"
 #include "hof/scene/project.h"
 #include "hof/scene/project_edit.h"
 #include "hof/scene/world.h"
@@ -90,7 +89,8 @@ class PyWorld {
     const auto i = body.cast<std::int64_t>();
     const std::int64_t at = i < 0 ? i + static_cast<std::int64_t>(n) : i;
     if (at < 0 || at >= static_cast<std::int64_t>(n)) {
-      throw py::index_error(fmt::format("body index {} is out of range: this world has {} bod{}", i, n, n == 1 ? "y" : "ies"));
+      throw py::index_error(
+          fmt::format("body index {} is out of range: this world has {} bod{}", i, n, n == 1 ? "y" : "ies"));
     }
     return static_cast<std::size_t>(at);
   }
@@ -98,7 +98,8 @@ class PyWorld {
     const std::size_t i = body_index(body);
     if (index) *index = i;
     const coupling::SessionBody& b = session_->body(i);
-    if (!b.deformable()) throw py::value_error(fmt::format("body '{}' is a rigid shape: it has no nodes (use surface())", b.name));
+    if (!b.deformable())
+      throw py::value_error(fmt::format("body '{}' is a rigid shape: it has no nodes (use surface())", b.name));
     return b;
   }
 
@@ -117,7 +118,9 @@ class PyWorld {
     deformable(body, &i);
     return flat_points_array(session_->state(i).f);
   }
-  py::array_t<double> rest_positions(const py::object& body) const { return points_array(deformable(body).model->rest_positions); }
+  py::array_t<double> rest_positions(const py::object& body) const {
+    return points_array(deformable(body).model->rest_positions);
+  }
   py::array_t<std::int32_t> tets(const py::object& body) const { return index_array(deformable(body).model->tets); }
   py::array_t<double> masses(const py::object& body) const {
     const auto& m = deformable(body).model->node_mass_kg;
@@ -193,7 +196,8 @@ class PyWorld {
     return {target.substr(0, slash), target.substr(slash + 1)};
   }
   static bool project_setting(const std::string& target) {
-    return target == "haptics" || target.starts_with("haptics/") || target == "graphics" || target.starts_with("graphics/");
+    return target == "haptics" || target.starts_with("haptics/") || target == "graphics" ||
+           target.starts_with("graphics/");
   }
   void set(const std::string& target, const std::string& parameter, const py::object& value) {
     if (project_setting(target)) return set_project(target, parameter, value);
@@ -209,10 +213,14 @@ class PyWorld {
   // carried to the session by the commands the window sends, kept for save().
   void set_project(const std::string& element, const std::string& attribute, const py::object& value) {
     std::string text;
-    if (py::isinstance<py::bool_>(value)) text = value.cast<bool>() ? "true" : "false";
-    else if (py::isinstance<py::str>(value)) text = value.cast<std::string>();
-    else if (py::isinstance<py::float_>(value) || py::isinstance<py::int_>(value)) text = py::repr(value).cast<std::string>();
-    else throw py::type_error(fmt::format("{}@{}: a setting is a number, a bool or a string", element, attribute));
+    if (py::isinstance<py::bool_>(value))
+      text = value.cast<bool>() ? "true" : "false";
+    else if (py::isinstance<py::str>(value))
+      text = value.cast<std::string>();
+    else if (py::isinstance<py::float_>(value) || py::isinstance<py::int_>(value))
+      text = py::repr(value).cast<std::string>();
+    else
+      throw py::type_error(fmt::format("{}@{}: a setting is a number, a bool or a string", element, attribute));
     if (element == "haptics" && attribute == "device") {
       switch_device(py::str(text), true);
       world_->project.device = text;
@@ -227,11 +235,14 @@ class PyWorld {
     scene::HofProject next = world_->project;
     scene::apply_edit(next, *edit);
     const auto commands = scene::live_commands(next, *edit, body_names());
-    for (const coupling::Command& c : commands.value_or(std::vector<coupling::Command>{})) ok_or_raise(session_->submit(c));
+    for (const coupling::Command& c : commands.value_or(std::vector<coupling::Command>{}))
+      ok_or_raise(session_->submit(c));
     world_->project = std::move(next);
     if (!commands) {
       PyErr_WarnEx(PyExc_UserWarning,
-                   fmt::format("{}@{} is saved with the project; it takes effect when the project is loaded again", element, attribute).c_str(),
+                   fmt::format("{}@{} is saved with the project; it takes effect when the project is loaded again",
+                               element, attribute)
+                       .c_str(),
                    1);
     }
   }
@@ -251,8 +262,9 @@ class PyWorld {
 
   void save(const std::filesystem::path& path) {
     if (world_->file.extension() == ".x3d") {
-      raise(Error{ErrorCode::kUnsupported, "an X3D scene cannot be saved as a project yet (the project format holds SOFA scenes)",
-                  path.string(), 0, -1});
+      raise(Error{ErrorCode::kUnsupported,
+                  "an X3D scene cannot be saved as a project yet (the project format holds SOFA scenes)", path.string(),
+                  0, -1});
     }
     scene::HofProject out = scene::moved_project(world_->project, world_->file, path);
     if (world_->default_probe) out.device = "auto";  // the probe is fitted again when it is read
@@ -276,7 +288,8 @@ class PyWorld {
       throw py::value_error(fmt::format("seconds must be in (0, 86400], got {}", *seconds));
     }
     if (!(telemetry_rate >= 0.0 && telemetry_rate <= 100000.0)) {
-      throw py::value_error(fmt::format("telemetry_rate must be in [0, 100000] rows/s (0 = every tick), got {}", telemetry_rate));
+      throw py::value_error(
+          fmt::format("telemetry_rate must be in [0, 100000] rows/s (0 = every tick), got {}", telemetry_rate));
     }
     if (!device.is_none()) switch_device(device, deterministic);
     const double length = seconds.value_or(app::default_run_seconds(*session_));
@@ -309,8 +322,9 @@ class PyWorld {
       command.opened = std::shared_ptr<haptics::Device>(std::move(*opened));
     } else if (PyCallable_Check(device.ptr())) {
       if (!deterministic) {
-        throw py::value_error("a Python function as the device runs in virtual time only (deterministic=True): in real time it "
-                              "would hold the haptic thread to the interpreter");
+        throw py::value_error(
+            "a Python function as the device runs in virtual time only (deterministic=True): in real time it "
+            "would hold the haptic thread to the interpreter");
       }
       command.label = "python-function";
       command.opened = std::make_shared<FunctionDevice>(device.cast<py::function>(), device_error_, running_);
@@ -345,7 +359,8 @@ class PyWorld {
     coupling::SessionReport report;
     {
       py::gil_scoped_release release;
-      report = deterministic ? session_->run_virtual(seconds, record, progress) : session_->run_realtime(seconds, record, progress);
+      report = deterministic ? session_->run_virtual(seconds, record, progress)
+                             : session_->run_realtime(seconds, record, progress);
     }
     running_ = nullptr;
     if (last) last_sample_ = last;
@@ -384,13 +399,16 @@ void bind_world(py::module_& module) {
       .def_property_readonly("warnings", &PyWorld::warnings)
       .def("step", &PyWorld::step, py::arg("steps") = 1,
            "Advances the world `steps` simulation steps in virtual time (the device plays meanwhile).")
-      .def("run", &PyWorld::run, py::arg("seconds") = py::none(), py::arg("device") = py::none(), py::arg("deterministic") = true,
-           py::arg("telemetry_rate") = 0.0, py::arg("out") = py::none(), py::arg("quiet") = true,
-           "Runs a haptic session (as `hof run`); returns (report, telemetry): summary.json as a dict and the telemetry "
-           "columns as numpy arrays.")
+      .def(
+          "run", &PyWorld::run, py::arg("seconds") = py::none(), py::arg("device") = py::none(),
+          py::arg("deterministic") = true, py::arg("telemetry_rate") = 0.0, py::arg("out") = py::none(),
+          py::arg("quiet") = true,
+          "Runs a haptic session (as `hof run`); returns (report, telemetry): summary.json as a dict and the telemetry "
+          "columns as numpy arrays.")
       .def("positions", &PyWorld::positions, py::arg("body") = 0, "(n, 3) node positions, m (a copy).")
       .def("velocities", &PyWorld::velocities, py::arg("body") = 0, "(n, 3) node velocities, m/s (a copy).")
-      .def("forces", &PyWorld::forces, py::arg("body") = 0, "(n, 3) total force on each node at the last step, N (a copy).")
+      .def("forces", &PyWorld::forces, py::arg("body") = 0,
+           "(n, 3) total force on each node at the last step, N (a copy).")
       .def("rest_positions", &PyWorld::rest_positions, py::arg("body") = 0, "(n, 3) rest positions, m (a copy).")
       .def("tets", &PyWorld::tets, py::arg("body") = 0, "(m, 4) int32 tetrahedra (a copy).")
       .def("masses", &PyWorld::masses, py::arg("body") = 0, "(n,) lumped node masses, kg (a copy).")
@@ -399,15 +417,20 @@ void bind_world(py::module_& module) {
            "(vertices (v, 3) m, triangles (f, 3) int32): the touchable surface as it is now (copies).")
       .def("normals", &PyWorld::normals, py::arg("body") = 0, "(v, 3) unit vertex normals of the surface as it is now.")
       .def("contact", &PyWorld::contact, "The last haptic tick's contact as a dict (None before any run).")
-      .def("set", &PyWorld::set, py::arg("target"), py::arg("parameter"), py::arg("value"),
-           "Sets a parameter through the command seam, e.g. set('Liver/FEM', 'youngModulus', 8000), or a setting of the "
-           "project by the file's names, e.g. set('haptics/surface', 'stiffness', 0.4), set('haptics', 'renderer', "
-           "'GodObjectRenderer'); applied before the next step. Checked now: a bad value raises ValueError with the "
-           "command line's message.")
-      .def("get", &PyWorld::get, py::arg("target"), py::arg("parameter"), "A parameter's value as the accepted commands leave it.")
-      .def("parameters", &PyWorld::parameters, py::arg("body") = 0, "Every 'Body/component/parameter' set() takes for a body.")
-      .def("set_force_limit", &PyWorld::set_force_limit, py::arg("newtons"), "A force limit below the device's (0: the device's).")
-      .def("save", &PyWorld::save, py::arg("path"), "Writes the world as a .hof project, with the parameters changed so far.");
+      .def(
+          "set", &PyWorld::set, py::arg("target"), py::arg("parameter"), py::arg("value"),
+          "Sets a parameter through the command seam, e.g. set('Liver/FEM', 'youngModulus', 8000), or a setting of the "
+          "project by the file's names, e.g. set('haptics/surface', 'stiffness', 0.4), set('haptics', 'renderer', "
+          "'GodObjectRenderer'); applied before the next step. Checked now: a bad value raises ValueError with the "
+          "command line's message.")
+      .def("get", &PyWorld::get, py::arg("target"), py::arg("parameter"),
+           "A parameter's value as the accepted commands leave it.")
+      .def("parameters", &PyWorld::parameters, py::arg("body") = 0,
+           "Every 'Body/component/parameter' set() takes for a body.")
+      .def("set_force_limit", &PyWorld::set_force_limit, py::arg("newtons"),
+           "A force limit below the device's (0: the device's).")
+      .def("save", &PyWorld::save, py::arg("path"),
+           "Writes the world as a .hof project, with the parameters changed so far.");
 }
 
 }  // namespace hof::python

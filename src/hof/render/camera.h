@@ -46,8 +46,8 @@ class OrbitCamera {
   Vec3 up_{0.0, 0.0, 1.0};
   Vec3 target_{Vec3::Zero()};
   double distance_{0.5};
-  double yaw_{-1.5707963267948966};  // direction from target to eye, about up
-  double pitch_{0.5};                // elevation of the eye above the target's horizon
+  double yaw_{-1.5707963267948966};       // direction from target to eye, about up
+  double pitch_{0.5};                     // elevation of the eye above the target's horizon
   double fov_y_rad_{0.6981317007977318};  // 40°
   // A frame whose third axis is up: direction = cos(pitch)(cos(yaw) e1 + sin(yaw) e2) + sin(pitch) up.
   Vec3 e1_{1.0, 0.0, 0.0}, e2_{0.0, 1.0, 0.0};

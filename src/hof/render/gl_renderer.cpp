@@ -224,7 +224,8 @@ void MeshBuffer::set_triangles(std::span<const mesh::Tri> triangles) {
 }
 
 namespace {
-void upload_vec3(GLuint buffer, std::span<const Vec3> values, std::vector<float>& scratch, GLenum usage = GL_DYNAMIC_DRAW) {
+void upload_vec3(GLuint buffer, std::span<const Vec3> values, std::vector<float>& scratch,
+                 GLenum usage = GL_DYNAMIC_DRAW) {
   scratch.resize(values.size() * 3);
   for (std::size_t i = 0; i < values.size(); ++i) {
     scratch[3 * i] = static_cast<float>(values[i].x());
@@ -255,7 +256,8 @@ void MeshBuffer::set_colours(std::span<const Rgba> colours) {
     has_colours_ = false;
   } else {
     glBindBuffer(GL_ARRAY_BUFFER, colours_);
-    glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(colours.size() * sizeof(Rgba)), colours.data(), GL_DYNAMIC_DRAW);
+    glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(colours.size() * sizeof(Rgba)), colours.data(),
+                 GL_DYNAMIC_DRAW);
     glEnableVertexAttribArray(2);
     has_colours_ = true;
   }
@@ -311,7 +313,8 @@ Expected<void> GlRenderer::init() {
   return {};
 }
 
-void GlRenderer::begin(const OrbitCamera& camera, int x_px, int y_px, int width_px, int height_px, const Rgba& background) {
+void GlRenderer::begin(const OrbitCamera& camera, int x_px, int y_px, int width_px, int height_px,
+                       const Rgba& background) {
   glViewport(x_px, y_px, width_px, height_px);
   glEnable(GL_SCISSOR_TEST);
   glScissor(x_px, y_px, width_px, height_px);
@@ -327,7 +330,8 @@ void GlRenderer::begin(const OrbitCamera& camera, int x_px, int y_px, int width_
   eye_ = camera.eye().cast<float>();
 }
 
-void GlRenderer::use_mesh_program(const Eigen::Matrix4f& model, const Material& material, bool lit, bool vertex_colours) {
+void GlRenderer::use_mesh_program(const Eigen::Matrix4f& model, const Material& material, bool lit,
+                                  bool vertex_colours) {
   glUseProgram(mesh_program_);
   const Eigen::Matrix4f mvp = view_projection_ * model;
   const Eigen::Matrix3f normal_matrix = model.block<3, 3>(0, 0).inverse().transpose();
@@ -341,7 +345,8 @@ void GlRenderer::use_mesh_program(const Eigen::Matrix4f& model, const Material& 
   glUniform1i(u_vertex_colours_, vertex_colours ? 1 : 0);
   glUniform3fv(u_eye_, 1, eye_.data());
   glUniform1f(u_head_intensity_, lighting_.headlight_intensity);
-  const Eigen::Vector3f towards = lighting_.direction.norm() > 0.0f ? Eigen::Vector3f(-lighting_.direction.normalized()) : Eigen::Vector3f::UnitZ();
+  const Eigen::Vector3f towards =
+      lighting_.direction.norm() > 0.0f ? Eigen::Vector3f(-lighting_.direction.normalized()) : Eigen::Vector3f::UnitZ();
   glUniform3fv(u_light_towards_, 1, towards.data());
   glUniform1f(u_light_intensity_, lighting_.intensity);
   glUniform1f(u_ambient_, lighting_.ambient);
@@ -384,7 +389,8 @@ void GlRenderer::draw(const MeshBuffer& mesh, const Material& material, RenderMo
   if (mode == RenderMode::kWireframe || mode == RenderMode::kShadedWireframe) {
     Material edges = material;
     if (mode == RenderMode::kShadedWireframe) edges.diffuse.head<3>() *= 0.45f;
-    use_mesh_program(model, edges, mode == RenderMode::kWireframe, mode == RenderMode::kWireframe && mesh.has_colours());
+    use_mesh_program(model, edges, mode == RenderMode::kWireframe,
+                     mode == RenderMode::kWireframe && mesh.has_colours());
     glPolygonMode(GL_FRONT_AND_BACK, GL_LINE);
     glDrawElements(GL_TRIANGLES, count, GL_UNSIGNED_INT, offset);
     glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);

@@ -29,7 +29,7 @@ enum class RenderMode : std::uint8_t { kShaded, kWireframe, kPoints, kShadedWire
 struct Material {
   Rgba diffuse{0.8f, 0.8f, 0.8f, 1.0f};  ///< diffuseColor, alpha = 1 − transparency
   Eigen::Vector3f specular{0.2f, 0.2f, 0.2f};
-  float shininess{0.2f};                 ///< X3D shininess in [0, 1] (× 128)
+  float shininess{0.2f};  ///< X3D shininess in [0, 1] (× 128)
 };
 
 /// A triangle mesh on the GPU. Positions and normals change every frame for a deforming body;
@@ -64,7 +64,7 @@ class MeshBuffer {
 
 /// The lights (X3D's headlight and one DirectionalLight).
 struct Lighting {
-  float headlight_intensity{0.75f};  ///< 0: no headlight
+  float headlight_intensity{0.75f};                ///< 0: no headlight
   Eigen::Vector3f direction{-0.3f, -0.2f, -1.0f};  ///< the way the light travels, world frame
   float intensity{0.3f};
   float ambient{0.18f};

@@ -32,7 +32,8 @@ Expected<void> write_png(const Image& image, const std::filesystem::path& path) 
 Expected<Image> read_png(const std::filesystem::path& path) {
   int w = 0, h = 0, channels = 0;
   unsigned char* data = stbi_load(path.c_str(), &w, &h, &channels, 3);
-  if (!data) return make_error(ErrorCode::kIo, std::string("cannot read the image: ") + stbi_failure_reason(), path.string());
+  if (!data)
+    return make_error(ErrorCode::kIo, std::string("cannot read the image: ") + stbi_failure_reason(), path.string());
   Image image;
   image.width = w;
   image.height = h;

@@ -20,8 +20,8 @@ constexpr double kProbeSpeed = 0.02;  // m/s of device travel
 }  // namespace
 
 DefaultProbe default_probe(const std::vector<coupling::SessionBody>& bodies, double workspace_radius_m,
-                           double device_stiffness_n_per_m, double max_force_n, const std::array<double, 16>* calibration,
-                           double device_max_stiffness_n_per_m,
+                           double device_stiffness_n_per_m, double max_force_n,
+                           const std::array<double, 16>* calibration, double device_max_stiffness_n_per_m,
                            const Vec3& effects_centre, double proxy_radius) {
   DefaultProbe probe;
   probe.calibration = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
@@ -29,7 +29,8 @@ DefaultProbe default_probe(const std::vector<coupling::SessionBody>& bodies, dou
     // Force effects only: circle through them (a still probe feels no viscosity and sits at a
     // spring's rest point), 5 mm around the first spring's anchor or the origin.
     const Vec3 centre = effects_centre;
-    probe.device = fmt::format("scripted:circle,centre={};{};{},radius=0.005,period=1,repeat=0", centre.x(), centre.y(), centre.z());
+    probe.device = fmt::format("scripted:circle,centre={};{};{},radius=0.005,period=1,repeat=0", centre.x(), centre.y(),
+                               centre.z());
     probe.description = "no body to press: the probe circles (5 mm, 1 s a turn) through the force effects";
     return probe;
   }
@@ -93,7 +94,8 @@ DefaultProbe default_probe(const std::vector<coupling::SessionBody>& bodies, dou
     // makes the press point a little less exact. A count, not a clock, keeps it deterministic.
     constexpr double kMaxNodeSteps = 2e6;
     const auto wanted = static_cast<std::int64_t>(std::ceil(clearance_dev / kProbeSpeed / target.model->dt_s - 1e-9));
-    const auto affordable = static_cast<std::int64_t>(kMaxNodeSteps / static_cast<double>(std::max<std::size_t>(target.model->node_count(), 1)));
+    const auto affordable = static_cast<std::int64_t>(
+        kMaxNodeSteps / static_cast<double>(std::max<std::size_t>(target.model->node_count(), 1)));
     const std::int64_t steps = std::min(wanted, affordable);
     bool ok = true;
     for (std::int64_t k = 0; k < steps && ok; ++k) ok = mechanics::step(*target.model, state);
@@ -179,13 +181,14 @@ DefaultProbe default_probe(const std::vector<coupling::SessionBody>& bodies, dou
     mechanics::MechanicalState state = mechanics::make_state(*target.model);
     std::array<std::int32_t, coupling::SurfaceMapping::kMaxPointWeights> nodes{};
     std::array<double, coupling::SurfaceMapping::kMaxPointWeights> weights{};
-    const std::size_t count = target.mapping.point_weights(std::span(press_vertices.data(), press_count),
-                                                           std::span(press_weights.data(), press_count), nodes, weights);
+    const std::size_t count = target.mapping.point_weights(
+        std::span(press_vertices.data(), press_count), std::span(press_weights.data(), press_count), nodes, weights);
     Mat3 point_compliance;
     // A bounded solve (~2·10⁸ block products): on a body of a million elements an unbounded
     // one takes minutes; without the compliance the press depth is set by the rendering
     // stiffness alone (a shallower, safe press).
-    const int max_iterations = static_cast<int>(std::clamp(2e8 / (3.0 * static_cast<double>(target.model->node_count())), 50.0, 5000.0));
+    const int max_iterations =
+        static_cast<int>(std::clamp(2e8 / (3.0 * static_cast<double>(target.model->node_count())), 50.0, 5000.0));
     if (mechanics::compute_point_compliance(*target.model, state, std::span(nodes.data(), count),
                                             std::span(weights.data(), count), point_compliance, max_iterations) &&
         point_compliance.allFinite()) {
@@ -194,9 +197,9 @@ DefaultProbe default_probe(const std::vector<coupling::SessionBody>& bodies, dou
   }
   // The rendering stiffness of the pressed body's own surface (device_stiffness_n_per_m is the
   // project's surface on this device; a body's own surface is a fraction of the same device).
-  const double k_device = std::max(target.material ? target.material->stiffness_n_per_m(device_max_stiffness_n_per_m)
-                                                   : device_stiffness_n_per_m,
-                                   1.0);
+  const double k_device = std::max(
+      target.material ? target.material->stiffness_n_per_m(device_max_stiffness_n_per_m) : device_stiffness_n_per_m,
+      1.0);
   const double k_effective = 1.0 / (1.0 / k_device + compliance_world / s);
   const double depth_dev = std::clamp(0.4 * max_force_n / k_effective, 0.001, 0.01);
   // The compliance at rest is only an estimate (a sagging, swinging or contact-stiffened body
@@ -207,17 +210,20 @@ DefaultProbe default_probe(const std::vector<coupling::SessionBody>& bodies, dou
   const Vec3 start_world = point + clearance_dev * s * normal;
   const Vec3 start_dev = (to_device * start_world.homogeneous()).head<3>();
   const Vec3 direction = (to_device.topLeftCorner<3, 3>() * -normal).normalized();
-  probe.device = fmt::format("scripted:poke,start={};{};{},direction={};{};{},approach={},depth={},speed={},hold=1,force={}",
-                             start_dev.x(), start_dev.y(), start_dev.z(), direction.x(), direction.y(), direction.z(),
-                             approach_dev, depth_dev, kProbeSpeed, stop_force_n);
+  probe.device =
+      fmt::format("scripted:poke,start={};{};{},direction={};{};{},approach={},depth={},speed={},hold=1,force={}",
+                  start_dev.x(), start_dev.y(), start_dev.z(), direction.x(), direction.y(), direction.z(),
+                  approach_dev, depth_dev, kProbeSpeed, stop_force_n);
   probe.arrival_s = approach_dev / kProbeSpeed;
   probe.press_s = 2.0 * (approach_dev + depth_dev) / kProbeSpeed + 1.0;
-  probe.description = fmt::format("presses body '{}' where its surface will be on arrival, ({:.4g}, {:.4g}, {:.4g}) along its inward normal ({:.3f}, {:.3f}, "
-                                  "{:.3f}), {:.1f} mm of device travel past the surface for about {:.1f} N, stopping earlier "
-                                  "at {:.1f} N (tissue compliance {:.3g} world units/N there); {:.4g} world units per device "
-                                  "metre",
-                                  target.name, point.x(), point.y(), point.z(), direction.x(), direction.y(), direction.z(),
-                                  1e3 * depth_dev, k_effective * depth_dev, stop_force_n, compliance_world, s);
+  probe.description = fmt::format(
+      "presses body '{}' where its surface will be on arrival, ({:.4g}, {:.4g}, {:.4g}) along its inward normal "
+      "({:.3f}, {:.3f}, "
+      "{:.3f}), {:.1f} mm of device travel past the surface for about {:.1f} N, stopping earlier "
+      "at {:.1f} N (tissue compliance {:.3g} world units/N there); {:.4g} world units per device "
+      "metre",
+      target.name, point.x(), point.y(), point.z(), direction.x(), direction.y(), direction.z(), 1e3 * depth_dev,
+      k_effective * depth_dev, stop_force_n, compliance_world, s);
   return probe;
 }
 

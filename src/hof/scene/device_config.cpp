@@ -30,9 +30,9 @@ namespace hof::scene {
 using haptics::DeviceConfig;
 using haptics::DeviceModel;
 using haptics::DeviceSpec;
+using haptics::kMaxPalpationPresses;
 using haptics::MotionConfig;
 using haptics::MotionKind;
-using haptics::kMaxPalpationPresses;
 namespace udp = haptics::udp;
 
 Expected<DeviceSpec> device_spec_for_model(std::string_view model) {
@@ -45,7 +45,8 @@ Expected<DeviceSpec> device_spec_for_model(std::string_view model) {
   for (const auto& [name, known] : kModels) {
     if (name == model) return haptics::device_spec_for_model(known);
   }
-  return make_error(ErrorCode::kInvalidArgument, fmt::format("unknown device model '{}' (known: virtual, falcon, omni, touch)", model));
+  return make_error(ErrorCode::kInvalidArgument,
+                    fmt::format("unknown device model '{}' (known: virtual, falcon, omni, touch)", model));
 }
 
 namespace {
@@ -117,7 +118,8 @@ class SpecParser {
   [[nodiscard]] const std::vector<Option>& options() const { return options_; }
 
   Expected<double> number(const Option& o) const {
-    if (!o.has_value || o.value.empty()) return fail(fmt::format("key '{}' needs a number (e.g. {}=0.01)", o.key, o.key));
+    if (!o.has_value || o.value.empty())
+      return fail(fmt::format("key '{}' needs a number (e.g. {}=0.01)", o.key, o.key));
     double v = 0.0;
     const auto [end, ec] = std::from_chars(o.value.data(), o.value.data() + o.value.size(), v);
     if (ec != std::errc{} || end != o.value.data() + o.value.size() || !std::isfinite(v)) {
@@ -196,19 +198,25 @@ Expected<MotionKind> motion_kind(const SpecParser& p, std::string_view name) {
 }
 
 std::span<const std::string_view> motion_keys(MotionKind kind) {
-  static constexpr std::string_view kPoke[] = {"start", "direction", "approach", "depth", "speed", "hold", "repeat", "force"};
-  static constexpr std::string_view kSlide[] = {"start", "direction", "approach", "depth",       "speed", "hold",
-                                                "repeat", "slide",    "distance", "slide_speed"};
+  static constexpr std::string_view kPoke[] = {"start", "direction", "approach", "depth",
+                                               "speed", "hold",      "repeat",   "force"};
+  static constexpr std::string_view kSlide[] = {"start", "direction", "approach", "depth",    "speed",
+                                                "hold",  "repeat",    "slide",    "distance", "slide_speed"};
   static constexpr std::string_view kPalpate[] = {"start", "direction", "approach", "depth", "speed",
                                                   "hold",  "repeat",    "step",     "count"};
   static constexpr std::string_view kCircle[] = {"centre", "center", "normal", "radius", "period", "repeat"};
   static constexpr std::string_view kHold[] = {"start", "hold", "repeat"};
   switch (kind) {
-    case MotionKind::kPoke: return kPoke;
-    case MotionKind::kPressAndSlide: return kSlide;
-    case MotionKind::kCircle: return kCircle;
-    case MotionKind::kHold: return kHold;
-    case MotionKind::kPalpate: return kPalpate;
+    case MotionKind::kPoke:
+      return kPoke;
+    case MotionKind::kPressAndSlide:
+      return kSlide;
+    case MotionKind::kCircle:
+      return kCircle;
+    case MotionKind::kHold:
+      return kHold;
+    case MotionKind::kPalpate:
+      return kPalpate;
   }
   return {};
 }
@@ -369,7 +377,7 @@ Expected<bool> apply_hand_key(const SpecParser& p, const Option& o, haptics::Vir
 
 Expected<SimulatedConfig> parse_simulated(const SpecParser& p, bool hand) {
   static constexpr std::string_view kHandKeys[] = {"mass",    "stiffness",  "damping", "device_damping",
-                                                    "substep", "integrator", "model"};
+                                                   "substep", "integrator", "model"};
   SimulatedConfig c;
   auto kind = motion_kind(p, p.argument());
   if (!kind) return std::unexpected(kind.error());
@@ -377,8 +385,10 @@ Expected<SimulatedConfig> parse_simulated(const SpecParser& p, bool hand) {
   if (*kind == MotionKind::kHold) c.motion.hold_s = kHoldForever;  // a held target stays unless told
   const auto keys = motion_keys(*kind);
   std::vector<std::string_view> known(keys.begin(), keys.end());
-  if (hand) known.insert(known.end(), std::begin(kHandKeys), std::end(kHandKeys));
-  else known.push_back("model");
+  if (hand)
+    known.insert(known.end(), std::begin(kHandKeys), std::end(kHandKeys));
+  else
+    known.push_back("model");
   const std::string what = fmt::format("{} {}", hand ? "virtual-hand" : "scripted", p.argument());
   auto ok = apply_options(p, what, known, SharedKeys{.spec = &c.spec}, [&](const Option& o) -> Expected<bool> {
     if (contains(keys, o.key)) {
@@ -441,13 +451,14 @@ Expected<DeviceConfig> parse_spacemouse(const SpecParser& p) {
   static constexpr std::string_view kKeys[] = {"scale", "model"};
   if (auto none = no_argument(p, "spacemouse"); !none) return std::unexpected(none.error());
   haptics::SpacemouseConfig config;
-  auto ok = apply_options(p, "spacemouse", kKeys, SharedKeys{.spec = &config.spec}, [&](const Option& o) -> Expected<bool> {
-    if (o.key != "scale") return false;
-    auto v = p.number(o);
-    if (!v) return std::unexpected(v.error());
-    config.scale_m_per_unit_s = *v;
-    return true;
-  });
+  auto ok =
+      apply_options(p, "spacemouse", kKeys, SharedKeys{.spec = &config.spec}, [&](const Option& o) -> Expected<bool> {
+        if (o.key != "scale") return false;
+        auto v = p.number(o);
+        if (!v) return std::unexpected(v.error());
+        config.scale_m_per_unit_s = *v;
+        return true;
+      });
   if (!ok) return std::unexpected(ok.error());
   return config;
 }
@@ -482,7 +493,8 @@ Expected<DeviceConfig> parse_dhd(const SpecParser& p) {
 
 Expected<DeviceConfig> parse_openhaptics(const SpecParser& p) {
   static constexpr std::string_view kKeys[] = {"device", "library", "model"};
-  if (auto none = no_argument(p, "openhaptics", "; device=NAME chooses one"); !none) return std::unexpected(none.error());
+  if (auto none = no_argument(p, "openhaptics", "; device=NAME chooses one"); !none)
+    return std::unexpected(none.error());
   haptics::OpenHapticsConfig config;
   auto ok = apply_options(p, "openhaptics", kKeys, SharedKeys{.sdk_model = &config.model, .library = &config.library},
                           [&](const Option& o) -> Expected<bool> {
@@ -519,8 +531,8 @@ Expected<std::unique_ptr<haptics::Device>> open_device(std::string_view spec) {
   auto device = haptics::open_device(*config);
   // A replay file's and the SpaceMouse's errors name what failed themselves (the file and
   // line, spnav's own message); the others say which spec they came from.
-  const bool names_itself =
-      std::holds_alternative<haptics::ReplayConfig>(*config) || std::holds_alternative<haptics::SpacemouseConfig>(*config);
+  const bool names_itself = std::holds_alternative<haptics::ReplayConfig>(*config) ||
+                            std::holds_alternative<haptics::SpacemouseConfig>(*config);
   if (!device && !names_itself) {
     Error e = device.error();
     e.message = fmt::format("device spec '{}': {}", spec, e.message);

@@ -33,11 +33,16 @@ std::optional<ComponentRef> find_component(const mechanics::ModelConfig& c, std:
 
 std::string_view kind_name(ComponentKind kind) {
   switch (kind) {
-    case ComponentKind::kModel: return "model";
-    case ComponentKind::kForceField: return "force field";
-    case ComponentKind::kOdeSolver: return "ODE solver";
-    case ComponentKind::kLinearSolver: return "linear solver";
-    case ComponentKind::kMass: return "mass";
+    case ComponentKind::kModel:
+      return "model";
+    case ComponentKind::kForceField:
+      return "force field";
+    case ComponentKind::kOdeSolver:
+      return "ODE solver";
+    case ComponentKind::kLinearSolver:
+      return "linear solver";
+    case ComponentKind::kMass:
+      return "mass";
   }
   return "component";
 }
@@ -70,9 +75,10 @@ Expected<ParameterRef> resolve_parameter(const mechanics::ModelConfig& config, s
                                          std::string_view parameter) {
   const auto found = find_component(config, component);
   if (!found) {
-    return make_error(ErrorCode::kInvalidArgument,
-                      fmt::format("no component '{}' (parameters: {})", component, fmt::join(parameter_names(config), ", ")),
-                      config.name);
+    return make_error(
+        ErrorCode::kInvalidArgument,
+        fmt::format("no component '{}' (parameters: {})", component, fmt::join(parameter_names(config), ", ")),
+        config.name);
   }
   const auto id = parameter_id(parameter);
   if (!id) {
@@ -80,15 +86,17 @@ Expected<ParameterRef> resolve_parameter(const mechanics::ModelConfig& config, s
     std::string closest;
     const std::string& why = id.error().message;
     if (const auto at = why.find(" (closest"); at != std::string::npos) closest = why.substr(at);
-    return make_error(ErrorCode::kInvalidArgument,
-                      fmt::format("{} '{}' has no parameter '{}'{}", kind_name(found->kind), component, parameter, closest),
-                      config.name);
+    return make_error(
+        ErrorCode::kInvalidArgument,
+        fmt::format("{} '{}' has no parameter '{}'{}", kind_name(found->kind), component, parameter, closest),
+        config.name);
   }
   const ParameterRef ref{*found, *id};
   // A parameter this component does not have (the model lists what each component has).
   if (const auto accepted = mechanics::parameter_refs(config); std::ranges::find(accepted, ref) == accepted.end()) {
     return make_error(ErrorCode::kInvalidArgument,
-                      fmt::format("{} '{}' has no parameter '{}'", kind_name(found->kind), component, parameter), config.name);
+                      fmt::format("{} '{}' has no parameter '{}'", kind_name(found->kind), component, parameter),
+                      config.name);
   }
   return ref;
 }
@@ -119,7 +127,8 @@ Expected<void> set_parameter(mechanics::ModelConfig& config, std::string_view co
   return mechanics::set_parameter(config, *ref, value);
 }
 
-Expected<double> get_parameter(const mechanics::ModelConfig& config, std::string_view component, std::string_view parameter) {
+Expected<double> get_parameter(const mechanics::ModelConfig& config, std::string_view component,
+                               std::string_view parameter) {
   auto ref = resolve_parameter(config, component, parameter);
   if (!ref) return std::unexpected(ref.error());
   return mechanics::get_parameter(config, *ref);
@@ -131,11 +140,13 @@ Expected<coupling::BodyId> body_id(const coupling::Session& session, std::string
     if (session.body(i).name == body) return static_cast<coupling::BodyId>(i);
     names += (names.empty() ? "" : ", ") + session.body(i).name;
   }
-  return make_error(ErrorCode::kInvalidArgument, fmt::format("no body '{}' (bodies: {})", body, names.empty() ? "none" : names));
+  return make_error(ErrorCode::kInvalidArgument,
+                    fmt::format("no body '{}' (bodies: {})", body, names.empty() ? "none" : names));
 }
 
 Expected<coupling::command::SetParameter> parameter_command(const coupling::Session& session, std::string_view body,
-                                                           std::string_view component, std::string_view parameter, double value) {
+                                                            std::string_view component, std::string_view parameter,
+                                                            double value) {
   const auto id = body_id(session, body);
   if (!id) return std::unexpected(id.error());
   const auto config = session.body_config(*id);

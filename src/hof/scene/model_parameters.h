@@ -36,7 +36,8 @@ namespace hof::scene {
 /// (kInvalidArgument): no such component (naming the model's parameters), or the component has
 /// no such parameter (naming the closest names).
 [[nodiscard]] Expected<mechanics::ParameterRef> resolve_parameter(const mechanics::ModelConfig& config,
-                                                                  std::string_view component, std::string_view parameter);
+                                                                  std::string_view component,
+                                                                  std::string_view parameter);
 
 /// "component/parameter" of `ref` in `config`; the model's own parameters have an empty
 /// component ("/dt").
@@ -61,7 +62,8 @@ namespace hof::scene {
 /// the body's configuration as the commands accepted so far leave it. Errors: no such body, a
 /// rigid body, then "body 'NAME': " and resolve_parameter's.
 [[nodiscard]] Expected<coupling::command::SetParameter> parameter_command(const coupling::Session& session,
-                                                                          std::string_view body, std::string_view component,
+                                                                          std::string_view body,
+                                                                          std::string_view component,
                                                                           std::string_view parameter, double value);
 /// A parameter's value in a session (Session::parameter) by its scene names.
 [[nodiscard]] Expected<double> session_parameter(const coupling::Session& session, std::string_view body,

@@ -1,6 +1,6 @@
 #include "hof/scene/project.h"
-#include "hof/scene/detail/project_fields.h"
 #include "hof/mesh/xml_depth.h"
+#include "hof/scene/detail/project_fields.h"
 
 #include "hof/core/file_write.h"
 
@@ -18,13 +18,13 @@
 
 namespace hof::scene {
 
-
 namespace {
 
 // Line of a byte offset in the file text (for error messages).
 std::int64_t line_of(const std::string& text, std::ptrdiff_t offset) {
   std::int64_t line = 1;
-  for (std::ptrdiff_t i = 0; i < offset && i < static_cast<std::ptrdiff_t>(text.size()); ++i) line += text[static_cast<std::size_t>(i)] == '\n';
+  for (std::ptrdiff_t i = 0; i < offset && i < static_cast<std::ptrdiff_t>(text.size()); ++i)
+    line += text[static_cast<std::size_t>(i)] == '\n';
   return line;
 }
 
@@ -84,15 +84,11 @@ haptics::SurfaceMaterial read_surface(ProjectReader& r, const pugi::xml_node& s)
 
 }  // namespace
 
-
 namespace {
 
-
-
-
-
 // <tissue>: a body's set (body="NAME"), starting from the set for every body, or that set.
-procedures::TissueNeedleParameters read_tissue(ProjectReader& r, const pugi::xml_node& node, procedures::TissueNeedleParameters t) {
+procedures::TissueNeedleParameters read_tissue(ProjectReader& r, const pugi::xml_node& node,
+                                               procedures::TissueNeedleParameters t) {
   r.read(node, detail::tissue_fields(), t);
   if (auto problem = detail::check_tissue(t, node.attribute("body").as_string(""))) r.fail(node, *problem);
   return t;
@@ -127,13 +123,14 @@ procedures::NeedleConfig read_needle(ProjectReader& r, const pugi::xml_node& nod
 
 Expected<void> check_graphics(const GraphicsSetup& g) {
   // By the reader's own checks of <graphics>, <material> and <light> (detail/project_fields.h).
-  for (const auto& [fields, element] : {std::pair{&detail::graphics_fields(), "graphics"}, std::pair{&detail::material_fields(), "material"},
-                                        std::pair{&detail::light_fields(), "light"}}) {
-    if (auto problem = detail::check_fields(*fields, element, g)) return make_error(ErrorCode::kInvalidArgument, std::move(*problem));
+  for (const auto& [fields, element] :
+       {std::pair{&detail::graphics_fields(), "graphics"}, std::pair{&detail::material_fields(), "material"},
+        std::pair{&detail::light_fields(), "light"}}) {
+    if (auto problem = detail::check_fields(*fields, element, g))
+      return make_error(ErrorCode::kInvalidArgument, std::move(*problem));
   }
   return {};
 }
-
 
 Expected<HofProject> read_project(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);
@@ -142,7 +139,6 @@ Expected<HofProject> read_project(const std::filesystem::path& path) {
   buffer << in.rdbuf();
   return parse_project(buffer.str(), path);
 }
-
 
 namespace {
 
@@ -163,13 +159,17 @@ MaterialRegion read_region(ProjectReader& r, const pugi::xml_node& node) {
     region.shape = MaterialRegion::Shape::kBox;
     region.box_min = r.get_vec(node, "min", Vec3::Zero());
     region.box_max = r.get_vec(node, "max", Vec3::Zero());
-    if (!(region.box_max.array() > region.box_min.array()).all()) r.fail(node, "<region shape=\"box\"> needs min < max on every axis");
+    if (!(region.box_max.array() > region.box_min.array()).all())
+      r.fail(node, "<region shape=\"box\"> needs min < max on every axis");
   } else if (shape == "group") {
     region.shape = MaterialRegion::Shape::kGroup;
-    if (!node.attribute("physicalGroup")) r.fail(node, "<region shape=\"group\"> needs physicalGroup=\"TAG\" (a Gmsh physical tag)");
+    if (!node.attribute("physicalGroup"))
+      r.fail(node, "<region shape=\"group\"> needs physicalGroup=\"TAG\" (a Gmsh physical tag)");
     const double tag = r.get(node, "physicalGroup", 0.0);
-    if (!(std::abs(tag) < 2e9) || tag != std::floor(tag)) r.fail(node, "<region physicalGroup> must be a whole number (a Gmsh physical tag)");
-    else region.physical_group = static_cast<std::int32_t>(tag);
+    if (!(std::abs(tag) < 2e9) || tag != std::floor(tag))
+      r.fail(node, "<region physicalGroup> must be a whole number (a Gmsh physical tag)");
+    else
+      region.physical_group = static_cast<std::int32_t>(tag);
   } else {
     r.fail(node, fmt::format("<region> shape=\"{}\": expected sphere, box or group", shape));
   }
@@ -179,7 +179,8 @@ MaterialRegion read_region(ProjectReader& r, const pugi::xml_node& node) {
   }
   if (node.attribute("poissonRatio")) {
     region.poisson_ratio = r.get(node, "poissonRatio", 0.0);
-    if (!(*region.poisson_ratio > -1.0 && *region.poisson_ratio < 0.5)) r.fail(node, "<region> poissonRatio must be in (-1, 0.5)");
+    if (!(*region.poisson_ratio > -1.0 && *region.poisson_ratio < 0.5))
+      r.fail(node, "<region> poissonRatio must be in (-1, 0.5)");
   }
   if (node.attribute("massDensity")) {
     region.mass_density_kg_per_m3 = r.get(node, "massDensity", 0.0);
@@ -206,7 +207,9 @@ void read_bodies(ProjectReader& r, const pugi::xml_node& bodies, HofProject& p) 
     if (tag == "body") {
       const std::string model = b.attribute("model").as_string("");
       if (!model.empty() && model != "springs" && model != "membrane" && model != "hexahedra") {
-        r.fail(b, fmt::format("<body model=\"{}\">: expected springs, membrane (surface bodies) or hexahedra (volume bodies)", model));
+        r.fail(b, fmt::format(
+                      "<body model=\"{}\">: expected springs, membrane (surface bodies) or hexahedra (volume bodies)",
+                      model));
       }
       std::array<int, 3> grid{0, 0, 0};
       if (b.attribute("grid")) {
@@ -303,8 +306,8 @@ Expected<HofProject> parse_project(const std::string& text, const std::filesyste
   pugi::xml_document doc;
   const pugi::xml_parse_result parsed = doc.load_buffer(text.data(), text.size());
   if (!parsed) {
-    return std::unexpected(Error{ErrorCode::kParse, fmt::format("malformed XML: {}", parsed.description()), path.string(),
-                                 line_of(text, parsed.offset), -1});
+    return std::unexpected(Error{ErrorCode::kParse, fmt::format("malformed XML: {}", parsed.description()),
+                                 path.string(), line_of(text, parsed.offset), -1});
   }
   if (const pugi::xml_node deep = mesh::first_too_deep_element(doc)) {
     return std::unexpected(Error{ErrorCode::kParse,
@@ -313,7 +316,8 @@ Expected<HofProject> parse_project(const std::string& text, const std::filesyste
   }
   ProjectReader r{text, path.string(), std::nullopt};
   const pugi::xml_node root = doc.child("hof");
-  if (!root) return make_error(ErrorCode::kParse, "not a HoF project: the root element must be <hof>", path.string(), 1);
+  if (!root)
+    return make_error(ErrorCode::kParse, "not a HoF project: the root element must be <hof>", path.string(), 1);
   HofProject p;
   p.name = root.attribute("name").as_string("untitled");
   const pugi::xml_node mechanics = root.child("mechanics");
@@ -339,7 +343,8 @@ Expected<HofProject> parse_project(const std::string& text, const std::filesyste
     c.parameter = set.attribute("parameter").as_string("");
     c.value = r.get(set, "value", 0.0);
     if (c.body.empty() || c.parameter.empty() || !set.attribute("value")) {
-      return std::unexpected(r.at(set, "<set> needs body, parameter and value (and component, unless the parameter is the model's own)"));
+      return std::unexpected(
+          r.at(set, "<set> needs body, parameter and value (and component, unless the parameter is the model's own)"));
     }
     p.parameters.push_back(std::move(c));
   }
@@ -353,12 +358,12 @@ Expected<HofProject> parse_project(const std::string& text, const std::filesyste
   return p;
 }
 
-
 std::filesystem::path scene_file(const HofProject& project, const std::filesystem::path& project_file) {
   return project.mechanics_inline.empty() ? project_file.parent_path() / project.mechanics_scene : project_file;
 }
 
-HofProject moved_project(const HofProject& project, const std::filesystem::path& from, const std::filesystem::path& to) {
+HofProject moved_project(const HofProject& project, const std::filesystem::path& from,
+                         const std::filesystem::path& to) {
   HofProject out = project;
   std::error_code ec;
   const std::filesystem::path folder = std::filesystem::absolute(to, ec).parent_path();
@@ -367,7 +372,8 @@ HofProject moved_project(const HofProject& project, const std::filesystem::path&
     out.mechanics_scene = std::filesystem::relative(scene, folder, ec);
     if (ec || out.mechanics_scene.empty()) out.mechanics_scene = scene;
   } else if (!out.mechanics_inline.empty()) {
-    out.mechanics_inline = reanchor_scene_files(out.mechanics_inline, std::filesystem::absolute(from, ec).parent_path(), folder);
+    out.mechanics_inline =
+        reanchor_scene_files(out.mechanics_inline, std::filesystem::absolute(from, ec).parent_path(), folder);
   }
   return out;
 }
@@ -386,7 +392,8 @@ coupling::SessionConfig session_config(const HofProject& p) {
   c.tree.use_bound_tree = p.use_bound_tree;
   c.tree.max_triangles_in_leaf = p.max_triangles_in_leaf;
   for (int r = 0; r < 4; ++r) {
-    for (int k = 0; k < 4; ++k) c.haptics.calibration.position(r, k) = p.position_calibration[static_cast<std::size_t>(4 * r + k)];
+    for (int k = 0; k < 4; ++k)
+      c.haptics.calibration.position(r, k) = p.position_calibration[static_cast<std::size_t>(4 * r + k)];
   }
   return c;
 }

@@ -8,8 +8,8 @@
 
 #include <array>
 #include <cstdint>
-#include <optional>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -86,16 +86,16 @@ struct ObstacleSetup {
 struct MaterialRegion {
   enum class Shape : std::uint8_t { kSphere, kBox, kGroup };
   std::string name{"region"};
-  std::string body;          ///< the body (its SOFA node name)
-  std::string force_field;   ///< the force field ("": every FEM force field of the body)
+  std::string body;         ///< the body (its SOFA node name)
+  std::string force_field;  ///< the force field ("": every FEM force field of the body)
   Shape shape{Shape::kSphere};
-  Vec3 center{Vec3::Zero()};  ///< sphere centre, m (scene units)
-  double radius{0.01};        ///< sphere radius
+  Vec3 center{Vec3::Zero()};                          ///< sphere centre, m (scene units)
+  double radius{0.01};                                ///< sphere radius
   Vec3 box_min{Vec3::Zero()}, box_max{Vec3::Zero()};  ///< box corners
-  std::int32_t physical_group{0};  ///< Gmsh physical tag (shape kGroup)
-  std::optional<double> young_modulus_pa;        ///< Pa
-  std::optional<double> poisson_ratio;           ///< in (−1, 0.5)
-  std::optional<double> mass_density_kg_per_m3;  ///< needs a DiagonalMass (per area on a membrane)
+  std::int32_t physical_group{0};                     ///< Gmsh physical tag (shape kGroup)
+  std::optional<double> young_modulus_pa;             ///< Pa
+  std::optional<double> poisson_ratio;                ///< in (−1, 0.5)
+  std::optional<double> mass_density_kg_per_m3;       ///< needs a DiagonalMass (per area on a membrane)
 };
 
 struct HofProject {
@@ -110,11 +110,11 @@ struct HofProject {
   /// Parameters of the scene's bodies set by the project (<set> in <mechanics>), applied
   /// after the scene is read — what a session's command seam changed, saved.
   std::vector<coupling::ParameterChange> parameters;
-  std::vector<MaterialRegion> regions;    ///< material regions (<region> in <mechanics>), in order
+  std::vector<MaterialRegion> regions;  ///< material regions (<region> in <mechanics>), in order
   /// The length unit of the scene ("" = metres); stated in reports.
   std::string scene_unit;
-  std::vector<BodySetup> bodies;          ///< per-body settings (<bodies><body>)
-  std::vector<ObstacleSetup> obstacles;   ///< rigid obstacles (<bodies><obstacle>)
+  std::vector<BodySetup> bodies;         ///< per-body settings (<bodies><body>)
+  std::vector<ObstacleSetup> obstacles;  ///< rigid obstacles (<bodies><obstacle>)
   std::array<double, 16> position_calibration{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};  ///< row-major 4x4
   double haptic_rate_hz{1000.0};
   haptics::RendererKind renderer{haptics::RendererKind::kRuspini};
@@ -124,10 +124,10 @@ struct HofProject {
   coupling::ContactCoupling coupling{coupling::ContactCoupling::kBarycentric};
   haptics::SurfaceMaterial surface;
   haptics::SafetyConfig safety;
-  haptics::ForceEffects effects;          ///< H3D SpringEffect, ViscosityEffect, ForceField
-  bool use_bound_tree{true};              ///< H3D HapticsOptions.useBoundTree
-  int max_triangles_in_leaf{1};           ///< H3D GeometryBoundTreeOptions.maxTrianglesInLeaf
-  double stylus_radius_m{0.0025};         ///< drawn stylus tip (graphics)
+  haptics::ForceEffects effects;   ///< H3D SpringEffect, ViscosityEffect, ForceField
+  bool use_bound_tree{true};       ///< H3D HapticsOptions.useBoundTree
+  int max_triangles_in_leaf{1};    ///< H3D GeometryBoundTreeOptions.maxTrianglesInLeaf
+  double stylus_radius_m{0.0025};  ///< drawn stylus tip (graphics)
   double stylus_length_m{0.1};
   /// The needle stylus and its tissue parameters (<needle> in <haptics>); unset: a point or
   /// sphere stylus.

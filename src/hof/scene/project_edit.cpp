@@ -22,8 +22,22 @@ using detail::Fields;
 
 // The elements a setting can be in, as the file has them.
 enum class Element : std::uint8_t {
-  kRoot, kHaptics, kCalibration, kSurface, kSafety, kOptions, kStylus, kNeedle, kTissue, kEffects,
-  kSpringEffect, kViscosityEffect, kForceField, kGraphics, kMaterial, kLight,
+  kRoot,
+  kHaptics,
+  kCalibration,
+  kSurface,
+  kSafety,
+  kOptions,
+  kStylus,
+  kNeedle,
+  kTissue,
+  kEffects,
+  kSpringEffect,
+  kViscosityEffect,
+  kForceField,
+  kGraphics,
+  kMaterial,
+  kLight,
 };
 
 struct Child {
@@ -35,24 +49,32 @@ struct Child {
 // The children of `e` in `p`, in the order the writer writes them.
 std::vector<Child> children(Element e, const HofProject& p) {
   switch (e) {
-    case Element::kRoot: return {{"haptics", Element::kHaptics, 1}, {"graphics", Element::kGraphics, 1}};
+    case Element::kRoot:
+      return {{"haptics", Element::kHaptics, 1}, {"graphics", Element::kGraphics, 1}};
     case Element::kHaptics: {
-      std::vector<Child> c{{"calibration", Element::kCalibration, 1}, {"surface", Element::kSurface, 1},
-                           {"safety", Element::kSafety, 1}, {"options", Element::kOptions, 1}, {"stylus", Element::kStylus, 1}};
+      std::vector<Child> c{{"calibration", Element::kCalibration, 1},
+                           {"surface", Element::kSurface, 1},
+                           {"safety", Element::kSafety, 1},
+                           {"options", Element::kOptions, 1},
+                           {"stylus", Element::kStylus, 1}};
       if (p.needle) c.push_back({"needle", Element::kNeedle, 1});
       c.push_back({"effects", Element::kEffects, 1});
       return c;
     }
-    case Element::kNeedle: return {{"tissue", Element::kTissue, p.needle ? 1 + p.needle->bodies.size() : 0}};
+    case Element::kNeedle:
+      return {{"tissue", Element::kTissue, p.needle ? 1 + p.needle->bodies.size() : 0}};
     case Element::kEffects: {
       std::vector<Child> c;
       if (!p.effects.springs.empty()) c.push_back({"SpringEffect", Element::kSpringEffect, p.effects.springs.size()});
-      if (!p.effects.viscosities.empty()) c.push_back({"ViscosityEffect", Element::kViscosityEffect, p.effects.viscosities.size()});
+      if (!p.effects.viscosities.empty())
+        c.push_back({"ViscosityEffect", Element::kViscosityEffect, p.effects.viscosities.size()});
       if (!p.effects.constants.empty()) c.push_back({"ForceField", Element::kForceField, p.effects.constants.size()});
       return c;
     }
-    case Element::kGraphics: return {{"material", Element::kMaterial, 1}, {"light", Element::kLight, 1}};
-    default: return {};
+    case Element::kGraphics:
+      return {{"material", Element::kMaterial, 1}, {"light", Element::kLight, 1}};
+    default:
+      return {};
   }
 }
 
@@ -73,7 +95,8 @@ struct Setting {
     return Error{ErrorCode::kParse, fmt::format("'{}' = '{}': {}", name, value, message), path.string(), 0, -1};
   }
   Error unknown_attribute(std::string known) const {
-    return invalid(fmt::format("'{}': <{}> has no attribute '{}' (it has: {})", name, walked, attribute, known.empty() ? "none" : known));
+    return invalid(fmt::format("'{}': <{}> has no attribute '{}' (it has: {})", name, walked, attribute,
+                               known.empty() ? "none" : known));
   }
   template <class T>
   Expected<T> read(const Fields<T>& fields, T into, std::string known_before = {}) const {
@@ -113,7 +136,8 @@ Expected<ProjectEdit> needle_edit(const Setting& s, Element e, std::size_t index
     auto& [body, tissue] = n.bodies[index - 1];
     if (s.attribute == "body") {
       if (s.value.empty()) {
-        return std::unexpected(s.refused("<tissue body=\"\">: name the body, or leave body out for every deformable body"));
+        return std::unexpected(
+            s.refused("<tissue body=\"\">: name the body, or leave body out for every deformable body"));
       }
       body = std::string(s.value);
     } else {
@@ -136,10 +160,14 @@ Expected<ProjectEdit> effects_edit(const Setting& s, Element e, std::size_t inde
     return {};
   };
   Expected<void> ok;
-  if (e == Element::kSpringEffect) ok = replace(detail::spring_effect_fields(), effects.springs);
-  else if (e == Element::kViscosityEffect) ok = replace(detail::viscosity_effect_fields(), effects.viscosities);
-  else if (e == Element::kForceField) ok = replace(detail::force_field_fields(), effects.constants);
-  else return std::unexpected(s.unknown_attribute(""));  // <effects> itself has none
+  if (e == Element::kSpringEffect)
+    ok = replace(detail::spring_effect_fields(), effects.springs);
+  else if (e == Element::kViscosityEffect)
+    ok = replace(detail::viscosity_effect_fields(), effects.viscosities);
+  else if (e == Element::kForceField)
+    ok = replace(detail::force_field_fields(), effects.constants);
+  else
+    return std::unexpected(s.unknown_attribute(""));  // <effects> itself has none
   if (!ok) return std::unexpected(ok.error());
   return project_edit::Effects{std::move(effects)};
 }
@@ -148,8 +176,10 @@ Expected<ProjectEdit> effects_edit(const Setting& s, Element e, std::size_t inde
 Expected<ProjectEdit> edit_of(const Setting& s, Element e, std::size_t index) {
   const HofProject& p = s.project;
   switch (e) {
-    case Element::kRoot: return std::unexpected(s.unknown_attribute(""));
-    case Element::kHaptics: return haptics_edit(s);
+    case Element::kRoot:
+      return std::unexpected(s.unknown_attribute(""));
+    case Element::kHaptics:
+      return haptics_edit(s);
     case Element::kCalibration: {
       auto next = s.read(detail::calibration_fields(), p);
       if (!next) return std::unexpected(next.error());
@@ -178,11 +208,13 @@ Expected<ProjectEdit> edit_of(const Setting& s, Element e, std::size_t index) {
       return project_edit::Stylus{next->stylus_radius_m, next->stylus_length_m};
     }
     case Element::kNeedle:
-    case Element::kTissue: return needle_edit(s, e, index);
+    case Element::kTissue:
+      return needle_edit(s, e, index);
     case Element::kEffects:
     case Element::kSpringEffect:
     case Element::kViscosityEffect:
-    case Element::kForceField: return effects_edit(s, e, index);
+    case Element::kForceField:
+      return effects_edit(s, e, index);
     case Element::kGraphics:
     case Element::kMaterial:
     case Element::kLight: {
@@ -199,15 +231,16 @@ Expected<ProjectEdit> edit_of(const Setting& s, Element e, std::size_t index) {
 
 }  // namespace
 
-Expected<ProjectEdit> parse_project_edit(const HofProject& project, const std::filesystem::path& path, std::string_view element,
-                                         std::string_view attribute, std::string_view value) {
+Expected<ProjectEdit> parse_project_edit(const HofProject& project, const std::filesystem::path& path,
+                                         std::string_view element, std::string_view attribute, std::string_view value) {
   Setting s{project, path, fmt::format("{}@{}", element, attribute), "hof", "hof", attribute, value};
   Element at = Element::kRoot;
   std::size_t index = 0;
   std::size_t start = 0;
   while (!element.empty() && start <= element.size()) {
     const std::size_t slash = element.find('/', start);
-    std::string_view part = element.substr(start, slash == std::string_view::npos ? std::string_view::npos : slash - start);
+    std::string_view part =
+        element.substr(start, slash == std::string_view::npos ? std::string_view::npos : slash - start);
     // NAME[n]: the n-th such element (from 1, as XPath), e.g. haptics/effects/SpringEffect[2].
     int n = 1;
     if (const std::size_t open = part.find('['); open != std::string_view::npos && part.ends_with(']')) {
@@ -219,22 +252,25 @@ Expected<ProjectEdit> parse_project_edit(const HofProject& project, const std::f
       part = part.substr(0, open);
     }
     const std::vector<Child> kids = children(at, project);
-    const auto child = std::find_if(kids.begin(), kids.end(), [&](const Child& c) { return c.name == part && c.count > 0; });
+    const auto child =
+        std::find_if(kids.begin(), kids.end(), [&](const Child& c) { return c.name == part && c.count > 0; });
     if (child == kids.end()) {
       std::string known;
       for (const Child& c : kids) {
         if (c.count > 0) known += fmt::format("{}{}", known.empty() ? "" : ", ", c.name);
       }
       if (at == Element::kRoot && (part == "mechanics" || part == "bodies")) {
-        return std::unexpected(invalid(fmt::format("'{}': <{}> is not set by name here (the settings set so are in: {}; a body's "
-                                                   "parameters are mechanics/BODY/COMPONENT@PARAMETER)",
-                                                   s.name, part, known)));
+        return std::unexpected(
+            invalid(fmt::format("'{}': <{}> is not set by name here (the settings set so are in: {}; a body's "
+                                "parameters are mechanics/BODY/COMPONENT@PARAMETER)",
+                                s.name, part, known)));
       }
-      return std::unexpected(
-          invalid(fmt::format("'{}': no element <{}> in <{}> (it has: {})", s.name, part, s.walked, known.empty() ? "none" : known)));
+      return std::unexpected(invalid(fmt::format("'{}': no element <{}> in <{}> (it has: {})", s.name, part, s.walked,
+                                                 known.empty() ? "none" : known)));
     }
     if (static_cast<std::size_t>(n) > child->count) {
-      return std::unexpected(invalid(fmt::format("'{}': <{}> has {} <{}>, not {}", s.name, s.walked, child->count, part, n)));
+      return std::unexpected(
+          invalid(fmt::format("'{}': <{}> has {} <{}>, not {}", s.name, s.walked, child->count, part, n)));
     }
     at = child->element;
     index = static_cast<std::size_t>(n - 1);

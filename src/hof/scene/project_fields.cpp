@@ -19,11 +19,20 @@ std::string xml_escape(std::string_view text) {
   std::string out;
   for (const char c : valid_utf8(text)) {
     switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      default:
+        out += c;
     }
   }
   return out;
@@ -103,9 +112,12 @@ template <class T, class Get>
 Field<T> boolean(std::string_view name, Get get) {
   return {name,
           [name, get](T& into, std::string_view element, std::string_view text) -> Problem {
-            if (text == "true" || text == "1") get(into) = true;
-            else if (text == "false" || text == "0") get(into) = false;
-            else return fmt::format("<{}> {}=\"{}\" must be true or false", element, name, text);
+            if (text == "true" || text == "1")
+              get(into) = true;
+            else if (text == "false" || text == "0")
+              get(into) = false;
+            else
+              return fmt::format("<{}> {}=\"{}\" must be true or false", element, name, text);
             return std::nullopt;
           },
           [get](const T& from) { return std::string(get(from) ? "true" : "false"); },
@@ -152,7 +164,9 @@ template <class T, std::size_t N, class ToArray, class FromArray>
 Field<T> numbers(std::string_view name, std::string_view meaning, ToArray to_array, FromArray from_array) {
   return {name,
           [name, meaning, from_array](T& into, std::string_view element, std::string_view text) -> Problem {
-            const auto error = [&] { return fmt::format("<{}> {}=\"{}\" must be {} numbers ({})", element, name, text, N, meaning); };
+            const auto error = [&] {
+              return fmt::format("<{}> {}=\"{}\" must be {} numbers ({})", element, name, text, N, meaning);
+            };
             std::istringstream in{std::string(text)};
             std::array<double, N> v{};
             for (double& x : v) {
@@ -177,7 +191,8 @@ Field<T> numbers(std::string_view name, std::string_view meaning, ToArray to_arr
 
 // One of named values; `unknown` is the error, with {} for the text.
 template <class T, class E, class Get>
-Field<T> choice(std::string_view name, Get get, std::vector<std::pair<std::string_view, E>> table, std::string_view unknown) {
+Field<T> choice(std::string_view name, Get get, std::vector<std::pair<std::string_view, E>> table,
+                std::string_view unknown) {
   return {name,
           [get, table, unknown](T& into, std::string_view, std::string_view text) -> Problem {
             for (const auto& [n, value] : table) {
@@ -218,14 +233,16 @@ constexpr std::pair<std::string_view, ColorBy> kColorings[] = {{"material", Colo
                                                                {"stress", ColorBy::kStress}};
 
 // Members reached by a generic lambda serve both the reading (T&) and the writing (const T&).
-#define HOF_MEMBER(expr) [](auto& t) -> auto& { return t.expr; }
+#define HOF_MEMBER(expr) \
+  [](auto& t) -> auto& { return t.expr; }
 
 }  // namespace
 
 template <class T>
 std::string write_fields(const Fields<T>& fields, const T& from) {
   std::string out;
-  for (const Field<T>& f : fields) out += fmt::format("{}{}=\"{}\"", out.empty() ? "" : " ", f.name, xml_escape(f.write(from)));
+  for (const Field<T>& f : fields)
+    out += fmt::format("{}{}=\"{}\"", out.empty() ? "" : " ", f.name, xml_escape(f.write(from)));
   return out;
 }
 
@@ -233,7 +250,8 @@ template std::string write_fields(const Fields<HofProject>&, const HofProject&);
 template std::string write_fields(const Fields<haptics::SurfaceMaterial>&, const haptics::SurfaceMaterial&);
 template std::string write_fields(const Fields<haptics::SafetyConfig>&, const haptics::SafetyConfig&);
 template std::string write_fields(const Fields<procedures::NeedleConfig>&, const procedures::NeedleConfig&);
-template std::string write_fields(const Fields<procedures::TissueNeedleParameters>&, const procedures::TissueNeedleParameters&);
+template std::string write_fields(const Fields<procedures::TissueNeedleParameters>&,
+                                  const procedures::TissueNeedleParameters&);
 template std::string write_fields(const Fields<haptics::SpringEffect>&, const haptics::SpringEffect&);
 template std::string write_fields(const Fields<haptics::ViscosityEffect>&, const haptics::ViscosityEffect&);
 template std::string write_fields(const Fields<haptics::ConstantForceEffect>&, const haptics::ConstantForceEffect&);
@@ -256,12 +274,13 @@ const Fields<HofProject>& haptics_fields() {
                                            {"BACK", collision::TouchableFace::kBack},
                                            {"FRONT_AND_BACK", collision::TouchableFace::kFrontAndBack}},
                                           "unknown touchableFace \"{}\" (FRONT, BACK, FRONT_AND_BACK)"),
-      choice<P, coupling::ContactCoupling>("coupling", HOF_MEMBER(coupling),
-                                           {{"barycentric", coupling::ContactCoupling::kBarycentric},
-                                            {"closest-vertex", coupling::ContactCoupling::kClosestVertex},
-                                            {"compliance", coupling::ContactCoupling::kCompliance},
-                                            {"fem-reaction", coupling::ContactCoupling::kFemReaction}},
-                                           "unknown coupling \"{}\" (barycentric, closest-vertex, compliance, fem-reaction)"),
+      choice<P, coupling::ContactCoupling>(
+          "coupling", HOF_MEMBER(coupling),
+          {{"barycentric", coupling::ContactCoupling::kBarycentric},
+           {"closest-vertex", coupling::ContactCoupling::kClosestVertex},
+           {"compliance", coupling::ContactCoupling::kCompliance},
+           {"fem-reaction", coupling::ContactCoupling::kFemReaction}},
+          "unknown coupling \"{}\" (barycentric, closest-vertex, compliance, fem-reaction)"),
   };
   return fields;
 }
@@ -376,8 +395,13 @@ const Fields<procedures::TissueNeedleParameters>& tissue_fields() {
   const auto fung = [](std::string_view name, procedures::FungParameters T::*member) {
     return numbers<T, 4>(
         name, "a 1/m, b N, d0 m, F0 N",
-        [member](const T& t) { const auto& f = t.*member; return Fung{f.a_per_m, f.b_n, f.d0_m, f.f0_n}; },
-        [member](T& t, const Fung& v) { t.*member = {v[0], v[1], v[2], v[3]}; });
+        [member](const T& t) {
+          const auto& f = t.*member;
+          return Fung{f.a_per_m, f.b_n, f.d0_m, f.f0_n};
+        },
+        [member](T& t, const Fung& v) {
+          t.*member = {v[0], v[1], v[2], v[3]};
+        });
   };
   static const Fields<T> fields{
       boolean<T>("pierceable", HOF_MEMBER(pierceable)),
@@ -396,14 +420,19 @@ const Fields<procedures::TissueNeedleParameters>& tissue_fields() {
       fung("fungPost", &T::fung_post),
       numbers<T, 3>(
           "stiffness", "a0 N, a1 N/m, a2 N/m2",
-          [](const T& t) { return std::array<double, 3>{t.stiffness.a0_n, t.stiffness.a1_n_per_m, t.stiffness.a2_n_per_m2}; },
-          [](T& t, const std::array<double, 3>& v) { t.stiffness = {v[0], v[1], v[2]}; }),
+          [](const T& t) {
+            return std::array<double, 3>{t.stiffness.a0_n, t.stiffness.a1_n_per_m, t.stiffness.a2_n_per_m2};
+          },
+          [](T& t, const std::array<double, 3>& v) {
+            t.stiffness = {v[0], v[1], v[2]};
+          }),
       number<T>("cuttingForce", HOF_MEMBER(cutting_force_n)),
       numbers<T, 4>(
           "friction", "Cp N/m, Cn N/m, bp N s/m2, bn N s/m2",
           [](const T& t) {
             const procedures::KarnoppFriction& f = t.friction;
-            return Fung{f.static_positive_n_per_m, f.static_negative_n_per_m, f.damping_positive_n_s_per_m2, f.damping_negative_n_s_per_m2};
+            return Fung{f.static_positive_n_per_m, f.static_negative_n_per_m, f.damping_positive_n_s_per_m2,
+                        f.damping_negative_n_s_per_m2};
           },
           [](T& t, const Fung& v) {
             t.friction.static_positive_n_per_m = v[0];
@@ -444,7 +473,8 @@ const Fields<haptics::ViscosityEffect>& viscosity_effect_fields() {
 }
 
 const Fields<haptics::ConstantForceEffect>& force_field_fields() {
-  static const Fields<haptics::ConstantForceEffect> fields{vector<haptics::ConstantForceEffect>("force", HOF_MEMBER(force_n))};
+  static const Fields<haptics::ConstantForceEffect> fields{
+      vector<haptics::ConstantForceEffect>("force", HOF_MEMBER(force_n))};
   return fields;
 }
 

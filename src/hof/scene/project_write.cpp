@@ -54,19 +54,23 @@ std::string to_xml(const HofProject& p) {
     std::string shape;
     switch (region.shape) {
       case MaterialRegion::Shape::kSphere:
-        shape = fmt::format("shape=\"sphere\" center=\"{}\" radius=\"{}\"", vec(region.center), number_text(region.radius));
+        shape =
+            fmt::format("shape=\"sphere\" center=\"{}\" radius=\"{}\"", vec(region.center), number_text(region.radius));
         break;
       case MaterialRegion::Shape::kBox:
         shape = fmt::format("shape=\"box\" min=\"{}\" max=\"{}\"", vec(region.box_min), vec(region.box_max));
         break;
-      case MaterialRegion::Shape::kGroup: shape = fmt::format("shape=\"group\" physicalGroup=\"{}\"", region.physical_group); break;
+      case MaterialRegion::Shape::kGroup:
+        shape = fmt::format("shape=\"group\" physicalGroup=\"{}\"", region.physical_group);
+        break;
     }
     std::string material;
     if (region.young_modulus_pa) material += fmt::format(" youngModulus=\"{}\"", number_text(*region.young_modulus_pa));
     if (region.poisson_ratio) material += fmt::format(" poissonRatio=\"{}\"", number_text(*region.poisson_ratio));
-    if (region.mass_density_kg_per_m3) material += fmt::format(" massDensity=\"{}\"", number_text(*region.mass_density_kg_per_m3));
-    sets += fmt::format("    <region name=\"{}\" body=\"{}\"{} {}{}/>\n", xml_escape(region.name), xml_escape(region.body),
-                        force_field, shape, material);
+    if (region.mass_density_kg_per_m3)
+      material += fmt::format(" massDensity=\"{}\"", number_text(*region.mass_density_kg_per_m3));
+    sets += fmt::format("    <region name=\"{}\" body=\"{}\"{} {}{}/>\n", xml_escape(region.name),
+                        xml_escape(region.body), force_field, shape, material);
   }
   const std::string unit = p.scene_unit.empty() ? std::string() : fmt::format(" unit=\"{}\"", xml_escape(p.scene_unit));
   if (!p.mechanics_inline.empty()) {
@@ -83,14 +87,15 @@ std::string to_xml(const HofProject& p) {
       std::string model = b.model.empty() ? std::string() : fmt::format(" model=\"{}\"", xml_escape(b.model));
       if (b.grid[0] > 0) model += fmt::format(" grid=\"{} {} {}\"", b.grid[0], b.grid[1], b.grid[2]);
       if (b.surface) {
-        out += fmt::format("    <body name=\"{}\"{}>\n", xml_escape(b.name), model) + surface_xml(*b.surface, "      ") + "    </body>\n";
+        out += fmt::format("    <body name=\"{}\"{}>\n", xml_escape(b.name), model) +
+               surface_xml(*b.surface, "      ") + "    </body>\n";
       } else {
         out += fmt::format("    <body name=\"{}\"{}/>\n", xml_escape(b.name), model);
       }
     }
     for (const ObstacleSetup& o : p.obstacles) {
-      const std::string open = fmt::format("    <obstacle name=\"{}\" mesh=\"{}\" translation=\"{}\"", xml_escape(o.name),
-                                           xml_escape(o.mesh.generic_string()), vec(o.translation));
+      const std::string open = fmt::format("    <obstacle name=\"{}\" mesh=\"{}\" translation=\"{}\"",
+                                           xml_escape(o.name), xml_escape(o.mesh.generic_string()), vec(o.translation));
       out += o.surface ? open + ">\n" + surface_xml(*o.surface, "      ") + "    </obstacle>\n" : open + "/>\n";
     }
     out += "  </bodies>\n";
@@ -106,11 +111,13 @@ std::string to_xml(const HofProject& p) {
     out += "    <effects/>\n";
   } else {
     out += "    <effects>\n";
-    for (const auto& e : p.effects.springs) out += fmt::format("      <SpringEffect {}/>\n", write_fields(detail::spring_effect_fields(), e));
+    for (const auto& e : p.effects.springs)
+      out += fmt::format("      <SpringEffect {}/>\n", write_fields(detail::spring_effect_fields(), e));
     for (const auto& e : p.effects.viscosities) {
       out += fmt::format("      <ViscosityEffect {}/>\n", write_fields(detail::viscosity_effect_fields(), e));
     }
-    for (const auto& e : p.effects.constants) out += fmt::format("      <ForceField {}/>\n", write_fields(detail::force_field_fields(), e));
+    for (const auto& e : p.effects.constants)
+      out += fmt::format("      <ForceField {}/>\n", write_fields(detail::force_field_fields(), e));
     out += "    </effects>\n";
   }
   out += "  </haptics>\n";

@@ -28,7 +28,8 @@ namespace hof::scene::detail {
 /// Up to `count` names of `candidates` closest to `name` (case-insensitive edit distance, then
 /// alphabetical), among those close enough to be a misspelling (at most a third of the name's
 /// letters off, and at least 2).
-[[nodiscard]] std::vector<std::string> closest_names(std::string_view name, std::span<const std::string_view> candidates,
+[[nodiscard]] std::vector<std::string> closest_names(std::string_view name,
+                                                     std::span<const std::string_view> candidates,
                                                      std::size_t count = 3);
 
 }  // namespace hof::scene::detail

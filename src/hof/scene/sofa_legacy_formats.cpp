@@ -56,8 +56,10 @@ Expected<LegacyMesh> read_legacy_mesh(const std::filesystem::path& path) {
     if (tok.empty() || tok[0].starts_with('#')) continue;
     // `tetra` and `triangle` are kept; other element kinds are counted.
     std::size_t count = 0;
-    if (tok[0] == "tetra") count = 4;
-    else if (tok[0] == "triangle") count = 3;
+    if (tok[0] == "tetra")
+      count = 4;
+    else if (tok[0] == "triangle")
+      count = 3;
     if (count == 0) {
       ++out.ignored_lines;
       continue;
@@ -69,8 +71,10 @@ Expected<LegacyMesh> read_legacy_mesh(const std::filesystem::path& path) {
       if (!parse_token(tok[k + 1], idx[k]) || idx[k] < 0)
         return error_at(path, line_no, fmt::format("'{}' is not a node index", tok[k + 1]));
     }
-    if (count == 4) out.tets.push_back({idx[0], idx[1], idx[2], idx[3]});
-    else out.triangles.push_back({idx[0], idx[1], idx[2]});
+    if (count == 4)
+      out.tets.push_back({idx[0], idx[1], idx[2], idx[3]});
+    else
+      out.triangles.push_back({idx[0], idx[1], idx[2]});
   }
   return out;
 }
@@ -115,8 +119,7 @@ Expected<Xs3File> read_xs3(const std::filesystem::path& path) {
   }
   if (!header) return error_at(path, 1, "not an Xsp file (no 'Xsp' header)");
   if (declared >= 0 && declared != static_cast<std::int64_t>(out.positions.size()))
-    return error_at(path, 0, fmt::format("'numm' says {} masses but the file has {}", declared,
-                                         out.positions.size()));
+    return error_at(path, 0, fmt::format("'numm' says {} masses but the file has {}", declared, out.positions.size()));
   return out;
 }
 

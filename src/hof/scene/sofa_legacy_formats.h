@@ -16,9 +16,9 @@ namespace hof::scene::detail {
 
 /// A `.mesh` file: elements only (the format carries no node positions).
 struct LegacyMesh {
-  std::vector<mesh::Tet> tets;        ///< (T) 0-based node indices
-  std::vector<mesh::Tri> triangles;   ///< (F) 0-based node indices
-  std::int64_t ignored_lines{0};      ///< `line`/`quad`/other element lines not kept
+  std::vector<mesh::Tet> tets;       ///< (T) 0-based node indices
+  std::vector<mesh::Tri> triangles;  ///< (F) 0-based node indices
+  std::int64_t ignored_lines{0};     ///< `line`/`quad`/other element lines not kept
 };
 
 /// Reads a `.mesh` file. Errors name the file and line (unknown numbers, short lines).
@@ -26,11 +26,11 @@ struct LegacyMesh {
 
 /// An `.xs3` (Xsp 3.0) file: the masses (nodes); springs are not kept.
 struct Xs3File {
-  std::vector<Vec3> positions;        ///< (N) scene units
-  std::vector<Vec3> velocities;       ///< (N) scene units per second
-  std::vector<double> masses;         ///< (N) mass per node
-  std::vector<bool> fixed;            ///< (N) the node's `fixed` flag
-  std::int64_t springs{0};            ///< number of `lspg` lines (not used by HoF)
+  std::vector<Vec3> positions;   ///< (N) scene units
+  std::vector<Vec3> velocities;  ///< (N) scene units per second
+  std::vector<double> masses;    ///< (N) mass per node
+  std::vector<bool> fixed;       ///< (N) the node's `fixed` flag
+  std::int64_t springs{0};       ///< number of `lspg` lines (not used by HoF)
 };
 
 /// Reads an `.xs3` file. Errors name the file and line; `numm` must match the `mass` lines.

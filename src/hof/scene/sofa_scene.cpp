@@ -141,12 +141,14 @@ Expected<SofaScene> Reader::run() {
   std::string others;
   std::size_t count = 0;
   for (const auto& s : scene_.skipped) {
-    if (std::ranges::any_of(scene_.warnings, [&](const std::string& w) { return w.find(s) != std::string::npos; })) continue;
+    if (std::ranges::any_of(scene_.warnings, [&](const std::string& w) { return w.find(s) != std::string::npos; }))
+      continue;
     others += (others.empty() ? "" : ", ") + s;
     ++count;
   }
   if (count) {
-    scene_.warnings.push_back(fmt::format("{}: {} component(s) not simulated by HoF and skipped: {}", path_.string(), count, others));
+    scene_.warnings.push_back(
+        fmt::format("{}: {} component(s) not simulated by HoF and skipped: {}", path_.string(), count, others));
   }
   if (scene_.models.empty()) warn(root_->line, "no simulated model (a Node with an ODE solver and a MechanicalObject)");
   return std::move(scene_);
@@ -169,10 +171,14 @@ Expected<void> Reader::build_node(const pugi::xml_node& xml, SceneNode& node) {
   node_as_component.name = node.name;
   node_as_component.line = node.line;
   for (const pugi::xml_attribute& a : xml.attributes()) node_as_component.attrs.emplace_back(a.name(), a.value());
-  if (auto dt = number(node_as_component, "dt"); !dt) return std::unexpected(dt.error());
-  else if (*dt) node.dt_s = **dt;
-  if (auto g = vec3(node_as_component, "gravity"); !g) return std::unexpected(g.error());
-  else if (*g) node.gravity = **g;
+  if (auto dt = number(node_as_component, "dt"); !dt)
+    return std::unexpected(dt.error());
+  else if (*dt)
+    node.dt_s = **dt;
+  if (auto g = vec3(node_as_component, "gravity"); !g)
+    return std::unexpected(g.error());
+  else if (*g)
+    node.gravity = **g;
 
   for (const pugi::xml_node& child : xml.children()) {
     if (child.type() != pugi::node_element) continue;
@@ -188,8 +194,7 @@ Expected<void> Reader::build_node(const pugi::xml_node& xml, SceneNode& node) {
     c->line = line_of(child.offset_debug());
     if (tag == "Object") {
       legacy_ = true;
-      if (!child.attribute("type"))
-        return fail(ErrorCode::kParse, c->line, "<Object> without a 'type' attribute");
+      if (!child.attribute("type")) return fail(ErrorCode::kParse, c->line, "<Object> without a 'type' attribute");
       c->written = child.attribute("type").value();
     } else {
       c->written = std::string(tag);
@@ -203,9 +208,12 @@ Expected<void> Reader::build_node(const pugi::xml_node& xml, SceneNode& node) {
       legacy_ = true;
     const auto alias = alias_table().find(c->written);
     c->type = alias != alias_table().end() ? alias->second : c->written;
-    if (const std::string* n = c->attr("name")) c->name = *n;
-    else if (const std::string* p = c->attr("pluginName")) c->name = *p;
-    else c->name = c->written;
+    if (const std::string* n = c->attr("name"))
+      c->name = *n;
+    else if (const std::string* p = c->attr("pluginName"))
+      c->name = *p;
+    else
+      c->name = c->written;
     c->node = &node;
     c->index = node.components.size();
     node.components.push_back(std::move(c));
@@ -221,9 +229,9 @@ namespace {
 // SOFA's modules are "Sofa.Component.X" (today) or "SofaBaseMechanics"-style (v20-v22); the
 // few plugin packs whose names also begin with "Sofa" are listed.
 bool is_external_plugin(std::string_view name) {
-  static constexpr std::string_view kExternalSofaNamed[] = {"SofaPython",  "SofaPython3",       "SofaCUDA",
-                                                            "SofaCarving", "SofaSphFluid",      "SofaDistanceGrid",
-                                                            "SofaImplicitField", "SofaOpenCL", "SofaAssimp"};
+  static constexpr std::string_view kExternalSofaNamed[] = {"SofaPython",        "SofaPython3",  "SofaCUDA",
+                                                            "SofaCarving",       "SofaSphFluid", "SofaDistanceGrid",
+                                                            "SofaImplicitField", "SofaOpenCL",   "SofaAssimp"};
   if (std::ranges::find(kExternalSofaNamed, name) != std::end(kExternalSofaNamed)) return true;
   return !name.starts_with("Sofa");
 }
@@ -234,12 +242,15 @@ bool is_accepted_extra_attribute(std::string_view type, std::string_view key) {
   // The factory's own (type, template), src="@loader", and SOFA's deprecated isCompliance.
   if (key == "name" || key == "template" || key == "type" || key == "src" || key == "isCompliance") return true;
   // Geometry HoF reads on any component that has it (compute_data): it is not ignored here.
-  static constexpr std::string_view kGeometry[] = {"filename", "fileMesh", "position", "tetrahedra", "tetras", "triangles"};
+  static constexpr std::string_view kGeometry[] = {"filename",   "fileMesh", "position",
+                                                   "tetrahedra", "tetras",   "triangles"};
   if (std::ranges::find(kGeometry, key) != std::end(kGeometry)) return true;
-  if (key == "coarseCorrection" || key == "coarseRefreshSteps") return type == "CGLinearSolver";  // HoF's CG preconditioner
-  if (type.ends_with("Mapping")) return key == "object1" || key == "object2";                    // input/output before v1.0
+  if (key == "coarseCorrection" || key == "coarseRefreshSteps")
+    return type == "CGLinearSolver";                                           // HoF's CG preconditioner
+  if (type.ends_with("Mapping")) return key == "object1" || key == "object2";  // input/output before v1.0
   if (type == "MechanicalObject" || type == "OglModel" || type == "VisualModel" || type == "VisualModelImpl") {
-    static constexpr std::string_view kLegacyTransform[] = {"dx", "dy", "dz", "rx", "ry", "rz", "scale", "sx", "sy", "sz"};
+    static constexpr std::string_view kLegacyTransform[] = {"dx", "dy",    "dz", "rx", "ry",
+                                                            "rz", "scale", "sx", "sy", "sz"};
     return std::ranges::find(kLegacyTransform, key) != std::end(kLegacyTransform);
   }
   if (is_loader(type)) return key == "scale";
@@ -284,17 +295,19 @@ Expected<void> Reader::check_types_and_attributes() {
       continue;
     }
     const std::vector<std::string> near = closest_names(c->written, known_sofa_components());
-    return fail(ErrorCode::kParse, c->line,
-                fmt::format("unknown component type '{}': SOFA has no such component (\"Object type {} was not created\"){}",
-                            c->written, c->written,
-                            near.empty() ? std::string("; check its spelling")
-                                         : fmt::format("; did you mean {}?", fmt::join(near, ", "))));
+    return fail(
+        ErrorCode::kParse, c->line,
+        fmt::format("unknown component type '{}': SOFA has no such component (\"Object type {} was not created\"){}",
+                    c->written, c->written,
+                    near.empty() ? std::string("; check its spelling")
+                                 : fmt::format("; did you mean {}?", fmt::join(near, ", "))));
   }
   if (!unknown_from_plugins.empty()) {
-    warn(root_->line, fmt::format("{} component(s) of a type HoF does not know, presumably from the plugin(s) the scene "
-                                  "requires ({}), are not simulated: {}",
-                                  unknown_from_plugins.size(), fmt::join(external_plugins, ", "),
-                                  fmt::join(unknown_from_plugins, ", ")));
+    warn(root_->line,
+         fmt::format("{} component(s) of a type HoF does not know, presumably from the plugin(s) the scene "
+                     "requires ({}), are not simulated: {}",
+                     unknown_from_plugins.size(), fmt::join(external_plugins, ", "),
+                     fmt::join(unknown_from_plugins, ", ")));
   }
   // Attributes: checked where HoF has the component's data names (the components it reads),
   // in today's syntax (a 2008 scene's data had other names, which SOFA then took).
@@ -303,10 +316,12 @@ Expected<void> Reader::check_types_and_attributes() {
     const std::span<const std::string_view> data = sofa_data_names(c->type);
     if (data.empty()) continue;
     for (const auto& [key, value] : c->attrs) {
-      if (std::ranges::binary_search(data, std::string_view(key)) || is_accepted_extra_attribute(c->type, key)) continue;
+      if (std::ranges::binary_search(data, std::string_view(key)) || is_accepted_extra_attribute(c->type, key))
+        continue;
       const std::vector<std::string> near = closest_names(key, data, 1);
-      warn(c->line, fmt::format("{}: attribute '{}' is not a data of {} and is ignored (SOFA ignores it too){}", c->label(),
-                                key, c->type, near.empty() ? std::string() : fmt::format("; did you mean '{}'?", near.front())));
+      warn(c->line,
+           fmt::format("{}: attribute '{}' is not a data of {} and is ignored (SOFA ignores it too){}", c->label(), key,
+                       c->type, near.empty() ? std::string() : fmt::format("; did you mean '{}'?", near.front())));
     }
   }
   return {};
@@ -333,8 +348,7 @@ Expected<std::optional<double>> Reader::number(const Component& c, std::string_v
   if (!v) return std::unexpected(v.error());
   if (v->empty()) return fail(c, fmt::format("attribute {}: empty, expected a number", key));
   if (v->size() > 1 && std::ranges::any_of(*v, [&](double x) { return x != v->front(); }))
-    return fail(c, fmt::format("attribute {}: {} different values; HoF takes one value per component", key,
-                               v->size()),
+    return fail(c, fmt::format("attribute {}: {} different values; HoF takes one value per component", key, v->size()),
                 ErrorCode::kUnsupported);
   return std::optional<double>{v->front()};
 }
@@ -416,13 +430,39 @@ namespace {
 
 // Components with no counterpart needed in HoF: they change nothing it simulates.
 bool needs_no_counterpart(std::string_view type) {
-  static constexpr std::string_view kTypes[] = {
-      "RequiredPlugin", "DefaultAnimationLoop", "DefaultVisualManagerLoop", "VisualStyle", "InteractiveCamera", "Camera",
-      "LightManager", "DirectionalLight", "PositionalLight", "SpotLight", "BackgroundSetting", "OglSceneFrame", "OglGrid",
-      "OglLabel", "CollisionPipeline", "DefaultPipeline", "BruteForceBroadPhase", "BVHNarrowPhase", "BruteForceDetection",
-      "BruteForce", "DiscreteIntersection", "MinProximityIntersection", "NewProximityIntersection", "LocalMinDistance",
-      "AttachBodyButtonSetting", "FixedPlaneConstraintSetting", "OglModel", "VisualModel", "OglShader", "MeshOBJLoader",
-      "SphereLoader", "VisualGrid", "LineAxis"};
+  static constexpr std::string_view kTypes[] = {"RequiredPlugin",
+                                                "DefaultAnimationLoop",
+                                                "DefaultVisualManagerLoop",
+                                                "VisualStyle",
+                                                "InteractiveCamera",
+                                                "Camera",
+                                                "LightManager",
+                                                "DirectionalLight",
+                                                "PositionalLight",
+                                                "SpotLight",
+                                                "BackgroundSetting",
+                                                "OglSceneFrame",
+                                                "OglGrid",
+                                                "OglLabel",
+                                                "CollisionPipeline",
+                                                "DefaultPipeline",
+                                                "BruteForceBroadPhase",
+                                                "BVHNarrowPhase",
+                                                "BruteForceDetection",
+                                                "BruteForce",
+                                                "DiscreteIntersection",
+                                                "MinProximityIntersection",
+                                                "NewProximityIntersection",
+                                                "LocalMinDistance",
+                                                "AttachBodyButtonSetting",
+                                                "FixedPlaneConstraintSetting",
+                                                "OglModel",
+                                                "VisualModel",
+                                                "OglShader",
+                                                "MeshOBJLoader",
+                                                "SphereLoader",
+                                                "VisualGrid",
+                                                "LineAxis"};
   return std::ranges::find(kTypes, type) != std::end(kTypes);
 }
 
@@ -431,7 +471,8 @@ std::string_view what_changes(std::string_view type) {
   if (type == "CollisionResponse" || type == "DefaultContactManager" || type == "RuleBasedContactManager") {
     return "contacts between bodies: in HoF bodies do not collide with each other, only with the stylus";
   }
-  if (type == "FreeMotionAnimationLoop" || type.ends_with("ConstraintSolver") || type.ends_with("ConstraintCorrection")) {
+  if (type == "FreeMotionAnimationLoop" || type.ends_with("ConstraintSolver") ||
+      type.ends_with("ConstraintCorrection")) {
     return "constraint-based contacts and constraints are not solved";
   }
   if (type.find("ForceField") != std::string_view::npos) return "its forces are missing from the body";
@@ -479,15 +520,14 @@ void Reader::list_skipped(const SceneNode& node) {
     }
     // A mapping that carries a collision model (SOFA's collision spheres) is part of that model.
     // (Collision models under today's names and the older ones: SphereModel, Sphere, ...)
-    static constexpr std::string_view kOlderCollisionModels[] = {"Sphere",     "SphereModel",    "Triangle",
-                                                                 "TriangleModel", "TTriangleModel", "Line",
-                                                                 "LineModel",  "Point",          "PointModel",
-                                                                 "CubeModel",  "TriangleMeshModel", "TriangleSetModel"};
-    const bool carries_collision = c->type.find("Mapping") != std::string::npos &&
-                                   std::ranges::any_of(node.components, [](const auto& o) {
-                                     return o->type.ends_with("CollisionModel") ||
-                                            std::ranges::find(kOlderCollisionModels, o->type) != std::end(kOlderCollisionModels);
-                                   });
+    static constexpr std::string_view kOlderCollisionModels[] = {
+        "Sphere",    "SphereModel", "Triangle",   "TriangleModel", "TTriangleModel",    "Line",
+        "LineModel", "Point",       "PointModel", "CubeModel",     "TriangleMeshModel", "TriangleSetModel"};
+    const bool carries_collision =
+        c->type.find("Mapping") != std::string::npos && std::ranges::any_of(node.components, [](const auto& o) {
+          return o->type.ends_with("CollisionModel") ||
+                 std::ranges::find(kOlderCollisionModels, o->type) != std::end(kOlderCollisionModels);
+        });
     if (const std::string_view why = what_changes(c->type); !why.empty() && !carries_collision) {
       warn(c->line, fmt::format("{} changes SOFA's result and is not simulated by HoF: {}", c->label(), why));
     }

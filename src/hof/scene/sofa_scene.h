@@ -23,10 +23,10 @@ namespace hof::scene {
 
 /// One simulated body: a SOFA node with an ODE solver and a mechanical state.
 struct SofaSceneModel {
-  std::string node_path;                          ///< e.g. "lroot/Liver"
-  mechanics::ModelConfig config;                  ///< ready for mechanics::build_model()
+  std::string node_path;                             ///< e.g. "lroot/Liver"
+  mechanics::ModelConfig config;                     ///< ready for mechanics::build_model()
   std::optional<std::filesystem::path> visual_mesh;  ///< OglModel file (resolved), if any
-  bool visual_barycentric{false};                 ///< a BarycentricMapping maps the volume to it
+  bool visual_barycentric{false};                    ///< a BarycentricMapping maps the volume to it
   /// A hexahedral grid's fine surface (the closed surface a SparseGridTopology was built
   /// from), to touch when the node has no mapped visual model: it follows the grid trilinearly.
   std::optional<mesh::TriMesh> fine_surface;
@@ -44,7 +44,7 @@ struct SofaScene {
   std::filesystem::path file;
   std::vector<SofaSceneModel> models;
   std::vector<SofaSceneObstacle> obstacles;
-  std::vector<std::string> skipped;   ///< "TYPE 'name' (line N)" of every component not simulated
+  std::vector<std::string> skipped;  ///< "TYPE 'name' (line N)" of every component not simulated
   /// Components HoF needs no counterpart of (plugins, display, the default loops, collision
   /// detection without a response): read, not simulated, changing nothing.
   std::vector<std::string> ignored;

@@ -29,7 +29,6 @@ Mat3 euler_xyz_deg(const Vec3& deg) {
 
 }  // namespace
 
-
 // "@a/b/name.field", "@../name", "@[-1].field", "@/root/a/name", "@name": the component (and
 // `field`, if any).
 // A single name is looked up in the node, then in its ancestors (SOFA's context lookup).
@@ -47,8 +46,8 @@ Expected<Component*> Reader::resolve_link(const Component& from, std::string_vie
   if (path.starts_with('[')) {
     const std::size_t close = path.find(']');
     int k = 0;
-    if (close == std::string_view::npos ||
-        std::from_chars(path.data() + 1, path.data() + close, k).ec != std::errc{} || k >= 0)
+    if (close == std::string_view::npos || std::from_chars(path.data() + 1, path.data() + close, k).ec != std::errc{} ||
+        k >= 0)
       return unresolved("expected [-k]");
     std::string_view rest = path.substr(close + 1);
     if (rest.starts_with('.')) field = std::string(rest.substr(1));
@@ -117,7 +116,8 @@ Expected<fs::path> Reader::resolve_file(const Component& c, std::string_view key
   for (const fs::path& dir : folders)
     if (fs::is_regular_file(dir / rel, ec)) return dir / rel;
   std::string others;
-  for (std::size_t i = 1; i < folders.size(); ++i) others += fmt::format("{}{}", others.empty() ? "" : ", ", folders[i].string());
+  for (std::size_t i = 1; i < folders.size(); ++i)
+    others += fmt::format("{}{}", others.empty() ? "" : ", ", folders[i].string());
   const bool data_path_set = std::getenv("SOFA_DATA_PATH") || std::getenv("SOFA_ROOT");
   return fail(c,
               fmt::format("{} '{}' not found: looked for {}{}{}", key, rel.string(), (scene_folder / rel).string(),
@@ -225,7 +225,8 @@ Expected<void> Reader::read_field(Component& c, std::string_view key, std::strin
   if (field == "position") {
     auto v = numbers(c, key, text);
     if (!v) return std::unexpected(v.error());
-    if (v->size() % 3 != 0) return fail(c, fmt::format("attribute {}: {} numbers, not a list of 3D points", key, v->size()));
+    if (v->size() % 3 != 0)
+      return fail(c, fmt::format("attribute {}: {} numbers, not a list of 3D points", key, v->size()));
     d.positions.clear();
     for (std::size_t i = 0; i < v->size(); i += 3) d.positions.emplace_back((*v)[i], (*v)[i + 1], (*v)[i + 2]);
     d.has_positions = true;
@@ -234,7 +235,8 @@ Expected<void> Reader::read_field(Component& c, std::string_view key, std::strin
   auto idx = indices(c, key);
   if (!idx) return std::unexpected(idx.error());
   const std::size_t k = field == "tetrahedra" ? 4 : 3;
-  if ((*idx)->size() % k != 0) return fail(c, fmt::format("attribute {}: {} indices, not a multiple of {}", key, (*idx)->size(), k));
+  if ((*idx)->size() % k != 0)
+    return fail(c, fmt::format("attribute {}: {} indices, not a multiple of {}", key, (*idx)->size(), k));
   const auto& v = **idx;
   if (k == 4) {
     d.tets.clear();
@@ -316,7 +318,9 @@ Expected<MeshData> Reader::compute_data(Component& c) {
   if (c.type == "MechanicalObject" || is_topology(c.type)) {
     if (is_topology(c.type)) {
       for (const char* key : {"translation", "rotation", "scale3d", "scale", "dx", "dy", "dz", "rx", "ry", "rz"})
-        if (c.attr(key)) warn(c.line, fmt::format("{}: attribute {} ignored (transform the loader or the MechanicalObject)", c.label(), key));
+        if (c.attr(key))
+          warn(c.line,
+               fmt::format("{}: attribute {} ignored (transform the loader or the MechanicalObject)", c.label(), key));
     }
     const bool topo = is_topology(c.type);
     for (auto& other : c.node->components) {

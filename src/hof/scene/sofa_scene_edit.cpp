@@ -103,7 +103,8 @@ Expected<std::string> edit_scene(const std::string& scene_xml, const SceneEdit& 
   }
   // A component the file left unnamed goes by its type: its replacement stays unnamed (it then
   // goes by its new type), rather than carrying the old type as a name.
-  const bool named = edit.action == SceneEdit::Action::kAdd || (component && (component.attribute("name") || component.attribute("pluginName")));
+  const bool named = edit.action == SceneEdit::Action::kAdd ||
+                     (component && (component.attribute("name") || component.attribute("pluginName")));
   const auto fill = [&](pugi::xml_node e) {
     if (legacy) e.append_attribute("type") = edit.type.c_str();
     if (named) e.append_attribute("name") = edit.component.c_str();
@@ -117,8 +118,9 @@ Expected<std::string> edit_scene(const std::string& scene_xml, const SceneEdit& 
     case SceneEdit::Action::kReplace:
     case SceneEdit::Action::kRemove: {
       if (!component) {
-        return make_error(ErrorCode::kInvalidArgument, fmt::format("node '{}' has no component '{}' (it has: {})", edit.node, edit.component,
-                                                                   names.empty() ? std::string("none") : names));
+        return make_error(ErrorCode::kInvalidArgument,
+                          fmt::format("node '{}' has no component '{}' (it has: {})", edit.node, edit.component,
+                                      names.empty() ? std::string("none") : names));
       }
       if (edit.action == SceneEdit::Action::kRemove) {
         component.parent().remove_child(component);
@@ -132,9 +134,11 @@ Expected<std::string> edit_scene(const std::string& scene_xml, const SceneEdit& 
       break;
     }
     case SceneEdit::Action::kAdd: {
-      if (edit.type.empty() || edit.component.empty()) return make_error(ErrorCode::kInvalidArgument, "a new component needs a type and a name");
+      if (edit.type.empty() || edit.component.empty())
+        return make_error(ErrorCode::kInvalidArgument, "a new component needs a type and a name");
       if (component && component.parent() == node) {
-        return make_error(ErrorCode::kInvalidArgument, fmt::format("node '{}' already has a component '{}'", edit.node, edit.component));
+        return make_error(ErrorCode::kInvalidArgument,
+                          fmt::format("node '{}' already has a component '{}'", edit.node, edit.component));
       }
       // Before the node's child nodes, so the component reads as the node's own.
       pugi::xml_node first_child = node.child("Node");
@@ -148,7 +152,8 @@ Expected<std::string> edit_scene(const std::string& scene_xml, const SceneEdit& 
 
 Expected<std::string> inline_scene(const fs::path& scene_file, const fs::path& project_folder) {
   std::ifstream in(scene_file, std::ios::binary);
-  if (!in) return make_error(ErrorCode::kIo, fmt::format("cannot open scene '{}'", scene_file.string()), scene_file.string());
+  if (!in)
+    return make_error(ErrorCode::kIo, fmt::format("cannot open scene '{}'", scene_file.string()), scene_file.string());
   std::ostringstream text;
   text << in.rdbuf();
   pugi::xml_document doc;

@@ -66,9 +66,10 @@ Expected<void> Reader::read_geometry(SceneNode& node, Component* state, SofaScen
   for (auto& c : node.components)
     if (c->type == "SparseGridTopology" || c->type == "RegularGridTopology") grid = c.get();
   if (const Component* hex = not_yet({"HexahedronSetTopologyContainer"}); hex && !grid) {
-    return fail(*hex, fmt::format("node '{}': a HexahedronSetTopologyContainer is not read by HoF yet; a "
-                                  "RegularGridTopology or SparseGridTopology (hexahedral FEM) or a tetrahedral mesh is",
-                                  node.path),
+    return fail(*hex,
+                fmt::format("node '{}': a HexahedronSetTopologyContainer is not read by HoF yet; a "
+                            "RegularGridTopology or SparseGridTopology (hexahedral FEM) or a tetrahedral mesh is",
+                            node.path),
                 ErrorCode::kUnsupported);
   }
   if (grid) {
@@ -90,9 +91,10 @@ Expected<void> Reader::read_geometry(SceneNode& node, Component* state, SofaScen
       }
     }
   } else if (const Component* hex = not_yet({"HexahedronFEMForceField", "HexahedralFEMForceField"})) {
-    return fail(*hex, fmt::format("node '{}': {} needs a hexahedral topology (RegularGridTopology or SparseGridTopology) "
-                                  "in the node",
-                                  node.path, hex->type),
+    return fail(*hex,
+                fmt::format("node '{}': {} needs a hexahedral topology (RegularGridTopology or SparseGridTopology) "
+                            "in the node",
+                            node.path, hex->type),
                 ErrorCode::kUnsupported);
   }
   if (!grid && (!geo->has_positions || geo->positions.empty()))
@@ -101,8 +103,8 @@ Expected<void> Reader::read_geometry(SceneNode& node, Component* state, SofaScen
                                      node.path));
   if (!grid) m.positions = geo->positions;
   if (geo->xs3 && std::ranges::any_of(geo->xs3->fixed, [](bool f) { return f; }))
-    warn(source->line, fmt::format("{}: 'fixed' flags of the Xsp file ignored (use a FixedProjectiveConstraint)",
-                                   source->label()));
+    warn(source->line,
+         fmt::format("{}: 'fixed' flags of the Xsp file ignored (use a FixedProjectiveConstraint)", source->label()));
   if (!grid) m.tets = topo_data.tets;
   if (!grid && m.tets.empty()) m.triangles = topo_data.triangles;
   // Gmsh physical groups, for tissue regions that select by them.
@@ -159,9 +161,9 @@ Expected<void> Reader::apply_components(SceneNode& node, ModelConfig& m) {
       if (auto r = apply_mass(*c, m, m.positions.size()); !r) return std::unexpected(r.error());
       have_mass = true;
     } else if (t == "TetrahedronFEMForceField" || t == "FastTetrahedralCorotationalForceField" ||
-               t == "TetrahedronHyperelasticityFEMForceField" || t == "MeshSpringForceField" || t == "ConstantForceField" ||
-               t == "TriangleFEMForceField" || t == "TriangularFEMForceField" || t == "HexahedronFEMForceField" ||
-               t == "HexahedralFEMForceField") {
+               t == "TetrahedronHyperelasticityFEMForceField" || t == "MeshSpringForceField" ||
+               t == "ConstantForceField" || t == "TriangleFEMForceField" || t == "TriangularFEMForceField" ||
+               t == "HexahedronFEMForceField" || t == "HexahedralFEMForceField") {
       if (auto r = apply_force_field(*c, m); !r) return std::unexpected(r.error());
     } else if (t == "FixedProjectiveConstraint" || t == "PartialFixedProjectiveConstraint") {
       if (auto r = apply_fixed(*c, m); !r) return std::unexpected(r.error());
@@ -174,8 +176,9 @@ Expected<void> Reader::apply_components(SceneNode& node, ModelConfig& m) {
     // A body with no elasticity HoF simulates would only fall: refused, naming what it has.
     for (auto& c : node.components) {
       if (c->used || c->type.find("ForceField") == std::string::npos) continue;
-      return fail(*c, fmt::format("node '{}': {} is not simulated by HoF yet, and the body has no other force field",
-                                  node.path, c->type),
+      return fail(*c,
+                  fmt::format("node '{}': {} is not simulated by HoF yet, and the body has no other force field",
+                              node.path, c->type),
                   ErrorCode::kUnsupported);
     }
   }
@@ -226,7 +229,8 @@ Expected<std::optional<SofaSceneObstacle>> Reader::make_obstacle(SceneNode& node
     data.has_positions = data.has_triangles = true;
   }
   if (!data.has_positions || data.positions.empty() || data.triangles.empty()) {
-    warn(collision->line, fmt::format("{}: node '{}' has no triangles to touch; skipped", collision->label(), node.path));
+    warn(collision->line,
+         fmt::format("{}: node '{}' has no triangles to touch; skipped", collision->label(), node.path));
     return std::optional<SofaSceneObstacle>{};
   }
   const auto n = static_cast<std::int64_t>(data.positions.size());
@@ -318,7 +322,8 @@ Expected<void> Reader::apply_linear(Component& c, ModelConfig& m) {
   if (!tol) return std::unexpected(tol.error());
   if (!th) return std::unexpected(th.error());
   if (*it && (**it < 1 || **it != std::floor(**it)))
-    return fail(c, fmt::format("attribute iterations: {} is not a positive integer", **it), ErrorCode::kInvalidArgument);
+    return fail(c, fmt::format("attribute iterations: {} is not a positive integer", **it),
+                ErrorCode::kInvalidArgument);
   m.linear.iterations = static_cast<int>(it->value_or(25.0));
   m.linear.tolerance = tol->value_or(1e-5);
   m.linear.threshold = th->value_or(1e-5);
@@ -332,7 +337,8 @@ Expected<void> Reader::apply_linear(Component& c, ModelConfig& m) {
   auto refresh = number(c, "coarseRefreshSteps");
   if (!refresh) return std::unexpected(refresh.error());
   if (*refresh && (**refresh < 1 || **refresh != std::floor(**refresh)))
-    return fail(c, fmt::format("attribute coarseRefreshSteps: {} is not a positive integer", **refresh), ErrorCode::kInvalidArgument);
+    return fail(c, fmt::format("attribute coarseRefreshSteps: {} is not a positive integer", **refresh),
+                ErrorCode::kInvalidArgument);
   m.linear.coarse_refresh_steps = static_cast<int>(refresh->value_or(100.0));
   return {};
 }
@@ -409,7 +415,8 @@ Expected<void> Reader::apply_grid(Component& c, SofaSceneModel& out) {
     for (std::size_t a = 0; a < 3; ++a) {
       const double count = (*v)[a];
       if (!(count >= 2.0 && count <= 512.0) || count != std::floor(count)) {
-        return fail(c, fmt::format("attribute n: {} is not a whole number of nodes from 2 to 512", count), ErrorCode::kInvalidArgument);
+        return fail(c, fmt::format("attribute n: {} is not a whole number of nodes from 2 to 512", count),
+                    ErrorCode::kInvalidArgument);
       }
       n[a] = static_cast<int>(count);
     }
@@ -420,14 +427,16 @@ Expected<void> Reader::apply_grid(Component& c, SofaSceneModel& out) {
     if (!v) return std::unexpected(v.error());
     if (*v) {
       if (!(**v >= 2.0 && **v <= 512.0) || **v != std::floor(**v)) {
-        return fail(c, fmt::format("attribute {}: {} is not a whole number of nodes from 2 to 512", kKeys[a], **v), ErrorCode::kInvalidArgument);
+        return fail(c, fmt::format("attribute {}: {} is not a whole number of nodes from 2 to 512", kKeys[a], **v),
+                    ErrorCode::kInvalidArgument);
       }
       n[a] = static_cast<int>(**v);
     }
   }
   for (std::size_t a = 0; a < 3; ++a) {
     if (n[a] < 2 || n[a] > 512) {
-      return fail(c, fmt::format("attribute n: {} {} {}: each axis needs 2 to 512 nodes (n - 1 cells)", n[0], n[1], n[2]),
+      return fail(c,
+                  fmt::format("attribute n: {} {} {}: each axis needs 2 to 512 nodes (n - 1 cells)", n[0], n[1], n[2]),
                   ErrorCode::kInvalidArgument);
     }
   }
@@ -440,7 +449,8 @@ Expected<void> Reader::apply_grid(Component& c, SofaSceneModel& out) {
   if (*lo && *hi) box = std::make_pair(**lo, **hi);
   if (!box && c.attr("xmin")) {
     Vec3 a = Vec3::Zero(), b = Vec3::Zero();
-    static constexpr std::array<std::pair<const char*, const char*>, 3> kBounds{{{"xmin", "xmax"}, {"ymin", "ymax"}, {"zmin", "zmax"}}};
+    static constexpr std::array<std::pair<const char*, const char*>, 3> kBounds{
+        {{"xmin", "xmax"}, {"ymin", "ymax"}, {"zmin", "zmax"}}};
     for (std::size_t k = 0; k < 3; ++k) {
       auto x0 = number(c, kBounds[k].first);
       auto x1 = number(c, kBounds[k].second);
@@ -469,16 +479,19 @@ Expected<void> Reader::apply_grid(Component& c, SofaSceneModel& out) {
         e.message = fmt::format("{}: {}", c.label(), e.message);
         return std::unexpected(std::move(e));
       }
-      if (!read->mesh.tets.empty()) surface = mesh::extract_boundary(read->mesh.nodes, read->mesh.tets).surface;
-      else surface = mesh::TriMesh{read->mesh.nodes, read->mesh.triangles};
+      if (!read->mesh.tets.empty())
+        surface = mesh::extract_boundary(read->mesh.nodes, read->mesh.tets).surface;
+      else
+        surface = mesh::TriMesh{read->mesh.nodes, read->mesh.triangles};
     } else if (c.attr("position") && c.attr("triangles")) {
       MeshData d;
       if (auto r = read_field(c, "position", "position", d); !r) return std::unexpected(r.error());
       if (auto r = read_field(c, "triangles", "triangles", d); !r) return std::unexpected(r.error());
       surface = mesh::TriMesh{d.positions, d.triangles};
     } else {
-      return fail(c, "a SparseGridTopology needs the closed surface it fills: fileTopology=\"FILE\" (or position and "
-                     "triangles)");
+      return fail(c,
+                  "a SparseGridTopology needs the closed surface it fills: fileTopology=\"FILE\" (or position and "
+                  "triangles)");
     }
     grid = mesh::sparse_grid(surface, n, box);
     if (grid) out.fine_surface = std::move(surface);
@@ -513,8 +526,8 @@ Expected<void> Reader::apply_grid(Component& c, SofaSceneModel& out) {
 Expected<void> Reader::elastic_lists(Component& c, double default_young, double default_poisson, std::size_t elements,
                                      const char* element_name, double& young, std::vector<double>& young_list,
                                      double& poisson, std::vector<double>& poisson_list) {
-  const auto read = [&](const char* key, double fallback, double& value, std::vector<double>& list,
-                        const auto& valid, const char* range) -> Expected<void> {
+  const auto read = [&](const char* key, double fallback, double& value, std::vector<double>& list, const auto& valid,
+                        const char* range) -> Expected<void> {
     value = fallback;
     const std::string* text = c.attr(key);
     if (!text) return {};
@@ -527,8 +540,9 @@ Expected<void> Reader::elastic_lists(Component& c, double default_young, double 
     value = values->front();
     if (std::ranges::all_of(*values, [&](double v) { return v == values->front(); })) return {};
     if (values->size() != elements) {
-      return fail(c, fmt::format("attribute {}: {} values; one per {} ({}) or a single one", key, values->size(), element_name,
-                                 elements),
+      return fail(c,
+                  fmt::format("attribute {}: {} values; one per {} ({}) or a single one", key, values->size(),
+                              element_name, elements),
                   ErrorCode::kInvalidArgument);
     }
     std::map<double, std::size_t> counts;
@@ -538,10 +552,15 @@ Expected<void> Reader::elastic_lists(Component& c, double default_young, double 
     for (const double v : *values) list.push_back(v == value ? 0.0 : v);
     return {};
   };
-  if (auto r = read("youngModulus", default_young, young, young_list, [](double v) { return v > 0.0 && std::isfinite(v); }, "> 0 Pa"); !r) {
+  if (auto r = read(
+          "youngModulus", default_young, young, young_list, [](double v) { return v > 0.0 && std::isfinite(v); },
+          "> 0 Pa");
+      !r) {
     return r;
   }
-  return read("poissonRatio", default_poisson, poisson, poisson_list, [](double v) { return v > -1.0 && v < 0.5; }, "in (-1, 0.5)");
+  return read(
+      "poissonRatio", default_poisson, poisson, poisson_list, [](double v) { return v > -1.0 && v < 0.5; },
+      "in (-1, 0.5)");
 }
 
 // A force field of the node: its config made by the function of its type (below).
@@ -576,15 +595,18 @@ Expected<void> Reader::apply_force_field(Component& c, ModelConfig& m) {
 // TetrahedronFEMForceField (and FastTetrahedralCorotationalForceField, the same law).
 Expected<mechanics::TetrahedronFemConfig> Reader::tetrahedron_fem_config(Component& c, const ModelConfig& m) {
   mechanics::TetrahedronFemConfig fem;
-  if (auto r = elastic_lists(c, 5000.0, 0.45, m.tets.size(), "tetrahedron", fem.young_modulus_pa, fem.element_young_modulus_pa,
-                             fem.poisson_ratio, fem.element_poisson_ratio);
+  if (auto r = elastic_lists(c, 5000.0, 0.45, m.tets.size(), "tetrahedron", fem.young_modulus_pa,
+                             fem.element_young_modulus_pa, fem.poisson_ratio, fem.element_poisson_ratio);
       !r) {
     return std::unexpected(r.error());
   }
   const std::string method = c.attr("method") ? lower(std::string(trim(*c.attr("method")))) : std::string("large");
-  if (method == "small" || method == "none") fem.method = mechanics::FemMethod::kSmall;
-  else if (method == "large" || method == "qr") fem.method = mechanics::FemMethod::kLarge;
-  else if (method == "polar" || method == "polar2") fem.method = mechanics::FemMethod::kPolar;
+  if (method == "small" || method == "none")
+    fem.method = mechanics::FemMethod::kSmall;
+  else if (method == "large" || method == "qr")
+    fem.method = mechanics::FemMethod::kLarge;
+  else if (method == "polar" || method == "polar2")
+    fem.method = mechanics::FemMethod::kPolar;
   else if (method == "svd") {
     fem.method = mechanics::FemMethod::kPolar;
     warn(c.line, fmt::format("{}: method svd simulated as polar (same rotation away from inversion)", c.label()));
@@ -599,20 +621,26 @@ Expected<mechanics::NeoHookeanConfig> Reader::neo_hookean_config(Component& c) {
   // SOFA's NeoHookean takes ParameterSet = [μ, k] (shear and bulk moduli). HoF's Neo-Hookean
   // (neo_hookean_force_field.h) is the compressible form with λ = k − 2μ/3: the same small-
   // strain response (E = 9kμ/(3k + μ), ν = (3k − 2μ)/(2(3k + μ))), a different volumetric term.
-  const std::string material = c.attr("materialName") ? std::string(trim(*c.attr("materialName"))) : std::string("ArrudaBoyce");
+  const std::string material =
+      c.attr("materialName") ? std::string(trim(*c.attr("materialName"))) : std::string("ArrudaBoyce");
   if (material != "NeoHookean") {
-    return fail(c, fmt::format("materialName '{}': HoF simulates NeoHookean (and the linear and co-rotational "
-                               "TetrahedronFEMForceField)", material),
+    return fail(c,
+                fmt::format("materialName '{}': HoF simulates NeoHookean (and the linear and co-rotational "
+                            "TetrahedronFEMForceField)",
+                            material),
                 ErrorCode::kUnsupported);
   }
   const std::string* text = c.attr("ParameterSet");
   if (!text) return fail(c, "NeoHookean needs ParameterSet=\"mu k\" (shear and bulk moduli, Pa)");
   auto values = numbers(c, "ParameterSet", *text);
   if (!values) return std::unexpected(values.error());
-  if (values->size() != 2) return fail(c, fmt::format("attribute ParameterSet: NeoHookean takes 2 values (mu k), got {}", values->size()));
+  if (values->size() != 2)
+    return fail(c, fmt::format("attribute ParameterSet: NeoHookean takes 2 values (mu k), got {}", values->size()));
   const double mu = (*values)[0], bulk = (*values)[1];
   if (!(mu > 0.0) || !(bulk > 2.0 * mu / 3.0) || !std::isfinite(bulk)) {
-    return fail(c, fmt::format("attribute ParameterSet: needs mu > 0 and k > 2mu/3 (a Poisson ratio above 0), got {} {}", mu, bulk),
+    return fail(c,
+                fmt::format("attribute ParameterSet: needs mu > 0 and k > 2mu/3 (a Poisson ratio above 0), got {} {}",
+                            mu, bulk),
                 ErrorCode::kInvalidArgument);
   }
   mechanics::NeoHookeanConfig neo;
@@ -625,18 +653,23 @@ Expected<mechanics::NeoHookeanConfig> Reader::neo_hookean_config(Component& c) {
 
 // HexahedronFEMForceField (and HexahedralFEMForceField) on the grid of the node.
 Expected<mechanics::HexahedronFemConfig> Reader::hexahedron_fem_config(Component& c, const ModelConfig& m) {
-  if (m.hexahedra.empty()) return fail(c, "no hexahedra in the node (give it a RegularGridTopology or SparseGridTopology)");
+  if (m.hexahedra.empty())
+    return fail(c, "no hexahedra in the node (give it a RegularGridTopology or SparseGridTopology)");
   mechanics::HexahedronFemConfig fem;
-  if (auto r = elastic_lists(c, 5000.0, 0.45, m.hexahedra.size(), "hexahedron", fem.young_modulus_pa, fem.element_young_modulus_pa,
-                             fem.poisson_ratio, fem.element_poisson_ratio);
+  if (auto r = elastic_lists(c, 5000.0, 0.45, m.hexahedra.size(), "hexahedron", fem.young_modulus_pa,
+                             fem.element_young_modulus_pa, fem.poisson_ratio, fem.element_poisson_ratio);
       !r) {
     return std::unexpected(r.error());
   }
   const std::string method = c.attr("method") ? lower(std::string(trim(*c.attr("method")))) : std::string("large");
-  if (method == "small") fem.method = mechanics::FemMethod::kSmall;
-  else if (method == "large") fem.method = mechanics::FemMethod::kLarge;
-  else if (method == "polar") fem.method = mechanics::FemMethod::kPolar;
-  else return fail(c, fmt::format("attribute method: '{}' is not small, large or polar", method));
+  if (method == "small")
+    fem.method = mechanics::FemMethod::kSmall;
+  else if (method == "large")
+    fem.method = mechanics::FemMethod::kLarge;
+  else if (method == "polar")
+    fem.method = mechanics::FemMethod::kPolar;
+  else
+    return fail(c, fmt::format("attribute method: '{}' is not small, large or polar", method));
   if (c.type != "HexahedronFEMForceField") warn(c.line, fmt::format("{}: read as HexahedronFEMForceField", c.label()));
   return fem;
 }
@@ -644,8 +677,10 @@ Expected<mechanics::HexahedronFemConfig> Reader::hexahedron_fem_config(Component
 // TriangleFEMForceField and TriangularFEMForceField: a membrane on a surface model.
 Expected<mechanics::TriangleFemConfig> Reader::triangle_fem_config(Component& c, const ModelConfig& m) {
   if (!m.tets.empty()) {
-    return fail(c, fmt::format("a membrane on a tetrahedral body: HoF simulates {} on a node whose topology has "
-                               "triangles and no tetrahedra (a surface model)", c.type),
+    return fail(c,
+                fmt::format("a membrane on a tetrahedral body: HoF simulates {} on a node whose topology has "
+                            "triangles and no tetrahedra (a surface model)",
+                            c.type),
                 ErrorCode::kUnsupported);
   }
   if (m.triangles.empty()) return fail(c, "no triangles in the node (give it a triangle topology or a surface loader)");
@@ -655,28 +690,35 @@ Expected<mechanics::TriangleFemConfig> Reader::triangle_fem_config(Component& c,
   // (BaseLinearElasticityFEMForceField) E = 5000, ν = 0.45.
   const bool triangular = c.type == "TriangularFEMForceField";
   if (auto r = elastic_lists(c, triangular ? 5000.0 : 1000.0, triangular ? 0.45 : 0.3, m.triangles.size(), "triangle",
-                             fem.young_modulus_pa, fem.element_young_modulus_pa, fem.poisson_ratio, fem.element_poisson_ratio);
+                             fem.young_modulus_pa, fem.element_young_modulus_pa, fem.poisson_ratio,
+                             fem.element_poisson_ratio);
       !r) {
     return std::unexpected(r.error());
   }
   auto thickness = number(c, "thickness");
   if (!thickness) return std::unexpected(thickness.error());
   fem.thickness_m = thickness->value_or(1.0);
-  if (!(fem.thickness_m > 0.0)) return fail(c, fmt::format("attribute thickness: must be > 0, got {}", fem.thickness_m), ErrorCode::kInvalidArgument);
+  if (!(fem.thickness_m > 0.0))
+    return fail(c, fmt::format("attribute thickness: must be > 0, got {}", fem.thickness_m),
+                ErrorCode::kInvalidArgument);
   auto rest_scale = number(c, "restScale");
   if (!rest_scale) return std::unexpected(rest_scale.error());
   fem.rest_scale = rest_scale->value_or(1.0);
   if (!(fem.rest_scale > 0.0 && fem.rest_scale <= 2.0)) {
-    return fail(c, fmt::format("attribute restScale: must be in (0, 2], got {}", fem.rest_scale), ErrorCode::kInvalidArgument);
+    return fail(c, fmt::format("attribute restScale: must be in (0, 2], got {}", fem.rest_scale),
+                ErrorCode::kInvalidArgument);
   }
   if (const std::string* plane = c.attr("planeStrain")) {
     const std::string v = lower(std::string(trim(*plane)));
     fem.plane_strain = v == "1" || v == "true";
   }
   const std::string method = c.attr("method") ? lower(std::string(trim(*c.attr("method")))) : std::string("large");
-  if (method == "small") fem.method = mechanics::FemMethod::kSmall;
-  else if (method == "large") fem.method = mechanics::FemMethod::kLarge;
-  else return fail(c, fmt::format("attribute method: '{}' is not small or large", method));
+  if (method == "small")
+    fem.method = mechanics::FemMethod::kSmall;
+  else if (method == "large")
+    fem.method = mechanics::FemMethod::kLarge;
+  else
+    return fail(c, fmt::format("attribute method: '{}' is not small or large", method));
   return fem;
 }
 
@@ -695,8 +737,8 @@ Expected<mechanics::MeshSpringConfig> Reader::mesh_springs_config(Component& c) 
   if (!d) return std::unexpected(d.error());
   s.stiffness_n_per_m = k->value_or(0.0);
   s.damping_n_s_per_m = d->value_or(0.0);
-  const auto kind = [&](const char* ks, const char* kd, const char* old_ks, const char* old_kd)
-      -> Expected<std::optional<mechanics::SpringValues>> {
+  const auto kind = [&](const char* ks, const char* kd, const char* old_ks,
+                        const char* old_kd) -> Expected<std::optional<mechanics::SpringValues>> {
     auto kk = number(c, c.attr(ks) || !old_ks ? ks : old_ks);
     auto dd = number(c, c.attr(kd) || !old_kd ? kd : old_kd);
     if (!kk) return std::unexpected(kk.error());
@@ -715,7 +757,9 @@ Expected<mechanics::MeshSpringConfig> Reader::mesh_springs_config(Component& c) 
   for (const char* key : {"linesStiffness", "quadsStiffness", "cubesStiffness"}) {
     auto v = number(c, key);
     if (!v) return std::unexpected(v.error());
-    if (*v && **v != 0.0) warn(c.line, fmt::format("{}: {} ignored (HoF's springs are the edges of the triangles and tetrahedra)", c.label(), key));
+    if (*v && **v != 0.0)
+      warn(c.line,
+           fmt::format("{}: {} ignored (HoF's springs are the edges of the triangles and tetrahedra)", c.label(), key));
   }
   if (s.stiffness_n_per_m == 0.0 && s.damping_n_s_per_m == 0.0 && !s.triangles && !s.tetrahedra)
     warn(c.line, fmt::format("{}: no stiffness set (SOFA's default 0): the springs hold nothing", c.label()));
@@ -729,15 +773,21 @@ Expected<mechanics::MeshSpringConfig> Reader::mesh_springs_config(Component& c) 
 Expected<void> Reader::spring_rule_extensions(Component& c, mechanics::MeshSpringConfig& s) {
   if (const std::string* rule = c.attr("stiffnessRule")) {
     const std::string v(trim(*rule));
-    if (v == "sameForEverySpring") s.rule = mechanics::SpringStiffnessRule::kSameForEverySpring;
-    else if (v == "dividedByRestLength") s.rule = mechanics::SpringStiffnessRule::kDividedByRestLength;
-    else return fail(c, fmt::format("attribute stiffnessRule: '{}' is not dividedByRestLength or sameForEverySpring", v));
+    if (v == "sameForEverySpring")
+      s.rule = mechanics::SpringStiffnessRule::kSameForEverySpring;
+    else if (v == "dividedByRestLength")
+      s.rule = mechanics::SpringStiffnessRule::kDividedByRestLength;
+    else
+      return fail(c, fmt::format("attribute stiffnessRule: '{}' is not dividedByRestLength or sameForEverySpring", v));
   }
   if (const std::string* tangent = c.attr("tangent")) {
     const std::string v(trim(*tangent));
-    if (v == "clampedTransverse") s.tangent = mechanics::SpringTangent::kClampedTransverse;
-    else if (v == "exact") s.tangent = mechanics::SpringTangent::kExact;
-    else return fail(c, fmt::format("attribute tangent: '{}' is not exact or clampedTransverse", v));
+    if (v == "clampedTransverse")
+      s.tangent = mechanics::SpringTangent::kClampedTransverse;
+    else if (v == "exact")
+      s.tangent = mechanics::SpringTangent::kExact;
+    else
+      return fail(c, fmt::format("attribute tangent: '{}' is not exact or clampedTransverse", v));
   }
   return {};
 }
@@ -747,7 +797,8 @@ Expected<mechanics::ConstantForceConfig> Reader::constant_force_config(Component
   mechanics::ConstantForceConfig f;
   auto idx = indices(c, "indices");
   if (!idx) return std::unexpected(idx.error());
-  if (*idx) f.indices = **idx;
+  if (*idx)
+    f.indices = **idx;
   else
     for (std::int32_t i = 0; i < static_cast<std::int32_t>(m.positions.size()); ++i) f.indices.push_back(i);
   const char* key = c.attr("forces") ? "forces" : "force";
@@ -762,9 +813,9 @@ Expected<mechanics::ConstantForceConfig> Reader::constant_force_config(Component
   f.total_force = *total;
   for (std::int32_t i : f.indices)
     if (i >= static_cast<std::int32_t>(m.positions.size()))
-      return fail(c, fmt::format("attribute indices: node {} out of range (the model has {} nodes)", i,
-                                 m.positions.size()),
-                  ErrorCode::kInvalidArgument);
+      return fail(
+          c, fmt::format("attribute indices: node {} out of range (the model has {} nodes)", i, m.positions.size()),
+          ErrorCode::kInvalidArgument);
   return f;
 }
 
@@ -791,13 +842,15 @@ Expected<void> Reader::apply_fixed(Component& c, ModelConfig& m) {
     auto target = resolve_link(c, "indices", *text, field);
     if (!target) return std::unexpected(target.error());
     Component& roi = **target;
-    if (roi.type != "BoxROI") return fail(c, fmt::format("attribute indices: links to {}, expected a BoxROI's indices", roi.label()));
+    if (roi.type != "BoxROI")
+      return fail(c, fmt::format("attribute indices: links to {}, expected a BoxROI's indices", roi.label()));
     roi.used = true;
     const std::string* box_text = roi.attr("box");
     if (!box_text) return fail(roi, "a BoxROI needs box=\"xmin ymin zmin xmax ymax zmax\"");
     auto v = numbers(roi, "box", *box_text);
     if (!v) return std::unexpected(v.error());
-    if (v->empty() || v->size() % 6 != 0) return fail(roi, fmt::format("attribute box: {} numbers, expected 6 per box", v->size()));
+    if (v->empty() || v->size() % 6 != 0)
+      return fail(roi, fmt::format("attribute box: {} numbers, expected 6 per box", v->size()));
     for (std::size_t i = 0; i < m.positions.size(); ++i) {
       for (std::size_t b = 0; b < v->size(); b += 6) {
         const Vec3 lo((*v)[b], (*v)[b + 1], (*v)[b + 2]), hi((*v)[b + 3], (*v)[b + 4], (*v)[b + 5]);
@@ -809,7 +862,8 @@ Expected<void> Reader::apply_fixed(Component& c, ModelConfig& m) {
     }
     // SOFA accepts a box that holds nothing; it is worth a word, since the body may fly off.
     if (f.indices.empty()) {
-      warn(roi.line, fmt::format("{}: no node of '{}' lies in its box; {} holds nothing", roi.label(), m.name, c.label()));
+      warn(roi.line,
+           fmt::format("{}: no node of '{}' lies in its box; {} holds nothing", roi.label(), m.name, c.label()));
       return {};
     }
     m.fixed.push_back(std::move(f));
@@ -820,9 +874,9 @@ Expected<void> Reader::apply_fixed(Component& c, ModelConfig& m) {
   if (*idx) f.indices = **idx;
   for (std::int32_t i : f.indices)
     if (i >= static_cast<std::int32_t>(m.positions.size()))
-      return fail(c, fmt::format("attribute indices: node {} out of range (the model has {} nodes)", i,
-                                 m.positions.size()),
-                  ErrorCode::kInvalidArgument);
+      return fail(
+          c, fmt::format("attribute indices: node {} out of range (the model has {} nodes)", i, m.positions.size()),
+          ErrorCode::kInvalidArgument);
   m.fixed.push_back(std::move(f));
   return {};
 }

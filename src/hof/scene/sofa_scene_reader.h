@@ -68,16 +68,16 @@ struct SceneNode {
 
 /// Geometry a loader, topology or state provides (a field is "set" when its flag is).
 struct MeshData {
-  std::vector<Vec3> positions;        ///< (N) scene units
-  std::vector<mesh::Tet> tets;        ///< (T)
-  std::vector<mesh::Tri> triangles;   ///< (F)
+  std::vector<Vec3> positions;                 ///< (N) scene units
+  std::vector<mesh::Tet> tets;                 ///< (T)
+  std::vector<mesh::Tri> triangles;            ///< (F)
   std::vector<std::int32_t> tet_regions;       ///< empty, or (T) Gmsh physical tag per tetrahedron
   std::vector<std::int32_t> triangle_regions;  ///< empty, or (F) Gmsh physical tag per triangle
   bool has_positions{false};
   bool has_tets{false};
   bool has_triangles{false};
-  std::optional<fs::path> file;       ///< resolved file the data came from
-  std::optional<Xs3File> xs3;         ///< the Xsp file, when positions came from one
+  std::optional<fs::path> file;  ///< resolved file the data came from
+  std::optional<Xs3File> xs3;    ///< the Xsp file, when positions came from one
 };
 
 /// SOFA component categories (after the alias table).
@@ -182,8 +182,8 @@ class Reader {
   /// A RegularGridTopology or SparseGridTopology as the model's nodes and hexahedra.
   Expected<void> apply_grid(Component& grid, SofaSceneModel& out);
   Expected<void> elastic_lists(Component& c, double default_young, double default_poisson, std::size_t elements,
-                               const char* element_name, double& young, std::vector<double>& young_list, double& poisson,
-                               std::vector<double>& poisson_list);
+                               const char* element_name, double& young, std::vector<double>& young_list,
+                               double& poisson, std::vector<double>& poisson_list);
   Expected<void> apply_fixed(Component& c, ModelConfig& m);
   Expected<void> apply_visual(SceneNode& node, SofaSceneModel& model);
   void list_skipped(const SceneNode& node);
@@ -193,7 +193,7 @@ class Reader {
   bool have_text_{false};
   std::vector<std::size_t> line_starts_;
   bool thesis_format_{false};  ///< <hof><sofa><sg>: the thesis' appendix format
-  bool legacy_{false};  ///< the file uses 2008 syntax (Object tags or 2008-only names)
+  bool legacy_{false};         ///< the file uses 2008 syntax (Object tags or 2008-only names)
   std::unique_ptr<SceneNode> root_;
   std::unordered_map<const Component*, MeshData> data_cache_;
 

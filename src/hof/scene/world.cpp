@@ -7,18 +7,17 @@
 #include <array>
 #include <cmath>
 
-#include "hof/scene/model_parameters.h"
 #include "hof/mechanics/step.h"
 #include "hof/mesh/boundary.h"
 #include "hof/mesh/hex_grid.h"
 #include "hof/mesh/mesh_io.h"
-#include "hof/scene/sofa_scene.h"
 #include "hof/scene/detail/world_parts.h"
+#include "hof/scene/model_parameters.h"
+#include "hof/scene/sofa_scene.h"
 
 namespace hof::scene {
 
 namespace detail {
-
 
 // Nodes on the border of an open triangle surface (edges used by one triangle only).
 std::vector<std::int32_t> border_nodes(const std::vector<mesh::Tri>& triangles) {
@@ -54,7 +53,8 @@ std::string unique_name(const std::vector<coupling::SessionBody>& bodies, const 
 // (shared nodes), else (a surface model) itself. On a hexahedral model the mapped surfaces
 // follow the grid trilinearly: a coarse mechanical grid under a fine surface.
 Expected<coupling::SessionBody> make_deformable(const mechanics::ModelConfig& config,
-                                                const std::optional<std::filesystem::path>& visual_mesh, bool visual_barycentric,
+                                                const std::optional<std::filesystem::path>& visual_mesh,
+                                                bool visual_barycentric,
                                                 const std::optional<mesh::TriMesh>& fine_surface) {
   auto model = mechanics::build_model(config);
   if (!model) return std::unexpected(model.error());
@@ -67,10 +67,11 @@ Expected<coupling::SessionBody> make_deformable(const mechanics::ModelConfig& co
     body.surface = surface;
     // SOFA's BarycentricMapping picks its mapper from the input topology: hexahedra, else
     // tetrahedra, else triangles (a membrane or a surface of springs).
-    auto mapping = hexahedral          ? coupling::SurfaceMapping::trilinear(config.positions, config.hexahedra, body.surface.vertices)
-                   : !config.tets.empty() ? coupling::SurfaceMapping::barycentric(config.positions, config.tets, body.surface.vertices)
-                                          : coupling::SurfaceMapping::onto_triangles(config.positions, config.triangles,
-                                                                                     body.surface.vertices);
+    auto mapping =
+        hexahedral ? coupling::SurfaceMapping::trilinear(config.positions, config.hexahedra, body.surface.vertices)
+        : !config.tets.empty()
+            ? coupling::SurfaceMapping::barycentric(config.positions, config.tets, body.surface.vertices)
+            : coupling::SurfaceMapping::onto_triangles(config.positions, config.triangles, body.surface.vertices);
     if (!mapping) return std::unexpected(mapping.error());
     body.mapping = std::move(*mapping);
     return {};
@@ -78,7 +79,8 @@ Expected<coupling::SessionBody> make_deformable(const mechanics::ModelConfig& co
   if (visual_mesh && visual_barycentric) {
     auto visual = mesh::read_mesh(*visual_mesh);
     if (!visual) return std::unexpected(visual.error());
-    if (auto ok = mapped(mesh::TriMesh{visual->mesh.nodes, visual->mesh.triangles}); !ok) return std::unexpected(ok.error());
+    if (auto ok = mapped(mesh::TriMesh{visual->mesh.nodes, visual->mesh.triangles}); !ok)
+      return std::unexpected(ok.error());
   } else if (hexahedral && fine_surface) {
     if (auto ok = mapped(*fine_surface); !ok) return std::unexpected(ok.error());
   } else if (hexahedral) {
@@ -128,7 +130,8 @@ using detail::unique_name;
 Expected<void> fill_with_hexahedra(coupling::SessionBody& body, const BodySetup& setup) {
   const mechanics::ModelConfig& tet = *body.config;
   if (!tet.hexahedra.empty()) return make_error(ErrorCode::kInvalidArgument, "the body is hexahedral already");
-  if (tet.tets.empty()) return make_error(ErrorCode::kInvalidArgument, "the body is a surface (no tetrahedra) with nothing inside to fill");
+  if (tet.tets.empty())
+    return make_error(ErrorCode::kInvalidArgument, "the body is a surface (no tetrahedra) with nothing inside to fill");
   std::array<int, 3> n = setup.grid;
   if (n[0] <= 0) {
     // Cells of a tenth of the largest extent.
@@ -138,7 +141,8 @@ Expected<void> fill_with_hexahedra(coupling::SessionBody& body, const BodySetup&
       hi = hi.cwiseMax(p);
     }
     const double cell = (hi - lo).maxCoeff() / 10.0;
-    for (int a = 0; a < 3; ++a) n[static_cast<std::size_t>(a)] = std::max(2, static_cast<int>(std::ceil((hi[a] - lo[a]) / cell)) + 1);
+    for (int a = 0; a < 3; ++a)
+      n[static_cast<std::size_t>(a)] = std::max(2, static_cast<int>(std::ceil((hi[a] - lo[a]) / cell)) + 1);
   }
   auto grid = mesh::sparse_grid(body.surface, n);
   if (!grid) return std::unexpected(grid.error());
@@ -153,12 +157,16 @@ Expected<void> fill_with_hexahedra(coupling::SessionBody& body, const BodySetup&
   std::optional<mechanics::HexahedronFemConfig> fem;
   for (const mechanics::ForceFieldConfig& f : tet.force_fields) {
     if (fem) break;
-    if (f.tetrahedron_fem) fem = mechanics::HexahedronFemConfig{f.tetrahedron_fem->young_modulus_pa, f.tetrahedron_fem->poisson_ratio,
-                                                                f.tetrahedron_fem->method, {}, {}};
-    if (f.neo_hookean) fem = mechanics::HexahedronFemConfig{f.neo_hookean->young_modulus_pa, f.neo_hookean->poisson_ratio,
-                                                            mechanics::FemMethod::kLarge, {}, {}};
+    if (f.tetrahedron_fem)
+      fem = mechanics::HexahedronFemConfig{
+          f.tetrahedron_fem->young_modulus_pa, f.tetrahedron_fem->poisson_ratio, f.tetrahedron_fem->method, {}, {}};
+    if (f.neo_hookean)
+      fem = mechanics::HexahedronFemConfig{
+          f.neo_hookean->young_modulus_pa, f.neo_hookean->poisson_ratio, mechanics::FemMethod::kLarge, {}, {}};
   }
-  if (!fem) return make_error(ErrorCode::kInvalidArgument, "the body has no FEM or Neo-Hookean force field to take the material from");
+  if (!fem)
+    return make_error(ErrorCode::kInvalidArgument,
+                      "the body has no FEM or Neo-Hookean force field to take the material from");
   // As SOFA's sparse grid (fillWeighted, its default): a cell the surface passes through is
   // about half full — half the stiffness and half the mass, whatever they are set to later.
   hex.element_fill.assign(grid->hexes.size(), 1.0);
@@ -172,19 +180,23 @@ Expected<void> fill_with_hexahedra(coupling::SessionBody& body, const BodySetup&
   hex.force_fields.push_back(std::move(field));
   for (const mechanics::ForceFieldConfig& f : tet.force_fields) {
     if (f.constant_force) {
-      return make_error(ErrorCode::kInvalidArgument,
-                        fmt::format("its ConstantForceField '{}' names tetrahedral nodes; remove it to fill the body with hexahedra", f.name));
+      return make_error(
+          ErrorCode::kInvalidArgument,
+          fmt::format("its ConstantForceField '{}' names tetrahedral nodes; remove it to fill the body with hexahedra",
+                      f.name));
     }
   }
   // Held nodes: each holds the corners of the grid cell it lies in.
   const Vec3 cell = grid->cell_size();
   std::vector<std::int32_t> hex_of_cell(static_cast<std::size_t>((n[0] - 1) * (n[1] - 1) * (n[2] - 1)), -1);
-  for (std::size_t h = 0; h < grid->hex_cells.size(); ++h) hex_of_cell[static_cast<std::size_t>(grid->hex_cells[h])] = static_cast<std::int32_t>(h);
+  for (std::size_t h = 0; h < grid->hex_cells.size(); ++h)
+    hex_of_cell[static_cast<std::size_t>(grid->hex_cells[h])] = static_cast<std::int32_t>(h);
   for (mechanics::FixedConstraintConfig& fixed : hex.fixed) {
     if (fixed.box) {
       // A box held the tetrahedral nodes inside it: those nodes, then their cells.
       for (std::size_t i = 0; i < tet.positions.size(); ++i) {
-        if ((tet.positions[i].array() >= fixed.box->first.array()).all() && (tet.positions[i].array() <= fixed.box->second.array()).all()) {
+        if ((tet.positions[i].array() >= fixed.box->first.array()).all() &&
+            (tet.positions[i].array() <= fixed.box->second.array()).all()) {
           fixed.indices.push_back(static_cast<std::int32_t>(i));
         }
       }
@@ -196,7 +208,8 @@ Expected<void> fill_with_hexahedra(coupling::SessionBody& body, const BodySetup&
       const Vec3 p = tet.positions[static_cast<std::size_t>(i)];
       std::array<int, 3> c{};
       for (int a = 0; a < 3; ++a) {
-        c[static_cast<std::size_t>(a)] = std::clamp(static_cast<int>(std::floor((p[a] - grid->min[a]) / cell[a])), 0, n[static_cast<std::size_t>(a)] - 2);
+        c[static_cast<std::size_t>(a)] = std::clamp(static_cast<int>(std::floor((p[a] - grid->min[a]) / cell[a])), 0,
+                                                    n[static_cast<std::size_t>(a)] - 2);
       }
       const std::int32_t h = hex_of_cell[static_cast<std::size_t>(c[0] + (n[0] - 1) * (c[1] + (n[1] - 1) * c[2]))];
       if (h < 0) continue;  // a node outside every kept cell (cannot happen for a surface node)
@@ -228,7 +241,8 @@ Expected<void> apply_body_models(World& w) {
     auto it = std::find_if(w.bodies.begin(), w.bodies.end(), [&](const auto& b) { return b.name == setup.name; });
     const std::string who = fmt::format("<body name=\"{}\" model=\"{}\">", setup.name, setup.model);
     if (it == w.bodies.end() || !it->config) {
-      return make_error(ErrorCode::kInvalidArgument, fmt::format("{}: no deformable body of that name in the scene", who), w.file.string());
+      return make_error(ErrorCode::kInvalidArgument,
+                        fmt::format("{}: no deformable body of that name in the scene", who), w.file.string());
     }
     mechanics::ModelConfig config = *it->config;
     if (setup.model == "hexahedra") {
@@ -238,10 +252,11 @@ Expected<void> apply_body_models(World& w) {
       continue;
     }
     if (!config.tets.empty() || config.triangles.empty()) {
-      return make_error(ErrorCode::kInvalidArgument,
-                        fmt::format("{}: the body is a volume ({}); springs and membranes are models of surface bodies (triangles)", who,
-                                    config.hexahedra.empty() ? "tetrahedra" : "hexahedra"),
-                        w.file.string());
+      return make_error(
+          ErrorCode::kInvalidArgument,
+          fmt::format("{}: the body is a volume ({}); springs and membranes are models of surface bodies (triangles)",
+                      who, config.hexahedra.empty() ? "tetrahedra" : "hexahedra"),
+          w.file.string());
     }
     double stiffness = 0.0, damping = 0.0, rest_scale = 1.0;
     bool had = false;
@@ -259,7 +274,9 @@ Expected<void> apply_body_models(World& w) {
       }
       if (!f.mesh_springs && !f.triangle_fem) kept.push_back(std::move(f));
     }
-    if (!had) return make_error(ErrorCode::kInvalidArgument, fmt::format("{}: the body has no springs or membrane to replace", who), w.file.string());
+    if (!had)
+      return make_error(ErrorCode::kInvalidArgument,
+                        fmt::format("{}: the body has no springs or membrane to replace", who), w.file.string());
     mechanics::ForceFieldConfig field;
     field.name = setup.model;
     if (setup.model == "membrane") {
@@ -294,8 +311,8 @@ Expected<void> apply_parameters(World& w) {
     }
     mechanics::ModelConfig config = *it->config;
     if (auto ok = scene::set_parameter(config, change.component, change.parameter, change.value); !ok) {
-      return make_error(ErrorCode::kInvalidArgument, fmt::format("<set body=\"{}\">: {}", change.body, ok.error().message),
-                        w.file.string());
+      return make_error(ErrorCode::kInvalidArgument,
+                        fmt::format("<set body=\"{}\">: {}", change.body, ok.error().message), w.file.string());
     }
     auto rebuilt = make_deformable(config, std::nullopt, false);
     if (!rebuilt) return std::unexpected(rebuilt.error());
@@ -311,11 +328,14 @@ Expected<void> apply_regions(World& w) {
     auto it = std::find_if(w.bodies.begin(), w.bodies.end(), [&](const auto& b) { return b.name == region.body; });
     const std::string who = fmt::format("<region name=\"{}\" body=\"{}\">", region.name, region.body);
     if (it == w.bodies.end() || !it->config) {
-      return make_error(ErrorCode::kInvalidArgument, fmt::format("{}: no deformable body of that name in the scene", who), w.file.string());
+      return make_error(ErrorCode::kInvalidArgument,
+                        fmt::format("{}: no deformable body of that name in the scene", who), w.file.string());
     }
     mechanics::ModelConfig config = *it->config;
     auto count = apply_material_region(config, region);
-    if (!count) return make_error(ErrorCode::kInvalidArgument, fmt::format("{}: {}", who, count.error().message), w.file.string());
+    if (!count)
+      return make_error(ErrorCode::kInvalidArgument, fmt::format("{}: {}", who, count.error().message),
+                        w.file.string());
     if (*count == 0) w.warnings.push_back(fmt::format("{}: no element is inside it; it changes nothing", who));
     auto rebuilt = make_deformable(config, std::nullopt, false);
     if (!rebuilt) return std::unexpected(rebuilt.error());
@@ -330,7 +350,8 @@ Expected<void> apply_bodies(World& w) {
   for (const BodySetup& setup : w.project.bodies) {
     auto it = std::find_if(w.bodies.begin(), w.bodies.end(), [&](const auto& b) { return b.name == setup.name; });
     if (it == w.bodies.end()) {
-      return make_error(ErrorCode::kInvalidArgument, fmt::format("<body name=\"{}\">: no body of that name in the scene", setup.name),
+      return make_error(ErrorCode::kInvalidArgument,
+                        fmt::format("<body name=\"{}\">: no body of that name in the scene", setup.name),
                         w.file.string());
     }
     if (setup.surface) it->material = setup.surface;
@@ -352,7 +373,8 @@ Expected<void> apply_bodies(World& w) {
       body.surface.triangles = read->mesh.triangles;
     }
     if (body.surface.triangles.empty()) {
-      return make_error(ErrorCode::kInvalidMesh, fmt::format("obstacle '{}' has no triangles to touch", o.name), path.string());
+      return make_error(ErrorCode::kInvalidMesh, fmt::format("obstacle '{}' has no triangles to touch", o.name),
+                        path.string());
     }
     for (Vec3& p : body.surface.vertices) p += o.translation;
     body.material = o.surface;
@@ -369,8 +391,9 @@ Expected<void> add_sofa(World& w, const std::filesystem::path& scene_path, const
   w.ignored = sofa->ignored;
   w.warnings = sofa->warnings;
   if (sofa->models.empty() && sofa->obstacles.empty()) {
-    std::string why = "the scene has no simulated body (a node with an ODE solver and a MechanicalObject) and no "
-                      "obstacle (a TriangleCollisionModel on a state no solver moves)";
+    std::string why =
+        "the scene has no simulated body (a node with an ODE solver and a MechanicalObject) and no "
+        "obstacle (a TriangleCollisionModel on a state no solver moves)";
     if (!sofa->skipped.empty()) why += fmt::format("; not simulated: {}", fmt::join(sofa->skipped, ", "));
     return make_error(ErrorCode::kInvalidArgument, why, scene_path.string());
   }
@@ -423,12 +446,14 @@ void record_parameters(HofProject& project, const std::vector<coupling::Paramete
 void record_changes(HofProject& project, const coupling::Session& session) {
   record_parameters(project, session.parameter_changes());
   for (const auto& [name, material] : session.material_changes()) {
-    auto obstacle = std::find_if(project.obstacles.begin(), project.obstacles.end(), [&](const auto& o) { return o.name == name; });
+    auto obstacle =
+        std::find_if(project.obstacles.begin(), project.obstacles.end(), [&](const auto& o) { return o.name == name; });
     if (obstacle != project.obstacles.end()) {
       obstacle->surface = material;
       continue;
     }
-    auto body = std::find_if(project.bodies.begin(), project.bodies.end(), [&](const auto& b) { return b.name == name; });
+    auto body =
+        std::find_if(project.bodies.begin(), project.bodies.end(), [&](const auto& b) { return b.name == name; });
     if (body == project.bodies.end()) {
       project.bodies.push_back(BodySetup{name, material, {}, {}});
     } else {
@@ -452,7 +477,8 @@ Expected<void> add_project_scene(World& w, const std::filesystem::path& file) {
   }
   // Lines of a scene held in memory are its own, not the file's: its messages say so (the
   // folder still anchors its files).
-  const std::filesystem::path named = text ? file.parent_path() / (file.filename().string() + " (edited scene)") : w.scene_path;
+  const std::filesystem::path named =
+      text ? file.parent_path() / (file.filename().string() + " (edited scene)") : w.scene_path;
   if (!text && w.scene_path.extension() == ".x3d") {
     // An X3D scene under a project: its shapes are the bodies; the project's settings (device,
     // renderer, calibration, graphics) stay the project's, the scene's force effects are used
@@ -468,7 +494,8 @@ Expected<void> add_project_scene(World& w, const std::filesystem::path& file) {
     const Vec3 scene_viewpoint = w.project.graphics.viewpoint_m;
     w.project = kept;
     // A project that keeps the default view looks from the scene's Viewpoint.
-    if (kept.graphics.viewpoint_m == GraphicsSetup{}.viewpoint_m && kept.graphics.look_at_m == GraphicsSetup{}.look_at_m) {
+    if (kept.graphics.viewpoint_m == GraphicsSetup{}.viewpoint_m &&
+        kept.graphics.look_at_m == GraphicsSetup{}.look_at_m) {
       w.project.graphics.viewpoint_m = scene_viewpoint;
     }
     if (two_sided) w.project.touchable_face = collision::TouchableFace::kFrontAndBack;  // solid='false' shapes
@@ -511,7 +538,8 @@ Expected<World> finish_world(World w, bool sofa_scene, bool bare, const std::str
     const double k = w.project.surface.stiffness_n_per_m(spec.max_stiffness_n_per_m);
     // A calibration the file gives is kept; a bare scene gets the fitted one.
     const bool given = !identity(w.project.position_calibration);
-    const Vec3 effects_centre = w.project.effects.springs.empty() ? Vec3::Zero() : w.project.effects.springs.front().position_m;
+    const Vec3 effects_centre =
+        w.project.effects.springs.empty() ? Vec3::Zero() : w.project.effects.springs.front().position_m;
     const double radius = w.project.renderer == haptics::RendererKind::kRuspini ? w.project.proxy_radius_m : 0.0;
     DefaultProbe probe = default_probe(w.bodies, spec.workspace_radius_m, k, spec.max_force_n,
                                        given ? &w.project.position_calibration : nullptr, spec.max_stiffness_n_per_m,
@@ -535,12 +563,17 @@ Expected<World> finish_world(World w, bool sofa_scene, bool bare, const std::str
     }
     // The needle's parameters are SI: lengths in the scene's unit are converted.
     double metres_per_unit = 1.0;
-    if (w.length_unit == "mm") metres_per_unit = 1e-3;
-    else if (w.length_unit == "cm") metres_per_unit = 1e-2;
-    else if (w.length_unit == "dm") metres_per_unit = 1e-1;
+    if (w.length_unit == "mm")
+      metres_per_unit = 1e-3;
+    else if (w.length_unit == "cm")
+      metres_per_unit = 1e-2;
+    else if (w.length_unit == "dm")
+      metres_per_unit = 1e-1;
     else if (w.length_unit != "m") {
-      w.warnings.push_back(fmt::format("the needle's parameters are in SI units; the scene's lengths ({}) are taken as metres "
-                                       "(set mechanics@unit to m, cm or mm)", w.length_unit));
+      w.warnings.push_back(
+          fmt::format("the needle's parameters are in SI units; the scene's lengths ({}) are taken as metres "
+                      "(set mechanics@unit to m, cm or mm)",
+                      w.length_unit));
     }
     auto tool = procedures::NeedleTool::make(*w.project.needle, names, deformable, metres_per_unit);
     if (!tool) {
@@ -557,13 +590,15 @@ Expected<World> finish_world(World w, bool sofa_scene, bool bare, const std::str
 }  // namespace
 
 std::optional<std::vector<coupling::Command>> live_commands(const HofProject& next, const ProjectEdit& edit,
-                                                           const std::vector<std::string>& bodies) {
+                                                            const std::vector<std::string>& bodies) {
   const coupling::SessionConfig config = session_config(next);
   std::vector<coupling::Command> commands;
   if (std::holds_alternative<project_edit::Surface>(edit)) {
     for (const std::string& body : bodies) {
-      const bool own = std::any_of(next.bodies.begin(), next.bodies.end(), [&](const auto& b) { return b.name == body && b.surface; }) ||
-                       std::any_of(next.obstacles.begin(), next.obstacles.end(), [&](const auto& o) { return o.name == body && o.surface; });
+      const bool own = std::any_of(next.bodies.begin(), next.bodies.end(),
+                                   [&](const auto& b) { return b.name == body && b.surface; }) ||
+                       std::any_of(next.obstacles.begin(), next.obstacles.end(),
+                                   [&](const auto& o) { return o.name == body && o.surface; });
       if (!own) commands.emplace_back(coupling::command::SetMaterial{body, next.surface});
     }
   } else if (std::holds_alternative<project_edit::Rendering>(edit)) {
@@ -574,7 +609,8 @@ std::optional<std::vector<coupling::Command>> live_commands(const HofProject& ne
     commands.emplace_back(coupling::command::SetCalibration{config.haptics.calibration});
   } else if (std::holds_alternative<project_edit::ForceLimit>(edit)) {
     commands.emplace_back(coupling::command::SetForceLimit{next.safety.max_force_n});
-  } else if (std::holds_alternative<project_edit::Graphics>(edit) || std::holds_alternative<project_edit::Stylus>(edit)) {
+  } else if (std::holds_alternative<project_edit::Graphics>(edit) ||
+             std::holds_alternative<project_edit::Stylus>(edit)) {
     // Drawn by the window only.
   } else {
     return std::nullopt;
@@ -588,7 +624,8 @@ Expected<World> build_world(const std::filesystem::path& file, const std::string
   w.scene_path = file;
   const std::string ext = file.extension().string();
   std::error_code ec;
-  if (std::filesystem::is_directory(file, ec)) return make_error(ErrorCode::kIo, "is a folder, not a scene or project file", file.string());
+  if (std::filesystem::is_directory(file, ec))
+    return make_error(ErrorCode::kIo, "is a folder, not a scene or project file", file.string());
   if (!std::filesystem::exists(file, ec)) return make_error(ErrorCode::kIo, "no such file", file.string());
   if (ext == ".hof") {
     auto project = read_project(file);
@@ -606,10 +643,12 @@ Expected<World> build_world(const std::filesystem::path& file, const std::string
     if (auto ok = add_x3d(w, file); !ok) return std::unexpected(ok.error());
     return finish_world(std::move(w), false, true, device_override);
   }
-  return make_error(ErrorCode::kUnsupported, "expected a .hof project, a .scn SOFA scene or an .x3d scene", file.string());
+  return make_error(ErrorCode::kUnsupported, "expected a .hof project, a .scn SOFA scene or an .x3d scene",
+                    file.string());
 }
 
-Expected<World> build_world(const HofProject& project, const std::filesystem::path& file, const std::string& device_override) {
+Expected<World> build_world(const HofProject& project, const std::filesystem::path& file,
+                            const std::string& device_override) {
   World w;
   w.file = file;
   w.project = project;
@@ -617,7 +656,8 @@ Expected<World> build_world(const HofProject& project, const std::filesystem::pa
   if (const std::string_view replay = "replay:"; w.project.device.starts_with(replay)) {
     const std::string rest = w.project.device.substr(replay.size());
     const std::filesystem::path recording = rest.substr(0, rest.find(','));
-    if (recording.is_relative() && !file.parent_path().empty()) w.project.device = std::string(replay) + (file.parent_path() / rest).string();
+    if (recording.is_relative() && !file.parent_path().empty())
+      w.project.device = std::string(replay) + (file.parent_path() / rest).string();
   }
   if (auto ok = add_project_scene(w, file); !ok) return std::unexpected(ok.error());
   return finish_world(std::move(w), false, project.device == "auto", device_override);
@@ -626,13 +666,16 @@ Expected<World> build_world(const HofProject& project, const std::filesystem::pa
 Expected<std::size_t> apply_material_region(mechanics::ModelConfig& config, const MaterialRegion& region) {
   const auto positive = [](const std::optional<double>& v) { return !v || (*v > 0.0 && std::isfinite(*v)); };
   if (!positive(region.young_modulus_pa)) {
-    return make_error(ErrorCode::kInvalidArgument, fmt::format("youngModulus must be > 0 Pa, got {}", *region.young_modulus_pa));
+    return make_error(ErrorCode::kInvalidArgument,
+                      fmt::format("youngModulus must be > 0 Pa, got {}", *region.young_modulus_pa));
   }
   if (region.poisson_ratio && !(*region.poisson_ratio > -1.0 && *region.poisson_ratio < 0.5)) {
-    return make_error(ErrorCode::kInvalidArgument, fmt::format("poissonRatio must be in (-1, 0.5), got {}", *region.poisson_ratio));
+    return make_error(ErrorCode::kInvalidArgument,
+                      fmt::format("poissonRatio must be in (-1, 0.5), got {}", *region.poisson_ratio));
   }
   if (!positive(region.mass_density_kg_per_m3)) {
-    return make_error(ErrorCode::kInvalidArgument, fmt::format("massDensity must be > 0, got {}", *region.mass_density_kg_per_m3));
+    return make_error(ErrorCode::kInvalidArgument,
+                      fmt::format("massDensity must be > 0, got {}", *region.mass_density_kg_per_m3));
   }
   if (!region.young_modulus_pa && !region.poisson_ratio && !region.mass_density_kg_per_m3) {
     return make_error(ErrorCode::kInvalidArgument, "sets nothing: give youngModulus, poissonRatio or massDensity");
@@ -641,8 +684,9 @@ Expected<std::size_t> apply_material_region(mechanics::ModelConfig& config, cons
   // its triangles (a membrane).
   const bool on_hexahedra = config.tets.empty() && !config.hexahedra.empty();
   const bool on_triangles = config.tets.empty() && !on_hexahedra;
-  const std::size_t element_count =
-      on_hexahedra ? config.hexahedra.size() : on_triangles ? config.triangles.size() : config.tets.size();
+  const std::size_t element_count = on_hexahedra   ? config.hexahedra.size()
+                                    : on_triangles ? config.triangles.size()
+                                                   : config.tets.size();
   struct Target {
     std::vector<double>* young;
     std::vector<double>* poisson;
@@ -651,7 +695,8 @@ Expected<std::size_t> apply_material_region(mechanics::ModelConfig& config, cons
   std::string names;
   for (mechanics::ForceFieldConfig& f : config.force_fields) {
     Target t{nullptr, nullptr};
-    if (f.tetrahedron_fem) t = {&f.tetrahedron_fem->element_young_modulus_pa, &f.tetrahedron_fem->element_poisson_ratio};
+    if (f.tetrahedron_fem)
+      t = {&f.tetrahedron_fem->element_young_modulus_pa, &f.tetrahedron_fem->element_poisson_ratio};
     if (f.neo_hookean) t = {&f.neo_hookean->element_young_modulus_pa, &f.neo_hookean->element_poisson_ratio};
     if (f.triangle_fem) t = {&f.triangle_fem->element_young_modulus_pa, &f.triangle_fem->element_poisson_ratio};
     if (f.hexahedron_fem) t = {&f.hexahedron_fem->element_young_modulus_pa, &f.hexahedron_fem->element_poisson_ratio};
@@ -662,21 +707,28 @@ Expected<std::size_t> apply_material_region(mechanics::ModelConfig& config, cons
   }
   const bool elastic = region.young_modulus_pa || region.poisson_ratio;
   if (elastic && targets.empty()) {
-    return make_error(ErrorCode::kInvalidArgument,
-                      region.force_field.empty()
-                          ? std::string("the body has no FEM force field (TetrahedronFEMForceField, Neo-Hookean, "
-                                        "HexahedronFEMForceField or a membrane TriangleFEMForceField) whose material a region could set")
-                          : fmt::format("no FEM force field '{}' (the body has: {})", region.force_field,
-                                        names.empty() ? std::string("none") : names));
+    return make_error(
+        ErrorCode::kInvalidArgument,
+        region.force_field.empty()
+            ? std::string(
+                  "the body has no FEM force field (TetrahedronFEMForceField, Neo-Hookean, "
+                  "HexahedronFEMForceField or a membrane TriangleFEMForceField) whose material a region could set")
+            : fmt::format("no FEM force field '{}' (the body has: {})", region.force_field,
+                          names.empty() ? std::string("none") : names));
   }
   if (region.mass_density_kg_per_m3 && config.mass.kind != mechanics::MassKind::kDiagonal) {
     return make_error(ErrorCode::kInvalidArgument,
-                      fmt::format("massDensity needs the body's mass to be a DiagonalMass (its '{}' is a UniformMass)", config.mass.name));
+                      fmt::format("massDensity needs the body's mass to be a DiagonalMass (its '{}' is a UniformMass)",
+                                  config.mass.name));
   }
   if (region.shape == MaterialRegion::Shape::kGroup && config.element_regions.size() != element_count) {
-    return make_error(ErrorCode::kInvalidArgument,
-                      fmt::format("physicalGroup=\"{}\": the body's mesh has no physical groups (a Gmsh file with tagged {})",
-                                  region.physical_group, on_hexahedra ? "elements; a grid has none" : on_triangles ? "triangles" : "tetrahedra"));
+    return make_error(
+        ErrorCode::kInvalidArgument,
+        fmt::format("physicalGroup=\"{}\": the body's mesh has no physical groups (a Gmsh file with tagged {})",
+                    region.physical_group,
+                    on_hexahedra   ? "elements; a grid has none"
+                    : on_triangles ? "triangles"
+                                   : "tetrahedra"));
   }
   std::size_t count = 0;
   for (const Target& t : targets) {
@@ -699,9 +751,9 @@ Expected<std::size_t> apply_material_region(mechanics::ModelConfig& config, cons
         }
         centroid += config.positions[static_cast<std::size_t>(n)] / static_cast<double>(nodes.size());
       }
-      inside = region.shape == MaterialRegion::Shape::kSphere
-                   ? (centroid - region.center).norm() <= region.radius
-                   : (centroid.array() >= region.box_min.array()).all() && (centroid.array() <= region.box_max.array()).all();
+      inside = region.shape == MaterialRegion::Shape::kSphere ? (centroid - region.center).norm() <= region.radius
+                                                              : (centroid.array() >= region.box_min.array()).all() &&
+                                                                    (centroid.array() <= region.box_max.array()).all();
     }
     if (!inside) continue;
     ++count;

@@ -23,8 +23,8 @@
 #include <filesystem>
 #include <map>
 #include <optional>
-#include <string_view>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "hof/core/error.h"
@@ -69,8 +69,8 @@ struct World {
   HofProject project;                ///< every setting (read from the project, or defaults)
   std::vector<coupling::SessionBody> bodies;
   coupling::SessionConfig config;
-  std::string device;                ///< the device spec (the default probe resolved)
-  bool default_probe{false};         ///< the device is the builder's probe
+  std::string device;         ///< the device spec (the default probe resolved)
+  bool default_probe{false};  ///< the device is the builder's probe
   /// The default probe: seconds until it reaches the surface, and its whole press (0 when it
   /// does not press a body).
   double probe_arrival_s{0.0};
@@ -85,7 +85,7 @@ struct World {
   /// nothing to render and exits with its own status.
   std::string nothing_to_touch;
   std::vector<std::string> warnings;
-  std::vector<std::string> defaults; ///< "what = value (why)" for every default the builder used
+  std::vector<std::string> defaults;  ///< "what = value (why)" for every default the builder used
   /// The calibration the file gave (identity when none), before the default probe fitted one.
   std::array<double, 16> file_calibration{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
 };
@@ -117,7 +117,8 @@ void record_parameters(HofProject& project, const std::vector<coupling::Paramete
 /// list: the change needs no command (the graphics and the stylus, drawn by the window).
 /// nullopt: it cannot be made live (it takes effect when the project is read again). The
 /// device and the needle are the caller's (they hold handles on them).
-[[nodiscard]] std::optional<std::vector<coupling::Command>> live_commands(const HofProject& next, const ProjectEdit& edit,
+[[nodiscard]] std::optional<std::vector<coupling::Command>> live_commands(const HofProject& next,
+                                                                          const ProjectEdit& edit,
                                                                           const std::vector<std::string>& bodies);
 
 /// Gives the tetrahedra of `config` whose centroid lies in `region` the region's Young's

@@ -24,7 +24,8 @@ struct ShapeCounts {
 // A DeformableShape: the thesis' surface model — springs on the triangle edges, uniform
 // mass, the open border held (or, for a closed surface, its lowest tenth along y, X3D's
 // up) — driven by the mechanics instead of H3D's CoordinateDeformer.
-mechanics::ModelConfig deformable_shape_config(const std::string& name, const mesh::TriMesh& geometry, const X3dDeformableDefaults& d) {
+mechanics::ModelConfig deformable_shape_config(const std::string& name, const mesh::TriMesh& geometry,
+                                               const X3dDeformableDefaults& d) {
   mechanics::ModelConfig c;
   c.name = name;
   c.positions = geometry.vertices;
@@ -65,15 +66,20 @@ Expected<ShapeCounts> add_shapes(World& w, const X3dScene& x3d, const X3dDeforma
         shape.deformable || shape.haptic_mesh_W.triangles.empty() ? shape.mesh_W : shape.haptic_mesh_W;
     if (geometry.triangles.empty()) {
       if (shape.touchable) {
-        out.empty_touchable.push_back(fmt::format("{} (line {}, {})", shape.def.empty() ? "Shape" : shape.def, shape.line,
-                                              shape.geometry_type.empty() ? "no geometry HoF draws" : shape.geometry_type + " without triangles"));
+        out.empty_touchable.push_back(fmt::format(
+            "{} (line {}, {})", shape.def.empty() ? "Shape" : shape.def, shape.line,
+            shape.geometry_type.empty() ? "no geometry HoF draws" : shape.geometry_type + " without triangles"));
       }
       continue;
     }
-    if (shape.haptics_switched_off) ++out.switched_off;
-    else if (!shape.touchable) ++out.seen_only;
+    if (shape.haptics_switched_off)
+      ++out.switched_off;
+    else if (!shape.touchable)
+      ++out.seen_only;
     const std::string name = unique_name(
-        w.bodies, !shape.def.empty() ? shape.def : fmt::format("{}@{}", shape.geometry_type.empty() ? "Shape" : shape.geometry_type, shape.line));
+        w.bodies, !shape.def.empty()
+                      ? shape.def
+                      : fmt::format("{}@{}", shape.geometry_type.empty() ? "Shape" : shape.geometry_type, shape.line));
     const Appearance appearance{shape.diffuse_color, shape.transparency};
     if (!shape.touchable) {
       w.visuals.push_back(VisualShape{name, shape.mesh_W, appearance});  // seen, not felt
@@ -139,7 +145,8 @@ std::string nothing_to_touch(const X3dScene& x3d, const ShapeCounts& counts) {
     causes.push_back(fmt::format("{} force effect{} under a ToggleGroup with hapticsOn false", x3d.effects_switched_off,
                                  x3d.effects_switched_off == 1 ? " is" : "s are"));
   }
-  if (!counts.empty_touchable.empty()) causes.push_back(fmt::format("a haptic surface on no triangles: {}", fmt::join(counts.empty_touchable, ", ")));
+  if (!counts.empty_touchable.empty())
+    causes.push_back(fmt::format("a haptic surface on no triangles: {}", fmt::join(counts.empty_touchable, ", ")));
   // Not modelled, and haptic (an Appearance's surface, an effect, a deformer): the likely reason.
   if (!x3d.unsupported_haptic.empty()) {
     causes.push_back(fmt::format("haptic nodes HoF does not model: {}", fmt::join(x3d.unsupported_haptic, ", ")));
@@ -176,12 +183,13 @@ Expected<void> add_x3d(World& w, const std::filesystem::path& file) {
   auto counts = add_shapes(w, *x3d, d);
   if (!counts) return std::unexpected(counts.error());
   if (counts->any_deformable) {
-    w.defaults.push_back(fmt::format("DeformableShape springs/stiffness = {} N/m, springs/damping = {} N s/m, "
-                                     "springs/restLengthScale = {} for an open sheet (a drum skin, border held; a closed "
-                                     "surface: 1, lowest tenth held), mass = {} kg, rayleigh = {}, dt = {} s, no gravity "
-                                     "(X3D gives no mechanics)",
-                                     d.spring_stiffness_n_per_m, d.spring_damping_n_s_per_m, d.open_sheet_rest_length_scale,
-                                     d.total_mass_kg, d.rayleigh, d.dt_s));
+    w.defaults.push_back(
+        fmt::format("DeformableShape springs/stiffness = {} N/m, springs/damping = {} N s/m, "
+                    "springs/restLengthScale = {} for an open sheet (a drum skin, border held; a closed "
+                    "surface: 1, lowest tenth held), mass = {} kg, rayleigh = {}, dt = {} s, no gravity "
+                    "(X3D gives no mechanics)",
+                    d.spring_stiffness_n_per_m, d.spring_damping_n_s_per_m, d.open_sheet_rest_length_scale,
+                    d.total_mass_kg, d.rayleigh, d.dt_s));
   }
   take_settings(w, *x3d, file);
   if (w.bodies.empty() && x3d->force_effects.empty()) {

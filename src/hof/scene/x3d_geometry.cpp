@@ -39,15 +39,19 @@ mesh::TriMesh make_sphere(double r) {
     const double phi = std::numbers::pi * i / kSphereStacks;
     for (int j = 0; j < kSphereSlices; ++j) {
       const double theta = 2.0 * std::numbers::pi * j / kSphereSlices;
-      m.vertices.emplace_back(r * std::sin(phi) * std::sin(theta), r * std::cos(phi), r * std::sin(phi) * std::cos(theta));
+      m.vertices.emplace_back(r * std::sin(phi) * std::sin(theta), r * std::cos(phi),
+                              r * std::sin(phi) * std::cos(theta));
     }
   }
   m.vertices.emplace_back(0.0, -r, 0.0);
-  const auto ring = [](int i, int j) { return static_cast<mesh::NodeIndex>(1 + (i - 1) * kSphereSlices + j % kSphereSlices); };
+  const auto ring = [](int i, int j) {
+    return static_cast<mesh::NodeIndex>(1 + (i - 1) * kSphereSlices + j % kSphereSlices);
+  };
   const auto south = index(m.vertices.size() - 1);
   for (int j = 0; j < kSphereSlices; ++j) {
     m.triangles.push_back({0, ring(1, j), ring(1, j + 1)});
-    for (int i = 1; i + 1 < kSphereStacks; ++i) add_quad(m, ring(i, j), ring(i + 1, j), ring(i + 1, j + 1), ring(i, j + 1));
+    for (int i = 1; i + 1 < kSphereStacks; ++i)
+      add_quad(m, ring(i, j), ring(i + 1, j), ring(i + 1, j + 1), ring(i, j + 1));
     m.triangles.push_back({south, ring(kSphereStacks - 1, j + 1), ring(kSphereStacks - 1, j)});
   }
   orient_outward(m);
@@ -57,7 +61,8 @@ mesh::TriMesh make_sphere(double r) {
 mesh::TriMesh make_box(const Vec3& size) {
   mesh::TriMesh m;
   const Vec3 h = 0.5 * size;
-  for (int i = 0; i < 8; ++i) m.vertices.emplace_back((i & 1) ? h.x() : -h.x(), (i & 2) ? h.y() : -h.y(), (i & 4) ? h.z() : -h.z());
+  for (int i = 0; i < 8; ++i)
+    m.vertices.emplace_back((i & 1) ? h.x() : -h.x(), (i & 2) ? h.y() : -h.y(), (i & 4) ? h.z() : -h.z());
   add_quad(m, 0, 2, 3, 1);  // z−
   add_quad(m, 4, 5, 7, 6);  // z+
   add_quad(m, 0, 1, 5, 4);  // y−
@@ -87,8 +92,10 @@ mesh::TriMesh make_round(double bottom_radius, double top_radius, double height,
   const auto b = [](int j) { return static_cast<mesh::NodeIndex>(j % n); };
   const auto tp = [cone](int j) { return static_cast<mesh::NodeIndex>(cone ? n : n + j % n); };
   for (int j = 0; j < n && side; ++j) {
-    if (cone) m.triangles.push_back({b(j), b(j + 1), tp(j)});
-    else add_quad(m, b(j), b(j + 1), tp(j + 1), tp(j));
+    if (cone)
+      m.triangles.push_back({b(j), b(j + 1), tp(j)});
+    else
+      add_quad(m, b(j), b(j + 1), tp(j + 1), tp(j));
   }
   if (bottom) {
     const auto c = index(m.vertices.size());
@@ -136,8 +143,8 @@ mesh::TriMesh make_disk(double inner_radius, double outer_radius) {
   return m;
 }
 
-mesh::TriMesh make_elevation_grid(std::int64_t x_dimension, std::int64_t z_dimension, double x_spacing, double z_spacing,
-                                  std::span<const double> height) {
+mesh::TriMesh make_elevation_grid(std::int64_t x_dimension, std::int64_t z_dimension, double x_spacing,
+                                  double z_spacing, std::span<const double> height) {
   mesh::TriMesh m;
   if (x_dimension < 2 || z_dimension < 2) return m;  // no quad: nothing to draw (the spec's "empty")
   for (std::int64_t j = 0; j < z_dimension; ++j) {
@@ -146,7 +153,9 @@ mesh::TriMesh make_elevation_grid(std::int64_t x_dimension, std::int64_t z_dimen
                               z_spacing * static_cast<double>(j));
     }
   }
-  const auto v = [x_dimension](std::int64_t i, std::int64_t j) { return static_cast<mesh::NodeIndex>(i + j * x_dimension); };
+  const auto v = [x_dimension](std::int64_t i, std::int64_t j) {
+    return static_cast<mesh::NodeIndex>(i + j * x_dimension);
+  };
   // (i, j) → (i, j+1) → (i+1, j+1) → (i+1, j) turns counter-clockwise seen from +y: the spec's
   // default (ccw TRUE) gives the grid normals with a positive y component.
   for (std::int64_t j = 0; j + 1 < z_dimension; ++j) {
@@ -155,8 +164,9 @@ mesh::TriMesh make_elevation_grid(std::int64_t x_dimension, std::int64_t z_dimen
   return m;
 }
 
-mesh::TriMesh make_extrusion(std::span<const Vec2> cross_section, std::span<const Vec3> spine, std::span<const Vec2> scale,
-                             std::span<const Vec4> orientation, bool begin_cap, bool end_cap) {
+mesh::TriMesh make_extrusion(std::span<const Vec2> cross_section, std::span<const Vec3> spine,
+                             std::span<const Vec2> scale, std::span<const Vec4> orientation, bool begin_cap,
+                             bool end_cap) {
   mesh::TriMesh m;
   const std::size_t ns = spine.size();
   const std::size_t nc = cross_section.size();
@@ -171,19 +181,24 @@ mesh::TriMesh make_extrusion(std::span<const Vec2> cross_section, std::span<cons
   for (std::size_t i = 0; i < ns; ++i) {
     Vec3 y;
     if (i == 0 || i + 1 == ns) {
-      y = spine_closed ? Vec3(spine[1] - spine[ns - 2]) : (i == 0 ? Vec3(spine[1] - spine[0]) : Vec3(spine[ns - 1] - spine[ns - 2]));
+      y = spine_closed ? Vec3(spine[1] - spine[ns - 2])
+                       : (i == 0 ? Vec3(spine[1] - spine[0]) : Vec3(spine[ns - 1] - spine[ns - 2]));
     } else {
       y = spine[i + 1] - spine[i - 1];
     }
     ys[i] = y;
     Vec3 z = Vec3::Zero();
-    if (i > 0 && i + 1 < ns) z = (spine[i + 1] - spine[i]).cross(spine[i - 1] - spine[i]);
-    else if (spine_closed) z = (spine[1] - spine[0]).cross(spine[ns - 2] - spine[0]);
+    if (i > 0 && i + 1 < ns)
+      z = (spine[i + 1] - spine[i]).cross(spine[i - 1] - spine[i]);
+    else if (spine_closed)
+      z = (spine[1] - spine[0]).cross(spine[ns - 2] - spine[0]);
     zs[i] = z;
   }
   // A zero Y (coincident points) takes its neighbour's; a spine with no length at all keeps +y.
-  for (std::size_t i = 1; i < ns; ++i) if (ys[i].norm() < kTiny) ys[i] = ys[i - 1];
-  for (std::size_t i = ns - 1; i-- > 0;) if (ys[i].norm() < kTiny) ys[i] = ys[i + 1];
+  for (std::size_t i = 1; i < ns; ++i)
+    if (ys[i].norm() < kTiny) ys[i] = ys[i - 1];
+  for (std::size_t i = ns - 1; i-- > 0;)
+    if (ys[i].norm() < kTiny) ys[i] = ys[i + 1];
   for (Vec3& y : ys) y = y.norm() < kTiny ? Vec3::UnitY() : Vec3(y.normalized());
   // Open ends take the Z of their neighbour; collinear points the previous Z.
   if (!spine_closed && ns > 2) {
@@ -199,9 +214,11 @@ mesh::TriMesh make_extrusion(std::span<const Vec2> cross_section, std::span<cons
     std::size_t first = 0;
     while (zs[first].norm() < kTiny) ++first;
     for (std::size_t i = 0; i < first; ++i) zs[i] = zs[first];
-    for (std::size_t i = first + 1; i < ns; ++i) if (zs[i].norm() < kTiny) zs[i] = zs[i - 1];
+    for (std::size_t i = first + 1; i < ns; ++i)
+      if (zs[i].norm() < kTiny) zs[i] = zs[i - 1];
     for (Vec3& z : zs) z.normalize();
-    for (std::size_t i = 1; i < ns; ++i) if (zs[i].dot(zs[i - 1]) < 0.0) zs[i] = -zs[i];
+    for (std::size_t i = 1; i < ns; ++i)
+      if (zs[i].dot(zs[i - 1]) < 0.0) zs[i] = -zs[i];
   }
 
   for (std::size_t i = 0; i < ns; ++i) {
@@ -209,7 +226,8 @@ mesh::TriMesh make_extrusion(std::span<const Vec2> cross_section, std::span<cons
     // Z made orthogonal to Y (they are by construction for a planar bend; not after the
     // neighbour fallbacks above), then X completes the right-handed frame.
     Vec3 z = zs[i] - zs[i].dot(y) * y;
-    z = z.norm() < kTiny ? Vec3(Eigen::Quaterniond::FromTwoVectors(Vec3::UnitY(), y) * Vec3::UnitZ()) : Vec3(z.normalized());
+    z = z.norm() < kTiny ? Vec3(Eigen::Quaterniond::FromTwoVectors(Vec3::UnitY(), y) * Vec3::UnitZ())
+                         : Vec3(z.normalized());
     const Vec3 x = y.cross(z);
     Eigen::Matrix3d scp;
     scp << x, y, z;
@@ -219,7 +237,8 @@ mesh::TriMesh make_extrusion(std::span<const Vec2> cross_section, std::span<cons
     const Eigen::Matrix3d R = axis.norm() > kTiny ? Eigen::AngleAxisd(r[3], axis.normalized()).toRotationMatrix()
                                                   : Eigen::Matrix3d::Identity();
     // Scaled, then rotated by orientation, then placed in the SCP.
-    for (const Vec2& c : cross_section) m.vertices.push_back(spine[i] + scp * (R * Vec3(s.x() * c.x(), 0.0, s.y() * c.y())));
+    for (const Vec2& c : cross_section)
+      m.vertices.push_back(spine[i] + scp * (R * Vec3(s.x() * c.x(), 0.0, s.y() * c.y())));
   }
   const auto v = [nc](std::size_t i, std::size_t k) { return static_cast<mesh::NodeIndex>(i * nc + k); };
   // Sides: the quad (i, k) (i, k+1) (i+1, k+1) (i+1, k) faces outward for the default data (a
@@ -239,7 +258,8 @@ mesh::TriMesh make_extrusion(std::span<const Vec2> cross_section, std::span<cons
   return m;
 }
 
-std::size_t append_grouped(std::vector<mesh::Tri>& out, VertexGrouping grouping, std::span<const std::vector<mesh::NodeIndex>> runs) {
+std::size_t append_grouped(std::vector<mesh::Tri>& out, VertexGrouping grouping,
+                           std::span<const std::vector<mesh::NodeIndex>> runs) {
   std::size_t left_out = 0;
   for (const std::vector<mesh::NodeIndex>& run : runs) {
     const std::size_t n = run.size();
@@ -264,8 +284,10 @@ std::size_t append_grouped(std::vector<mesh::Tri>& out, VertexGrouping grouping,
         // Triangle k is (k, k+1, k+2); every other one is reversed so that all keep the
         // strip's winding (19775-1, TriangleStripSet).
         for (std::size_t k = 0; k + 2 < n; ++k) {
-          if (k % 2 == 0) out.push_back({run[k], run[k + 1], run[k + 2]});
-          else out.push_back({run[k + 1], run[k], run[k + 2]});
+          if (k % 2 == 0)
+            out.push_back({run[k], run[k + 1], run[k + 2]});
+          else
+            out.push_back({run[k + 1], run[k], run[k + 2]});
         }
         if (n < 3) left_out += n;
         break;

@@ -39,8 +39,10 @@ void X3dReader::appearance(pugi::xml_node n, X3dShape& s) {
       for (pugi::xml_node m : c.children()) {
         if (!is_child(m)) continue;
         const pugi::xml_node r = source_.resolve(m);
-        if (!first && is_surface(r.name())) first = r;
-        else unsupported(m);
+        if (!first && is_surface(r.name()))
+          first = r;
+        else
+          unsupported(m);
       }
       if (first) {
         s.touchable = true;
@@ -59,8 +61,7 @@ haptics::SurfaceMaterial X3dReader::surface(pugi::xml_node n) {
   const std::string_view t = n.name();
   haptics::SurfaceMaterial m;
   // OpenHapticsSurface is magnetic only when its `magnetic` field says so (default false).
-  const bool magnetic =
-      t == "MagneticSurface" || (t == "OpenHapticsSurface" && source_.boolean(n, "magnetic", false));
+  const bool magnetic = t == "MagneticSurface" || (t == "OpenHapticsSurface" && source_.boolean(n, "magnetic", false));
   m.kind = t == "SmoothSurface" ? SurfaceKind::kSmooth : magnetic ? SurfaceKind::kMagnetic : SurfaceKind::kFrictional;
   m.stiffness = source_.number(n, "stiffness", 0.5);
   m.damping_n_s_per_m = source_.number(n, "damping", 0.0);
@@ -75,9 +76,10 @@ haptics::SurfaceMaterial X3dReader::surface(pugi::xml_node n) {
   if (magnetic) m.snap_distance_m = source_.number(n, "snapDistance", 0.01);
   // What HoF renders in place of H3D's surfaces it does not have, said once per type.
   if (t == "OpenHapticsSurface" || t == "DepthMapSurface" || t == "HapticTexturesSurface") {
-    const std::string_view as = t == "OpenHapticsSurface" ? "HoF's frictional (or, with magnetic true, magnetic) surface "
-                                                            "with its stiffness, damping and friction (HLAPI's own "
-                                                            "rendering is not modelled)"
+    const std::string_view as = t == "OpenHapticsSurface"
+                                    ? "HoF's frictional (or, with magnetic true, magnetic) surface "
+                                      "with its stiffness, damping and friction (HLAPI's own "
+                                      "rendering is not modelled)"
                                 : t == "DepthMapSurface" ? "a frictional surface: its depth map is not modelled"
                                                          : "a frictional surface: its texture maps are not modelled";
     if (approximated_.insert(std::string(t)).second) source_.warn(n, fmt::format("{}: rendered as {}", t, as));
@@ -133,44 +135,47 @@ void X3dReader::function_effect(pugi::xml_node n) {
     const std::size_t wanted = of_time ? 1 : 3;
     if (params.size() != wanted) {
       // H3D ignores the effect then (it prints a warning): so does HoF.
-      source_.warn(c, fmt::format("{}: GeneralFunction params '{}' must name {} variable(s): the effect is ignored", n.name(),
-                          c.attribute("params").as_string(), wanted));
+      source_.warn(c, fmt::format("{}: GeneralFunction params '{}' must name {} variable(s): the effect is ignored",
+                                  n.name(), c.attribute("params").as_string(), wanted));
       return;
     }
     auto expression = haptics::FunctionExpression::make(c.attribute("function").as_string(), params);
-    if (!expression) source_.fail(c, ErrorCode::kParse, fmt::format("<GeneralFunction> function: {}", expression.error().message));
+    if (!expression)
+      source_.fail(c, ErrorCode::kParse, fmt::format("<GeneralFunction> function: {}", expression.error().message));
     f[static_cast<std::size_t>(slot - fields.begin())] = *expression;
   }
   if (!f[0] || !f[1] || !f[2]) {
-    source_.warn(n, fmt::format("{}: xFunction, yFunction and zFunction are all needed (H3D ignores the effect otherwise): ignored",
-                        n.name()));
+    source_.warn(
+        n,
+        fmt::format("{}: xFunction, yFunction and zFunction are all needed (H3D ignores the effect otherwise): ignored",
+                    n.name()));
     return;
   }
-  if (of_time) scene_.force_effects.time_functions.push_back({*f[0], *f[1], *f[2]});
-  else scene_.force_effects.position_functions.push_back({*f[0], *f[1], *f[2]});
+  if (of_time)
+    scene_.force_effects.time_functions.push_back({*f[0], *f[1], *f[2]});
+  else
+    scene_.force_effects.position_functions.push_back({*f[0], *f[1], *f[2]});
 }
 
-void X3dReader::rotational_spring_effect(pugi::xml_node n) {
-  unsupported(n, "(a torque: HoF renders forces only)");
-}
+void X3dReader::rotational_spring_effect(pugi::xml_node n) { unsupported(n, "(a torque: HoF renders forces only)"); }
 
 X3dHapticsOptions X3dReader::haptics_options(pugi::xml_node n) const {
   X3dHapticsOptions o;
   o.touchable_face = source_.choice<X3dTouchableFace>(n, "touchableFace",
-                                              {{"AS_GRAPHICS", X3dTouchableFace::kAsGraphics},
-                                               {"FRONT", X3dTouchableFace::kFront},
-                                               {"BACK", X3dTouchableFace::kBack},
-                                               {"FRONT_AND_BACK", X3dTouchableFace::kFrontAndBack}},
-                                              o.touchable_face);
+                                                      {{"AS_GRAPHICS", X3dTouchableFace::kAsGraphics},
+                                                       {"FRONT", X3dTouchableFace::kFront},
+                                                       {"BACK", X3dTouchableFace::kBack},
+                                                       {"FRONT_AND_BACK", X3dTouchableFace::kFrontAndBack}},
+                                                      o.touchable_face);
   o.max_distance_m = source_.number(n, "maxDistance", o.max_distance_m);
   o.look_ahead_factor = source_.number(n, "lookAheadFactor", o.look_ahead_factor);
   o.use_bound_tree = source_.boolean(n, "useBoundTree", o.use_bound_tree);
   o.interpolate_force_effects = source_.boolean(n, "interpolateForceEffects", o.interpolate_force_effects);
   o.dynamic_mode = source_.choice<X3dDynamicMode>(n, "dynamicMode",
-                                          {{"TRANSFORM_CHANGED", X3dDynamicMode::kTransformChanged},
-                                           {"ALWAYS", X3dDynamicMode::kAlways},
-                                           {"NEVER", X3dDynamicMode::kNever}},
-                                          o.dynamic_mode);
+                                                  {{"TRANSFORM_CHANGED", X3dDynamicMode::kTransformChanged},
+                                                   {"ALWAYS", X3dDynamicMode::kAlways},
+                                                   {"NEVER", X3dDynamicMode::kNever}},
+                                                  o.dynamic_mode);
   return o;
 }
 
@@ -222,7 +227,8 @@ void X3dReader::device_info(pugi::xml_node n) {
     d.type = c.name();
     d.def = c.attribute("DEF").as_string();
     d.device_name = source_.string(c, "deviceName", "");
-    const auto pc = source_.numbers(c, "positionCalibration", 16, {d.position_calibration.begin(), d.position_calibration.end()});
+    const auto pc =
+        source_.numbers(c, "positionCalibration", 16, {d.position_calibration.begin(), d.position_calibration.end()});
     std::copy(pc.begin(), pc.end(), d.position_calibration.begin());
     const auto oc = source_.numbers(c, "orientationCalibration", 4, {1, 0, 0, 0});
     std::copy(oc.begin(), oc.end(), d.orientation_calibration.begin());

@@ -17,13 +17,13 @@
 
 #include <algorithm>
 #include <array>
-#include <memory>
-#include <optional>
-#include <set>
 #include <cmath>
 #include <fstream>
 #include <map>
+#include <memory>
 #include <numbers>
+#include <optional>
+#include <set>
 #include <sstream>
 #include <string_view>
 #include <utility>
@@ -56,7 +56,7 @@ X3dScene X3dReader::run(std::string text) {
   const std::string_view head = std::string_view(text).substr(0, 64);
   if (head.starts_with("#X3D") || head.starts_with("#VRML")) {
     source_.fail_at(scene_.file, 1, ErrorCode::kUnsupported,
-            "the X3D classic VRML encoding (#X3D / #VRML) is not read: only X3D's XML encoding (<X3D>...)");
+                    "the X3D classic VRML encoding (#X3D / #VRML) is not read: only X3D's XML encoding (<X3D>...)");
   }
   X3dDocument& doc = source_.parse(scene_.file, std::move(text), nullptr, 0);
   const pugi::xml_node root = doc.xml.document_element();
@@ -68,10 +68,11 @@ X3dScene X3dReader::run(std::string text) {
   visit(root, Mat4::Identity());
   if (!scene_.unsupported.empty()) {
     std::string list;
-    for (std::size_t i = 0; i < scene_.unsupported.size() && i < 8; ++i) list += (i ? ", " : "") + scene_.unsupported[i];
+    for (std::size_t i = 0; i < scene_.unsupported.size() && i < 8; ++i)
+      list += (i ? ", " : "") + scene_.unsupported[i];
     if (scene_.unsupported.size() > 8) list += ", ...";
-    scene_.warnings.push_back(fmt::format("{}: {} node(s) not modelled, ignored: {}", scene_.file.string(),
-                                          scene_.unsupported.size(), list));
+    scene_.warnings.push_back(
+        fmt::format("{}: {} node(s) not modelled, ignored: {}", scene_.file.string(), scene_.unsupported.size(), list));
   }
   return std::move(scene_);
 }
@@ -84,8 +85,9 @@ void X3dReader::unsupported(pugi::xml_node original, std::string_view extra, Slo
   if (std::string_view(n.name()) == "ProtoInstance") entry += fmt::format(" '{}'", n.attribute("name").as_string());
   if (!extra.empty()) entry += fmt::format(" {}", extra);
   const fs::path& file = source_.doc_of(original).file;
-  entry = file == scene_.file ? fmt::format("{} (line {})", entry, source_.line_of(original))
-                              : fmt::format("{} ({} line {})", entry, file.filename().string(), source_.line_of(original));
+  entry = file == scene_.file
+              ? fmt::format("{} (line {})", entry, source_.line_of(original))
+              : fmt::format("{} ({} line {})", entry, file.filename().string(), source_.line_of(original));
   const std::string_view type = n.name();
   if (slot == Slot::kOther && (type.ends_with("Effect") || type.ends_with("Deformer"))) slot = Slot::kHaptic;
   if (slot == Slot::kGeometry) scene_.unsupported_geometry.push_back(entry);
@@ -129,7 +131,8 @@ void X3dReader::visit(pugi::xml_node original, const Mat4& X) {
   // USE copies subtrees: a chain of nodes each USE'd twice by the next doubles the tree at
   // every link (2^40 nodes from 40 lines). Bounded, so such a file is refused, not a hang.
   if (++visited_ > kMaxVisitedNodes) {
-    source_.fail(original, ErrorCode::kParse, fmt::format("the scene expands to more than {} nodes through USE", kMaxVisitedNodes));
+    source_.fail(original, ErrorCode::kParse,
+                 fmt::format("the scene expands to more than {} nodes through USE", kMaxVisitedNodes));
   }
   const std::string_view tag = original.name();
   if (tag == "head" || tag == "meta" || tag == "component" || tag == "unit" || tag == "ProtoDeclare" ||
@@ -171,15 +174,18 @@ void X3dReader::visit(pugi::xml_node original, const Mat4& X) {
     const Vec3 p = source_.vec3(n, "position", Vec3::Zero());
     const Mat4 R = axis_angle(source_.numbers(n, "orientation", 4, {0, 0, 1, 0}));
     if (!dynamic_transform_noted_) {
-      source_.warn(n, "DynamicTransform: its children are placed where it starts (position, orientation); its motion "
-                      "(mass, momentum, force, torque) is not simulated");
+      source_.warn(n,
+                   "DynamicTransform: its children are placed where it starts (position, orientation); its motion "
+                   "(mass, momentum, force, torque) is not simulated");
       dynamic_transform_noted_ = true;
     }
     visit_children(n, X * translation(p) * R);
   } else if (t == "Switch") {
     // 19775-1, Switch: only the child whichChoice names is traversed; −1 (the default) or an
     // index past the children: none.
-    if (const pugi::xml_node c = nth_child(n, source_.integer(n, "whichChoice", -1)); c && source_.integer(n, "whichChoice", -1) >= 0) visit(c, X);
+    if (const pugi::xml_node c = nth_child(n, source_.integer(n, "whichChoice", -1));
+        c && source_.integer(n, "whichChoice", -1) >= 0)
+      visit(c, X);
   } else if (t == "LOD") {
     // 19775-1, LOD: level 0, the most detailed, is shown nearest the viewer; HoF has no
     // viewer distance, and takes that one.
@@ -252,18 +258,21 @@ void X3dReader::inline_file(pugi::xml_node n, const Mat4& X) {
       // H3DViewer reads the classic encoding too; HoF reads X3D's XML only: the Inline is
       // not shown, the scene still opens.
       source_.warn(n, fmt::format("Inline url '{}': the classic VRML encoding (.wrl, #VRML / #X3D) is not read: "
-                                  "not shown", url));
+                                  "not shown",
+                                  url));
       return;
     }
     const fs::path key = source_.weakly_canonical(path);
     if (std::ranges::find(inline_stack_, key) != inline_stack_.end()) {
       std::string chain;
       for (const fs::path& p : inline_stack_) chain += p.filename().string() + " → ";
-      source_.fail(n, ErrorCode::kParse, fmt::format("Inline url '{}' includes a file that includes it: {}{}", url, chain,
-                                             path.filename().string()));
+      source_.fail(
+          n, ErrorCode::kParse,
+          fmt::format("Inline url '{}' includes a file that includes it: {}{}", url, chain, path.filename().string()));
     }
     if (static_cast<int>(inline_stack_.size()) > kMaxInlineDepth)
-      source_.fail(n, ErrorCode::kParse, fmt::format("Inline url '{}': Inlines nest deeper than {}", url, kMaxInlineDepth));
+      source_.fail(n, ErrorCode::kParse,
+                   fmt::format("Inline url '{}': Inlines nest deeper than {}", url, kMaxInlineDepth));
     const X3dDocument& d = source_.load(n, path);
     if (!d.xml.document_element()) return;
     inline_stack_.push_back(key);
@@ -272,8 +281,8 @@ void X3dReader::inline_file(pugi::xml_node n, const Mat4& X) {
     return;
   }
   source_.warn(n, urls.empty() ? std::string("Inline without a url")
-                       : fmt::format("Inline: none of its urls is a file beside the scene ({}): not shown",
-                                     n.attribute("url").as_string()));
+                               : fmt::format("Inline: none of its urls is a file beside the scene ({}): not shown",
+                                             n.attribute("url").as_string()));
 }
 
 bool X3dReader::is_classic_vrml(const fs::path& path) {
@@ -402,8 +411,9 @@ void X3dReader::warn_if_zero_size(pugi::xml_node original, const X3dShape& s) {
   int flat = 0;
   for (int k = 0; k < 3; ++k) flat += size[k] <= 1e-12 ? 1 : 0;
   if (flat >= 2) {
-    source_.warn(original, fmt::format("{} has zero size ({} x {} x {} m): nothing to see or touch",
-                                       s.geometry_type.empty() ? "Shape" : s.geometry_type, size.x(), size.y(), size.z()));
+    source_.warn(original,
+                 fmt::format("{} has zero size ({} x {} x {} m): nothing to see or touch",
+                             s.geometry_type.empty() ? "Shape" : s.geometry_type, size.x(), size.y(), size.z()));
   }
 }
 
@@ -418,11 +428,16 @@ mesh::TriMesh X3dReader::geometry(pugi::xml_node n, bool& solid, X3dShape& s) {
     if (!is_child(c_orig)) continue;
     const pugi::xml_node c = source_.resolve(c_orig);
     const std::string_view ct = c.name();
-    if (ct == "Coordinate" || ct == "CoordinateDouble") coord = c;
-    else if (ct == "HapticsOptions") { if (!s.haptics_options) s.haptics_options = haptics_options(c); }
-    else if (ct == "GeometryBoundTreeOptions") { if (!s.bound_tree_options) s.bound_tree_options = bound_tree_options(c); }
-    else if (t == "GeometryGroup" && is_geometry(ct)) members.push_back(c);
-    else unsupported(c_orig);
+    if (ct == "Coordinate" || ct == "CoordinateDouble")
+      coord = c;
+    else if (ct == "HapticsOptions") {
+      if (!s.haptics_options) s.haptics_options = haptics_options(c);
+    } else if (ct == "GeometryBoundTreeOptions") {
+      if (!s.bound_tree_options) s.bound_tree_options = bound_tree_options(c);
+    } else if (t == "GeometryGroup" && is_geometry(ct))
+      members.push_back(c);
+    else
+      unsupported(c_orig);
   }
   if (t == "Sphere") {
     m = detail::make_sphere(source_.number(n, "radius", 1.0));
@@ -430,11 +445,11 @@ mesh::TriMesh X3dReader::geometry(pugi::xml_node n, bool& solid, X3dShape& s) {
     m = detail::make_box(source_.vec3(n, "size", Vec3::Constant(2.0)));
   } else if (t == "Cylinder") {
     const double r = source_.number(n, "radius", 1.0);
-    m = detail::make_round(r, r, source_.number(n, "height", 2.0), source_.boolean(n, "side", true), source_.boolean(n, "bottom", true),
-                           source_.boolean(n, "top", true));
+    m = detail::make_round(r, r, source_.number(n, "height", 2.0), source_.boolean(n, "side", true),
+                           source_.boolean(n, "bottom", true), source_.boolean(n, "top", true));
   } else if (t == "Cone") {
-    m = detail::make_round(source_.number(n, "bottomRadius", 1.0), 0.0, source_.number(n, "height", 2.0), source_.boolean(n, "side", true),
-                           source_.boolean(n, "bottom", true), false);
+    m = detail::make_round(source_.number(n, "bottomRadius", 1.0), 0.0, source_.number(n, "height", 2.0),
+                           source_.boolean(n, "side", true), source_.boolean(n, "bottom", true), false);
   } else if (t == "Rectangle2D") {
     const auto sz = source_.numbers(n, "size", 2, {2.0, 2.0});
     m = detail::make_rectangle(sz[0], sz[1]);
@@ -465,10 +480,13 @@ mesh::TriMesh X3dReader::elevation_grid(pugi::xml_node n) {
   const std::int64_t nz = source_.integer(n, "zDimension", 0);
   const auto height = source_.numbers(n, "height");
   if (nx < 0 || nz < 0 || nx > 100000 || nz > 100000)
-    source_.fail(n, ErrorCode::kParse, fmt::format("<ElevationGrid>: xDimension {} and zDimension {} must be in [0, 100000]", nx, nz));
+    source_.fail(n, ErrorCode::kParse,
+                 fmt::format("<ElevationGrid>: xDimension {} and zDimension {} must be in [0, 100000]", nx, nz));
   if (static_cast<std::int64_t>(height.size()) < nx * nz)
-    source_.fail(n, ErrorCode::kInvalidMesh, fmt::format("<ElevationGrid>: {} heights for a {} × {} grid", height.size(), nx, nz));
-  mesh::TriMesh m = detail::make_elevation_grid(nx, nz, source_.number(n, "xSpacing", 1.0), source_.number(n, "zSpacing", 1.0), height);
+    source_.fail(n, ErrorCode::kInvalidMesh,
+                 fmt::format("<ElevationGrid>: {} heights for a {} × {} grid", height.size(), nx, nz));
+  mesh::TriMesh m = detail::make_elevation_grid(nx, nz, source_.number(n, "xSpacing", 1.0),
+                                                source_.number(n, "zSpacing", 1.0), height);
   if (!source_.boolean(n, "ccw", true)) flip(m);
   return m;
 }
@@ -484,15 +502,17 @@ mesh::TriMesh X3dReader::extrusion(pugi::xml_node n) {
   for (std::size_t i = 0; i + 1 < cs.size(); i += 2) cross_section.emplace_back(cs[i], cs[i + 1]);
   for (std::size_t i = 0; i + 2 < sp.size(); i += 3) spine.emplace_back(sp[i], sp[i + 1], sp[i + 2]);
   for (std::size_t i = 0; i + 1 < sc.size(); i += 2) scale.emplace_back(sc[i], sc[i + 1]);
-  for (std::size_t i = 0; i + 3 < orient.size(); i += 4) orientation.emplace_back(orient[i], orient[i + 1], orient[i + 2], orient[i + 3]);
+  for (std::size_t i = 0; i + 3 < orient.size(); i += 4)
+    orientation.emplace_back(orient[i], orient[i + 1], orient[i + 2], orient[i + 3]);
   if (scale.empty()) scale.emplace_back(1.0, 1.0);
   if (orientation.empty()) orientation.emplace_back(0.0, 0.0, 1.0, 0.0);
   if (cross_section.size() < 2 || spine.size() < 2) {
-    source_.warn(n, fmt::format("Extrusion: {} cross-section and {} spine points: no surface", cross_section.size(), spine.size()));
+    source_.warn(n, fmt::format("Extrusion: {} cross-section and {} spine points: no surface", cross_section.size(),
+                                spine.size()));
     return {};
   }
-  mesh::TriMesh m = detail::make_extrusion(cross_section, spine, scale, orientation, source_.boolean(n, "beginCap", true),
-                                           source_.boolean(n, "endCap", true));
+  mesh::TriMesh m = detail::make_extrusion(cross_section, spine, scale, orientation,
+                                           source_.boolean(n, "beginCap", true), source_.boolean(n, "endCap", true));
   if (!source_.boolean(n, "ccw", true)) flip(m);
   return m;
 }
@@ -505,7 +525,8 @@ std::vector<Vec3> X3dReader::points(pugi::xml_node coord) {
   std::vector<Vec3> out;
   const auto p = source_.numbers(coord, "point");
   if (p.size() % 3 != 0)
-    source_.fail(coord, ErrorCode::kParse, fmt::format("<{}> field point: {} numbers, not a multiple of 3", coord.name(), p.size()));
+    source_.fail(coord, ErrorCode::kParse,
+                 fmt::format("<{}> field point: {} numbers, not a multiple of 3", coord.name(), p.size()));
   for (std::size_t i = 0; i + 2 < p.size(); i += 3) out.emplace_back(p[i], p[i + 1], p[i + 2]);
   const std::string_view def = coord.attribute("DEF").as_string();
   if (!out.empty() || def.empty()) return out;
@@ -525,13 +546,15 @@ std::vector<Vec3> X3dReader::points(pugi::xml_node coord) {
       const auto values = source_.tuples(source, "keyValue", 3, {});
       const std::size_t per_key = keys.empty() ? 0 : values.size() / 3 / keys.size();
       for (std::size_t i = 0; i < per_key; ++i) out.emplace_back(values[3 * i], values[3 * i + 1], values[3 * i + 2]);
-      source_.warn(coord, fmt::format("Coordinate '{}' has no points: a ROUTE (line {}) animates it from CoordinateInterpolator "
-                              "'{}' (line {}); drawn still, at its first key (HoF does not animate)",
-                              def, source_.line_of(route), from, source_.line_of(source)));
+      source_.warn(
+          coord, fmt::format("Coordinate '{}' has no points: a ROUTE (line {}) animates it from CoordinateInterpolator "
+                             "'{}' (line {}); drawn still, at its first key (HoF does not animate)",
+                             def, source_.line_of(route), from, source_.line_of(source)));
     } else {
-      source_.warn(coord, fmt::format("Coordinate '{}' has no points: they come through a ROUTE (line {}) from {} '{}', which "
-                              "HoF does not run; the shape has no surface",
-                              def, source_.line_of(route), source ? source.name() : "an unknown node", from));
+      source_.warn(coord,
+                   fmt::format("Coordinate '{}' has no points: they come through a ROUTE (line {}) from {} '{}', which "
+                               "HoF does not run; the shape has no surface",
+                               def, source_.line_of(route), source ? source.name() : "an unknown node", from));
     }
     return out;
   }
@@ -559,7 +582,8 @@ void X3dReader::composed_set(pugi::xml_node n, pugi::xml_node coord, mesh::TriMe
         continue;
       }
       if (i < 0 || i >= count)
-        source_.fail(n, ErrorCode::kInvalidMesh, fmt::format("<{}>: index {} out of range (the Coordinate has {} points)", t, i, count));
+        source_.fail(n, ErrorCode::kInvalidMesh,
+                     fmt::format("<{}>: index {} out of range (the Coordinate has {} points)", t, i, count));
       runs.back().push_back(static_cast<mesh::NodeIndex>(i));
     }
   } else if (separated) {
@@ -580,10 +604,11 @@ void X3dReader::composed_set(pugi::xml_node n, pugi::xml_node coord, mesh::TriMe
   }
   const std::size_t left_out = detail::append_grouped(m.triangles, grouping, runs);
   if (left_out > 0) {
-    source_.warn(n, fmt::format("{}: {} {} left over (not a whole {}): ignored", t, left_out, indexed ? "indices" : "points",
-                        grouping == VertexGrouping::kQuads       ? "quad"
-                        : grouping == VertexGrouping::kTriangles ? "triangle"
-                                                                 : "triangle (fewer than 3)"));
+    source_.warn(
+        n, fmt::format("{}: {} {} left over (not a whole {}): ignored", t, left_out, indexed ? "indices" : "points",
+                       grouping == VertexGrouping::kQuads       ? "quad"
+                       : grouping == VertexGrouping::kTriangles ? "triangle"
+                                                                : "triangle (fewer than 3)"));
   }
   if (!source_.boolean(n, "ccw", true)) flip(m);
 }

@@ -65,37 +65,37 @@ struct X3dGlobalSettings {
 
 /// One Shape or DeformableShape, in the world frame.
 struct X3dShape {
-  std::string def;             ///< DEF name of the Shape ("" if none)
-  std::int64_t line{0};        ///< line of the Shape element
-  std::string geometry_type;   ///< "Sphere", "IndexedTriangleSet", ... ("" if none)
-  mesh::TriMesh mesh_W;        ///< geometry, world frame, m, counter-clockwise from outside
-  std::string haptic_geometry_type;  ///< Shape.hapticGeometry node type ("" if none)
-  mesh::TriMesh haptic_mesh_W;       ///< hapticGeometry, world frame (empty if none)
-  bool solid{true};            ///< X3D `solid` of the geometry
-  bool touchable{false};       ///< has an Appearance.surface (and haptics on: ToggleGroup hapticsOn)
-  bool haptics_switched_off{false};  ///< has a surface, under a ToggleGroup with hapticsOn false
-  std::string surface_type;    ///< "SmoothSurface", ... ("" if none)
-  haptics::SurfaceMaterial surface;  ///< meaningful when touchable
-  bool deformable{false};      ///< a DeformableShape
-  int layer{0};                ///< haptic layer: index of its HapticLayeredGroup child (0 outside one)
-  std::string deformer_type;   ///< e.g. "CoordinateDeformer" ("" = no deformation)
+  std::string def;                    ///< DEF name of the Shape ("" if none)
+  std::int64_t line{0};               ///< line of the Shape element
+  std::string geometry_type;          ///< "Sphere", "IndexedTriangleSet", ... ("" if none)
+  mesh::TriMesh mesh_W;               ///< geometry, world frame, m, counter-clockwise from outside
+  std::string haptic_geometry_type;   ///< Shape.hapticGeometry node type ("" if none)
+  mesh::TriMesh haptic_mesh_W;        ///< hapticGeometry, world frame (empty if none)
+  bool solid{true};                   ///< X3D `solid` of the geometry
+  bool touchable{false};              ///< has an Appearance.surface (and haptics on: ToggleGroup hapticsOn)
+  bool haptics_switched_off{false};   ///< has a surface, under a ToggleGroup with hapticsOn false
+  std::string surface_type;           ///< "SmoothSurface", ... ("" if none)
+  haptics::SurfaceMaterial surface;   ///< meaningful when touchable
+  bool deformable{false};             ///< a DeformableShape
+  int layer{0};                       ///< haptic layer: index of its HapticLayeredGroup child (0 outside one)
+  std::string deformer_type;          ///< e.g. "CoordinateDeformer" ("" = no deformation)
   Vec3 diffuse_color{0.8, 0.8, 0.8};  ///< Material.diffuseColor (X3D default 0.8 0.8 0.8)
   double transparency{0.0};           ///< Material.transparency (X3D default 0)
   bool has_material{false};           ///< an Appearance.material was given
-  std::optional<X3dHapticsOptions> haptics_options;      ///< from the geometry's `options`
+  std::optional<X3dHapticsOptions> haptics_options;       ///< from the geometry's `options`
   std::optional<X3dBoundTreeOptions> bound_tree_options;  ///< from the geometry's `options`
 };
 
 struct X3dRenderer {
-  std::string type;  ///< "GodObjectRenderer", "RuspiniRenderer", "OpenHapticsRenderer", ...
+  std::string type;                           ///< "GodObjectRenderer", "RuspiniRenderer", "OpenHapticsRenderer", ...
   std::optional<haptics::RendererKind> kind;  ///< set for GodObject and Ruspini
   double proxy_radius_m{0.0025};              ///< RuspiniRenderer.proxyRadius
 };
 
 struct X3dDevice {
-  std::string type;          ///< "AnyDevice", "FalconDevice", "PhantomDevice", ...
+  std::string type;  ///< "AnyDevice", "FalconDevice", "PhantomDevice", ...
   std::string def;
-  std::string device_name;   ///< deviceName ("" if not given)
+  std::string device_name;  ///< deviceName ("" if not given)
   /// positionCalibration, row-major as written in the file (identity by default).
   std::array<double, 16> position_calibration{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
   /// orientationCalibration: axis x y z, angle rad.
@@ -105,29 +105,29 @@ struct X3dDevice {
 };
 
 struct X3dViewpoint {
-  Vec3 position{0.0, 0.0, 10.0};                     ///< local frame of the Viewpoint, m
-  std::array<double, 4> orientation{0, 0, 1, 0};     ///< axis x y z, angle rad
+  Vec3 position{0.0, 0.0, 10.0};                  ///< local frame of the Viewpoint, m
+  std::array<double, 4> orientation{0, 0, 1, 0};  ///< axis x y z, angle rad
   double field_of_view_rad{0.785398};
 };
 
 struct X3dScene {
   std::filesystem::path file;
-  std::string root_element;               ///< "X3D" or "Scene" for a scene (a settings file: "DeviceInfo", ...)
-  std::int64_t root_line{1};              ///< line of the root element
-  bool root_known{true};                  ///< the root is a node HoF reads (false: <svg>, <html>, ...)
+  std::string root_element;   ///< "X3D" or "Scene" for a scene (a settings file: "DeviceInfo", ...)
+  std::int64_t root_line{1};  ///< line of the root element
+  bool root_known{true};      ///< the root is a node HoF reads (false: <svg>, <html>, ...)
   std::vector<X3dShape> shapes;
-  std::vector<X3dDevice> devices;         ///< DeviceInfo.device, in order (= device index)
+  std::vector<X3dDevice> devices;  ///< DeviceInfo.device, in order (= device index)
   std::optional<X3dGlobalSettings> global_settings;
-  haptics::ForceEffects force_effects;    ///< positions and forces in the world frame
+  haptics::ForceEffects force_effects;  ///< positions and forces in the world frame
   std::vector<X3dViewpoint> viewpoints;
-  std::vector<std::string> unsupported;   ///< "TYPE 'DEF' (line N)" of every node not modelled
-                                          ///< ("(FILE line N)" when in an Inline'd or PROTO file)
+  std::vector<std::string> unsupported;  ///< "TYPE 'DEF' (line N)" of every node not modelled
+                                         ///< ("(FILE line N)" when in an Inline'd or PROTO file)
   /// Of those, the ones in a Shape's geometry slot (Text, NurbsPatchSurface, ...) and the
   /// haptic ones (an Appearance's surface, a force effect, a deformer): what a scene with
   /// nothing to touch names as the cause.
   std::vector<std::string> unsupported_geometry, unsupported_haptic;
-  int effects_switched_off{0};            ///< force effects under a ToggleGroup with hapticsOn false
-  std::vector<std::string> warnings;      ///< "FILE:LINE: ..." notes
+  int effects_switched_off{0};        ///< force effects under a ToggleGroup with hapticsOn false
+  std::vector<std::string> warnings;  ///< "FILE:LINE: ..." notes
 };
 
 /// Reads an X3D file (with or without the <X3D><Scene> wrapper). Errors carry the file and

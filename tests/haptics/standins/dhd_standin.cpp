@@ -18,7 +18,7 @@ namespace {
 struct State {
   std::mutex mutex;
   int devices{1};
-  int system_type{33};  // omega.3
+  int system_type{33};     // omega.3
   double max_force{-1.0};  // dhdGetMaxForce: negative = no limit reported
   bool open{false};
   bool forces_enabled{false};

@@ -41,8 +41,8 @@ struct State {
   HDSchedulerHandle next_handle{1};
   std::thread scheduler;
   std::atomic<bool> running{false};
-  std::atomic<long> frames{0};        // frames begun and ended
-  std::atomic<long> frames_open{0};   // a frame begun and not ended (must stay 0 or 1)
+  std::atomic<long> frames{0};       // frames begun and ended
+  std::atomic<long> frames_open{0};  // a frame begun and not ended (must stay 0 or 1)
   bool in_frame{false};
   bool device_ok{true};
   unsigned int pending_error{0};
@@ -113,7 +113,9 @@ HDErrorInfo hdGetError() {
   return e;
 }
 
-const char* hdGetErrorString(unsigned int code) { return code == 0x300 ? "Device fault (stand-in)" : "Error (stand-in)"; }
+const char* hdGetErrorString(unsigned int code) {
+  return code == 0x300 ? "Device fault (stand-in)" : "Error (stand-in)";
+}
 
 void hdEnable(HDenum) {}
 
@@ -126,16 +128,25 @@ void hdGetDoublev(HDenum what, double* out) {
     case 0x2051:  // HD_CURRENT_VELOCITY, mm/s
       out[0] = out[1] = out[2] = 0.0;
       break;
-    case 0x2603: *out = 3.3; break;   // HD_NOMINAL_MAX_FORCE, N
-    case 0x2604: *out = 0.88; break;  // HD_NOMINAL_MAX_CONTINUOUS_FORCE, N
-    case 0x2602: *out = 1.26; break;  // HD_NOMINAL_MAX_STIFFNESS, N/mm
-    case 0x2609: *out = 0.005; break; // HD_NOMINAL_MAX_DAMPING, N·s/mm
-    case 0x2551: {                    // HD_USABLE_WORKSPACE_DIMENSIONS, mm
+    case 0x2603:
+      *out = 3.3;
+      break;  // HD_NOMINAL_MAX_FORCE, N
+    case 0x2604:
+      *out = 0.88;
+      break;  // HD_NOMINAL_MAX_CONTINUOUS_FORCE, N
+    case 0x2602:
+      *out = 1.26;
+      break;  // HD_NOMINAL_MAX_STIFFNESS, N/mm
+    case 0x2609:
+      *out = 0.005;
+      break;        // HD_NOMINAL_MAX_DAMPING, N·s/mm
+    case 0x2551: {  // HD_USABLE_WORKSPACE_DIMENSIONS, mm
       const double box[6] = {-80.0, -60.0, -35.0, 80.0, 60.0, 35.0};
       for (int i = 0; i < 6; ++i) out[i] = box[i];
       break;
     }
-    default: break;
+    default:
+      break;
   }
 }
 

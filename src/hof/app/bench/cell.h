@@ -15,7 +15,9 @@ using Clock = std::chrono::steady_clock;
 
 inline constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-[[nodiscard]] inline double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+[[nodiscard]] inline double seconds_since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
 
 // How long each cell is measured. Full: five batches of at least 0.2 s (the median of five
 // is robust to one descheduled batch on a loaded machine), stability over 1 s of simulated
@@ -29,7 +31,9 @@ struct Budget {
   int steps_between_samples;
 };
 
-[[nodiscard]] inline Budget budget_for(bool quick) { return quick ? Budget{3, 0.02, 0.1, 0.3, 2, 5} : Budget{5, 0.2, 1.0, 4.0, 3, 10}; }
+[[nodiscard]] inline Budget budget_for(bool quick) {
+  return quick ? Budget{3, 0.02, 0.1, 0.3, 2, 5} : Budget{5, 0.2, 1.0, 4.0, 3, 10};
+}
 
 // One measurement of the matrix. Fields that do not apply stay NaN / empty.
 struct Cell {
@@ -39,7 +43,7 @@ struct Cell {
   int iterations{0};
   bool warm_start{false};
   bool coarse_correction{false};  // the CG's two-level preconditioner
-  int matrix_reuse{1};  // implicit Euler: steps one assembled matrix serves
+  int matrix_reuse{1};            // implicit Euler: steps one assembled matrix serves
   int threads{0};
   std::size_t nodes{0}, elements{0}, triangles{0};
   double median{kNaN}, min{kNaN}, max{kNaN};  // steps/s

@@ -34,7 +34,8 @@ bool checked_step(const MechanicalModel& model, MechanicalState& state, const Ei
 
 void time_cell(const ModelConfig& config, const Budget& budget, Cell& cell) {
   cell.matrix_reuse = config.ode.matrix_reuse_steps;  // as the model runs (it depends on the mesh)
-  if (config.linear.warm_start) cell.iterations = config.linear.iterations;  // the haptic-rate CG's depend on the mesh too
+  if (config.linear.warm_start)
+    cell.iterations = config.linear.iterations;  // the haptic-rate CG's depend on the mesh too
   auto model = build_model(config);
   if (!model) {
     cell.stable = false;
@@ -66,7 +67,8 @@ void time_cell(const ModelConfig& config, const Budget& budget, Cell& cell) {
     timed += n;
   }
   const auto t_check = Clock::now();
-  while (ok && static_cast<double>(state.steps) * model->dt_s < budget.horizon_s && seconds_since(t_check) < budget.stability_wall_s) {
+  while (ok && static_cast<double>(state.steps) * model->dt_s < budget.horizon_s &&
+         seconds_since(t_check) < budget.stability_wall_s) {
     ok = checked_step(*model, state, start, cell);
   }
   cell.stable = ok;
@@ -116,7 +118,8 @@ double step_error(const ModelConfig& config, const Budget& budget) {
     exact_state.v = v0;
     if (!step(*model, state) || !step(*exact, exact_state)) return kNaN;
     const Eigen::VectorXd d = static_solver ? Eigen::VectorXd(state.x - x0) : Eigen::VectorXd(state.v - v0);
-    const Eigen::VectorXd d_exact = static_solver ? Eigen::VectorXd(exact_state.x - x0) : Eigen::VectorXd(exact_state.v - v0);
+    const Eigen::VectorXd d_exact =
+        static_solver ? Eigen::VectorXd(exact_state.x - x0) : Eigen::VectorXd(exact_state.v - v0);
     const double scale = d_exact.norm();
     if (!(scale > 0.0)) continue;
     worst = std::max(worst, (d - d_exact).norm() / scale);
@@ -127,7 +130,8 @@ double step_error(const ModelConfig& config, const Budget& budget) {
 // One haptic tick per device reading, as the haptic loop makes it: the device slides along
 // a loop over the liver's top, 3 mm under the surface (a contact every tick), the surface at
 // rest (the thesis' useBoundTree test, l. 1221). Each tick is timed alone: p50/p99/max.
-void time_renderer(const mesh::TriMesh& surface, haptics::RendererKind kind, bool bound_tree, const Budget& budget, Cell& cell) {
+void time_renderer(const mesh::TriMesh& surface, haptics::RendererKind kind, bool bound_tree, const Budget& budget,
+                   Cell& cell) {
   collision::AabbTreeOptions tree;
   tree.use_bound_tree = bound_tree;
   const haptics::SurfaceSnapshot snapshot = haptics::make_snapshot(surface, tree);
@@ -138,7 +142,8 @@ void time_renderer(const mesh::TriMesh& surface, haptics::RendererKind kind, boo
   }
   const Vec3 centre = 0.5 * (lo + hi), half = 0.5 * (hi - lo);
   auto top = [&](double x, double y) {
-    const collision::SweepHit hit = snapshot.tree.first_hit_segment(snapshot.view(), Vec3(x, y, hi.z() + 1.0), Vec3(x, y, lo.z() - 1.0));
+    const collision::SweepHit hit =
+        snapshot.tree.first_hit_segment(snapshot.view(), Vec3(x, y, hi.z() + 1.0), Vec3(x, y, lo.z() - 1.0));
     return hit.triangle >= 0 ? std::optional<double>(hit.point.z()) : std::nullopt;
   };
   constexpr int kPath = 2000;

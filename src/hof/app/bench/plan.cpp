@@ -40,7 +40,8 @@ struct BodyLookup {
   }
   // ... and `measure` of the physiological co-rotational liver of `setup` on that body.
   template <class Measure>
-  std::function<void(Cell&)> on_corotational(std::string mesh_name, const CorotationalSetup& setup, Measure measure_model) const {
+  std::function<void(Cell&)> on_corotational(std::string mesh_name, const CorotationalSetup& setup,
+                                             Measure measure_model) const {
     return on(std::move(mesh_name), [setup, measure = std::move(measure_model)](const Body& b, Cell& cell) {
       measure(b, corotational_config(b, setup), cell);
     });
@@ -58,7 +59,8 @@ struct PlanContext {
 };
 
 // A cell's description for a body_config + set_solver recipe.
-Cell recipe_cell(std::string section, std::string name, const std::string& mesh, Field f, Settings s, Solver sv, double dt_s, int iterations) {
+Cell recipe_cell(std::string section, std::string name, const std::string& mesh, Field f, Settings s, Solver sv,
+                 double dt_s, int iterations) {
   Cell c;
   c.section = std::move(section);
   c.name = std::move(name);
@@ -73,8 +75,8 @@ Cell recipe_cell(std::string section, std::string name, const std::string& mesh,
 
 // A cell's description for a corotational_config set-up.
 Cell corotational_cell(std::string section, std::string name, const std::string& mesh, const CorotationalSetup& s) {
-  Cell c = recipe_cell(std::move(section), std::move(name), mesh, Field::kLarge, Settings::kPhysiological, Solver::kImplicitCg, s.dt_s,
-                       s.haptic_rate_cg ? kHapticRateCgIterations : s.iterations);
+  Cell c = recipe_cell(std::move(section), std::move(name), mesh, Field::kLarge, Settings::kPhysiological,
+                       Solver::kImplicitCg, s.dt_s, s.haptic_rate_cg ? kHapticRateCgIterations : s.iterations);
   c.warm_start = s.haptic_rate_cg;
   c.coarse_correction = s.haptic_rate_cg;
   // iterations (haptic-rate CG) and matrix_reuse: set when the cell runs, from the model.
@@ -104,8 +106,9 @@ void plan_force_fields(const PlanContext& ctx, std::vector<PlannedCell>& cells) 
       const bool grid = m == "sparse-grid";
       for (Field f : grid ? std::vector<Field>{Field::kHexahedra}
                           : std::vector<Field>{Field::kSprings, Field::kSmall, Field::kLarge, Field::kNeoHookean}) {
-        const Cell c = recipe_cell("force_fields", fmt::format("force_fields/{}/{}/{}", settings_name(s), m, field_name(f)), m, f, s,
-                                   Solver::kImplicitCg, 0.02, 25);
+        const Cell c =
+            recipe_cell("force_fields", fmt::format("force_fields/{}/{}/{}", settings_name(s), m, field_name(f)), m, f,
+                        s, Solver::kImplicitCg, 0.02, 25);
         cells.push_back({c, with_body.on(m, [f, s, budget](const Body& b, Cell& cell) {
                            ModelConfig config = body_config(b, f, s);
                            set_solver(config, Solver::kImplicitCg, 0.02);
@@ -125,8 +128,9 @@ void plan_solvers(const PlanContext& ctx, std::vector<PlannedCell>& cells) {
     for (const std::string& m : livers) {
       for (Solver sv : {Solver::kExplicitEuler, Solver::kSymplecticEuler, Solver::kRungeKutta4, Solver::kStatic,
                         Solver::kImplicitCg, Solver::kImplicitLdlt}) {
-        const Cell c = recipe_cell("solvers", fmt::format("solvers/{}/{}/{}", dt_label(dt), m, solver_name(sv)), m, Field::kSprings,
-                                   Settings::kThesis, sv, dt, sv == Solver::kImplicitCg || sv == Solver::kStatic ? 25 : 0);
+        const Cell c = recipe_cell("solvers", fmt::format("solvers/{}/{}/{}", dt_label(dt), m, solver_name(sv)), m,
+                                   Field::kSprings, Settings::kThesis, sv, dt,
+                                   sv == Solver::kImplicitCg || sv == Solver::kStatic ? 25 : 0);
         cells.push_back({c, with_body.on(m, [sv, dt, budget](const Body& b, Cell& cell) {
                            ModelConfig config = body_config(b, Field::kSprings, Settings::kThesis);
                            set_solver(config, sv, dt);
@@ -147,10 +151,11 @@ void plan_threads(const PlanContext& ctx, std::vector<PlannedCell>& cells) {
       const CorotationalSetup setup{0.02};
       Cell c = corotational_cell("threads", fmt::format("threads/{}/corotational-fem/threads{}", m, threads), m, setup);
       c.threads = threads;
-      cells.push_back({c, with_body.on_corotational(m, setup, [threads, budget](const Body&, ModelConfig config, Cell& cell) {
-                         config.threads = threads;
-                         time_cell(config, budget, cell);
-                       })});
+      cells.push_back(
+          {c, with_body.on_corotational(m, setup, [threads, budget](const Body&, ModelConfig config, Cell& cell) {
+             config.threads = threads;
+             time_cell(config, budget, cell);
+           })});
     }
   }
 }
@@ -161,7 +166,8 @@ void plan_renderers(const PlanContext& ctx, std::vector<PlannedCell>& cells) {
   const BodyLookup with_body = ctx.with_body;
   // Haptic renderers × bound tree × mesh: the cost of a tick.
   for (const std::string& m : livers) {
-    for (auto [kind, renderer] : {std::pair{haptics::RendererKind::kGodObject, "god-object"}, std::pair{haptics::RendererKind::kRuspini, "ruspini"},
+    for (auto [kind, renderer] : {std::pair{haptics::RendererKind::kGodObject, "god-object"},
+                                  std::pair{haptics::RendererKind::kRuspini, "ruspini"},
                                   std::pair{haptics::RendererKind::kPenalty, "penalty"}}) {
       for (bool tree : {true, false}) {
         Cell c;
@@ -185,12 +191,16 @@ void plan_cg_iterations(const PlanContext& ctx, std::vector<PlannedCell>& cells)
   // Figures 32–33: CG iterations with the static solver and implicit Euler at dt 0.02, on
   // the thesis' springs and on the physiological co-rotational FEM; error against LDLᵀ.
   const std::string cg_mesh = quick ? "simple" : "medium";
-  const std::vector<int> counts = quick ? std::vector<int>{1, 5, 25} : std::vector<int>{1, 2, 3, 5, 7, 10, 15, 20, 25, 30, 40, 50};
+  const std::vector<int> counts =
+      quick ? std::vector<int>{1, 5, 25} : std::vector<int>{1, 2, 3, 5, 7, 10, 15, 20, 25, 30, 40, 50};
   for (Solver sv : {Solver::kStatic, Solver::kImplicitCg}) {
-    for (auto [f, s] : {std::pair{Field::kSprings, Settings::kThesis}, std::pair{Field::kLarge, Settings::kPhysiological}}) {
+    for (auto [f, s] :
+         {std::pair{Field::kSprings, Settings::kThesis}, std::pair{Field::kLarge, Settings::kPhysiological}}) {
       for (int k : counts) {
-        const Cell c = recipe_cell("cg_iterations", fmt::format("cg_iterations/{}/{}/{}/{}/cg{}", solver_name(sv), cg_mesh, field_name(f), settings_name(s), k),
-                                   cg_mesh, f, s, sv, 0.02, k);
+        const Cell c = recipe_cell(
+            "cg_iterations",
+            fmt::format("cg_iterations/{}/{}/{}/{}/cg{}", solver_name(sv), cg_mesh, field_name(f), settings_name(s), k),
+            cg_mesh, f, s, sv, 0.02, k);
         cells.push_back({c, with_body.on(cg_mesh, [sv, f, s, k, budget](const Body& b, Cell& cell) {
                            ModelConfig config = body_config(b, f, s);
                            set_solver(config, sv, 0.02);
@@ -216,14 +226,16 @@ void plan_haptic_rate(const PlanContext& ctx, std::vector<PlannedCell>& cells) {
       for (int threads : {1, 2}) {
         const CorotationalSetup setup{0.001, 25, warm};
         Cell c = corotational_cell("haptic_rate", "", m, setup);
-        c.name = fmt::format("haptic_rate/{}/{}/threads{}", m, warm ? std::string(kHapticRateCell) : fmt::format("cg{}", c.iterations), threads);
+        c.name = fmt::format("haptic_rate/{}/{}/threads{}", m,
+                             warm ? std::string(kHapticRateCell) : fmt::format("cg{}", c.iterations), threads);
         c.threads = threads;
-        cells.push_back({c, with_body.on_corotational(m, setup, [threads, budget](const Body&, ModelConfig config, Cell& cell) {
-                           config.threads = threads;
-                           time_cell(config, budget, cell);
-                           // The error does not depend on the thread count: measured once.
-                           if (cell.stable && threads == 1) cell.step_error = step_error(config, budget);
-                         })});
+        cells.push_back(
+            {c, with_body.on_corotational(m, setup, [threads, budget](const Body&, ModelConfig config, Cell& cell) {
+               config.threads = threads;
+               time_cell(config, budget, cell);
+               // The error does not depend on the thread count: measured once.
+               if (cell.stable && threads == 1) cell.step_error = step_error(config, budget);
+             })});
       }
     }
   }
@@ -236,17 +248,21 @@ void plan_framework(const PlanContext& ctx, std::vector<PlannedCell>& cells) {
   // The whole framework in real time: the thesis' set-up (dt 10 ms, CG 25, the contact force
   // spread over the triangle) and the haptic rate (dt 1 ms, the FEM's reaction felt).
   const double framework_s = quick ? 0.6 : 4.0;
-  for (const std::string& m : quick ? std::vector<std::string>{"simple"} : std::vector<std::string>{"simple", "medium", "fine"}) {
+  for (const std::string& m :
+       quick ? std::vector<std::string>{"simple"} : std::vector<std::string>{"simple", "medium", "fine"}) {
     for (bool haptic_rate : {false, true}) {
       const CorotationalSetup setup{haptic_rate ? 0.001 : 0.01, 25, haptic_rate, false};
-      Cell c = corotational_cell("framework", fmt::format("framework/{}/{}", m, haptic_rate ? "haptic-rate-fem-reaction" : "dt10ms-barycentric"),
-                                 m, setup);
+      Cell c = corotational_cell(
+          "framework",
+          fmt::format("framework/{}/{}", m, haptic_rate ? "haptic-rate-fem-reaction" : "dt10ms-barycentric"), m, setup);
       c.renderer = haptic_rate ? "ruspini, fem-reaction" : "ruspini, barycentric";
-      cells.push_back({c, with_body.on_corotational(m, setup, [haptic_rate, framework_s](const Body& b, ModelConfig config, Cell& cell) {
-                         time_framework(b, config,
-                                        haptic_rate ? coupling::ContactCoupling::kFemReaction : coupling::ContactCoupling::kBarycentric, framework_s,
-                                        cell);
-                       })});
+      cells.push_back({c, with_body.on_corotational(
+                              m, setup, [haptic_rate, framework_s](const Body& b, ModelConfig config, Cell& cell) {
+                                time_framework(b, config,
+                                               haptic_rate ? coupling::ContactCoupling::kFemReaction
+                                                           : coupling::ContactCoupling::kBarycentric,
+                                               framework_s, cell);
+                              })});
     }
   }
   // ... and with the window open, at the haptic rate on the mesh of the real-time goal.
@@ -255,9 +271,10 @@ void plan_framework(const PlanContext& ctx, std::vector<PlannedCell>& cells) {
     const CorotationalSetup setup{0.001, 25, true, false};
     Cell c = corotational_cell("framework", fmt::format("framework/{}/haptic-rate-fem-reaction/window", m), m, setup);
     c.renderer = "ruspini, fem-reaction, window";
-    cells.push_back({c, with_body.on_corotational(m, setup, [framework_s, out](const Body& b, ModelConfig config, Cell& cell) {
-                       time_framework_window(b, config, out, framework_s, cell);
-                     })});
+    cells.push_back(
+        {c, with_body.on_corotational(m, setup, [framework_s, out](const Body& b, ModelConfig config, Cell& cell) {
+           time_framework_window(b, config, out, framework_s, cell);
+         })});
   }
 }
 
@@ -272,9 +289,10 @@ void plan_bodies(const PlanContext& ctx, std::vector<PlannedCell>& cells) {
       const CorotationalSetup setup{0.01, 25, false, false};
       Cell c = corotational_cell("bodies", fmt::format("bodies/{}/livers{}", m, count), m, setup);
       c.bodies = count;
-      cells.push_back({c, with_body.on_corotational(m, setup, [count, seconds](const Body& b, ModelConfig config, Cell& cell) {
-                         time_bodies(b, config, count, seconds, cell);
-                       })});
+      cells.push_back(
+          {c, with_body.on_corotational(m, setup, [count, seconds](const Body& b, ModelConfig config, Cell& cell) {
+             time_bodies(b, config, count, seconds, cell);
+           })});
     }
   }
 }
@@ -313,7 +331,8 @@ void plan_coupling(const PlanContext& ctx, std::vector<PlannedCell>& cells) {
 
 std::vector<PlannedCell> plan(bool quick, Bodies& bodies, const std::filesystem::path& out) {
   PlanContext ctx{quick, budget_for(quick), {}, {}, BodyLookup{&bodies}, out};
-  ctx.livers = quick ? std::vector<std::string>{"simple"} : std::vector<std::string>{"simple", "coarse", "medium", "fine"};
+  ctx.livers =
+      quick ? std::vector<std::string>{"simple"} : std::vector<std::string>{"simple", "coarse", "medium", "fine"};
   ctx.meshes = ctx.livers;
   ctx.meshes.push_back("sparse-grid");
   std::vector<PlannedCell> cells;

@@ -15,7 +15,8 @@ namespace hof::app::bench {
 
 /// Writes the data files into `dir` and returns the plots to render (a figure none of whose
 /// cells ran is left out).
-[[nodiscard]] std::vector<detail::Plot> write_plot_data(const std::filesystem::path& dir, const std::vector<Cell>& cells,
+[[nodiscard]] std::vector<detail::Plot> write_plot_data(const std::filesystem::path& dir,
+                                                        const std::vector<Cell>& cells,
                                                         const std::vector<Ratio>& ratios);
 
 }  // namespace hof::app::bench

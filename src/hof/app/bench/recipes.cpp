@@ -48,29 +48,38 @@ Expected<const Body*> Bodies::by_name(const std::string& name) {
   return liver(*mesh::parse_liver_resolution(name));
 }
 
-
 const char* field_name(Field f) {
   switch (f) {
-    case Field::kSprings: return "springs";
-    case Field::kSmall: return "linear-fem";
-    case Field::kLarge: return "corotational-fem";
-    case Field::kNeoHookean: return "neo-hookean";
-    case Field::kHexahedra: return "hexahedral-fem";
+    case Field::kSprings:
+      return "springs";
+    case Field::kSmall:
+      return "linear-fem";
+    case Field::kLarge:
+      return "corotational-fem";
+    case Field::kNeoHookean:
+      return "neo-hookean";
+    case Field::kHexahedra:
+      return "hexahedral-fem";
   }
   return "?";
 }
 
 const char* settings_name(Settings s) { return s == Settings::kThesis ? "thesis" : "physiological"; }
 
-
 const char* solver_name(Solver s) {
   switch (s) {
-    case Solver::kExplicitEuler: return "explicit-euler";
-    case Solver::kSymplecticEuler: return "symplectic-euler";
-    case Solver::kRungeKutta4: return "rk4";
-    case Solver::kStatic: return "static-cg";
-    case Solver::kImplicitCg: return "implicit-cg";
-    case Solver::kImplicitLdlt: return "implicit-ldlt";
+    case Solver::kExplicitEuler:
+      return "explicit-euler";
+    case Solver::kSymplecticEuler:
+      return "symplectic-euler";
+    case Solver::kRungeKutta4:
+      return "rk4";
+    case Solver::kStatic:
+      return "static-cg";
+    case Solver::kImplicitCg:
+      return "implicit-cg";
+    case Solver::kImplicitLdlt:
+      return "implicit-ldlt";
   }
   return "?";
 }
@@ -99,14 +108,16 @@ std::string indices_text(const Elements& elements) {
 // SparseGridTopology; fillWeighted off: the bench's grid weighs every cell whole).
 std::string geometry_text(const Body& b) {
   if (b.filled_surface) {
-    return fmt::format("    <MechanicalObject name=\"state\"/>\n"
-                       "    <SparseGridTopology name=\"grid\" n=\"{} {} {}\" fillWeighted=\"0\" position=\"{}\" triangles=\"{}\"/>\n",
-                       kSparseGridNodes[0], kSparseGridNodes[1], kSparseGridNodes[2], numbers_text(b.filled_surface->vertices),
-                       indices_text(b.filled_surface->triangles));
+    return fmt::format(
+        "    <MechanicalObject name=\"state\"/>\n"
+        "    <SparseGridTopology name=\"grid\" n=\"{} {} {}\" fillWeighted=\"0\" position=\"{}\" triangles=\"{}\"/>\n",
+        kSparseGridNodes[0], kSparseGridNodes[1], kSparseGridNodes[2], numbers_text(b.filled_surface->vertices),
+        indices_text(b.filled_surface->triangles));
   }
-  return fmt::format("    <MechanicalObject name=\"state\" position=\"{}\"/>\n"
-                     "    <MeshTopology name=\"mesh\" tetrahedra=\"{}\"/>\n",
-                     numbers_text(b.nodes), indices_text(b.tets));
+  return fmt::format(
+      "    <MechanicalObject name=\"state\" position=\"{}\"/>\n"
+      "    <MeshTopology name=\"mesh\" tetrahedra=\"{}\"/>\n",
+      numbers_text(b.nodes), indices_text(b.tets));
 }
 
 // The spring cells' stiffness and damping. Springs have no Young's modulus; physiologically, a
@@ -115,7 +126,8 @@ std::string geometry_text(const Body& b) {
 std::pair<double, double> spring_values(const Body& b, bool thesis, double young) {
   if (thesis) return {10000.0, 15.0};
   double length = 0.0;
-  for (const mesh::Tet& t : b.tets) length += (b.nodes[static_cast<std::size_t>(t[0])] - b.nodes[static_cast<std::size_t>(t[1])]).norm();
+  for (const mesh::Tet& t : b.tets)
+    length += (b.nodes[static_cast<std::size_t>(t[0])] - b.nodes[static_cast<std::size_t>(t[1])]).norm();
   const double stiffness = young * length / static_cast<double>(std::max<std::size_t>(b.tets.size(), 1));
   return {stiffness, 15.0 * stiffness / 10000.0};
 }
@@ -128,22 +140,27 @@ std::string force_field_text(const Body& b, Field field, bool thesis, double you
   switch (field) {
     case Field::kSprings: {
       const auto [stiffness, damping] = spring_values(b, thesis, young);
-      return fmt::format("    <MeshSpringForceField name=\"{}\" stiffness=\"{}\" damping=\"{}\" stiffnessRule=\"sameForEverySpring\" "
-                         "tangent=\"clampedTransverse\"/>\n",
-                         name, stiffness, damping);
+      return fmt::format(
+          "    <MeshSpringForceField name=\"{}\" stiffness=\"{}\" damping=\"{}\" stiffnessRule=\"sameForEverySpring\" "
+          "tangent=\"clampedTransverse\"/>\n",
+          name, stiffness, damping);
     }
     case Field::kSmall:
     case Field::kLarge:
-      return fmt::format("    <TetrahedronFEMForceField name=\"{}\" youngModulus=\"{}\" poissonRatio=\"{}\" method=\"{}\"/>\n", name, young,
-                         poisson, field == Field::kSmall ? "small" : "large");
+      return fmt::format(
+          "    <TetrahedronFEMForceField name=\"{}\" youngModulus=\"{}\" poissonRatio=\"{}\" method=\"{}\"/>\n", name,
+          young, poisson, field == Field::kSmall ? "small" : "large");
     case Field::kNeoHookean: {
       const double shear = young / (2.0 * (1.0 + poisson)), bulk = young / (3.0 * (1.0 - 2.0 * poisson));
-      return fmt::format("    <TetrahedronHyperelasticityFEMForceField name=\"{}\" materialName=\"NeoHookean\" ParameterSet=\"{} {}\"/>\n",
-                         name, shear, bulk);
+      return fmt::format(
+          "    <TetrahedronHyperelasticityFEMForceField name=\"{}\" materialName=\"NeoHookean\" ParameterSet=\"{} "
+          "{}\"/>\n",
+          name, shear, bulk);
     }
     case Field::kHexahedra:
-      return fmt::format("    <HexahedronFEMForceField name=\"{}\" youngModulus=\"{}\" poissonRatio=\"{}\" method=\"large\"/>\n", name,
-                         young, poisson);
+      return fmt::format(
+          "    <HexahedronFEMForceField name=\"{}\" youngModulus=\"{}\" poissonRatio=\"{}\" method=\"large\"/>\n", name,
+          young, poisson);
   }
   return {};
 }
@@ -171,13 +188,19 @@ std::string body_scene(const Body& b, Field field, Settings s, const ImplicitCgS
   const bool thesis = s == Settings::kThesis;
   const double young = thesis ? 100.0 : 5000.0;
   const double poisson = thesis ? 0.4 : 0.45;
-  std::string text = fmt::format("<Node name=\"root\" dt=\"{}\" gravity=\"0 0 {}\">\n  <Node name=\"liver\">\n", solver.dt_s,
-                                 !solver.gravity ? 0.0 : thesis ? -9.8 : -9.81);
-  text += fmt::format("    <EulerImplicitSolver name=\"odesolver\" rayleighMass=\"{}\" rayleighStiffness=\"0.1\"/>\n", solver.rayleigh_mass);
-  text += fmt::format("    <CGLinearSolver name=\"linearsolver\" iterations=\"{}\" tolerance=\"{}\" threshold=\"{}\"/>\n", solver.iterations,
-                      solver.tolerance, solver.tolerance);
+  std::string text =
+      fmt::format("<Node name=\"root\" dt=\"{}\" gravity=\"0 0 {}\">\n  <Node name=\"liver\">\n", solver.dt_s,
+                  !solver.gravity ? 0.0
+                  : thesis        ? -9.8
+                                  : -9.81);
+  text += fmt::format("    <EulerImplicitSolver name=\"odesolver\" rayleighMass=\"{}\" rayleighStiffness=\"0.1\"/>\n",
+                      solver.rayleigh_mass);
+  text +=
+      fmt::format("    <CGLinearSolver name=\"linearsolver\" iterations=\"{}\" tolerance=\"{}\" threshold=\"{}\"/>\n",
+                  solver.iterations, solver.tolerance, solver.tolerance);
   text += geometry_text(b);
-  text += thesis ? "    <UniformMass name=\"mass\" totalMass=\"1\"/>\n" : "    <DiagonalMass name=\"mass\" massDensity=\"1060\"/>\n";
+  text += thesis ? "    <UniformMass name=\"mass\" totalMass=\"1\"/>\n"
+                 : "    <DiagonalMass name=\"mass\" massDensity=\"1060\"/>\n";
   text += force_field_text(b, field, thesis, young, poisson);
   text += table_text(b);
   text += "  </Node>\n</Node>\n";
@@ -186,7 +209,8 @@ std::string body_scene(const Body& b, Field field, Settings s, const ImplicitCgS
 
 ModelConfig body_config(const Body& b, Field field, Settings s, const ImplicitCgScene& solver) {
   // Built as `hof run` builds a scene's body: the SOFA reader makes the ModelConfig.
-  auto scene = scene::read_sofa_scene_text(body_scene(b, field, s, solver), std::filesystem::path("hof-bench") / (b.name + ".scn"));
+  auto scene = scene::read_sofa_scene_text(body_scene(b, field, s, solver),
+                                           std::filesystem::path("hof-bench") / (b.name + ".scn"));
   HOF_CHECK(scene && scene->models.size() == 1, "the bench's own scene reads as one body");
   ModelConfig c = std::move(scene->models.front().config);
   // What the scene cannot say. Neo-Hookean: SOFA's component takes (μ, k), which the reader
@@ -206,16 +230,26 @@ ModelConfig body_config(const Body& b, Field field, Settings s, const ImplicitCg
 void set_solver(ModelConfig& c, Solver s, double dt_s) {
   c.dt_s = dt_s;
   switch (s) {
-    case Solver::kExplicitEuler: c.ode.kind = OdeSolverKind::kEulerExplicit; c.ode.symplectic = false; break;
-    case Solver::kSymplecticEuler: c.ode.kind = OdeSolverKind::kEulerExplicit; c.ode.symplectic = true; break;
-    case Solver::kRungeKutta4: c.ode.kind = OdeSolverKind::kRungeKutta4; break;
+    case Solver::kExplicitEuler:
+      c.ode.kind = OdeSolverKind::kEulerExplicit;
+      c.ode.symplectic = false;
+      break;
+    case Solver::kSymplecticEuler:
+      c.ode.kind = OdeSolverKind::kEulerExplicit;
+      c.ode.symplectic = true;
+      break;
+    case Solver::kRungeKutta4:
+      c.ode.kind = OdeSolverKind::kRungeKutta4;
+      break;
     case Solver::kStatic:
       // Every step makes its Newton iteration, as SOFA's StaticSolver with a fixed count
       // does: a step skipped because the residual is already small would time nothing.
       c.ode.kind = OdeSolverKind::kStatic;
       c.ode.newton_residual_tolerance_n = 0.0;
       break;
-    case Solver::kImplicitCg: c.ode.kind = OdeSolverKind::kEulerImplicit; break;
+    case Solver::kImplicitCg:
+      c.ode.kind = OdeSolverKind::kEulerImplicit;
+      break;
     case Solver::kImplicitLdlt:
       c.ode.kind = OdeSolverKind::kEulerImplicit;
       c.linear.kind = LinearSolverKind::kSparseLdlt;
@@ -228,7 +262,8 @@ void use_haptic_rate_cg(ModelConfig& c) { use_haptic_rate_solver(c.linear, c.ode
 // The haptic-rate CG stays mechanics' own typed mode (use_haptic_rate_solver), as `hof run`
 // applies it: its iterations follow the body's size.
 ModelConfig corotational_config(const Body& b, const CorotationalSetup& s) {
-  ModelConfig config = body_config(b, Field::kLarge, Settings::kPhysiological, {.dt_s = s.dt_s, .iterations = s.iterations, .gravity = s.gravity});
+  ModelConfig config = body_config(b, Field::kLarge, Settings::kPhysiological,
+                                   {.dt_s = s.dt_s, .iterations = s.iterations, .gravity = s.gravity});
   if (s.haptic_rate_cg) use_haptic_rate_cg(config);
   return config;
 }

@@ -75,7 +75,8 @@ struct ImplicitCgScene {
 [[nodiscard]] std::string body_scene(const Body& b, Field field, Settings s, const ImplicitCgScene& solver = {});
 /// body_scene() read by the builder's SOFA reader (scene::read_sofa_scene_text), as `hof run`
 /// reads a scene, with what a scene cannot say set after (see the definition).
-[[nodiscard]] mechanics::ModelConfig body_config(const Body& b, Field field, Settings s, const ImplicitCgScene& solver = {});
+[[nodiscard]] mechanics::ModelConfig body_config(const Body& b, Field field, Settings s,
+                                                 const ImplicitCgScene& solver = {});
 /// Switches the ODE (and linear) solver of `c` and sets its step.
 void set_solver(mechanics::ModelConfig& c, Solver s, double dt_s);
 

@@ -27,18 +27,20 @@ struct RunInfo {
 [[nodiscard]] std::string machine_description();
 
 /// The Markdown tables, one section per kind of cell that ran, then the ratios and goals.
-[[nodiscard]] std::string tables(const std::vector<Cell>& cells, const std::vector<Ratio>& ratios, const std::vector<Goal>& goal_list);
+[[nodiscard]] std::string tables(const std::vector<Cell>& cells, const std::vector<Ratio>& ratios,
+                                 const std::vector<Goal>& goal_list);
 
 /// results.json's text (indented, with a final newline).
-[[nodiscard]] std::string results_json(const RunInfo& run, const std::vector<Cell>& cells, const std::vector<Ratio>& ratios,
-                                       const std::vector<Goal>& goal_list);
+[[nodiscard]] std::string results_json(const RunInfo& run, const std::vector<Cell>& cells,
+                                       const std::vector<Ratio>& ratios, const std::vector<Goal>& goal_list);
 
 /// results.csv's text: one row per cell.
 [[nodiscard]] std::string csv(const std::vector<Cell>& cells);
 
 /// report.md: how the run was made, the tables, the plots that were made (those in `failed`
 /// are left out), what this version does not measure.
-[[nodiscard]] std::string report_markdown(const RunInfo& run, const std::string& table_text, const std::vector<detail::Plot>& plots,
+[[nodiscard]] std::string report_markdown(const RunInfo& run, const std::string& table_text,
+                                          const std::vector<detail::Plot>& plots,
                                           const std::vector<std::string>& failed);
 
 }  // namespace hof::app::bench

@@ -56,7 +56,8 @@ void fail_cell(const Error& error, Cell& cell) {
 
 // A session of `bodies` pressed by a scripted hand moving as `motion`, or null (the cell
 // failed) when it cannot be made.
-std::unique_ptr<coupling::Session> pressed_session(std::vector<coupling::SessionBody> bodies, const haptics::MotionConfig& motion,
+std::unique_ptr<coupling::Session> pressed_session(std::vector<coupling::SessionBody> bodies,
+                                                   const haptics::MotionConfig& motion,
                                                    const std::optional<haptics::DeviceSpec>& spec,
                                                    const coupling::SessionConfig& config, Cell& cell) {
   auto scripted = haptics::ScriptedMotion::make(motion);
@@ -64,7 +65,8 @@ std::unique_ptr<coupling::Session> pressed_session(std::vector<coupling::Session
     fail_cell(scripted.error(), cell);
     return nullptr;
   }
-  auto device = spec ? std::make_unique<haptics::ScriptedDevice>(*scripted, *spec) : std::make_unique<haptics::ScriptedDevice>(*scripted);
+  auto device = spec ? std::make_unique<haptics::ScriptedDevice>(*scripted, *spec)
+                     : std::make_unique<haptics::ScriptedDevice>(*scripted);
   auto session = coupling::Session::make(std::move(bodies), std::move(device), config);
   if (!session) {
     fail_cell(session.error(), cell);
@@ -84,13 +86,15 @@ haptics::MotionConfig framework_press_on(const Body& b) {
 // The whole framework (thesis Figure 34): a real-time session, the haptic loop and the
 // simulation each on its own thread, a scripted hand pressing the liver's top from 1 cm above
 // (contact after about 0.5 s, then held). Its rates, and the haptic period's p50/p99/max.
-void time_framework(const Body& b, const ModelConfig& config, coupling::ContactCoupling mode, double seconds, Cell& cell) {
+void time_framework(const Body& b, const ModelConfig& config, coupling::ContactCoupling mode, double seconds,
+                    Cell& cell) {
   cell.matrix_reuse = config.ode.matrix_reuse_steps;  // as the model runs (it depends on the mesh)
   auto body = scene::deformable_body(config);
   if (!body) return fail_cell(body.error(), cell);
   std::vector<coupling::SessionBody> bodies;
   bodies.push_back(std::move(*body));
-  auto session = pressed_session(std::move(bodies), framework_press_on(b), std::nullopt, framework_session_config(mode), cell);
+  auto session =
+      pressed_session(std::move(bodies), framework_press_on(b), std::nullopt, framework_session_config(mode), cell);
   if (session) fill_framework_cell(session->run_realtime(seconds, {}), cell);
 }
 
@@ -98,7 +102,8 @@ void time_framework(const Body& b, const ModelConfig& config, coupling::ContactC
 // of time_framework, written out as a project (the liver as Gmsh, a SOFA scene, a `.hof`
 // naming the scripted hand as its device) into DIR/window and opened by `hof gui` in this
 // process, which draws it for `seconds` and stops. Needs a display (Xvfb will do).
-void time_framework_window(const Body& b, const ModelConfig& config, const std::filesystem::path& dir, double seconds, Cell& cell) {
+void time_framework_window(const Body& b, const ModelConfig& config, const std::filesystem::path& dir, double seconds,
+                           Cell& cell) {
   cell.matrix_reuse = config.ode.matrix_reuse_steps;  // as the model runs (it depends on the mesh)
   const char* display = std::getenv("DISPLAY");
   if (!display || !*display) {
@@ -125,24 +130,30 @@ void time_framework_window(const Body& b, const ModelConfig& config, const std::
       "    <EulerImplicitSolver name=\"solver\" rayleighStiffness=\"{}\" rayleighMass=\"{}\"/>\n"
       "    <CGLinearSolver name=\"cg\" iterations=\"{}\" tolerance=\"1e-12\" threshold=\"1e-12\" warmStart=\"{}\" "
       "coarseCorrection=\"{}\"/>\n"
-      "    <MeshGmshLoader name=\"loader\" filename=\"liver.msh\"/>\n    <MeshTopology name=\"topology\" src=\"@loader\"/>\n"
+      "    <MeshGmshLoader name=\"loader\" filename=\"liver.msh\"/>\n    <MeshTopology name=\"topology\" "
+      "src=\"@loader\"/>\n"
       "    <MechanicalObject name=\"dofs\" src=\"@loader\"/>\n    <DiagonalMass name=\"mass\" massDensity=\"{}\"/>\n"
       "    <TetrahedronFEMForceField name=\"FEM\" youngModulus=\"{}\" poissonRatio=\"{}\" method=\"large\"/>\n"
       "    <FixedProjectiveConstraint name=\"base\" indices=\"{}\"/>\n  </Node>\n</Node>\n",
       config.dt_s, config.ode.rayleigh_stiffness, config.ode.rayleigh_mass, config.linear.iterations,
-      config.linear.warm_start ? "true" : "false", config.linear.coarse_correction ? "true" : "false", config.mass.mass_density_kg_per_m3, fem.young_modulus_pa, fem.poisson_ratio, fixed);
+      config.linear.warm_start ? "true" : "false", config.linear.coarse_correction ? "true" : "false",
+      config.mass.mass_density_kg_per_m3, fem.young_modulus_pa, fem.poisson_ratio, fixed);
   const haptics::MotionConfig press = framework_press_on(b);
-  const std::string device = fmt::format("scripted:poke,start={};{};{},direction=0;0;-1,approach={},depth={},speed={},hold={}", press.start_m.x(),
-                                         press.start_m.y(), press.start_m.z(), press.approach_m, press.depth_m, press.speed_m_per_s, press.hold_s);
+  const std::string device = fmt::format(
+      "scripted:poke,start={};{};{},direction=0;0;-1,approach={},depth={},speed={},hold={}", press.start_m.x(),
+      press.start_m.y(), press.start_m.z(), press.approach_m, press.depth_m, press.speed_m_per_s, press.hold_s);
   const std::string project = fmt::format(
-      "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<hof version=\"1\" name=\"hof bench: the framework with the window open\">\n"
+      "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<hof version=\"1\" name=\"hof bench: the framework with the window "
+      "open\">\n"
       "  <mechanics scene=\"liver.scn\">\n"
       "    <set body=\"Liver\" component=\"solver\" parameter=\"matrixReuseSteps\" value=\"{}\"/>\n  </mechanics>\n"
       "  <haptics device=\"{}\" hapticRate=\"1000\" renderer=\"RuspiniRenderer\" coupling=\"fem-reaction\">\n"
-      "    <surface type=\"SmoothSurface\" stiffness=\"0.2\" damping=\"0\" useRelativeValues=\"true\"/>\n  </haptics>\n</hof>\n",
+      "    <surface type=\"SmoothSurface\" stiffness=\"0.2\" damping=\"0\" useRelativeValues=\"true\"/>\n  "
+      "</haptics>\n</hof>\n",
       config.ode.matrix_reuse_steps, device);
   const std::string script = fmt::format("wait {}\nquit\n", seconds);
-  for (const auto& [file, text] : {std::pair{"liver.scn", scene}, std::pair{"liver.hof", project}, std::pair{"script.txt", script}}) {
+  for (const auto& [file, text] :
+       {std::pair{"liver.scn", scene}, std::pair{"liver.hof", project}, std::pair{"script.txt", script}}) {
     if (auto w = write_file_atomically(at / file, text); !w) {
       cell.stable = false;
       cell.failure = w.error().to_string();
@@ -157,7 +168,8 @@ void time_framework_window(const Body& b, const ModelConfig& config, const std::
   options.result = &result;
   if (run_gui(options) != 0 || !result.session) {
     cell.stable = false;
-    cell.failure = fmt::format("the window did not run the project {} (see the messages above)", options.file->string());
+    cell.failure =
+        fmt::format("the window did not run the project {} (see the messages above)", options.file->string());
     return;
   }
   fill_framework_cell(*result.session, cell);
@@ -214,7 +226,9 @@ Expected<CouplingReference> coupling_reference(const Body& b) {
     if (!model) return std::unexpected(model.error());
     MechanicalState state = make_state(*model);
     state.x.segment<3>(3 * static_cast<Eigen::Index>(ref.node)) = ref.top - Vec3(0, 0, depth);
-    if (!step(*model, state)) return make_error(ErrorCode::kInvalidArgument, fmt::format("the static reference at {} mm did not converge", 1e3 * depth));
+    if (!step(*model, state))
+      return make_error(ErrorCode::kInvalidArgument,
+                        fmt::format("the static reference at {} mm did not converge", 1e3 * depth));
     Eigen::VectorXd internal = Eigen::VectorXd::Zero(state.x.size());
     model->force_fields[0]->add_force(state.x, state.v, state.field_states[0], internal);
     ref.depths.push_back(depth);
@@ -235,7 +249,8 @@ void time_coupling(const Body& b, const CouplingReference& ref, coupling::Contac
   std::vector<coupling::SessionBody> bodies;
   bodies.push_back(std::move(*body));
   // Held 1 s: the run ends 0.6 s into the hold.
-  const haptics::MotionConfig motion = haptics::MotionConfig::poke(ref.top + Vec3(0, 0, 0.004), Vec3(0, 0, -1), 0.004, 0.004, 0.004, 1.0);
+  const haptics::MotionConfig motion =
+      haptics::MotionConfig::poke(ref.top + Vec3(0, 0, 0.004), Vec3(0, 0, -1), 0.004, 0.004, 0.004, 1.0);
   haptics::DeviceSpec spec;
   spec.max_force_n = 50.0;
   spec.max_stiffness_n_per_m = 2000.0;
@@ -276,7 +291,8 @@ void time_coupling(const Body& b, const CouplingReference& ref, coupling::Contac
   }
   cell.force_error = worst;
   if (have_settled && std::abs(ref.top.z() - settled.device.z() - ref.depths.back()) < 1e-6) {
-    cell.force_error_settled = (settled.force - ref.reactions.back()).norm() / std::max(ref.reactions.back().norm(), 1e-12);
+    cell.force_error_settled =
+        (settled.force - ref.reactions.back()).norm() / std::max(ref.reactions.back().norm(), 1e-12);
   }
 }
 

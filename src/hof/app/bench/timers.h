@@ -24,15 +24,17 @@ void time_cell(const mechanics::ModelConfig& config, const Budget& budget, Cell&
 [[nodiscard]] double step_error(const mechanics::ModelConfig& config, const Budget& budget);
 
 /// The cost of one haptic tick of `kind` sliding 3 mm under the surface at rest.
-void time_renderer(const mesh::TriMesh& surface, haptics::RendererKind kind, bool bound_tree, const Budget& budget, Cell& cell);
+void time_renderer(const mesh::TriMesh& surface, haptics::RendererKind kind, bool bound_tree, const Budget& budget,
+                   Cell& cell);
 
 /// The whole framework in real time: a scripted hand pressing the liver's top.
-void time_framework(const Body& b, const mechanics::ModelConfig& config, coupling::ContactCoupling mode, double seconds, Cell& cell);
+void time_framework(const Body& b, const mechanics::ModelConfig& config, coupling::ContactCoupling mode, double seconds,
+                    Cell& cell);
 
 /// time_framework's haptic-rate press with the window open (needs a display), written as a
 /// project into `dir`/window.
-void time_framework_window(const Body& b, const mechanics::ModelConfig& config, const std::filesystem::path& dir, double seconds,
-                           Cell& cell);
+void time_framework_window(const Body& b, const mechanics::ModelConfig& config, const std::filesystem::path& dir,
+                           double seconds, Cell& cell);
 
 /// `count` livers side by side, the first pressed, in virtual time.
 void time_bodies(const Body& b, const mechanics::ModelConfig& config, int count, double seconds, Cell& cell);

@@ -9,12 +9,13 @@
 
 namespace hof::app::gui {
 
-const std::vector<std::string> kOdeSolvers{"EulerImplicitSolver", "EulerExplicitSolver", "RungeKutta4Solver", "StaticSolver"};
+const std::vector<std::string> kOdeSolvers{"EulerImplicitSolver", "EulerExplicitSolver", "RungeKutta4Solver",
+                                           "StaticSolver"};
 const std::vector<std::string> kLinearSolvers{"CGLinearSolver", "SparseLDLSolver"};
 const std::vector<std::string> kMasses{"DiagonalMass", "UniformMass"};
-const std::vector<std::string> kForceFields{"TetrahedronFEMForceField large", "TetrahedronFEMForceField small",
-                                            "TetrahedronFEMForceField polar", "NeoHookean (TetrahedronHyperelasticityFEMForceField)",
-                                            "MeshSpringForceField"};
+const std::vector<std::string> kForceFields{
+    "TetrahedronFEMForceField large", "TetrahedronFEMForceField small", "TetrahedronFEMForceField polar",
+    "NeoHookean (TetrahedronHyperelasticityFEMForceField)", "MeshSpringForceField"};
 
 /// E and ν of a model's first FEM force field (SOFA's defaults otherwise).
 std::pair<double, double> elastic_moduli(const mechanics::ModelConfig& c) {
@@ -33,7 +34,9 @@ double mean_edge_length(const mechanics::ModelConfig& c) {
   for (const mesh::Tet& t : c.tets) {
     for (int i = 0; i < 4; ++i) {
       for (int j = i + 1; j < 4; ++j) {
-        sum += (c.positions[static_cast<std::size_t>(t[static_cast<std::size_t>(i)])] - c.positions[static_cast<std::size_t>(t[static_cast<std::size_t>(j)])]).norm();
+        sum += (c.positions[static_cast<std::size_t>(t[static_cast<std::size_t>(i)])] -
+                c.positions[static_cast<std::size_t>(t[static_cast<std::size_t>(j)])])
+                   .norm();
         ++count;
       }
     }
@@ -49,7 +52,8 @@ std::vector<std::pair<std::string, std::string>> components_of(const mechanics::
                     : c.ode.kind == mechanics::OdeSolverKind::kStatic      ? "StaticSolver"
                                                                            : "EulerImplicitSolver";
   out.emplace_back(c.ode.name, ode);
-  out.emplace_back(c.linear.name, c.linear.kind == mechanics::LinearSolverKind::kSparseLdlt ? "SparseLDLSolver" : "CGLinearSolver");
+  out.emplace_back(c.linear.name,
+                   c.linear.kind == mechanics::LinearSolverKind::kSparseLdlt ? "SparseLDLSolver" : "CGLinearSolver");
   out.emplace_back(c.mass.name, c.mass.kind == mechanics::MassKind::kUniform ? "UniformMass" : "DiagonalMass");
   for (const mechanics::ForceFieldConfig& f : c.force_fields) {
     const char* type = f.mesh_springs      ? "MeshSpringForceField"
@@ -62,8 +66,8 @@ std::vector<std::pair<std::string, std::string>> components_of(const mechanics::
   return out;
 }
 
-Expected<scene::SceneEdit> switch_edit(const mechanics::ModelConfig& c, const std::string& body, const std::string& component,
-                                       const std::string& choice) {
+Expected<scene::SceneEdit> switch_edit(const mechanics::ModelConfig& c, const std::string& body,
+                                       const std::string& component, const std::string& choice) {
   scene::SceneEdit edit;
   edit.action = scene::SceneEdit::Action::kReplace;
   edit.node = body;
@@ -72,7 +76,8 @@ Expected<scene::SceneEdit> switch_edit(const mechanics::ModelConfig& c, const st
   const auto [young, poisson] = elastic_moduli(c);
   if (choice.starts_with("TetrahedronFEMForceField")) {
     edit.type = "TetrahedronFEMForceField";
-    edit.attributes = {{"youngModulus", num(young)}, {"poissonRatio", num(poisson)}, {"method", choice.substr(choice.find(' ') + 1)}};
+    edit.attributes = {
+        {"youngModulus", num(young)}, {"poissonRatio", num(poisson)}, {"method", choice.substr(choice.find(' ') + 1)}};
   } else if (choice.starts_with("NeoHookean")) {
     // SOFA's NeoHookean ParameterSet is (μ, k): the same small-strain E and ν.
     edit.type = "TetrahedronHyperelasticityFEMForceField";
@@ -97,7 +102,9 @@ Expected<scene::SceneEdit> switch_edit(const mechanics::ModelConfig& c, const st
     edit.type = choice;
   } else if (choice == "CGLinearSolver") {
     edit.type = choice;
-    edit.attributes = {{"iterations", num(c.linear.iterations)}, {"tolerance", num(c.linear.tolerance)}, {"threshold", num(c.linear.threshold)}};
+    edit.attributes = {{"iterations", num(c.linear.iterations)},
+                       {"tolerance", num(c.linear.tolerance)},
+                       {"threshold", num(c.linear.threshold)}};
   } else if (choice == "SparseLDLSolver") {
     edit.type = choice;
   } else if (choice == "UniformMass") {

@@ -6,8 +6,8 @@
 
 namespace hof::app::gui {
 
-void FileDialog::show(const std::string& t, bool save, std::vector<std::string> exts, std::function<void(const std::filesystem::path&)> f,
-                      const std::string& suggested) {
+void FileDialog::show(const std::string& t, bool save, std::vector<std::string> exts,
+                      std::function<void(const std::filesystem::path&)> f, const std::string& suggested) {
   open = true;
   saving = save;
   title = t;
@@ -29,7 +29,8 @@ void FileDialog::draw() {
   std::error_code ec;
   std::vector<std::filesystem::directory_entry> entries;
   for (const auto& e : std::filesystem::directory_iterator(folder, ec)) entries.push_back(e);
-  std::sort(entries.begin(), entries.end(), [](const auto& a, const auto& b) { return a.path().filename() < b.path().filename(); });
+  std::sort(entries.begin(), entries.end(),
+            [](const auto& a, const auto& b) { return a.path().filename() < b.path().filename(); });
   for (const auto& e : entries) {
     const std::string file = e.path().filename().string();
     if (file.starts_with('.')) continue;

@@ -5,8 +5,8 @@
 /// draws the latest snapshots, and changes settings only through the command seam. It never
 /// steps the simulation and never holds a lock that the haptic loop could wait on.
 
-#include <filesystem>
 #include <cstdint>
+#include <filesystem>
 #include <optional>
 #include <string>
 

@@ -87,7 +87,8 @@ std::string parse_edit(const std::string& line, const std::string& verb, ScriptA
 
 std::string parse_region(const std::vector<std::string>& w, ScriptAction& a) {
   a.kind = ScriptAction::Kind::kRegion;
-  const char* usage = "region takes BODY sphere X Y Z RADIUS YOUNGMODULUS, BODY box X0 Y0 Z0 X1 Y1 Z1 YOUNGMODULUS, or clear";
+  const char* usage =
+      "region takes BODY sphere X Y Z RADIUS YOUNGMODULUS, BODY box X0 Y0 Z0 X1 Y1 Z1 YOUNGMODULUS, or clear";
   if (w.size() == 2 && w[1] == "clear") return {};  // no numbers: every region removed
   if (w.size() < 3 || (w[2] != "sphere" && w[2] != "box")) return usage;
   a.element = w[1];
@@ -120,7 +121,7 @@ std::string parse_action(const std::string& line, const std::vector<std::string>
     a.kind = ScriptAction::Kind::kStep;
     a.number = 1.0;
     if (w.size() > 2 || (w.size() == 2 && (!to_number(w[1], a.number) || a.number < 1.0 || a.number > 1e6 ||
-                                            a.number != std::floor(a.number)))) {
+                                           a.number != std::floor(a.number)))) {
       return "step takes a number of steps in [1, 1000000]";
     }
   } else if (verb == "reset") {
@@ -144,7 +145,8 @@ std::string parse_action(const std::string& line, const std::vector<std::string>
     a.file = w[1];
   } else if (verb == "show") {
     a.kind = ScriptAction::Kind::kShow;
-    if (w.size() != 2 || (w[1] != "needle" && w[1] != "mechanics" && w[1] != "haptics" && w[1] != "graphics" && w[1] != "messages")) {
+    if (w.size() != 2 ||
+        (w[1] != "needle" && w[1] != "mechanics" && w[1] != "haptics" && w[1] != "graphics" && w[1] != "messages")) {
       return "show takes a panel: needle, mechanics, haptics, graphics or messages";
     }
     a.value = w[1];
@@ -167,7 +169,10 @@ std::string parse_action(const std::string& line, const std::vector<std::string>
     a.kind = ScriptAction::Kind::kQuit;
     if (w.size() != 1) return "quit takes nothing";
   } else {
-    return fmt::format("unknown action '{}' (known: wait, animate, step, needle, reset, set, replace, add, remove, region, mouse, open, show, record, screenshot, save, quit)", verb);
+    return fmt::format(
+        "unknown action '{}' (known: wait, animate, step, needle, reset, set, replace, add, remove, region, mouse, "
+        "open, show, record, screenshot, save, quit)",
+        verb);
   }
   return {};
 }

@@ -41,19 +41,35 @@
 namespace hof::app {
 
 struct ScriptAction {
-  enum class Kind { kWait, kAnimate, kNeedle, kStep, kReset, kSet, kEdit, kRegion, kMouse, kShow, kOpen, kRecord, kScreenshot, kSave, kQuit };
+  enum class Kind {
+    kWait,
+    kAnimate,
+    kNeedle,
+    kStep,
+    kReset,
+    kSet,
+    kEdit,
+    kRegion,
+    kMouse,
+    kShow,
+    kOpen,
+    kRecord,
+    kScreenshot,
+    kSave,
+    kQuit
+  };
   Kind kind{Kind::kWait};
   int line{0};
-  double number{0.0};          ///< wait: seconds; step: steps; mouse: x
-  double y{0.0}, depth{0.0};   ///< mouse
-  bool on{false};              ///< animate; record (false: stop)
+  double number{0.0};                     ///< wait: seconds; step: steps; mouse: x
+  double y{0.0}, depth{0.0};              ///< mouse
+  bool on{false};                         ///< animate; record (false: stop)
   std::string element, attribute, value;  ///< set; edit: element = the path, value = replace|add|remove
   std::string type, name;                 ///< edit: the new component's type and (add) name
   std::vector<std::pair<std::string, std::string>> attributes;  ///< edit: KEY=VALUE
-  std::vector<double> numbers;            ///< region: centre and radius, or corners; then E (empty: clear)
-  bool box{false};                        ///< region
-  std::filesystem::path file;  ///< screenshot, save, record
-  std::string text;            ///< the line as written
+  std::vector<double> numbers;  ///< region: centre and radius, or corners; then E (empty: clear)
+  bool box{false};              ///< region
+  std::filesystem::path file;   ///< screenshot, save, record
+  std::string text;             ///< the line as written
 };
 
 /// Reads and checks a script. Errors name the file and line.

@@ -43,9 +43,11 @@ std::filesystem::path recent_files_path() {
 }  // namespace
 
 Expected<void> GuiWindow::create_window() {
-  glfwSetErrorCallback([](int code, const char* text) { std::fprintf(stderr, "hof gui: GLFW error %d: %s\n", code, text); });
+  glfwSetErrorCallback(
+      [](int code, const char* text) { std::fprintf(stderr, "hof gui: GLFW error %d: %s\n", code, text); });
   if (!glfwInit()) {
-    return make_error(ErrorCode::kUnsupported, "no display: the window needs X11 (run `hof run --headless`, or under xvfb-run)");
+    return make_error(ErrorCode::kUnsupported,
+                      "no display: the window needs X11 (run `hof run --headless`, or under xvfb-run)");
   }
   glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
   glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 3);
@@ -142,13 +144,17 @@ float GuiWindow::draw_menu() {
         if (auto ok = save(file_); !ok) report(ok.error().to_string(), true);
       }
       if (ImGui::MenuItem("Save as...", nullptr, false, session_ != nullptr)) want_save_dialog_ = true;
-      if (ImGui::MenuItem("Export shape (.obj, .vtu)...", nullptr, false, session_ != nullptr)) want_export_dialog_ = true;
-      if (ImGui::MenuItem("Replay a recording (.csv)...", nullptr, false, session_ != nullptr)) want_replay_dialog_ = true;
+      if (ImGui::MenuItem("Export shape (.obj, .vtu)...", nullptr, false, session_ != nullptr))
+        want_export_dialog_ = true;
+      if (ImGui::MenuItem("Replay a recording (.csv)...", nullptr, false, session_ != nullptr))
+        want_replay_dialog_ = true;
       if (ImGui::MenuItem("Screenshot (.png)...")) want_screenshot_dialog_ = true;
       ImGui::Separator();
       if (ImGui::MenuItem("Quit", "Ctrl+Q")) {
-        if (dirty_) confirm_quit_ = true;
-        else quit_ = true;
+        if (dirty_)
+          confirm_quit_ = true;
+        else
+          quit_ = true;
       }
       ImGui::EndMenu();
     }
@@ -161,31 +167,40 @@ float GuiWindow::draw_menu() {
 void GuiWindow::draw_dialogs() {
   if (want_open_dialog_) {
     want_open_dialog_ = false;
-    dialog_.show("Open a project, SOFA scene or X3D scene", false, {".hof", ".scn", ".x3d"}, [this](const std::filesystem::path& p) { dropped_ = p; });
+    dialog_.show("Open a project, SOFA scene or X3D scene", false, {".hof", ".scn", ".x3d"},
+                 [this](const std::filesystem::path& p) { dropped_ = p; });
   }
   if (want_save_dialog_) {
     want_save_dialog_ = false;
-    dialog_.show("Save the project", true, {".hof"}, [this](const std::filesystem::path& p) {
-      std::filesystem::path target = p.extension() == ".hof" ? p : std::filesystem::path(p.string() + ".hof");
-      if (auto ok = save(target); !ok) report(ok.error().to_string(), true);
-    }, file_.stem().string() + ".hof");
+    dialog_.show(
+        "Save the project", true, {".hof"},
+        [this](const std::filesystem::path& p) {
+          std::filesystem::path target = p.extension() == ".hof" ? p : std::filesystem::path(p.string() + ".hof");
+          if (auto ok = save(target); !ok) report(ok.error().to_string(), true);
+        },
+        file_.stem().string() + ".hof");
   }
   if (want_export_dialog_) {
     want_export_dialog_ = false;
-    dialog_.show("Export the current shape", true, {".obj", ".vtu"}, [this](const std::filesystem::path& p) {
-      if (auto ok = export_shape(p); !ok) report(ok.error().to_string(), true);
-    }, file_.stem().string() + "-shape.obj");
+    dialog_.show(
+        "Export the current shape", true, {".obj", ".vtu"},
+        [this](const std::filesystem::path& p) {
+          if (auto ok = export_shape(p); !ok) report(ok.error().to_string(), true);
+        },
+        file_.stem().string() + "-shape.obj");
   }
   if (want_replay_dialog_) {
     want_replay_dialog_ = false;
     dialog_.show("Replay a recorded stylus trajectory", false, {".csv"}, [this](const std::filesystem::path& p) {
-      if (auto ok = apply_set("haptics", "device", "replay:" + std::filesystem::absolute(p).string()); !ok) report(ok.error().to_string(), true);
+      if (auto ok = apply_set("haptics", "device", "replay:" + std::filesystem::absolute(p).string()); !ok)
+        report(ok.error().to_string(), true);
     });
   }
   if (want_screenshot_dialog_) {
     want_screenshot_dialog_ = false;
-    dialog_.show("Save a screenshot", true, {".png"}, [this](const std::filesystem::path& p) { pending_screenshot_ = p; },
-                 file_.stem().string() + ".png");
+    dialog_.show(
+        "Save a screenshot", true, {".png"}, [this](const std::filesystem::path& p) { pending_screenshot_ = p; },
+        file_.stem().string() + ".png");
   }
   dialog_.draw();
 }
@@ -199,9 +214,13 @@ void GuiWindow::draw_unsaved_prompts() {
       pending_open_.reset();
       ImGui::CloseCurrentPopup();
     };
-    if (ImGui::Button("Save, then open") ) {
-      if (auto ok = file_.extension() == ".hof" ? save(file_) : save(std::filesystem::path(file_).replace_extension(".hof")); ok) go();
-      else report(ok.error().to_string(), true);
+    if (ImGui::Button("Save, then open")) {
+      if (auto ok =
+              file_.extension() == ".hof" ? save(file_) : save(std::filesystem::path(file_).replace_extension(".hof"));
+          ok)
+        go();
+      else
+        report(ok.error().to_string(), true);
     }
     ImGui::SameLine();
     if (ImGui::Button("Discard them and open")) go();
@@ -219,9 +238,12 @@ void GuiWindow::draw_unsaved_prompts() {
   if (ImGui::BeginPopupModal("Unsaved changes", nullptr, ImGuiWindowFlags_AlwaysAutoResize)) {
     ImGui::Text("%s has changes that are not saved.", file_.filename().string().c_str());
     if (ImGui::Button("Save and quit")) {
-      auto ok = file_.extension() == ".hof" ? save(file_) : save(std::filesystem::path(file_).replace_extension(".hof"));
-      if (ok) quit_ = true;
-      else report(ok.error().to_string(), true);
+      auto ok =
+          file_.extension() == ".hof" ? save(file_) : save(std::filesystem::path(file_).replace_extension(".hof"));
+      if (ok)
+        quit_ = true;
+      else
+        report(ok.error().to_string(), true);
       ImGui::CloseCurrentPopup();
     }
     ImGui::SameLine();
@@ -242,7 +264,9 @@ void GuiWindow::draw_panels() {
   ImGuiIO& io = ImGui::GetIO();
   ImGui::SetNextWindowPos(ImVec2(0, menu_height));
   ImGui::SetNextWindowSize(ImVec2(kPanelWidth, io.DisplaySize.y - menu_height));
-  ImGui::Begin("HoF", nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse | ImGuiWindowFlags_NoTitleBar);
+  ImGui::Begin(
+      "HoF", nullptr,
+      ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse | ImGuiWindowFlags_NoTitleBar);
   // Each panel is drawn over this frame's view, then its commands are applied (the next panel
   // sees them).
   apply(controls_panel(view()));
@@ -268,12 +292,15 @@ void GuiWindow::draw_legend() {
   const bool strain = by == scene::ColorBy::kStrain;
   const bool stress = by == scene::ColorBy::kStress;
   double range = 0.0;
-  for (const LayerView& l : layers_) range = std::max(range, strain ? l.max_strain : stress ? l.max_stress_pa : l.max_displacement_m);
+  for (const LayerView& l : layers_)
+    range = std::max(range, strain ? l.max_strain : stress ? l.max_stress_pa : l.max_displacement_m);
   range = std::max(range, strain ? 0.01 : stress ? 1e-6 : 0.01 * scene_size());
   const ImVec2 size(290, 58);
-  ImGui::SetNextWindowPos(ImVec2(ImGui::GetIO().DisplaySize.x - size.x - 10, ImGui::GetIO().DisplaySize.y - size.y - 10));
+  ImGui::SetNextWindowPos(
+      ImVec2(ImGui::GetIO().DisplaySize.x - size.x - 10, ImGui::GetIO().DisplaySize.y - size.y - 10));
   ImGui::SetNextWindowSize(size);
-  ImGui::Begin("##legend", nullptr, ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_NoInputs | ImGuiWindowFlags_NoSavedSettings);
+  ImGui::Begin("##legend", nullptr,
+               ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_NoInputs | ImGuiWindowFlags_NoSavedSettings);
   const double scale = strain ? 100.0 : stress ? (range >= 1e3 ? 1e-3 : 1.0) : length_unit_ == "m" ? 1e3 : 1.0;
   if (strain) {
     ImGui::Text("surface strain (%%, to its 98th pct)");
@@ -319,8 +346,10 @@ void GuiWindow::frame() {
     }
     if (ImGui::IsKeyPressed(GLFW_KEY_O)) want_open_dialog_ = true;
     if (ImGui::IsKeyPressed(GLFW_KEY_Q)) {
-      if (dirty_) confirm_quit_ = true;
-      else quit_ = true;
+      if (dirty_)
+        confirm_quit_ = true;
+      else
+        quit_ = true;
     }
   } else if (!io.WantCaptureKeyboard && ImGui::IsKeyPressed(GLFW_KEY_SPACE)) {
     set_animating(!animating_);
@@ -371,24 +400,38 @@ int GuiWindow::run(std::vector<ScriptAction> script, const std::string& script_n
   }
   if (scripted && !options_.quiet) {
     const double wall = seconds_between(started, Clock::now());
-    std::printf("hof gui: %llu frames in %.2f s (%.1f frames/s); last second: %.0f frames/s, %.0f simulation steps/s, haptic %.0f Hz, "
-                "period p99 %.3f ms; whole run: longest period %.3f ms, %llu over 2 ms\n",
-                static_cast<unsigned long long>(frames), wall, static_cast<double>(frames) / std::max(wall, 1e-9), stats_.fps,
-                stats_.steps_per_s, stats_.haptic_hz, stats_.period_p99_ms, stats_.longest_period_ms,
-                static_cast<unsigned long long>(stats_.periods_over_2ms));
-    std::printf("hof gui: contact %.3f s, max force %.3f N, max surface displacement %.3f %s, %llu ticks at the force limit\n",
-                static_cast<double>(contact_ticks_) * 1e-3, max_force_seen_n_,
-                length_unit_ == "m" ? 1e3 * max_displacement_seen_m_ : max_displacement_seen_m_, length_unit_ == "m" ? "mm" : length_unit_.c_str(),
-                static_cast<unsigned long long>(stats_.clamped));
+    std::printf(
+        "hof gui: %llu frames in %.2f s (%.1f frames/s); last second: %.0f frames/s, %.0f simulation steps/s, haptic "
+        "%.0f Hz, "
+        "period p99 %.3f ms; whole run: longest period %.3f ms, %llu over 2 ms\n",
+        static_cast<unsigned long long>(frames), wall, static_cast<double>(frames) / std::max(wall, 1e-9), stats_.fps,
+        stats_.steps_per_s, stats_.haptic_hz, stats_.period_p99_ms, stats_.longest_period_ms,
+        static_cast<unsigned long long>(stats_.periods_over_2ms));
+    std::printf(
+        "hof gui: contact %.3f s, max force %.3f N, max surface displacement %.3f %s, %llu ticks at the force limit\n",
+        static_cast<double>(contact_ticks_) * 1e-3, max_force_seen_n_,
+        length_unit_ == "m" ? 1e3 * max_displacement_seen_m_ : max_displacement_seen_m_,
+        length_unit_ == "m" ? "mm" : length_unit_.c_str(), static_cast<unsigned long long>(stats_.clamped));
   }
   return status;
 }
 
 WorldView GuiWindow::view() const {
-  return WorldView{file_, project_, world_name_, length_unit_, device_spec_, session_.get(), needle_.get(), mouse_ != nullptr, mouse_world_,
-                   calibration_, max_force_n_, workspace_radius_m_, bodies_, bounds_min_, bounds_max_, animating_, dirty_, realtime_pacing_,
-                   last_, stats_, plot_force_, plot_indentation_, indentation_m_, reading_, contact_body_,
-                   recording_ ? &*recording_ : nullptr, error_, log_, camera_};
+  return WorldView{file_,          project_,
+                   world_name_,    length_unit_,
+                   device_spec_,   session_.get(),
+                   needle_.get(),  mouse_ != nullptr,
+                   mouse_world_,   calibration_,
+                   max_force_n_,   workspace_radius_m_,
+                   bodies_,        bounds_min_,
+                   bounds_max_,    animating_,
+                   dirty_,         realtime_pacing_,
+                   last_,          stats_,
+                   plot_force_,    plot_indentation_,
+                   indentation_m_, reading_,
+                   contact_body_,  recording_ ? &*recording_ : nullptr,
+                   error_,         log_,
+                   camera_};
 }
 
 void GuiWindow::apply(const GuiCommands& commands) {

@@ -47,7 +47,8 @@ GuiCommands graphics_panel(const WorldView& w, ViewOptions& view) {
   ImGui::SetNextItemWidth(200);
   if (ImGui::Combo("renderMode", &mode, modes, 4)) {
     const auto chosen = static_cast<scene::RenderMode>(mode);
-    change("graphics", "renderMode", std::string(scene::render_mode_name(chosen)), [&](scene::GraphicsSetup& n) { n.render_mode = chosen; });
+    change("graphics", "renderMode", std::string(scene::render_mode_name(chosen)),
+           [&](scene::GraphicsSetup& n) { n.render_mode = chosen; });
   }
   const char* colourings[4];
   for (int i = 0; i < 4; ++i) colourings[i] = scene::color_by_name(static_cast<scene::ColorBy>(i)).data();
@@ -55,18 +56,22 @@ GuiCommands graphics_panel(const WorldView& w, ViewOptions& view) {
   ImGui::SetNextItemWidth(200);
   if (ImGui::Combo("colorBy", &colouring, colourings, 4)) {
     const auto chosen = static_cast<scene::ColorBy>(colouring);
-    change("graphics", "colorBy", std::string(scene::color_by_name(chosen)), [&](scene::GraphicsSetup& n) { n.color_by = chosen; });
+    change("graphics", "colorBy", std::string(scene::color_by_name(chosen)),
+           [&](scene::GraphicsSetup& n) { n.color_by = chosen; });
   }
-  float diffuse[3] = {static_cast<float>(g.diffuse_color.x()), static_cast<float>(g.diffuse_color.y()), static_cast<float>(g.diffuse_color.z())};
+  float diffuse[3] = {static_cast<float>(g.diffuse_color.x()), static_cast<float>(g.diffuse_color.y()),
+                      static_cast<float>(g.diffuse_color.z())};
   if (ImGui::ColorEdit3("diffuseColor", diffuse)) {
-    change("graphics/material", "diffuseColor", joined(diffuse), [&](scene::GraphicsSetup& n) { n.diffuse_color = as_written(diffuse); });
+    change("graphics/material", "diffuseColor", joined(diffuse),
+           [&](scene::GraphicsSetup& n) { n.diffuse_color = as_written(diffuse); });
   }
   const auto unit = [&](const char* element, const char* attribute, float v, double scene::GraphicsSetup::*field) {
     change(element, attribute, number_text(v), [&](scene::GraphicsSetup& n) { n.*field = v; });
   };
   float shininess = static_cast<float>(g.shininess), transparency = static_cast<float>(g.transparency);
   ImGui::SetNextItemWidth(200);
-  if (ImGui::SliderFloat("shininess", &shininess, 0.0f, 1.0f)) unit("graphics/material", "shininess", shininess, &scene::GraphicsSetup::shininess);
+  if (ImGui::SliderFloat("shininess", &shininess, 0.0f, 1.0f))
+    unit("graphics/material", "shininess", shininess, &scene::GraphicsSetup::shininess);
   ImGui::SetNextItemWidth(200);
   if (ImGui::SliderFloat("transparency", &transparency, 0.0f, 0.9f)) {
     unit("graphics/material", "transparency", transparency, &scene::GraphicsSetup::transparency);
@@ -74,7 +79,8 @@ GuiCommands graphics_panel(const WorldView& w, ViewOptions& view) {
   if (ImGui::TreeNode("Lights")) {
     bool headlight = g.headlight;
     if (ImGui::Checkbox("headlight", &headlight)) {
-      change("graphics/light", "headlight", headlight ? "true" : "false", [&](scene::GraphicsSetup& n) { n.headlight = headlight; });
+      change("graphics/light", "headlight", headlight ? "true" : "false",
+             [&](scene::GraphicsSetup& n) { n.headlight = headlight; });
     }
     float head = static_cast<float>(g.headlight_intensity), key = static_cast<float>(g.light_intensity),
           ambient = static_cast<float>(g.ambient_intensity);
@@ -85,11 +91,14 @@ GuiCommands graphics_panel(const WorldView& w, ViewOptions& view) {
     float direction[3] = {static_cast<float>(g.light_direction.x()), static_cast<float>(g.light_direction.y()),
                           static_cast<float>(g.light_direction.z())};
     ImGui::SetNextItemWidth(200);
-    if (ImGui::SliderFloat3("direction", direction, -1.0f, 1.0f) && Eigen::Vector3f(direction[0], direction[1], direction[2]).norm() > 1e-3f) {
-      change("graphics/light", "direction", joined(direction), [&](scene::GraphicsSetup& n) { n.light_direction = as_written(direction); });
+    if (ImGui::SliderFloat3("direction", direction, -1.0f, 1.0f) &&
+        Eigen::Vector3f(direction[0], direction[1], direction[2]).norm() > 1e-3f) {
+      change("graphics/light", "direction", joined(direction),
+             [&](scene::GraphicsSetup& n) { n.light_direction = as_written(direction); });
     }
     ImGui::SetNextItemWidth(160);
-    if (ImGui::SliderFloat("intensity", &key, 0.0f, 1.0f)) unit("graphics/light", "intensity", key, &scene::GraphicsSetup::light_intensity);
+    if (ImGui::SliderFloat("intensity", &key, 0.0f, 1.0f))
+      unit("graphics/light", "intensity", key, &scene::GraphicsSetup::light_intensity);
     ImGui::SetNextItemWidth(160);
     if (ImGui::SliderFloat("ambientIntensity", &ambient, 0.0f, 1.0f)) {
       unit("graphics/light", "ambientIntensity", ambient, &scene::GraphicsSetup::ambient_intensity);
@@ -100,8 +109,10 @@ GuiCommands graphics_panel(const WorldView& w, ViewOptions& view) {
   ImGui::SameLine();
   if (ImGui::Button("Keep this view in the project")) {
     const Vec3 eye = w.camera.eye(), target = w.camera.target();
-    change("graphics", "viewpoint", fmt::format("{} {} {}", eye.x(), eye.y(), eye.z()), [&](scene::GraphicsSetup& n) { n.viewpoint_m = eye; });
-    change("graphics", "lookAt", fmt::format("{} {} {}", target.x(), target.y(), target.z()), [&](scene::GraphicsSetup& n) { n.look_at_m = target; });
+    change("graphics", "viewpoint", fmt::format("{} {} {}", eye.x(), eye.y(), eye.z()),
+           [&](scene::GraphicsSetup& n) { n.viewpoint_m = eye; });
+    change("graphics", "lookAt", fmt::format("{} {} {}", target.x(), target.y(), target.z()),
+           [&](scene::GraphicsSetup& n) { n.look_at_m = target; });
   }
   if (edit) out.push_back(std::move(*edit));
   ImGui::Separator();

@@ -23,12 +23,14 @@ void effects_editor(const WorldView& w, GuiCommands& out) {
   };
   const auto number = [&](const std::string& element, const char* attribute, double value) {
     ImGui::SetNextItemWidth(160);
-    if (ImGui::InputDouble(attribute, &value, 0.0, 0.0, "%.4g", ImGuiInputTextFlags_EnterReturnsTrue)) set(element, attribute, number_text(value));
+    if (ImGui::InputDouble(attribute, &value, 0.0, 0.0, "%.4g", ImGuiInputTextFlags_EnterReturnsTrue))
+      set(element, attribute, number_text(value));
   };
   const auto vector = [&](const std::string& element, const char* attribute, const Vec3& value) {
     double v[3] = {value.x(), value.y(), value.z()};
     ImGui::SetNextItemWidth(240);
-    if (ImGui::InputScalarN(attribute, ImGuiDataType_Double, v, 3, nullptr, nullptr, "%.4g", ImGuiInputTextFlags_EnterReturnsTrue)) {
+    if (ImGui::InputScalarN(attribute, ImGuiDataType_Double, v, 3, nullptr, nullptr, "%.4g",
+                            ImGuiInputTextFlags_EnterReturnsTrue)) {
       set(element, attribute, fmt::format("{} {} {}", v[0], v[1], v[2]));
     }
   };
@@ -45,7 +47,8 @@ void effects_editor(const WorldView& w, GuiCommands& out) {
     ImGui::PushID(element.c_str());
     ImGui::Text("SpringEffect %zu", i + 1);
     ImGui::SameLine();
-    if (ImGui::SmallButton("remove")) pending = [i](haptics::ForceEffects& f) { f.springs.erase(f.springs.begin() + static_cast<std::ptrdiff_t>(i)); };
+    if (ImGui::SmallButton("remove"))
+      pending = [i](haptics::ForceEffects& f) { f.springs.erase(f.springs.begin() + static_cast<std::ptrdiff_t>(i)); };
     vector(element, "position", e.position_m);
     number(element, "springConstant", e.spring_constant_n_per_m);
     number(element, "startDistance", e.start_distance_m);
@@ -59,7 +62,10 @@ void effects_editor(const WorldView& w, GuiCommands& out) {
     ImGui::PushID(element.c_str());
     ImGui::Text("ViscosityEffect %zu", i + 1);
     ImGui::SameLine();
-    if (ImGui::SmallButton("remove")) pending = [i](haptics::ForceEffects& f) { f.viscosities.erase(f.viscosities.begin() + static_cast<std::ptrdiff_t>(i)); };
+    if (ImGui::SmallButton("remove"))
+      pending = [i](haptics::ForceEffects& f) {
+        f.viscosities.erase(f.viscosities.begin() + static_cast<std::ptrdiff_t>(i));
+      };
     number(element, "viscosity", e.viscosity_pa_s);
     number(element, "radius", e.radius_m);
     number(element, "dampingFactor", e.damping_factor);
@@ -72,7 +78,10 @@ void effects_editor(const WorldView& w, GuiCommands& out) {
     ImGui::PushID(element.c_str());
     ImGui::Text("ForceField %zu", i + 1);
     ImGui::SameLine();
-    if (ImGui::SmallButton("remove")) pending = [i](haptics::ForceEffects& f) { f.constants.erase(f.constants.begin() + static_cast<std::ptrdiff_t>(i)); };
+    if (ImGui::SmallButton("remove"))
+      pending = [i](haptics::ForceEffects& f) {
+        f.constants.erase(f.constants.begin() + static_cast<std::ptrdiff_t>(i));
+      };
     vector(element, "force", w.project.effects.constants[i].force_n);
     ImGui::PopID();
   }
@@ -106,7 +115,8 @@ GuiCommands haptics_panel(const WorldView& w, HapticsPanelState& ui) {
     ImGui::TextColored(ImVec4(1.0f, 0.45f, 0.4f, 1.0f), "no reading (absent, timed out or ended): no force");
   }
   if (w.session) {
-    ImGui::TextDisabled("device limit %.3g N; %s", w.max_force_n, w.mouse_stylus ? "left-drag in the view moves the stylus" : "");
+    ImGui::TextDisabled("device limit %.3g N; %s", w.max_force_n,
+                        w.mouse_stylus ? "left-drag in the view moves the stylus" : "");
   }
   std::array<char, 256>& spec = ui.device_spec;
   ImGui::SetNextItemWidth(220);
@@ -120,7 +130,9 @@ GuiCommands haptics_panel(const WorldView& w, HapticsPanelState& ui) {
   // The renderer's settings changed this frame, as one typed edit of the project.
   std::optional<action::SetRendering> rendering;
   const auto render = [&](const char* attribute, const std::string& value, const auto& apply) {
-    if (!rendering) rendering = action::SetRendering{{w.project.renderer, w.project.proxy_radius_m, w.project.force_shading, w.project.touchable_face}, {}};
+    if (!rendering)
+      rendering = action::SetRendering{
+          {w.project.renderer, w.project.proxy_radius_m, w.project.force_shading, w.project.touchable_face}, {}};
     apply(rendering->rendering);
     rendering->settings.push_back(fmt::format("haptics@{} {}", attribute, value));
   };
@@ -128,7 +140,8 @@ GuiCommands haptics_panel(const WorldView& w, HapticsPanelState& ui) {
   const char* renderers[] = {"PenaltyRenderer", "GodObjectRenderer", "RuspiniRenderer"};
   ImGui::SetNextItemWidth(200);
   if (ImGui::Combo("renderer", &renderer, renderers, 3)) {
-    render("renderer", renderers[renderer], [&](action::Rendering& r) { r.renderer = static_cast<haptics::RendererKind>(renderer); });
+    render("renderer", renderers[renderer],
+           [&](action::Rendering& r) { r.renderer = static_cast<haptics::RendererKind>(renderer); });
   }
   double radius = w.project.proxy_radius_m;
   ImGui::SetNextItemWidth(200);
@@ -140,7 +153,8 @@ GuiCommands haptics_panel(const WorldView& w, HapticsPanelState& ui) {
   if (ImGui::TreeNode("Calibration (device -> world)")) {
     const Eigen::Matrix3d linear = w.calibration.position.topLeftCorner<3, 3>();
     const Vec3 offset = w.calibration.position.topRightCorner<3, 1>();
-    ImGui::Text("scale %.4g, offset %.4g %.4g %.4g", std::cbrt(std::abs(linear.determinant())), offset.x(), offset.y(), offset.z());
+    ImGui::Text("scale %.4g, offset %.4g %.4g %.4g", std::cbrt(std::abs(linear.determinant())), offset.x(), offset.y(),
+                offset.z());
     ImGui::TextDisabled("device workspace radius %.3g m", w.workspace_radius_m);
     const auto apply = [&](const Eigen::Matrix4d& m) {
       std::string text;
@@ -159,7 +173,8 @@ GuiCommands haptics_panel(const WorldView& w, HapticsPanelState& ui) {
     if (ImGui::Button("Identity")) apply(Eigen::Matrix4d::Identity());
     ImGui::TreePop();
   }
-  if (ImGui::InputDouble("force limit (N, 0: device's)", &limit, 0.0, 0.0, "%.3g", ImGuiInputTextFlags_EnterReturnsTrue)) {
+  if (ImGui::InputDouble("force limit (N, 0: device's)", &limit, 0.0, 0.0, "%.3g",
+                         ImGuiInputTextFlags_EnterReturnsTrue)) {
     set("haptics/safety", "maxForce", number_text(limit));
   }
   bool shading = w.project.force_shading;
@@ -170,7 +185,8 @@ GuiCommands haptics_panel(const WorldView& w, HapticsPanelState& ui) {
   const char* faces[] = {"FRONT", "BACK", "FRONT_AND_BACK"};
   ImGui::SetNextItemWidth(200);
   if (ImGui::Combo("touchableFace", &face, faces, 3)) {
-    render("touchableFace", faces[face], [&](action::Rendering& r) { r.touchable_face = static_cast<collision::TouchableFace>(face); });
+    render("touchableFace", faces[face],
+           [&](action::Rendering& r) { r.touchable_face = static_cast<collision::TouchableFace>(face); });
   }
   if (rendering) out.push_back(std::move(*rendering));
   ImGui::Separator();
@@ -201,7 +217,8 @@ GuiCommands haptics_panel(const WorldView& w, HapticsPanelState& ui) {
   number("dynamicFriction", "dynamicFriction", &haptics::SurfaceMaterial::dynamic_friction);
   bool relative = w.project.surface.use_relative_values;
   if (ImGui::Checkbox("useRelativeValues", &relative)) {
-    change("useRelativeValues", relative ? "true" : "false", [&](haptics::SurfaceMaterial& m) { m.use_relative_values = relative; });
+    change("useRelativeValues", relative ? "true" : "false",
+           [&](haptics::SurfaceMaterial& m) { m.use_relative_values = relative; });
   }
   if (surface) out.push_back(std::move(*surface));
   ImGui::Separator();

@@ -23,10 +23,12 @@ void structure_editor(const WorldView& w, const BodyView& b, MechanicsPanelState
   ImGui::SetNextItemWidth(200);
   if (ImGui::BeginCombo(fmt::format("add##{}", id).c_str(), "add a component...")) {
     using Kind = action::AddComponent::Kind;
-    if (ImGui::Selectable("TetrahedronFEMForceField")) out.push_back(action::AddComponent{b.name, Kind::kTetrahedronFem, 0.0});
+    if (ImGui::Selectable("TetrahedronFEMForceField"))
+      out.push_back(action::AddComponent{b.name, Kind::kTetrahedronFem, 0.0});
     if (ImGui::Selectable("MeshSpringForceField")) out.push_back(action::AddComponent{b.name, Kind::kMeshSprings, 0.0});
     const bool at_stylus = w.last.valid;
-    if (ImGui::Selectable("FixedProjectiveConstraint: the nodes near the stylus", false, at_stylus ? 0 : ImGuiSelectableFlags_Disabled)) {
+    if (ImGui::Selectable("FixedProjectiveConstraint: the nodes near the stylus", false,
+                          at_stylus ? 0 : ImGuiSelectableFlags_Disabled)) {
       out.push_back(action::AddComponent{b.name, Kind::kPinNearStylus, ui.pin_radius_m});
     }
     ImGui::EndCombo();
@@ -44,9 +46,10 @@ void structure_editor(const WorldView& w, const BodyView& b, MechanicsPanelState
     if (r.young_modulus_pa) material += fmt::format(" E = {:.4g} Pa", *r.young_modulus_pa);
     if (r.poisson_ratio) material += fmt::format(" nu = {:.3g}", *r.poisson_ratio);
     if (r.mass_density_kg_per_m3) material += fmt::format(" rho = {:.4g}", *r.mass_density_kg_per_m3);
-    const std::string where = r.shape == scene::MaterialRegion::Shape::kSphere ? fmt::format("sphere r {:.3g}", r.radius)
-                              : r.shape == scene::MaterialRegion::Shape::kBox  ? std::string("box")
-                                                                               : fmt::format("group {}", r.physical_group);
+    const std::string where =
+        r.shape == scene::MaterialRegion::Shape::kSphere ? fmt::format("sphere r {:.3g}", r.radius)
+        : r.shape == scene::MaterialRegion::Shape::kBox  ? std::string("box")
+                                                         : fmt::format("group {}", r.physical_group);
     ImGui::BulletText("%s: %s,%s", r.name.c_str(), where.c_str(), material.c_str());
     ImGui::SameLine();
     if (ImGui::SmallButton(fmt::format("remove##region{}", i).c_str())) {
@@ -59,8 +62,9 @@ void structure_editor(const WorldView& w, const BodyView& b, MechanicsPanelState
   ImGui::SameLine();
   ImGui::SetNextItemWidth(70);
   ImGui::InputFloat(fmt::format("x E##{}", id).c_str(), &ui.region_factor, 0.0f, 0.0f, "%.3g");
-  const bool has_tets = std::any_of(b.structure->force_fields.begin(), b.structure->force_fields.end(),
-                                    [](const auto& f) { return f.tetrahedron_fem || f.neo_hookean || f.triangle_fem || f.hexahedron_fem; });
+  const bool has_tets = std::any_of(
+      b.structure->force_fields.begin(), b.structure->force_fields.end(),
+      [](const auto& f) { return f.tetrahedron_fem || f.neo_hookean || f.triangle_fem || f.hexahedron_fem; });
   if (!has_tets) ImGui::TextDisabled("(regions need an FEM force field)");
   if (has_tets && ImGui::Button(fmt::format("+ region at the stylus##{}", id).c_str())) {
     out.push_back(action::AddRegionAtStylus{b.name, ui.region_radius_m, ui.region_factor});
@@ -81,24 +85,30 @@ GuiCommands mechanics_panel(const WorldView& w, MechanicsPanelState& ui) {
       ImGui::TreePop();
       continue;
     }
-    ImGui::TextDisabled("%zu nodes, %zu tetrahedra, %zu fixed", b.structure->positions.size(), b.structure->tets.size(), b.fixed_points.size());
+    ImGui::TextDisabled("%zu nodes, %zu tetrahedra, %zu fixed", b.structure->positions.size(), b.structure->tets.size(),
+                        b.fixed_points.size());
     for (const auto& [component, type] : components_of(*b.structure)) {
       const std::string prefix = component + "/";
-      const bool has_parameters = std::any_of(b.parameters.begin(), b.parameters.end(), [&](const std::string& p) { return p.starts_with(prefix); });
-      const std::string node = fmt::format("{} {}##{}/{}", type, component.empty() ? b.name : component, b.name, component);
+      const bool has_parameters = std::any_of(b.parameters.begin(), b.parameters.end(),
+                                              [&](const std::string& p) { return p.starts_with(prefix); });
+      const std::string node =
+          fmt::format("{} {}##{}/{}", type, component.empty() ? b.name : component, b.name, component);
       // The force fields (what is tuned most) start open.
       const bool force_field = type.find("ForceField") != std::string::npos;
-      const ImGuiTreeNodeFlags flags = !has_parameters ? ImGuiTreeNodeFlags_Leaf : force_field ? ImGuiTreeNodeFlags_DefaultOpen : ImGuiTreeNodeFlags_None;
+      const ImGuiTreeNodeFlags flags = !has_parameters ? ImGuiTreeNodeFlags_Leaf
+                                       : force_field   ? ImGuiTreeNodeFlags_DefaultOpen
+                                                       : ImGuiTreeNodeFlags_None;
       // Interactive: components can be opened (to switch or remove them) even without parameters.
       const bool editable = !component.empty();
       if (!ImGui::TreeNodeEx(node.c_str(), editable ? (flags & ~ImGuiTreeNodeFlags_Leaf) : flags)) continue;
       if (editable) {
-        const std::vector<std::string>* choices = type.find("Solver") != std::string::npos && type != "CGLinearSolver" && type != "SparseLDLSolver"
-                                                      ? &kOdeSolvers
-                                                  : type == "CGLinearSolver" || type == "SparseLDLSolver" ? &kLinearSolvers
-                                                  : type.find("Mass") != std::string::npos                ? &kMasses
-                                                  : type.find("ForceField") != std::string::npos && type != "ConstantForceField" ? &kForceFields
-                                                                                                          : nullptr;
+        const std::vector<std::string>* choices =
+            type.find("Solver") != std::string::npos && type != "CGLinearSolver" && type != "SparseLDLSolver"
+                ? &kOdeSolvers
+            : type == "CGLinearSolver" || type == "SparseLDLSolver"                        ? &kLinearSolvers
+            : type.find("Mass") != std::string::npos                                       ? &kMasses
+            : type.find("ForceField") != std::string::npos && type != "ConstantForceField" ? &kForceFields
+                                                                                           : nullptr;
         if (choices) {
           ImGui::SetNextItemWidth(200);
           const std::string combo = fmt::format("type##{}/{}", b.name, component);
@@ -111,12 +121,14 @@ GuiCommands mechanics_panel(const WorldView& w, MechanicsPanelState& ui) {
             ImGui::EndCombo();
           }
         }
-        const bool removable = type.find("ForceField") != std::string::npos || type.find("Constraint") != std::string::npos;
+        const bool removable =
+            type.find("ForceField") != std::string::npos || type.find("Constraint") != std::string::npos;
         if (removable) {
           if (choices) ImGui::SameLine();
           const std::string remove = fmt::format("remove##{}/{}", b.name, component);
           if (ImGui::SmallButton(remove.c_str())) {
-            out.push_back(action::EditScene{scene::SceneEdit{scene::SceneEdit::Action::kRemove, b.name, component, "", {}}});
+            out.push_back(
+                action::EditScene{scene::SceneEdit{scene::SceneEdit::Action::kRemove, b.name, component, "", {}}});
           }
         }
       }
@@ -133,7 +145,8 @@ GuiCommands mechanics_panel(const WorldView& w, MechanicsPanelState& ui) {
         ImGui::SetNextItemWidth(130);
         const std::string id = fmt::format("{}##{}/{}", parameter, b.name, p);
         if (ImGui::InputDouble(id.c_str(), &v, 0.0, 0.0, "%.6g", ImGuiInputTextFlags_EnterReturnsTrue)) {
-          const std::string element = component.empty() ? "mechanics/" + b.name : "mechanics/" + b.name + "/" + component;
+          const std::string element =
+              component.empty() ? "mechanics/" + b.name : "mechanics/" + b.name + "/" + component;
           out.push_back(action::SetAttribute{element, parameter, number_text(v)});
         }
       }

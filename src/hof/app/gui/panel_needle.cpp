@@ -33,7 +33,8 @@ GuiCommands needle_panel(const WorldView& w) {
     set("haptics/needle", "velocityFilter", number_text(filter));
   }
   // The common set (every deformable body), then each body's own: tissue[k] as the file orders them.
-  const auto edit_tissue = [&](const std::string& element, const procedures::TissueNeedleParameters& t, const std::string& label) {
+  const auto edit_tissue = [&](const std::string& element, const procedures::TissueNeedleParameters& t,
+                               const std::string& label) {
     if (!ImGui::TreeNodeEx(label.c_str(), ImGuiTreeNodeFlags_DefaultOpen)) return;
     int model = static_cast<int>(t.model);
     const char* models[] = {"fung", "simone-okamura"};
@@ -43,14 +44,16 @@ GuiCommands needle_panel(const WorldView& w) {
     if (ImGui::Checkbox("pierceable", &pierceable)) set(element, "pierceable", pierceable ? "true" : "false");
     const auto number = [&](const char* text, const char* attribute, double value) {
       ImGui::SetNextItemWidth(150);
-      if (ImGui::InputDouble(text, &value, 0.0, 0.0, "%.5g", ImGuiInputTextFlags_EnterReturnsTrue)) set(element, attribute, number_text(value));
+      if (ImGui::InputDouble(text, &value, 0.0, 0.0, "%.5g", ImGuiInputTextFlags_EnterReturnsTrue))
+        set(element, attribute, number_text(value));
     };
     const auto numbers = [&](const char* text, const char* attribute, std::vector<double> values) {
       std::array<float, 4> f{};
       for (std::size_t i = 0; i < values.size(); ++i) f[i] = static_cast<float>(values[i]);
       ImGui::SetNextItemWidth(230);
-      bool changed = values.size() == 4 ? ImGui::InputFloat4(text, f.data(), "%.4g", ImGuiInputTextFlags_EnterReturnsTrue)
-                                        : ImGui::InputFloat3(text, f.data(), "%.4g", ImGuiInputTextFlags_EnterReturnsTrue);
+      bool changed = values.size() == 4
+                         ? ImGui::InputFloat4(text, f.data(), "%.4g", ImGuiInputTextFlags_EnterReturnsTrue)
+                         : ImGui::InputFloat3(text, f.data(), "%.4g", ImGuiInputTextFlags_EnterReturnsTrue);
       if (!changed) return;
       std::string joined;
       // A float's shortest text (0.01145, not 0.011450000107…): the values the user sees.
@@ -66,16 +69,18 @@ GuiCommands needle_panel(const WorldView& w) {
       ImGui::SetNextItemWidth(150);
       if (ImGui::Combo("fungForm", &form, forms, 2)) set(element, "fungForm", forms[form]);
       numbers("fungPre a b d0 F0", "fungPre", {t.fung_pre.a_per_m, t.fung_pre.b_n, t.fung_pre.d0_m, t.fung_pre.f0_n});
-      numbers("fungPost a b d0 F0", "fungPost", {t.fung_post.a_per_m, t.fung_post.b_n, t.fung_post.d0_m, t.fung_post.f0_n});
-      ImGui::TextDisabled(t.fung_form == procedures::FungForm::kIntegrated ? "f(d) = (F0 + b) exp(a (d - d0)) - b; SI: 1/m, N, m, N"
-                                                                             : "f(d) = (F0 + b) exp(a (d - d0)) + b; SI: 1/m, N, m, N");
+      numbers("fungPost a b d0 F0", "fungPost",
+              {t.fung_post.a_per_m, t.fung_post.b_n, t.fung_post.d0_m, t.fung_post.f0_n});
+      ImGui::TextDisabled(t.fung_form == procedures::FungForm::kIntegrated
+                              ? "f(d) = (F0 + b) exp(a (d - d0)) - b; SI: 1/m, N, m, N"
+                              : "f(d) = (F0 + b) exp(a (d - d0)) + b; SI: 1/m, N, m, N");
     } else {
       numbers("stiffness a0 a1 a2", "stiffness", {t.stiffness.a0_n, t.stiffness.a1_n_per_m, t.stiffness.a2_n_per_m2});
       number("cuttingForce (N)", "cuttingForce", t.cutting_force_n);
     }
     numbers("friction Cp Cn bp bn", "friction",
-            {t.friction.static_positive_n_per_m, t.friction.static_negative_n_per_m, t.friction.damping_positive_n_s_per_m2,
-             t.friction.damping_negative_n_s_per_m2});
+            {t.friction.static_positive_n_per_m, t.friction.static_negative_n_per_m,
+             t.friction.damping_positive_n_s_per_m2, t.friction.damping_negative_n_s_per_m2});
     number("frictionVelocityBand (m/s)", "frictionVelocityBand", t.friction.velocity_band_m_per_s);
     number("lateralStiffness (N/m)", "lateralStiffness", t.lateral_stiffness_n_per_m);
     number("lateralDamping (N s/m)", "lateralDamping", t.lateral_damping_n_s_per_m);
@@ -86,7 +91,8 @@ GuiCommands needle_panel(const WorldView& w) {
   const procedures::NeedleConfig& current = n;
   edit_tissue("haptics/needle/tissue", current.tissue, "tissue of every deformable body");
   for (std::size_t k = 0; k < current.bodies.size(); ++k) {
-    edit_tissue(fmt::format("haptics/needle/tissue[{}]", k + 2), current.bodies[k].second, "tissue of " + current.bodies[k].first);
+    edit_tissue(fmt::format("haptics/needle/tissue[{}]", k + 2), current.bodies[k].second,
+                "tissue of " + current.bodies[k].first);
   }
   return out;
 }

@@ -25,18 +25,21 @@ Expected<void> GuiWindow::stop_recording() {
   if (!recording_) return make_error(ErrorCode::kInvalidArgument, "not recording");
   Recording r = std::move(*recording_);
   recording_.reset();
-  if (r.samples.size() < 2) return make_error(ErrorCode::kInvalidArgument, "nothing recorded (the stylus sent no reading)", r.file.string());
+  if (r.samples.size() < 2)
+    return make_error(ErrorCode::kInvalidArgument, "nothing recorded (the stylus sent no reading)", r.file.string());
   std::error_code ec;
   if (r.file.has_parent_path()) std::filesystem::create_directories(r.file.parent_path(), ec);
   // The trajectory, in the replay format (docs/device-protocol.md), written whole then renamed.
-  std::string text = fmt::format("# hof gui recording of {} ({}), device {}\n# t s, x y z m in the device frame; calibration (row-major):", file_.string(),
-                                 world_name_, device_spec_);
+  std::string text = fmt::format(
+      "# hof gui recording of {} ({}), device {}\n# t s, x y z m in the device frame; calibration (row-major):",
+      file_.string(), world_name_, device_spec_);
   for (int i = 0; i < 16; ++i) text += fmt::format(" {}", calibration_.position(i / 4, i % 4));
   text += "\n";
   for (const std::string& e : r.events) text += "# event " + e + "\n";
   text += "t,x,y,z,button\n";
   for (const haptics::ReplaySample& s : r.samples) {
-    text += fmt::format("{:.6f},{:.9g},{:.9g},{:.9g},{}\n", s.t_s, s.position_m.x(), s.position_m.y(), s.position_m.z(), s.buttons);
+    text += fmt::format("{:.6f},{:.9g},{:.9g},{:.9g},{}\n", s.t_s, s.position_m.x(), s.position_m.y(), s.position_m.z(),
+                        s.buttons);
   }
   if (auto written = write_file_atomically(r.file, text); !written) return std::unexpected(written.error());
   // Beside it, the project that replays it with the settings it began with and the calibration
@@ -48,11 +51,13 @@ Expected<void> GuiWindow::stop_recording() {
     project_file.replace_extension(".hof");
     scene::HofProject out = *r.project;
     out.device = "replay:" + r.file.filename().string();
-    for (int i = 0; i < 16; ++i) out.position_calibration[static_cast<std::size_t>(i)] = calibration_.position(i / 4, i % 4);
+    for (int i = 0; i < 16; ++i)
+      out.position_calibration[static_cast<std::size_t>(i)] = calibration_.position(i / 4, i % 4);
     if (auto ok = scene::write_project(out, project_file); !ok) return ok;
     replay_project = fmt::format("; replay it with `hof run {} --deterministic`", project_file.string());
   }
-  report(fmt::format("recorded {:.2f} s of the stylus ({} samples) to {}{}", r.seconds(), r.samples.size(), r.file.string(), replay_project),
+  report(fmt::format("recorded {:.2f} s of the stylus ({} samples) to {}{}", r.seconds(), r.samples.size(),
+                     r.file.string(), replay_project),
          false);
   return {};
 }

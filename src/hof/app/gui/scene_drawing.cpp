@@ -14,10 +14,14 @@ namespace {
 // The project's render mode as the renderer's (scene/ does not depend on render/).
 render::RenderMode render_mode_of(scene::RenderMode mode) {
   switch (mode) {
-    case scene::RenderMode::kShaded: return render::RenderMode::kShaded;
-    case scene::RenderMode::kWireframe: return render::RenderMode::kWireframe;
-    case scene::RenderMode::kShadedWireframe: return render::RenderMode::kShadedWireframe;
-    case scene::RenderMode::kPoints: return render::RenderMode::kPoints;
+    case scene::RenderMode::kShaded:
+      return render::RenderMode::kShaded;
+    case scene::RenderMode::kWireframe:
+      return render::RenderMode::kWireframe;
+    case scene::RenderMode::kShadedWireframe:
+      return render::RenderMode::kShadedWireframe;
+    case scene::RenderMode::kPoints:
+      return render::RenderMode::kPoints;
   }
   return render::RenderMode::kShaded;
 }
@@ -43,12 +47,18 @@ void add_box_edges(std::vector<Vec3>& lines, const Vec3& lo, const Vec3& hi) {
 // The colour of each needle phase (the tip marker, the touch panel).
 render::Rgba phase_colour(procedures::NeedlePhase phase) {
   switch (phase) {
-    case procedures::NeedlePhase::kTouching: return {1.0f, 0.85f, 0.1f, 1.0f};
-    case procedures::NeedlePhase::kPrePuncture: return {0.75f, 0.35f, 1.0f, 1.0f};
-    case procedures::NeedlePhase::kPunctured: return {0.1f, 0.8f, 0.5f, 1.0f};
-    case procedures::NeedlePhase::kRelaxation: return {0.35f, 0.75f, 1.0f, 1.0f};
-    case procedures::NeedlePhase::kExtraction: return {1.0f, 0.6f, 0.1f, 1.0f};
-    default: return {0.85f, 0.85f, 0.85f, 1.0f};
+    case procedures::NeedlePhase::kTouching:
+      return {1.0f, 0.85f, 0.1f, 1.0f};
+    case procedures::NeedlePhase::kPrePuncture:
+      return {0.75f, 0.35f, 1.0f, 1.0f};
+    case procedures::NeedlePhase::kPunctured:
+      return {0.1f, 0.8f, 0.5f, 1.0f};
+    case procedures::NeedlePhase::kRelaxation:
+      return {0.35f, 0.75f, 1.0f, 1.0f};
+    case procedures::NeedlePhase::kExtraction:
+      return {1.0f, 0.6f, 0.1f, 1.0f};
+    default:
+      return {0.85f, 0.85f, 0.85f, 1.0f};
   }
 }
 
@@ -91,15 +101,18 @@ void GuiWindow::draw_bodies() {
     // The needle is opaque: drawn before the transparent bodies it is seen through.
     if (pass == 1 && last_.valid && needle_) draw_needle(size);
     for (const VisualView& v : visuals_) {
-      if ((v.material.diffuse.w() < 0.999f) == (pass == 1)) renderer_->draw(v.mesh, v.material, render::RenderMode::kShaded);
+      if ((v.material.diffuse.w() < 0.999f) == (pass == 1))
+        renderer_->draw(v.mesh, v.material, render::RenderMode::kShaded);
     }
     for (LayerView& l : layers_) {
       for (const haptics::SurfacePart& part : l.parts) {
-        const BodyView* body = part.body >= 0 && static_cast<std::size_t>(part.body) < bodies_.size() ? &bodies_[static_cast<std::size_t>(part.body)] : nullptr;
+        const BodyView* body = part.body >= 0 && static_cast<std::size_t>(part.body) < bodies_.size()
+                                   ? &bodies_[static_cast<std::size_t>(part.body)]
+                                   : nullptr;
         const render::Material& m = body && body->material ? *body->material : part.is_static ? rigid : tissue;
         if ((m.diffuse.w() < 0.999f) != (pass == 1)) continue;
         renderer_->draw(l.mesh, m, part.is_static ? render::RenderMode::kShaded : mode, Eigen::Matrix4f::Identity(),
-                       static_cast<std::size_t>(part.first_triangle), static_cast<std::size_t>(part.triangle_count));
+                        static_cast<std::size_t>(part.first_triangle), static_cast<std::size_t>(part.triangle_count));
       }
     }
   }
@@ -128,7 +141,8 @@ void GuiWindow::draw_debug_views() {
     renderer_->draw_lines(lines, render::Rgba(0.3f, 0.9f, 0.4f, 1.0f));
   }
   if (view_options_.show_fixed_nodes) {
-    for (const BodyView& b : bodies_) renderer_->draw_points(b.fixed_points, render::Rgba(0.2f, 0.6f, 1.0f, 1.0f), 5.0f);
+    for (const BodyView& b : bodies_)
+      renderer_->draw_points(b.fixed_points, render::Rgba(0.2f, 0.6f, 1.0f, 1.0f), 5.0f);
   }
   if (view_options_.show_regions) {
     for (const scene::MaterialRegion& r : project_.regions) {
@@ -152,12 +166,14 @@ void GuiWindow::draw_debug_views() {
 void GuiWindow::draw_stylus() {
   const double size = scene_size();
   // The stylus, the proxy, the device, the contact.
-  const double proxy_radius = std::max(project_.renderer == haptics::RendererKind::kRuspini ? project_.proxy_radius_m : project_.stylus_radius_m,
-                                       0.004 * size);
+  const double proxy_radius = std::max(
+      project_.renderer == haptics::RendererKind::kRuspini ? project_.proxy_radius_m : project_.stylus_radius_m,
+      0.004 * size);
   if (last_.valid && !needle_) {
     const Vec3 shaft = (camera_.up_on_screen() * 0.8 - camera_.forward() * 0.6).normalized();
     const double length = std::clamp(project_.stylus_length_m, 0.05 * size, 0.6 * size);
-    renderer_->draw_cylinder(last_.proxy, last_.proxy + shaft * length, proxy_radius * 0.45, render::Rgba(0.75f, 0.78f, 0.82f, 1.0f));
+    renderer_->draw_cylinder(last_.proxy, last_.proxy + shaft * length, proxy_radius * 0.45,
+                             render::Rgba(0.75f, 0.78f, 0.82f, 1.0f));
     renderer_->draw_sphere(last_.proxy, proxy_radius, render::Rgba(0.35f, 0.75f, 1.0f, 1.0f));
     if (view_options_.show_device) {
       renderer_->draw_sphere(last_.device, proxy_radius * 0.6, render::Rgba(0.95f, 0.95f, 0.3f, 1.0f));
@@ -168,17 +184,21 @@ void GuiWindow::draw_stylus() {
       renderer_->draw_sphere(last_.contact_point, proxy_radius * 0.5, render::Rgba(1.0f, 0.85f, 0.1f, 1.0f));
       const Vec3 normal[2] = {last_.contact_point, last_.contact_point + last_.contact_normal * 0.08 * size};
       renderer_->draw_lines(normal, render::Rgba(0.3f, 1.0f, 0.3f, 1.0f));
-      const double per_n = view_options_.arrow_m_per_n > 0.0f ? view_options_.arrow_m_per_n : size / 3.0 / std::max(max_force_n_, 1e-6);
+      const double per_n =
+          view_options_.arrow_m_per_n > 0.0f ? view_options_.arrow_m_per_n : size / 3.0 / std::max(max_force_n_, 1e-6);
       const Vec3 force = last_.force;
       if (force.norm() > 1e-6) {
-        renderer_->draw_arrow(last_.proxy, last_.proxy + force * per_n, proxy_radius * 0.35, render::Rgba(1.0f, 0.25f, 0.2f, 1.0f));
+        renderer_->draw_arrow(last_.proxy, last_.proxy + force * per_n, proxy_radius * 0.35,
+                              render::Rgba(1.0f, 0.25f, 0.2f, 1.0f));
       }
-      if (view_options_.show_contact_triangle && last_.triangle >= 0 && static_cast<std::size_t>(last_.layer) < layers_.size()) {
+      if (view_options_.show_contact_triangle && last_.triangle >= 0 &&
+          static_cast<std::size_t>(last_.layer) < layers_.size()) {
         const haptics::SurfaceSnapshot* s = layers_[static_cast<std::size_t>(last_.layer)].latest;
         if (s && static_cast<std::size_t>(last_.triangle) < s->triangles.size()) {
           const mesh::Tri& t = s->triangles[static_cast<std::size_t>(last_.triangle)];
           const Vec3 lift = last_.contact_normal * 0.001 * size;
-          const Vec3 a = s->vertices[static_cast<std::size_t>(t[0])] + lift, b = s->vertices[static_cast<std::size_t>(t[1])] + lift,
+          const Vec3 a = s->vertices[static_cast<std::size_t>(t[0])] + lift,
+                     b = s->vertices[static_cast<std::size_t>(t[1])] + lift,
                      c = s->vertices[static_cast<std::size_t>(t[2])] + lift;
           const Vec3 edges[6] = {a, b, b, c, c, a};
           renderer_->draw_lines(edges, render::Rgba(0.2f, 1.0f, 1.0f, 1.0f));
@@ -197,24 +217,30 @@ void GuiWindow::draw_needle(double size) {
   const haptics::ToolState& tool = last_.tool;
   const auto phase = static_cast<procedures::NeedlePhase>(tool.phase);
   const bool inside = tool.touched && tool.axis.squaredNorm() > 0.5;
-  const Vec3 back = inside ? Vec3(-tool.axis) : Vec3((camera_.up_on_screen() * 0.8 - camera_.forward() * 0.6).normalized());
+  const Vec3 back =
+      inside ? Vec3(-tool.axis) : Vec3((camera_.up_on_screen() * 0.8 - camera_.forward() * 0.6).normalized());
   const Vec3 tip = last_.device;
   const double visible = 0.0012 * size;  // the thinnest radius worth drawing
   const double widen = std::max(1.0, visible / (0.5 * g.tip_diameter_m));
   const Vec3 tip_end = tip + back * g.tip_length_m;
   const Vec3 hub = tip + back * g.length_m;
   renderer_->draw_cylinder(tip, tip_end, 0.5 * g.tip_diameter_m * widen, render::Rgba(0.85f, 0.87f, 0.9f, 1.0f));
-  renderer_->draw_cylinder(tip_end, hub, 0.5 * g.shaft_diameter_m * std::min(widen, std::max(1.0, 2.0 * visible / (0.5 * g.shaft_diameter_m))),
-                           render::Rgba(0.75f, 0.78f, 0.82f, 1.0f));
-  renderer_->draw_cylinder(hub, hub + back * g.syringe_length_m, 0.5 * g.syringe_diameter_m, render::Rgba(0.8f, 0.9f, 1.0f, 0.45f));
+  renderer_->draw_cylinder(
+      tip_end, hub,
+      0.5 * g.shaft_diameter_m * std::min(widen, std::max(1.0, 2.0 * visible / (0.5 * g.shaft_diameter_m))),
+      render::Rgba(0.75f, 0.78f, 0.82f, 1.0f));
+  renderer_->draw_cylinder(hub, hub + back * g.syringe_length_m, 0.5 * g.syringe_diameter_m,
+                           render::Rgba(0.8f, 0.9f, 1.0f, 0.45f));
   // The tip marker (the thesis' sphere at the tip), in the phase's colour, and the entry point.
   renderer_->draw_sphere(tip, std::max(0.0025 * size, g.tip_diameter_m), phase_colour(phase));
   if (tool.touched) {
-    renderer_->draw_sphere(tool.entry, std::max(0.003 * size, g.shaft_diameter_m), render::Rgba(1.0f, 0.15f, 0.1f, 1.0f));
+    renderer_->draw_sphere(tool.entry, std::max(0.003 * size, g.shaft_diameter_m),
+                           render::Rgba(1.0f, 0.15f, 0.1f, 1.0f));
     const Vec3 path[2] = {tool.entry, tool.entry + tool.axis * std::max(tool.depth_m, 0.0)};
     renderer_->draw_lines(path, render::Rgba(1.0f, 0.4f, 0.3f, 1.0f));
   }
-  const double per_n = view_options_.arrow_m_per_n > 0.0f ? view_options_.arrow_m_per_n : size / 3.0 / std::max(max_force_n_, 1e-6);
+  const double per_n =
+      view_options_.arrow_m_per_n > 0.0f ? view_options_.arrow_m_per_n : size / 3.0 / std::max(max_force_n_, 1e-6);
   if (last_.force.norm() > 1e-6) {
     renderer_->draw_arrow(hub, hub + last_.force * per_n, 0.0015 * size, render::Rgba(1.0f, 0.25f, 0.2f, 1.0f));
   }

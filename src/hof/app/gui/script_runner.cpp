@@ -9,7 +9,8 @@
 
 namespace hof::app::gui {
 
-bool GuiWindow::step_script(std::vector<ScriptAction>& script, std::size_t& next, const std::string& name, int& status) {
+bool GuiWindow::step_script(std::vector<ScriptAction>& script, std::size_t& next, const std::string& name,
+                            int& status) {
   while (next < script.size()) {
     const ScriptAction& a = script[next];
     const auto fail = [&](const Error& e) {
@@ -21,7 +22,8 @@ bool GuiWindow::step_script(std::vector<ScriptAction>& script, std::size_t& next
       case ScriptAction::Kind::kWait:
         if (!script_waiting_) {
           script_waiting_ = true;
-          script_wait_until_ = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(a.number));
+          script_wait_until_ =
+              Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(a.number));
         }
         if (Clock::now() < script_wait_until_) return true;
         script_waiting_ = false;
@@ -34,7 +36,8 @@ bool GuiWindow::step_script(std::vector<ScriptAction>& script, std::size_t& next
         break;
       case ScriptAction::Kind::kStep:
         if (session_) {
-          if (auto ok = session_->submit(coupling::command::SingleStep{static_cast<int>(a.number)}); !ok) return fail(ok.error());
+          if (auto ok = session_->submit(coupling::command::SingleStep{static_cast<int>(a.number)}); !ok)
+            return fail(ok.error());
         }
         break;
       case ScriptAction::Kind::kReset:
@@ -80,7 +83,9 @@ bool GuiWindow::step_script(std::vector<ScriptAction>& script, std::size_t& next
         break;
       }
       case ScriptAction::Kind::kMouse:
-        if (!mouse_) return fail(Error{ErrorCode::kInvalidArgument, "the stylus is not the mouse (device " + device_spec_ + ")", "", 0, -1});
+        if (!mouse_)
+          return fail(Error{ErrorCode::kInvalidArgument, "the stylus is not the mouse (device " + device_spec_ + ")",
+                            "", 0, -1});
         mouse_to(a.number, a.y, 0.0, true);
         mouse_to(a.number, a.y, a.depth, false);
         break;

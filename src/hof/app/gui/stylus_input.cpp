@@ -18,7 +18,8 @@ std::optional<Vec3> GuiWindow::pick(double x_px, double y_px) const {
   double best_t = 2.0;
   for (const LayerView& l : layers_) {
     if (!l.latest || l.latest->triangles.empty()) continue;
-    const collision::SweepHit hit = l.latest->tree.first_hit_segment(l.latest->view(), origin, far, collision::TouchableFace::kFrontAndBack);
+    const collision::SweepHit hit =
+        l.latest->tree.first_hit_segment(l.latest->view(), origin, far, collision::TouchableFace::kFrontAndBack);
     if (hit.triangle >= 0 && hit.t < best_t) {
       best_t = hit.t;
       best = hit.point;

@@ -24,8 +24,9 @@ std::vector<BodyView> body_views(const scene::World& world) {
     if (b.config) v.set_structure(*b.config);
     if (const auto a = world.appearances.find(b.name); a != world.appearances.end()) {
       render::Material m;
-      m.diffuse = render::Rgba(static_cast<float>(a->second.diffuse_color.x()), static_cast<float>(a->second.diffuse_color.y()),
-                               static_cast<float>(a->second.diffuse_color.z()), static_cast<float>(1.0 - a->second.transparency));
+      m.diffuse = render::Rgba(
+          static_cast<float>(a->second.diffuse_color.x()), static_cast<float>(a->second.diffuse_color.y()),
+          static_cast<float>(a->second.diffuse_color.z()), static_cast<float>(1.0 - a->second.transparency));
       v.material = m;
     }
     bodies.push_back(std::move(v));
@@ -63,7 +64,8 @@ Expected<void> GuiWindow::open(const std::filesystem::path& file, const scene::H
   } else {
     const std::string ext = file.extension().string();
     if (ext != ".scn" && ext != ".x3d") {
-      return make_error(ErrorCode::kUnsupported, "expected a .hof project, a .scn SOFA scene or an .x3d scene", file.string());
+      return make_error(ErrorCode::kUnsupported, "expected a .hof project, a .scn SOFA scene or an .x3d scene",
+                        file.string());
     }
     world = scene::build_world(file, options_.device);
     if (world) project = world->project;
@@ -79,7 +81,9 @@ Expected<void> GuiWindow::open(const std::filesystem::path& file, const scene::H
   std::string spec = world->default_probe && options_.device.empty() ? std::string("mouse") : world->device;
   auto device = scene::open_device(spec);
   if (!device && spec != "mouse") {
-    report(fmt::format("device '{}' does not answer ({}): the mouse holds the stylus", spec, device.error().to_string()), true);
+    report(
+        fmt::format("device '{}' does not answer ({}): the mouse holds the stylus", spec, device.error().to_string()),
+        true);
     spec = "mouse";
     device = scene::open_device(spec);
   }
@@ -97,7 +101,8 @@ Expected<void> GuiWindow::open(const std::filesystem::path& file, const scene::H
   // `hof run FILE --device replay:REC.csv` just as it was made); a SOFA scene, which has no
   // unit, keeps the fit: it gives the world its scale.
   if (spec == "mouse" && world->default_probe && world->length_unit == "m") {
-    for (int i = 0; i < 16; ++i) config.haptics.calibration.position(i / 4, i % 4) = world->file_calibration[static_cast<std::size_t>(i)];
+    for (int i = 0; i < 16; ++i)
+      config.haptics.calibration.position(i / 4, i % 4) = world->file_calibration[static_cast<std::size_t>(i)];
   }
   auto made = coupling::Session::make(std::move(world->bodies), std::move(*device), config);
   if (!made) return std::unexpected(made.error());
@@ -138,7 +143,9 @@ Expected<void> GuiWindow::open(const std::filesystem::path& file, const scene::H
   session_->start_realtime();
   if (!animating_) (void)session_->submit(coupling::command::Pause{});
   remember_recent(file);
-  report(fmt::format("opened {} ({} bod{}, device {})", file.string(), bodies_.size(), bodies_.size() == 1 ? "y" : "ies", spec), false);
+  report(fmt::format("opened {} ({} bod{}, device {})", file.string(), bodies_.size(),
+                     bodies_.size() == 1 ? "y" : "ies", spec),
+         false);
   return {};
 }
 
@@ -220,7 +227,8 @@ void GuiWindow::reset_camera() {
   // The project's viewpoint, unless it is the format's default and does not frame this scene
   // (a scene in millimetres, or somewhere else).
   const bool is_default = g.viewpoint_m == defaults.viewpoint_m && g.look_at_m == defaults.look_at_m;
-  const bool frames = (centre - g.look_at_m).norm() < 0.5 * distance && radius > 0.05 * distance && radius < 2.0 * distance;
+  const bool frames =
+      (centre - g.look_at_m).norm() < 0.5 * distance && radius > 0.05 * distance && radius < 2.0 * distance;
   if (file_.extension() == ".hof" && (!is_default || frames)) {
     camera_.look(g.viewpoint_m, g.look_at_m);
   } else if (x3d && g.viewpoint_m != defaults.viewpoint_m) {
@@ -234,7 +242,8 @@ void GuiWindow::reset_camera() {
 void GuiWindow::set_animating(bool on) {
   animating_ = on;
   if (!session_) return;
-  (void)session_->submit(on ? coupling::Command{coupling::command::Resume{}} : coupling::Command{coupling::command::Pause{}});
+  (void)session_->submit(on ? coupling::Command{coupling::command::Resume{}}
+                            : coupling::Command{coupling::command::Pause{}});
 }
 
 void GuiWindow::reset_world() {
@@ -247,7 +256,8 @@ void GuiWindow::reset_world() {
 Expected<void> GuiWindow::save(const std::filesystem::path& path) {
   if (!session_) return make_error(ErrorCode::kInvalidArgument, "no world is open");
   if (file_.extension() == ".x3d") {
-    return make_error(ErrorCode::kUnsupported, "an X3D scene cannot be saved as a project yet (the project format holds SOFA scenes)",
+    return make_error(ErrorCode::kUnsupported,
+                      "an X3D scene cannot be saved as a project yet (the project format holds SOFA scenes)",
                       path.string());
   }
   scene::HofProject out = project_for(path);
@@ -272,7 +282,8 @@ scene::HofProject GuiWindow::project_for(const std::filesystem::path& path) cons
 Expected<void> GuiWindow::mount_needle(bool on) {
   if (!session_) return make_error(ErrorCode::kInvalidArgument, "no world is open");
   if (on == project_.needle.has_value()) return {};
-  if (file_.extension() == ".x3d") return make_error(ErrorCode::kUnsupported, "the needle is mounted in a .hof project (save the scene as one)");
+  if (file_.extension() == ".x3d")
+    return make_error(ErrorCode::kUnsupported, "the needle is mounted in a .hof project (save the scene as one)");
   scene::HofProject next = project_;
   // The parameters changed so far go with the reopened world.
   scene::record_parameters(next, session_->parameter_changes());
@@ -284,7 +295,8 @@ Expected<void> GuiWindow::mount_needle(bool on) {
   }
   if (auto ok = open(file_, &next); !ok) return ok;
   dirty_ = true;
-  report(on ? "the needle is mounted: its tissue parameters are in the Needle panel" : "the needle is taken off", false);
+  report(on ? "the needle is mounted: its tissue parameters are in the Needle panel" : "the needle is taken off",
+         false);
   return {};
 }
 

@@ -10,17 +10,19 @@
 #include "hof/app/gui/detail/component_switch.h"
 #include "hof/app/gui/detail/gui_window.h"
 #include "hof/haptics/device_backends/mouse_device.h"
-#include "hof/scene/model_parameters.h"
 #include "hof/scene/device_config.h"
+#include "hof/scene/model_parameters.h"
 #include "hof/scene/sofa_scene_edit.h"
 
 namespace hof::app::gui {
 
-Expected<void> GuiWindow::apply_set(const std::string& element, const std::string& attribute, const std::string& value) {
+Expected<void> GuiWindow::apply_set(const std::string& element, const std::string& attribute,
+                                    const std::string& value) {
   if (!session_) return make_error(ErrorCode::kInvalidArgument, "no world is open");
   const std::string name = element + "@" + attribute;
   // mechanics/BODY/COMPONENT@PARAMETER (or mechanics/BODY@PARAMETER for the model's own).
-  if (element == "mechanics" || element.starts_with("mechanics/")) return set_mechanics_parameter(element, attribute, value);
+  if (element == "mechanics" || element.starts_with("mechanics/"))
+    return set_mechanics_parameter(element, attribute, value);
   // The text parsed once, by the project file's names and checks, into a typed edit.
   auto edit = scene::parse_project_edit(project_, file_, element, attribute, value);
   if (!edit) return std::unexpected(edit.error());
@@ -47,7 +49,9 @@ Expected<void> GuiWindow::apply_project_edit(const scene::ProjectEdit& edit, con
     if (auto ok = set_device(next, name); !ok) return ok;
   } else if (const auto* needle = std::get_if<scene::project_edit::Needle>(&edit)) {
     // Taken by the needle's next tick: it keeps its place and phase.
-    if (!needle_) return make_error(ErrorCode::kInvalidArgument, fmt::format("'{}': no needle is mounted (script: needle on)", name));
+    if (!needle_)
+      return make_error(ErrorCode::kInvalidArgument,
+                        fmt::format("'{}': no needle is mounted (script: needle on)", name));
     if (auto ok = needle_->configure(needle->needle); !ok) return ok;
   } else {
     std::vector<std::string> names;
@@ -62,13 +66,16 @@ Expected<void> GuiWindow::apply_project_edit(const scene::ProjectEdit& edit, con
   return {};
 }
 
-Expected<void> GuiWindow::set_mechanics_parameter(const std::string& element, const std::string& attribute, const std::string& value) {
+Expected<void> GuiWindow::set_mechanics_parameter(const std::string& element, const std::string& attribute,
+                                                  const std::string& value) {
   const std::string name = element + "@" + attribute;
   const std::string rest = element.size() > 10 ? element.substr(10) : std::string();
   const std::size_t slash = rest.find('/');
   const std::string body = rest.substr(0, slash);
   const std::string component = slash == std::string::npos ? std::string() : rest.substr(slash + 1);
-  if (body.empty()) return make_error(ErrorCode::kInvalidArgument, fmt::format("'{}': name a body: mechanics/BODY/COMPONENT@PARAMETER", name));
+  if (body.empty())
+    return make_error(ErrorCode::kInvalidArgument,
+                      fmt::format("'{}': name a body: mechanics/BODY/COMPONENT@PARAMETER", name));
   double v = 0.0;
   const auto parsed = std::from_chars(value.data(), value.data() + value.size(), v);
   if (parsed.ec != std::errc() || parsed.ptr != value.data() + value.size() || !std::isfinite(v)) {
@@ -94,9 +101,10 @@ Expected<void> GuiWindow::set_device(const scene::HofProject& next, const std::s
   const std::string spec = next.device == "auto" ? std::string("mouse") : next.device;
   if (spec.starts_with("openhaptics")) {
     // Its servo loop must be the haptic loop's clock from the start.
-    return make_error(ErrorCode::kUnsupported, fmt::format("'{}': an OpenHaptics device drives the haptic loop from its own servo "
-                                                           "loop: open the window with it (hof gui FILE --device {})",
-                                                           name, spec));
+    return make_error(ErrorCode::kUnsupported,
+                      fmt::format("'{}': an OpenHaptics device drives the haptic loop from its own servo "
+                                  "loop: open the window with it (hof gui FILE --device {})",
+                                  name, spec));
   }
   auto config = scene::parse_device_spec(spec);
   if (!config) return std::unexpected(config.error());
@@ -113,10 +121,11 @@ Expected<void> GuiWindow::set_device(const scene::HofProject& next, const std::s
 }
 
 Expected<void> GuiWindow::change_structure(const std::optional<scene::SceneEdit>& edit,
-                                     const std::optional<std::vector<scene::MaterialRegion>>& regions) {
+                                           const std::optional<std::vector<scene::MaterialRegion>>& regions) {
   if (!session_) return make_error(ErrorCode::kInvalidArgument, "no world is open");
   if (file_.extension() == ".x3d") {
-    return make_error(ErrorCode::kUnsupported, "the scene tree edits SOFA scenes; an X3D scene's bodies are edited in its file", file_.string());
+    return make_error(ErrorCode::kUnsupported,
+                      "the scene tree edits SOFA scenes; an X3D scene's bodies are edited in its file", file_.string());
   }
   scene::HofProject next = project_;
   // The values changed so far go with the new models (the seam forgets them at the switch),
@@ -135,7 +144,9 @@ Expected<void> GuiWindow::change_structure(const std::optional<scene::SceneEdit>
     if (!text) return std::unexpected(text.error());
     next.mechanics_inline = std::move(*text);
     if (edit->action != scene::SceneEdit::Action::kAdd) {
-      std::erase_if(next.parameters, [&](const coupling::ParameterChange& c) { return c.body == edit->node && c.component == edit->component; });
+      std::erase_if(next.parameters, [&](const coupling::ParameterChange& c) {
+        return c.body == edit->node && c.component == edit->component;
+      });
     }
   }
   if (regions) next.regions = *regions;
@@ -148,7 +159,8 @@ Expected<void> GuiWindow::change_structure(const std::optional<scene::SceneEdit>
   for (const coupling::SessionBody& b : world->bodies) {
     if (!b.config) continue;
     const auto id = scene::body_id(*session_, b.name);
-    if (auto ok = id ? session_->submit(coupling::command::SetModel{*id, *b.config, nullptr}) : Expected<void>(std::unexpected(id.error()));
+    if (auto ok = id ? session_->submit(coupling::command::SetModel{*id, *b.config, nullptr})
+                     : Expected<void>(std::unexpected(id.error()));
         !ok) {
       Error e = ok.error();
       e.message = "the change is not made: " + e.message;
@@ -164,12 +176,15 @@ Expected<void> GuiWindow::change_structure(const std::optional<scene::SceneEdit>
     if (warned_.insert(w).second) report("warning: " + w, false);  // each once, not with every edit
   }
   if (edit) {
-    const char* verb = edit->action == scene::SceneEdit::Action::kReplace ? "is now" : edit->action == scene::SceneEdit::Action::kAdd ? "added:" : "removed";
+    const char* verb = edit->action == scene::SceneEdit::Action::kReplace ? "is now"
+                       : edit->action == scene::SceneEdit::Action::kAdd   ? "added:"
+                                                                          : "removed";
     report(fmt::format("{}/{} {} {}", edit->node, edit->component, verb, edit->type), false);
   }
   if (recording_) {
-    recording_->events.push_back(fmt::format("{:.3f}: {}", recording_->seconds(),
-                                             edit ? fmt::format("scene edit {}/{}", edit->node, edit->component) : std::string("material regions")));
+    recording_->events.push_back(fmt::format(
+        "{:.3f}: {}", recording_->seconds(),
+        edit ? fmt::format("scene edit {}/{}", edit->node, edit->component) : std::string("material regions")));
   }
   project_ = std::move(next);
   submitted_changes_.clear();
@@ -177,7 +192,8 @@ Expected<void> GuiWindow::change_structure(const std::optional<scene::SceneEdit>
   return {};
 }
 
-Expected<void> GuiWindow::switch_component(const std::string& body, const std::string& component, const std::string& choice) {
+Expected<void> GuiWindow::switch_component(const std::string& body, const std::string& component,
+                                           const std::string& choice) {
   const auto b = std::find_if(bodies_.begin(), bodies_.end(), [&](const BodyView& v) { return v.name == body; });
   if (b == bodies_.end()) return make_error(ErrorCode::kInvalidArgument, fmt::format("no body '{}'", body));
   if (!b->structure) return make_error(ErrorCode::kInvalidArgument, fmt::format("body '{}' is rigid", body));
@@ -226,18 +242,22 @@ Expected<void> GuiWindow::set_rendering(const action::SetRendering& edit) {
   // A typed edit of the project in memory, then the haptic loop's renderer from it.
   if (!session_) return make_error(ErrorCode::kInvalidArgument, "no world is open");
   if (!std::isfinite(edit.rendering.proxy_radius_m)) {
-    return make_error(ErrorCode::kInvalidArgument, fmt::format("'haptics@proxyRadius': {} is not a number", edit.rendering.proxy_radius_m));
+    return make_error(ErrorCode::kInvalidArgument,
+                      fmt::format("'haptics@proxyRadius': {} is not a number", edit.rendering.proxy_radius_m));
   }
   const action::Rendering& r = edit.rendering;
   const scene::project_edit::Rendering rendering{r.renderer, r.proxy_radius_m, r.force_shading, r.touchable_face};
-  if (auto ok = apply_project_edit(rendering, edit.settings.empty() ? std::string("haptics") : edit.settings.front()); !ok) return ok;
+  if (auto ok = apply_project_edit(rendering, edit.settings.empty() ? std::string("haptics") : edit.settings.front());
+      !ok)
+    return ok;
   note_settings(edit.settings);
   return {};
 }
 
 void GuiWindow::note_settings(const std::vector<std::string>& settings) {
   if (recording_) {
-    for (const std::string& s : settings) recording_->events.push_back(fmt::format("{:.3f}: set {}", recording_->seconds(), s));
+    for (const std::string& s : settings)
+      recording_->events.push_back(fmt::format("{:.3f}: set {}", recording_->seconds(), s));
   }
   dirty_ = true;
 }
@@ -254,14 +274,17 @@ mechanics::ModelConfig GuiWindow::current_config(const BodyView& body) const {
 
 Expected<void> GuiWindow::add_component(const action::AddComponent& add) {
   const auto b = std::find_if(bodies_.begin(), bodies_.end(), [&](const BodyView& v) { return v.name == add.body; });
-  if (b == bodies_.end() || !b->structure) return make_error(ErrorCode::kInvalidArgument, fmt::format("no deformable body '{}'", add.body));
+  if (b == bodies_.end() || !b->structure)
+    return make_error(ErrorCode::kInvalidArgument, fmt::format("no deformable body '{}'", add.body));
   const mechanics::ModelConfig c = current_config(*b);
   // A name no component of the node has yet: BASE, else BASE2, BASE3, ...
   const auto unique = [&](const std::string& base) {
     std::string name = base;
-    for (int n = 2; std::any_of(b->parameters.begin(), b->parameters.end(), [&](const std::string& p) { return p.starts_with(name + "/"); }) ||
-                    std::any_of(c.fixed.begin(), c.fixed.end(), [&](const auto& f) { return f.name == name; }) ||
-                    std::any_of(c.force_fields.begin(), c.force_fields.end(), [&](const auto& f) { return f.name == name; });
+    for (int n = 2;
+         std::any_of(b->parameters.begin(), b->parameters.end(),
+                     [&](const std::string& p) { return p.starts_with(name + "/"); }) ||
+         std::any_of(c.fixed.begin(), c.fixed.end(), [&](const auto& f) { return f.name == name; }) ||
+         std::any_of(c.force_fields.begin(), c.force_fields.end(), [&](const auto& f) { return f.name == name; });
          ++n) {
       name = base + std::to_string(n);
     }
@@ -273,7 +296,9 @@ Expected<void> GuiWindow::add_component(const action::AddComponent& add) {
     case action::AddComponent::Kind::kTetrahedronFem:
       edit.component = unique("FEM");
       edit.type = "TetrahedronFEMForceField";
-      edit.attributes = {{"youngModulus", fmt::format("{}", young)}, {"poissonRatio", fmt::format("{}", poisson)}, {"method", "large"}};
+      edit.attributes = {{"youngModulus", fmt::format("{}", young)},
+                         {"poissonRatio", fmt::format("{}", poisson)},
+                         {"method", "large"}};
       break;
     case action::AddComponent::Kind::kMeshSprings: {
       edit.component = unique("springs");
@@ -286,10 +311,12 @@ Expected<void> GuiWindow::add_component(const action::AddComponent& add) {
       const double radius = add.pin_radius_m > 0.0 ? add.pin_radius_m : 0.05 * scene_size();
       std::string indices;
       for (std::size_t i = 0; i < c.positions.size(); ++i) {
-        if ((c.positions[i] - last_.proxy).norm() <= radius) indices += (indices.empty() ? "" : " ") + std::to_string(i);
+        if ((c.positions[i] - last_.proxy).norm() <= radius)
+          indices += (indices.empty() ? "" : " ") + std::to_string(i);
       }
       if (indices.empty()) {
-        return make_error(ErrorCode::kInvalidArgument, fmt::format("no node of {} within {:.3g} of the stylus: nothing to pin", add.body, radius));
+        return make_error(ErrorCode::kInvalidArgument,
+                          fmt::format("no node of {} within {:.3g} of the stylus: nothing to pin", add.body, radius));
       }
       edit.component = unique("pin");
       edit.type = "FixedProjectiveConstraint";
@@ -303,7 +330,8 @@ Expected<void> GuiWindow::add_component(const action::AddComponent& add) {
 Expected<void> GuiWindow::add_region_at_stylus(const action::AddRegionAtStylus& add) {
   if (!last_.valid) return make_error(ErrorCode::kInvalidArgument, "the stylus has no position yet");
   const auto b = std::find_if(bodies_.begin(), bodies_.end(), [&](const BodyView& v) { return v.name == add.body; });
-  if (b == bodies_.end() || !b->structure) return make_error(ErrorCode::kInvalidArgument, fmt::format("no deformable body '{}'", add.body));
+  if (b == bodies_.end() || !b->structure)
+    return make_error(ErrorCode::kInvalidArgument, fmt::format("no deformable body '{}'", add.body));
   scene::MaterialRegion r;
   r.name = fmt::format("region{}", project_.regions.size() + 1);
   r.body = add.body;

@@ -43,7 +43,8 @@ void GuiWindow::update_from_loops() {
   stats_.update(now);
   if (session_->simulation_ended()) {
     const coupling::SessionReport r = session_->stop_realtime();
-    report(fmt::format("the simulation stopped: {} — change a setting and press Reset", r.divergence.empty() ? "it ended" : r.divergence),
+    report(fmt::format("the simulation stopped: {} — change a setting and press Reset",
+                       r.divergence.empty() ? "it ended" : r.divergence),
            true);
     // The haptic loop has stopped with it (zero force sent); Reset starts both again.
   }
@@ -78,7 +79,8 @@ void GuiWindow::take_sample(const haptics::HapticSample& s) {
   // Indentation: as `hof run` (telemetry.csv) counts it, from where the contact began.
   double indentation = 0.0;
   if (s.contact && s.triangle >= 0) {
-    const double from_rest = (session_->rest_point(s.triangle, s.barycentric, s.layer) - s.contact_point).dot(s.contact_normal);
+    const double from_rest =
+        (session_->rest_point(s.triangle, s.barycentric, s.layer) - s.contact_point).dot(s.contact_normal);
     if (!was_in_contact_) displaced_at_contact_ = from_rest;
     indentation = from_rest - displaced_at_contact_;
     contact_body_ = session_->body_of_triangle(s.triangle, s.layer);
@@ -94,8 +96,9 @@ void GuiWindow::take_sample(const haptics::HapticSample& s) {
     const double shown = 1e3;  // the needle's lengths are SI
     const char* unit = "mm";
     if (phase == procedures::NeedlePhase::kPunctured && needle_phase_ == procedures::NeedlePhase::kPrePuncture) {
-      report(fmt::format("needle: the capsule of {} broke at {:.1f} {} ({:.3f} N after)", body, shown * s.tool.depth_m, unit,
-                         s.tool.axial_force_n), false);
+      report(fmt::format("needle: the capsule of {} broke at {:.1f} {} ({:.3f} N after)", body, shown * s.tool.depth_m,
+                         unit, s.tool.axial_force_n),
+             false);
     } else if (phase == procedures::NeedlePhase::kTouching && needle_phase_ != procedures::NeedlePhase::kTouching) {
       report(fmt::format("needle: touching {}", body), false);
     } else if (phase == procedures::NeedlePhase::kOut && needle_phase_ != procedures::NeedlePhase::kOut) {
@@ -120,7 +123,8 @@ void GuiWindow::upload_layer(LayerView& layer, const haptics::SurfaceSnapshot& s
   layer.mesh.set_normals(s.vertex_normals);
   layer.max_displacement_m = 0.0;
   if (layer.rest.size() == s.vertices.size()) {
-    for (std::size_t i = 0; i < s.vertices.size(); ++i) layer.max_displacement_m = std::max(layer.max_displacement_m, (s.vertices[i] - layer.rest[i]).norm());
+    for (std::size_t i = 0; i < s.vertices.size(); ++i)
+      layer.max_displacement_m = std::max(layer.max_displacement_m, (s.vertices[i] - layer.rest[i]).norm());
   }
   using scene::ColorBy;
   const ColorBy by = project_.graphics.color_by;
@@ -137,15 +141,18 @@ void GuiWindow::upload_layer(LayerView& layer, const haptics::SurfaceSnapshot& s
     // The scale: the 98th percentile, not the maximum — a point load strains the triangles
     // under it far more than the rest, which would leave the whole body one colour.
     layer.ranked = layer.strain;
-    const auto at = layer.ranked.begin() + static_cast<std::ptrdiff_t>(0.98 * static_cast<double>(layer.ranked.size() - 1));
+    const auto at =
+        layer.ranked.begin() + static_cast<std::ptrdiff_t>(0.98 * static_cast<double>(layer.ranked.size() - 1));
     std::nth_element(layer.ranked.begin(), at, layer.ranked.end());
     layer.max_strain = layer.ranked.empty() ? 0.0 : *at;
   }
   const double range = by == ColorBy::kStrain   ? std::max(layer.max_strain, 0.01)
                        : by == ColorBy::kStress ? std::max(layer.max_stress_pa, 1e-6)
-                                        : std::max(layer.max_displacement_m, 0.01 * scene_size());
+                                                : std::max(layer.max_displacement_m, 0.01 * scene_size());
   for (std::size_t i = 0; i < s.vertices.size(); ++i) {
-    const double value = by == ColorBy::kStrain ? layer.strain[i] : by == ColorBy::kStress ? layer.stress[i] : (s.vertices[i] - layer.rest[i]).norm();
+    const double value = by == ColorBy::kStrain   ? layer.strain[i]
+                         : by == ColorBy::kStress ? layer.stress[i]
+                                                  : (s.vertices[i] - layer.rest[i]).norm();
     const Eigen::Vector3f c = render::viridis(static_cast<float>(value / range));
     layer.colours[i] = render::Rgba(c.x(), c.y(), c.z(), 1.0f);
   }
@@ -179,15 +186,18 @@ void GuiWindow::update_stress() {
     if (static_cast<std::size_t>(b.layer) >= layers_.size()) continue;
     LayerView& layer = layers_[static_cast<std::size_t>(b.layer)];
     for (const haptics::SurfacePart& part : layer.parts) {
-      if (part.body != static_cast<std::int32_t>(i) || static_cast<std::size_t>(part.vertex_count) != surface.size()) continue;
-      for (std::size_t v = 0; v < surface.size(); ++v) layer.stress[static_cast<std::size_t>(part.first_vertex) + v] = std::max(surface[v].x(), 0.0);
+      if (part.body != static_cast<std::int32_t>(i) || static_cast<std::size_t>(part.vertex_count) != surface.size())
+        continue;
+      for (std::size_t v = 0; v < surface.size(); ++v)
+        layer.stress[static_cast<std::size_t>(part.first_vertex) + v] = std::max(surface[v].x(), 0.0);
     }
   }
   for (LayerView& layer : layers_) {
     // The scale: the 98th percentile, as for strain (the load point peaks far above the rest).
     layer.ranked = layer.stress;
     if (layer.ranked.empty()) continue;
-    const auto at = layer.ranked.begin() + static_cast<std::ptrdiff_t>(0.98 * static_cast<double>(layer.ranked.size() - 1));
+    const auto at =
+        layer.ranked.begin() + static_cast<std::ptrdiff_t>(0.98 * static_cast<double>(layer.ranked.size() - 1));
     std::nth_element(layer.ranked.begin(), at, layer.ranked.end());
     layer.max_stress_pa = *at;
     if (layer.latest) upload_layer(layer, *layer.latest);

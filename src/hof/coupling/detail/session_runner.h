@@ -32,7 +32,9 @@ class SessionRunner {
   SessionReport stop_realtime(const SampleSink& on_sample);
 
   [[nodiscard]] bool realtime_running() const { return sim_thread_.joinable(); }
-  [[nodiscard]] bool simulation_ended() const { return sim_finished_.load(std::memory_order_acquire) && !stop_sim_.load(); }
+  [[nodiscard]] bool simulation_ended() const {
+    return sim_finished_.load(std::memory_order_acquire) && !stop_sim_.load();
+  }
   void set_pacing(bool paced) { paced_.store(paced, std::memory_order_relaxed); }
   [[nodiscard]] bool pacing() const { return paced_.load(std::memory_order_relaxed); }
   void request_stop() { stop_requested_.store(true, std::memory_order_relaxed); }

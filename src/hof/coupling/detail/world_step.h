@@ -26,7 +26,9 @@ namespace hof::coupling::detail {
 class SnapshotPublisher;
 
 using Clock = std::chrono::steady_clock;
-inline double seconds_between(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
+inline double seconds_between(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double>(b - a).count();
+}
 
 // The FEM-reaction coupling's patch: the surface within this radius of the contact (or twice the
 // contact triangle's longest edge, when larger), at most this many nodes.
@@ -63,19 +65,20 @@ struct BodyRuntime {
 
   // This step's reaction of the tissue at a contact on triangle `tri` (barycentric `bary`,
   // carried by `triangle_nodes`), felt at the next tick (world_step.cpp says how).
-  Vec3 fem_reaction(const mesh::Tri& tri, const std::array<double, 3>& bary, std::span<const std::int32_t> triangle_nodes);
+  Vec3 fem_reaction(const mesh::Tri& tri, const std::array<double, 3>& bary,
+                    std::span<const std::int32_t> triangle_nodes);
 };
 
 /// A haptic layer: the bodies felt through one proxy, as one snapshot.
 struct LayerRuntime {
-  std::vector<std::size_t> bodies;           // indices into World::bodies, in part order
-  haptics::SurfaceSnapshot rest;             // the layer's surfaces at rest (parts name bodies)
+  std::vector<std::size_t> bodies;                  // indices into World::bodies, in part order
+  haptics::SurfaceSnapshot rest;                    // the layer's surfaces at rest (parts name bodies)
   TripleBuffer<haptics::SurfaceSnapshot> surfaces;  // to the haptic loop
   TripleBuffer<haptics::SurfaceSnapshot> graphics;  // to a reader (the window)
-  std::vector<Vec3> positions, velocities;   // the layer's vertices now
-  Vec3 proxy{Vec3::Zero()};                  // this layer's proxy at the last tick
-  std::int32_t proxy_triangle{-1};           // the triangle it touched at that tick (-1: none)
-  bool proxy_outside_box{false};             // outside the box of `positions` (fall-through test)
+  std::vector<Vec3> positions, velocities;          // the layer's vertices now
+  Vec3 proxy{Vec3::Zero()};                         // this layer's proxy at the last tick
+  std::int32_t proxy_triangle{-1};                  // the triangle it touched at that tick (-1: none)
+  bool proxy_outside_box{false};                    // outside the box of `positions` (fall-through test)
 };
 
 /// Wall time of the steps in the thesis' three states (SessionReport::rate_*).
@@ -111,7 +114,7 @@ struct World {
   // The device and those switched to: kept until the loop is gone (declared before it).
   std::unique_ptr<haptics::Device> device;
   std::vector<std::shared_ptr<haptics::Device>> switched_devices;
-  haptics::Device* last_device{nullptr};  // the device the ticks used at the last step
+  haptics::Device* last_device{nullptr};           // the device the ticks used at the last step
   TripleBuffer<haptics::HapticSettings> settings;  // to the haptic loop
   haptics::HapticSettings current_settings;
   std::unique_ptr<haptics::HapticLoop> loop;

@@ -117,7 +117,8 @@ class DhdDevice final : public Device {
   void fail(std::string_view what) {
     if (failed_.load(std::memory_order_relaxed)) return;
     const char* why = api_.error_string ? api_.error_string() : nullptr;
-    const auto end = fmt::format_to_n(failure_.data(), failure_.size() - 1, "{} {} (device {}): {} - unplugged, switched off, or its driver stopped?",
+    const auto end = fmt::format_to_n(failure_.data(), failure_.size() - 1,
+                                      "{} {} (device {}): {} - unplugged, switched off, or its driver stopped?",
                                       spec_.model, what, static_cast<int>(id_), why ? why : "no reason given");
     *end.out = '\0';
     failed_.store(true, std::memory_order_release);
@@ -144,21 +145,36 @@ DhdModel dhd_model(int system_type) {
   // dhdc.h's DHD_DEVICE_* values; figures as CHAI3D gives them (CDeltaDevices.cpp): the
   // maximum continuous force and the radius of the workspace sphere.
   switch (system_type) {
-    case 33: return {"omega.3", 12.0, 0.075};
-    case 34: return {"omega.6", 12.0, 0.075};
-    case 36: return {"omega.6 (left)", 12.0, 0.075};
-    case 35: return {"omega.7", 12.0, 0.075};
-    case 37: return {"omega.7 (left)", 12.0, 0.075};
-    case 60: return {"Novint Falcon", 8.0, 0.04};
-    case 63: return {"delta.3", 20.0, 0.15};
-    case 64: return {"delta.6", 20.0, 0.15};
-    case 104: return {"sigma.7", 12.0, 0.075};
-    case 105: return {"sigma.7 (left)", 12.0, 0.075};
-    case 106: return {"sigma.6+", 12.0, 0.09};
-    case 107: return {"sigma.6+ (left)", 12.0, 0.09};
-    case 108: return {"lambda.7", 12.0, 0.075};
-    case 109: return {"lambda.7 (left)", 12.0, 0.075};
-    default: break;
+    case 33:
+      return {"omega.3", 12.0, 0.075};
+    case 34:
+      return {"omega.6", 12.0, 0.075};
+    case 36:
+      return {"omega.6 (left)", 12.0, 0.075};
+    case 35:
+      return {"omega.7", 12.0, 0.075};
+    case 37:
+      return {"omega.7 (left)", 12.0, 0.075};
+    case 60:
+      return {"Novint Falcon", 8.0, 0.04};
+    case 63:
+      return {"delta.3", 20.0, 0.15};
+    case 64:
+      return {"delta.6", 20.0, 0.15};
+    case 104:
+      return {"sigma.7", 12.0, 0.075};
+    case 105:
+      return {"sigma.7 (left)", 12.0, 0.075};
+    case 106:
+      return {"sigma.6+", 12.0, 0.09};
+    case 107:
+      return {"sigma.6+ (left)", 12.0, 0.09};
+    case 108:
+      return {"lambda.7", 12.0, 0.075};
+    case 109:
+      return {"lambda.7 (left)", 12.0, 0.075};
+    default:
+      break;
   }
   return {fmt::format("Force Dimension device type {}", system_type), 12.0, 0.075};
 }
@@ -189,18 +205,20 @@ Expected<std::unique_ptr<Device>> open_dhd_device(const DhdConfig& config) {
 
   const int count = api.get_device_count();
   if (count <= 0) {
-    return make_error(ErrorCode::kIo, fmt::format("no device found by the Force Dimension SDK ({}: {}); is it plugged in and "
-                                                  "switched on, and may this user open it (udev rules, docs/devices.md)?",
-                                                  lib.path(), count < 0 ? last_error(api) : "none connected"));
+    return make_error(ErrorCode::kIo,
+                      fmt::format("no device found by the Force Dimension SDK ({}: {}); is it plugged in and "
+                                  "switched on, and may this user open it (udev rules, docs/devices.md)?",
+                                  lib.path(), count < 0 ? last_error(api) : "none connected"));
   }
   if (config.index < 0 || config.index >= count) {
     return make_error(ErrorCode::kInvalidArgument,
-                      fmt::format("index={}: the Force Dimension SDK found {} device{} (index 0 to {})", config.index, count,
-                                  count == 1 ? "" : "s", count - 1));
+                      fmt::format("index={}: the Force Dimension SDK found {} device{} (index 0 to {})", config.index,
+                                  count, count == 1 ? "" : "s", count - 1));
   }
   const int id = api.open_id(static_cast<char>(config.index));
   if (id < 0) {
-    return make_error(ErrorCode::kIo, fmt::format("the Force Dimension SDK could not open device {}: {}", config.index, last_error(api)));
+    return make_error(ErrorCode::kIo, fmt::format("the Force Dimension SDK could not open device {}: {}", config.index,
+                                                  last_error(api)));
   }
   const auto handle = static_cast<char>(id);
   const DhdModel model = dhd_model(api.get_system_type(handle));
@@ -223,7 +241,8 @@ Expected<std::unique_ptr<Device>> open_dhd_device(const DhdConfig& config) {
   if (api.enable_force(1, handle) < 0) {
     const std::string why = last_error(api);
     api.close(handle);
-    return make_error(ErrorCode::kIo, fmt::format("the Force Dimension SDK could not enable the forces of {}: {}", spec.model, why));
+    return make_error(ErrorCode::kIo,
+                      fmt::format("the Force Dimension SDK could not enable the forces of {}: {}", spec.model, why));
   }
   return std::unique_ptr<Device>(std::make_unique<DhdDevice>(std::move(api), handle, std::move(spec)));
 }

@@ -28,9 +28,10 @@
 namespace hof::haptics {
 
 struct DhdConfig {
-  int index{0};            ///< which device, in the SDK's enumeration order
-  std::string library;     ///< the SDK's file; empty: $HOF_DHD_LIBRARY, else libdhd.so from the loader's path
-  std::optional<DeviceSpec> model;  ///< a known model's figures (device_spec_for_model) instead of what the device reports
+  int index{0};         ///< which device, in the SDK's enumeration order
+  std::string library;  ///< the SDK's file; empty: $HOF_DHD_LIBRARY, else libdhd.so from the loader's path
+  std::optional<DeviceSpec>
+      model;  ///< a known model's figures (device_spec_for_model) instead of what the device reports
 };
 
 /// The Force Dimension model of a dhdGetSystemType() value and its figures: name, maximum

@@ -5,7 +5,8 @@
 
 namespace hof::haptics {
 
-MouseDevice::MouseDevice(const DeviceSpec& spec, double smoothing_s) : spec_(spec), smoothing_s_(std::max(smoothing_s, 0.0)) {}
+MouseDevice::MouseDevice(const DeviceSpec& spec, double smoothing_s)
+    : spec_(spec), smoothing_s_(std::max(smoothing_s, 0.0)) {}
 
 void MouseDevice::set_target(const Vec3& position_m, std::uint32_t buttons) {
   if (!position_m.allFinite()) return;

@@ -43,7 +43,9 @@ Expected<std::unique_ptr<Device>> as_device(Expected<std::unique_ptr<T>> opened)
   return std::unique_ptr<Device>(std::move(*opened));
 }
 
-Expected<std::unique_ptr<Device>> open(const ReplayConfig& c) { return as_device(ReplayDevice::open(c.file, c.loop, c.spec)); }
+Expected<std::unique_ptr<Device>> open(const ReplayConfig& c) {
+  return as_device(ReplayDevice::open(c.file, c.loop, c.spec));
+}
 
 Expected<std::unique_ptr<Device>> open(const ScriptedConfig& c) {
   auto motion = ScriptedMotion::make(c.motion);
@@ -60,7 +62,9 @@ Expected<std::unique_ptr<Device>> open(const VirtualHandConfig& c) {
 
 Expected<std::unique_ptr<Device>> open(const UdpDeviceConfig& c) { return as_device(UdpDevice::open(c)); }
 Expected<std::unique_ptr<Device>> open(const SpacemouseConfig& c) { return as_device(SpacemouseDevice::open(c)); }
-Expected<std::unique_ptr<Device>> open(const MouseConfig& c) { return std::unique_ptr<Device>(std::make_unique<MouseDevice>(c.spec)); }
+Expected<std::unique_ptr<Device>> open(const MouseConfig& c) {
+  return std::unique_ptr<Device>(std::make_unique<MouseDevice>(c.spec));
+}
 Expected<std::unique_ptr<Device>> open(const DhdConfig& c) { return open_dhd_device(c); }
 Expected<std::unique_ptr<Device>> open(const OpenHapticsConfig& c) { return open_openhaptics_device(c); }
 

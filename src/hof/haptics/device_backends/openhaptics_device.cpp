@@ -89,14 +89,18 @@ struct Api {
     const HDErrorInfo e = get_error();
     if (e.errorCode == kSuccess) return {};
     const char* text = get_error_string ? get_error_string(e.errorCode) : nullptr;
-    return fmt::format("{} (HD error 0x{:x}, internal {})", text && *text ? text : "unknown error", e.errorCode, e.internalErrorCode);
+    return fmt::format("{} (HD error 0x{:x}, internal {})", text && *text ? text : "unknown error", e.errorCode,
+                       e.internalErrorCode);
   }
 };
 
 class OpenHapticsDevice final : public Device {
  public:
   OpenHapticsDevice(Api api, HHD handle, DeviceSpec spec, double continuous_force_n, std::string calibration)
-      : api_(std::move(api)), handle_(handle), spec_(std::move(spec)), continuous_force_n_(continuous_force_n),
+      : api_(std::move(api)),
+        handle_(handle),
+        spec_(std::move(spec)),
+        continuous_force_n_(continuous_force_n),
         calibration_(std::move(calibration)) {}
   ~OpenHapticsDevice() override { OpenHapticsDevice::close(); }
 
@@ -207,9 +211,10 @@ class OpenHapticsDevice final : public Device {
   void fail_code(const HDErrorInfo& e) {
     if (failed_.load(std::memory_order_relaxed)) return;
     const char* text = api_.get_error_string ? api_.get_error_string(e.errorCode) : nullptr;
-    const auto end = fmt::format_to_n(failure_.data(), failure_.size() - 1,
-                                      "{}: {} (HD error 0x{:x}, internal {}) - unplugged, or its driver stopped?", spec_.model,
-                                      text && *text ? text : "device error", e.errorCode, e.internalErrorCode);
+    const auto end =
+        fmt::format_to_n(failure_.data(), failure_.size() - 1,
+                         "{}: {} (HD error 0x{:x}, internal {}) - unplugged, or its driver stopped?", spec_.model,
+                         text && *text ? text : "device error", e.errorCode, e.internalErrorCode);
     *end.out = '\0';
     failed_.store(true, std::memory_order_release);
   }
@@ -260,25 +265,26 @@ Expected<std::unique_ptr<Device>> open_openhaptics_device(const OpenHapticsConfi
   if (!library) return std::unexpected(library.error());
   Api api{std::move(*library)};
   const SharedLibrary& lib = api.library;
-  for (auto bound : {lib.bind("hdInitDevice", api.init_device), lib.bind("hdDisableDevice", api.disable_device),
-                     lib.bind("hdBeginFrame", api.begin_frame), lib.bind("hdEndFrame", api.end_frame),
-                     lib.bind("hdGetError", api.get_error), lib.bind("hdGetErrorString", api.get_error_string),
-                     lib.bind("hdEnable", api.enable), lib.bind("hdGetDoublev", api.get_doublev),
-                     lib.bind("hdGetIntegerv", api.get_integerv), lib.bind("hdSetDoublev", api.set_doublev),
-                     lib.bind("hdGetString", api.get_string), lib.bind("hdStartScheduler", api.start_scheduler),
-                     lib.bind("hdStopScheduler", api.stop_scheduler),
-                     lib.bind("hdScheduleAsynchronous", api.schedule_asynchronous),
-                     lib.bind("hdScheduleSynchronous", api.schedule_synchronous), lib.bind("hdUnschedule", api.unschedule),
-                     lib.bind("hdCheckCalibration", api.check_calibration),
-                     lib.bind("hdUpdateCalibration", api.update_calibration)}) {
+  for (auto bound :
+       {lib.bind("hdInitDevice", api.init_device), lib.bind("hdDisableDevice", api.disable_device),
+        lib.bind("hdBeginFrame", api.begin_frame), lib.bind("hdEndFrame", api.end_frame),
+        lib.bind("hdGetError", api.get_error), lib.bind("hdGetErrorString", api.get_error_string),
+        lib.bind("hdEnable", api.enable), lib.bind("hdGetDoublev", api.get_doublev),
+        lib.bind("hdGetIntegerv", api.get_integerv), lib.bind("hdSetDoublev", api.set_doublev),
+        lib.bind("hdGetString", api.get_string), lib.bind("hdStartScheduler", api.start_scheduler),
+        lib.bind("hdStopScheduler", api.stop_scheduler), lib.bind("hdScheduleAsynchronous", api.schedule_asynchronous),
+        lib.bind("hdScheduleSynchronous", api.schedule_synchronous), lib.bind("hdUnschedule", api.unschedule),
+        lib.bind("hdCheckCalibration", api.check_calibration),
+        lib.bind("hdUpdateCalibration", api.update_calibration)}) {
     if (!bound) return std::unexpected(bound.error());
   }
   const std::string name = config.device.empty() ? std::string("the default device") : "'" + config.device + "'";
   const HHD handle = api.init_device(config.device.empty() ? nullptr : config.device.c_str());
   if (const std::string error = api.error(); !error.empty() || handle == kInvalidHandle) {
-    return make_error(ErrorCode::kIo, fmt::format("OpenHaptics could not open {}: {}; is it plugged in, and set up with Touch "
-                                                  "Setup (docs/devices.md)?",
-                                                  name, error.empty() ? std::string("invalid handle") : error));
+    return make_error(ErrorCode::kIo,
+                      fmt::format("OpenHaptics could not open {}: {}; is it plugged in, and set up with Touch "
+                                  "Setup (docs/devices.md)?",
+                                  name, error.empty() ? std::string("invalid handle") : error));
   }
   api.enable(kForceOutput);
   DeviceSpec spec;
@@ -299,7 +305,8 @@ Expected<std::unique_ptr<Device>> open_openhaptics_device(const OpenHapticsConfi
     if (max_force > 0.0 && std::isfinite(max_force)) spec.max_force_n = max_force;
     if (stiffness > 0.0 && std::isfinite(stiffness)) spec.max_stiffness_n_per_m = 1e3 * stiffness;
     if (damping > 0.0 && std::isfinite(damping)) spec.max_damping_n_s_per_m = 1e3 * damping;
-    const double smallest = std::min({workspace[3] - workspace[0], workspace[4] - workspace[1], workspace[5] - workspace[2]});
+    const double smallest =
+        std::min({workspace[3] - workspace[0], workspace[4] - workspace[1], workspace[5] - workspace[2]});
     if (smallest > 0.0 && std::isfinite(smallest)) spec.workspace_radius_m = 0.5 * kMetresPerMillimetre * smallest;
   }
   api.start_scheduler();
@@ -324,7 +331,8 @@ Expected<std::unique_ptr<Device>> open_openhaptics_device(const OpenHapticsConfi
     }
   };
   on_scheduler(api, check);
-  return std::unique_ptr<Device>(std::make_unique<OpenHapticsDevice>(std::move(api), handle, std::move(spec), continuous, calibration));
+  return std::unique_ptr<Device>(
+      std::make_unique<OpenHapticsDevice>(std::move(api), handle, std::move(spec), continuous, calibration));
 }
 
 std::string openhaptics_calibration(const Device& device) {

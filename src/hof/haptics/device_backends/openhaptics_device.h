@@ -28,7 +28,8 @@ namespace hof::haptics {
 struct OpenHapticsConfig {
   std::string device;   ///< the configuration name (Touch Setup's); empty: the default device
   std::string library;  ///< the SDK's file; empty: $HOF_HD_LIBRARY, else libHD.so from the loader's path
-  std::optional<DeviceSpec> model;  ///< a known model's figures (device_spec_for_model) instead of what the device reports
+  std::optional<DeviceSpec>
+      model;  ///< a known model's figures (device_spec_for_model) instead of what the device reports
 };
 
 /// Opens the device and starts the HD scheduler. Errors: the SDK not found (the file names

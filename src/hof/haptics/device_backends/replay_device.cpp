@@ -1,5 +1,5 @@
-#include "hof/core/text.h"
 #include "hof/haptics/device_backends/replay_device.h"
+#include "hof/core/text.h"
 
 #include <fmt/format.h>
 
@@ -109,15 +109,32 @@ Expected<ReplaySample> parse_row(const Parser& p, std::int64_t line_no, const st
       return p.fail(line_no, fmt::format("non-finite value '{}' (NaN or infinity) in column '{}'", text, name));
     }
     switch (columns[i]) {
-      case Column::kT: s.t_s = value; break;
-      case Column::kX: s.position_m.x() = value; break;
-      case Column::kY: s.position_m.y() = value; break;
-      case Column::kZ: s.position_m.z() = value; break;
-      case Column::kQw: q[0] = value; break;
-      case Column::kQx: q[1] = value; break;
-      case Column::kQy: q[2] = value; break;
-      case Column::kQz: q[3] = value; break;
-      case Column::kButton: break;
+      case Column::kT:
+        s.t_s = value;
+        break;
+      case Column::kX:
+        s.position_m.x() = value;
+        break;
+      case Column::kY:
+        s.position_m.y() = value;
+        break;
+      case Column::kZ:
+        s.position_m.z() = value;
+        break;
+      case Column::kQw:
+        q[0] = value;
+        break;
+      case Column::kQx:
+        q[1] = value;
+        break;
+      case Column::kQy:
+        q[2] = value;
+        break;
+      case Column::kQz:
+        q[3] = value;
+        break;
+      case Column::kButton:
+        break;
     }
   }
   const double norm = q.norm();
@@ -157,8 +174,8 @@ Expected<std::vector<ReplaySample>> load_replay(const std::filesystem::path& pat
     auto sample = parse_row(p, line_no, columns, fields);
     if (!sample) return std::unexpected(sample.error());
     if (!samples.empty() && !(sample->t_s > samples.back().t_s)) {
-      return p.fail(line_no, fmt::format("time {} is not after the previous sample's time {}", sample->t_s,
-                                         samples.back().t_s));
+      return p.fail(line_no,
+                    fmt::format("time {} is not after the previous sample's time {}", sample->t_s, samples.back().t_s));
     }
     samples.push_back(*sample);
   }
@@ -212,7 +229,8 @@ DeviceReading ReplayDevice::read(double time_s) {
   // The segment [a, b] with a.t ≤ t < b.t (the last segment at t = last.t).
   const auto after = std::upper_bound(samples_.begin(), samples_.end(), t,
                                       [](double value, const ReplaySample& s) { return value < s.t_s; });
-  const std::size_t j = after == samples_.end() ? samples_.size() - 1 : static_cast<std::size_t>(after - samples_.begin());
+  const std::size_t j =
+      after == samples_.end() ? samples_.size() - 1 : static_cast<std::size_t>(after - samples_.begin());
   const ReplaySample& a = samples_[j - 1];
   const ReplaySample& b = samples_[j];
   const double dt = b.t_s - a.t_s;

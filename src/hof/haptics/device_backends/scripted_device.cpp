@@ -31,7 +31,8 @@ void plane_basis(const Vec3& n, Vec3& u, Vec3& w) {
 Expected<ScriptedMotion> ScriptedMotion::make(const MotionConfig& c) {
   if (!finite(c.start_m)) return invalid("start is not finite");
   if (!finite(c.direction) || c.direction.norm() < 1e-12) return invalid("direction must be a non-zero vector");
-  if (!std::isfinite(c.depth_m) || c.depth_m < 0.0) return invalid(fmt::format("depth must be >= 0 m (got {})", c.depth_m));
+  if (!std::isfinite(c.depth_m) || c.depth_m < 0.0)
+    return invalid(fmt::format("depth must be >= 0 m (got {})", c.depth_m));
   if (!std::isfinite(c.approach_m)) return invalid("approach is not finite");
   if (!std::isfinite(c.speed_m_per_s) || c.speed_m_per_s <= 0.0)
     return invalid(fmt::format("speed must be > 0 m/s (got {})", c.speed_m_per_s));
@@ -101,7 +102,8 @@ Expected<ScriptedMotion> ScriptedMotion::make(const MotionConfig& c) {
       }
       // Repeated sweeps travel back to the first start rather than jump there.
       if (c.repeat != 1) {
-        m.add_segment(m.start_m_ + static_cast<double>(c.palpation_count - 1) * c.palpation_step_m, m.start_m_, c.speed_m_per_s);
+        m.add_segment(m.start_m_ + static_cast<double>(c.palpation_count - 1) * c.palpation_step_m, m.start_m_,
+                      c.speed_m_per_s);
       }
       break;
     }
@@ -235,8 +237,7 @@ Vec3 ScriptedMotion::velocity(double t_s) const {
 // ---------------------------------------------------------------------------------------
 // ScriptedDevice
 
-ScriptedDevice::ScriptedDevice(const ScriptedMotion& motion, const DeviceSpec& spec)
-    : spec_(spec), motion_(motion) {}
+ScriptedDevice::ScriptedDevice(const ScriptedMotion& motion, const DeviceSpec& spec) : spec_(spec), motion_(motion) {}
 
 DeviceReading ScriptedDevice::read(double time_s) {
   // A poke pressing to a force: once the force last written pushes back by the stop force
@@ -244,7 +245,8 @@ DeviceReading ScriptedDevice::read(double time_s) {
   const Vec3 press_direction = motion_.press_direction();
   const double stop_force = motion_.stop_force();
   const double pushback = -force_n_.dot(press_direction);
-  if (stop_force > 0.0 && time_s > motion_.press_begin_s() && time_s < motion_.press_end_s() && pushback >= stop_force) {
+  if (stop_force > 0.0 && time_s > motion_.press_begin_s() && time_s < motion_.press_end_s() &&
+      pushback >= stop_force) {
     motion_ = motion_.stopped_at_depth((motion_.position(time_s) - motion_.contact_point()).norm());
   }
   // Giving way, as a hand does to any force above F (tissue pushing back, or a surface that

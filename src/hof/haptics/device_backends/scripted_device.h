@@ -33,8 +33,8 @@
 /// are continuous, velocities jump at the corners.
 
 #include <array>
-#include <cmath>
 #include <atomic>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <string_view>
@@ -53,25 +53,25 @@ inline constexpr std::uint32_t kMaxPalpationPresses = 16;
 struct MotionConfig {
   MotionKind kind{MotionKind::kPoke};
   // poke / press-and-slide / hold
-  Vec3 start_m{0.0, 0.05, 0.0};                ///< where the motion begins, device frame
-  Vec3 direction{0.0, -1.0, 0.0};              ///< press direction (normalised by make())
-  double approach_m{-1.0};                     ///< < 0: distance from start to the origin plane
-  double depth_m{0.02};                        ///< travel past the approach, ≥ 0
-  double speed_m_per_s{0.01};                  ///< approach, press and retract speed, > 0
-  double hold_s{1.0};                          ///< pause at full depth (or the whole hold), ≥ 0
+  Vec3 start_m{0.0, 0.05, 0.0};    ///< where the motion begins, device frame
+  Vec3 direction{0.0, -1.0, 0.0};  ///< press direction (normalised by make())
+  double approach_m{-1.0};         ///< < 0: distance from start to the origin plane
+  double depth_m{0.02};            ///< travel past the approach, ≥ 0
+  double speed_m_per_s{0.01};      ///< approach, press and retract speed, > 0
+  double hold_s{1.0};              ///< pause at full depth (or the whole hold), ≥ 0
   /// poke: stop pressing at this force against the press, N; 0 = press to `depth` whatever the
   /// force. Only for one cycle (repeat 1).
   double stop_force_n{0.0};
   // press-and-slide
-  Vec3 slide_direction{Vec3::Zero()};          ///< zero: first axis of plane_basis(direction)
+  Vec3 slide_direction{Vec3::Zero()};  ///< zero: first axis of plane_basis(direction)
   double slide_distance_m{0.02};
-  double slide_speed_m_per_s{0.0};             ///< ≤ 0: same as speed
+  double slide_speed_m_per_s{0.0};  ///< ≤ 0: same as speed
   // palpate
-  Vec3 palpation_step_m{0.01, 0.0, 0.0};      ///< from one press's start to the next
-  std::uint32_t palpation_count{5};            ///< presses, 1..kMaxPalpationPresses
+  Vec3 palpation_step_m{0.01, 0.0, 0.0};  ///< from one press's start to the next
+  std::uint32_t palpation_count{5};       ///< presses, 1..kMaxPalpationPresses
   // circle
   Vec3 centre_m{Vec3::Zero()};
-  Vec3 normal{0.0, 1.0, 0.0};                  ///< plane normal (normalised by make())
+  Vec3 normal{0.0, 1.0, 0.0};  ///< plane normal (normalised by make())
   double radius_m{0.02};
   double period_s{2.0};
   /// Number of cycles; 0 = forever.
@@ -79,7 +79,8 @@ struct MotionConfig {
 
   /// A poke: from `start` along `direction`, `approach` to the surface, then `depth` past it at
   /// `speed`, held for `hold` seconds, and back.
-  static MotionConfig poke(const Vec3& start, const Vec3& direction, double approach, double depth, double speed, double hold) {
+  static MotionConfig poke(const Vec3& start, const Vec3& direction, double approach, double depth, double speed,
+                           double hold) {
     MotionConfig m;
     m.kind = MotionKind::kPoke;
     m.start_m = start;

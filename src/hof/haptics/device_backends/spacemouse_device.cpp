@@ -108,9 +108,9 @@ SpacemouseDevice::~SpacemouseDevice() { close(); }
 
 Expected<std::unique_ptr<SpacemouseDevice>> SpacemouseDevice::open(const SpacemouseConfig& config) {
   if (!std::isfinite(config.scale_m_per_unit_s) || config.scale_m_per_unit_s <= 0.0) {
-    return make_error(ErrorCode::kInvalidArgument,
-                      fmt::format("spacemouse: scale must be > 0 m per unit per second (got {})",
-                                  config.scale_m_per_unit_s));
+    return make_error(
+        ErrorCode::kInvalidArgument,
+        fmt::format("spacemouse: scale must be > 0 m per unit per second (got {})", config.scale_m_per_unit_s));
   }
   if (g_connection_taken.exchange(true)) {
     return make_error(ErrorCode::kIo, "spacemouse: already open (libspnav allows one connection per process)");

@@ -43,10 +43,10 @@ Expected<Key> read_key_file(const std::string& path) {
   }
   if (!S_ISREG(info.st_mode)) return make_error(ErrorCode::kIo, "the key is not a regular file", path);
   if ((info.st_mode & (S_IRWXG | S_IRWXO)) != 0) {
-    return make_error(ErrorCode::kInvalidArgument,
-                      fmt::format("the key may be read by other users (mode {:o}); run: chmod 600 {}",
-                                  info.st_mode & 0777U, path),
-                      path);
+    return make_error(
+        ErrorCode::kInvalidArgument,
+        fmt::format("the key may be read by other users (mode {:o}); run: chmod 600 {}", info.st_mode & 0777U, path),
+        path);
   }
   std::ifstream in(path);
   std::stringstream text;

@@ -55,7 +55,8 @@ class Reader {
  public:
   explicit Reader(const std::uint8_t* p) : p_(p) {}
   bool magic(const std::array<char, 4>& m) {
-    const bool same = std::equal(m.begin(), m.end(), p_, [](char c, std::uint8_t b) { return static_cast<std::uint8_t>(c) == b; });
+    const bool same =
+        std::equal(m.begin(), m.end(), p_, [](char c, std::uint8_t b) { return static_cast<std::uint8_t>(c) == b; });
     p_ += 4;
     return same;
   }
@@ -116,8 +117,8 @@ std::size_t encode(const HelloPacket& h, std::span<std::uint8_t> out) {
   w.u16(0);
   w.u32(h.sequence);
   w.u32(0);
-  for (const double v : {h.max_force_n, h.max_stiffness_n_per_m, h.max_damping_n_s_per_m, h.workspace_radius_m,
-                         h.nominal_rate_hz}) {
+  for (const double v :
+       {h.max_force_n, h.max_stiffness_n_per_m, h.max_damping_n_s_per_m, h.workspace_radius_m, h.nominal_rate_hz}) {
     w.f64(v);
   }
   std::memcpy(out.data() + 56, h.model.data(), kModelNameSize);
@@ -196,8 +197,8 @@ bool decode(std::span<const std::uint8_t> bytes, HelloPacket& out) {
   h.max_damping_n_s_per_m = r.f64();
   h.workspace_radius_m = r.f64();
   h.nominal_rate_hz = r.f64();
-  for (const double v : {h.max_force_n, h.max_stiffness_n_per_m, h.max_damping_n_s_per_m, h.workspace_radius_m,
-                         h.nominal_rate_hz}) {
+  for (const double v :
+       {h.max_force_n, h.max_stiffness_n_per_m, h.max_damping_n_s_per_m, h.workspace_radius_m, h.nominal_rate_hz}) {
     if (!std::isfinite(v)) return false;
   }
   std::memcpy(h.model.data(), bytes.data() + 56, kModelNameSize);
@@ -286,7 +287,7 @@ struct UdpDevice::Impl {
   // Receiver thread only (and close() after the join).
   sockaddr_in peer{};
   bool has_peer{false};
-  bool resync{true};             // accept the next state whatever its sequence
+  bool resync{true};  // accept the next state whatever its sequence
   std::uint32_t last_sequence{0};
   bool has_previous{false};
   double previous_time_s{0.0};
@@ -414,15 +415,15 @@ void UdpDevice::Impl::handle(std::span<const std::uint8_t> raw, const sockaddr_i
     }
     case udp::PacketType::kForce:      // HoF never receives forces
     case udp::PacketType::kChallenge:  // nor challenges
-    case udp::PacketType::kUnknown: break;
+    case udp::PacketType::kUnknown:
+      break;
   }
   bump(counters.malformed);
 }
 
 void UdpDevice::Impl::accept_state(const udp::StatePacket& s, const sockaddr_in& from, Clock::time_point now) {
   // One peer (handle() refused any other): the first state starts its sequence.
-  const bool same_peer =
-      has_peer && peer.sin_addr.s_addr == from.sin_addr.s_addr && peer.sin_port == from.sin_port;
+  const bool same_peer = has_peer && peer.sin_addr.s_addr == from.sin_addr.s_addr && peer.sin_port == from.sin_port;
   if (!resync && same_peer && !udp::newer(s.sequence, last_sequence)) {
     bump(counters.stale);
     return;
@@ -516,7 +517,8 @@ Expected<std::unique_ptr<UdpDevice>> UdpDevice::open(const UdpDeviceConfig& conf
     addrinfo* found = nullptr;
     const int rc = ::getaddrinfo(config.host.c_str(), nullptr, &hints, &found);
     if (rc != 0 || found == nullptr) {
-      return fail(ErrorCode::kInvalidArgument, fmt::format("cannot resolve host '{}': {}", config.host, ::gai_strerror(rc)));
+      return fail(ErrorCode::kInvalidArgument,
+                  fmt::format("cannot resolve host '{}': {}", config.host, ::gai_strerror(rc)));
     }
     impl->host_addr = reinterpret_cast<const sockaddr_in*>(found->ai_addr)->sin_addr;
     impl->filter_host = true;

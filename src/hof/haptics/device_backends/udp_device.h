@@ -33,7 +33,7 @@ namespace hof::haptics {
 // access is well defined; on x86 every access below compiles to a plain move).
 
 template <class T>
-  requires std::is_trivially_copyable_v<T>
+requires std::is_trivially_copyable_v<T>
 class SeqLock {
  public:
   /// Publishes `value`. Single writer only. Wait-free.
@@ -93,13 +93,13 @@ inline constexpr std::uint16_t kForceFinal = 1U << 0;        ///< force flag: Ho
 
 /// Device → HoF, one per servo tick ('HOFS').
 struct StatePacket {
-  std::uint32_t sequence{0};       ///< increments by one per packet (wraps at 2³²)
-  double device_time_s{0.0};       ///< the device's own clock
-  Vec3 position_m{Vec3::Zero()};   ///< device frame (x right, y up, z toward the user)
+  std::uint32_t sequence{0};      ///< increments by one per packet (wraps at 2³²)
+  double device_time_s{0.0};      ///< the device's own clock
+  Vec3 position_m{Vec3::Zero()};  ///< device frame (x right, y up, z toward the user)
   Eigen::Quaterniond orientation{Eigen::Quaterniond::Identity()};
   bool has_velocity{false};
   Vec3 velocity_m_per_s{Vec3::Zero()};
-  std::uint32_t buttons{0};        ///< bit 0 = main button
+  std::uint32_t buttons{0};  ///< bit 0 = main button
 };
 
 /// Device → HoF, at start and from time to time ('HOFH'): what the device can do.
@@ -120,7 +120,7 @@ struct ForcePacket {
   std::uint32_t sequence{0};       ///< HoF's own counter
   Vec3 force_n{Vec3::Zero()};      ///< device frame, already safety-clamped
   Vec3 torque_n_m{Vec3::Zero()};
-  bool closing{false};             ///< HoF is closing: render zero and stop waiting
+  bool closing{false};  ///< HoF is closing: render zero and stop waiting
 };
 
 /// HoF → bridge, version 2 only ('HOFC'): the answer to an authenticated hello. Its sealed
@@ -149,9 +149,7 @@ std::size_t encode(const ChallengePacket& packet, std::span<std::uint8_t> out);
 [[nodiscard]] bool decode(std::span<const std::uint8_t> bytes, ChallengePacket& out);
 
 /// True when sequence `a` is newer than `b` in wrap-around (serial number) arithmetic.
-[[nodiscard]] constexpr bool newer(std::uint32_t a, std::uint32_t b) {
-  return static_cast<std::int32_t>(a - b) > 0;
-}
+[[nodiscard]] constexpr bool newer(std::uint32_t a, std::uint32_t b) { return static_cast<std::int32_t>(a - b) > 0; }
 
 /// The spec `base` with the stated fields of `hello` applied.
 [[nodiscard]] DeviceSpec apply_hello(const DeviceSpec& base, const HelloPacket& hello);
@@ -167,11 +165,11 @@ struct UdpDeviceConfig {
   /// other host can reach the port. Else the bridge's IPv4 host: HoF listens on every
   /// interface and takes datagrams from that host only.
   std::string host;
-  std::uint16_t port{0};      ///< UDP port HoF listens on; 0 picks a free one (local_port())
-  double timeout_s{0.1};      ///< no accepted state for this long (counted from open()) →
-                              ///< kTimedOut, readings invalid; the next state recovers
-  double hello_wait_s{0.0};   ///< open() waits up to this long for a hello to set spec()
-  DeviceSpec spec{};          ///< spec until (and unless) a hello arrives within hello_wait_s
+  std::uint16_t port{0};     ///< UDP port HoF listens on; 0 picks a free one (local_port())
+  double timeout_s{0.1};     ///< no accepted state for this long (counted from open()) →
+                             ///< kTimedOut, readings invalid; the next state recovers
+  double hello_wait_s{0.0};  ///< open() waits up to this long for a hello to set spec()
+  DeviceSpec spec{};         ///< spec until (and unless) a hello arrives within hello_wait_s
   /// Set: the authenticated protocol (version 2) — only sealed datagrams with a valid tag are
   /// read, forces go out sealed. Required when `host` is not a loopback address.
   std::optional<udp::Key> key;
@@ -179,12 +177,12 @@ struct UdpDeviceConfig {
 
 /// Counters kept by the receiver thread (relaxed, for diagnostics).
 struct UdpDeviceStats {
-  std::uint64_t datagrams{0};    ///< everything received
-  std::uint64_t states{0};       ///< states accepted
+  std::uint64_t datagrams{0};  ///< everything received
+  std::uint64_t states{0};     ///< states accepted
   std::uint64_t hellos{0};
-  std::uint64_t stale{0};        ///< states dropped: sequence not newer than the last accepted
-  std::uint64_t malformed{0};    ///< bad magic, version, size, flags or numbers
-  std::uint64_t foreign{0};      ///< from a host other than the configured one
+  std::uint64_t stale{0};      ///< states dropped: sequence not newer than the last accepted
+  std::uint64_t malformed{0};  ///< bad magic, version, size, flags or numbers
+  std::uint64_t foreign{0};    ///< from a host other than the configured one
   /// From a second sender once the first has the session (another address or port): refused,
   /// never takes over — no one else drives the device or receives its forces.
   std::uint64_t other_sender{0};

@@ -10,9 +10,8 @@ namespace hof::haptics {
 Expected<void> validate(const VirtualHandParams& p) {
   const auto check = [](double value, bool strictly_positive, const char* name) -> Expected<void> {
     if (!std::isfinite(value) || value < 0.0 || (strictly_positive && value == 0.0)) {
-      return make_error(ErrorCode::kInvalidArgument,
-                        fmt::format("virtual hand: {} must be {} (got {})", name,
-                                    strictly_positive ? "> 0" : ">= 0", value));
+      return make_error(ErrorCode::kInvalidArgument, fmt::format("virtual hand: {} must be {} (got {})", name,
+                                                                 strictly_positive ? "> 0" : ">= 0", value));
     }
     return {};
   };

@@ -42,11 +42,11 @@ enum class HandIntegrator : std::uint8_t { kSemiImplicitEuler, kExactZeroOrderHo
 
 /// Physical parameters of the hand and device (SI units).
 struct VirtualHandParams {
-  double mass_kg{0.1};                       ///< hand + handle mass, > 0
-  double stiffness_n_per_m{200.0};           ///< k_h, arm stiffness toward the target, ≥ 0
-  double damping_n_s_per_m{5.0};             ///< b_h, arm damping relative to the target, ≥ 0
-  double device_damping_n_s_per_m{0.0};      ///< b_dev, device friction against |ẋ|, ≥ 0
-  double substep_s{1e-3};                    ///< largest internal integration step, > 0
+  double mass_kg{0.1};                   ///< hand + handle mass, > 0
+  double stiffness_n_per_m{200.0};       ///< k_h, arm stiffness toward the target, ≥ 0
+  double damping_n_s_per_m{5.0};         ///< b_h, arm damping relative to the target, ≥ 0
+  double device_damping_n_s_per_m{0.0};  ///< b_dev, device friction against |ẋ|, ≥ 0
+  double substep_s{1e-3};                ///< largest internal integration step, > 0
   HandIntegrator integrator{HandIntegrator::kSemiImplicitEuler};
 };
 

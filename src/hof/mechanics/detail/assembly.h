@@ -4,8 +4,8 @@
 /// pattern (fixed nodes' rows and columns replaced by the identity, so their unknowns stay
 /// zero), from the element data the force stage left in the field states.
 
-#include "hof/mechanics/mechanical_model.h"
 #include "hof/mechanics/detail/solver_workspace.h"
+#include "hof/mechanics/mechanical_model.h"
 #include "hof/mechanics/mechanical_state.h"
 
 namespace hof::mechanics::detail {

@@ -46,8 +46,8 @@ void prepare_coarse_space(const MechanicalModel& model, CoarseSpace& coarse, std
   coarse.usable = false;
   const std::size_t nodes = model.node_count();
   if (nodes == 0) return;
-  const auto wanted = std::clamp<std::int32_t>(static_cast<std::int32_t>(std::lround(static_cast<double>(nodes) / kNodesPerAggregate)), 1,
-                                               kMaxAggregates);
+  const auto wanted = std::clamp<std::int32_t>(
+      static_cast<std::int32_t>(std::lround(static_cast<double>(nodes) / kNodesPerAggregate)), 1, kMaxAggregates);
   Eigen::Vector3d lo = model.rest_positions.front(), hi = lo;
   for (const Eigen::Vector3d& p : model.rest_positions) {
     lo = lo.cwiseMin(p);
@@ -147,7 +147,8 @@ bool build_coarse_space(const MechanicalModel& model, MechanicalState& state) {
     const double size = coarse.size[static_cast<std::size_t>(coarse.aggregate[i])];
     coarse.arm[i] /= size > 0.0 ? size : 1.0;
   }
-  if (!coarse.arm.empty() && !std::all_of(coarse.arm.begin(), coarse.arm.end(), [](const Eigen::Vector3d& d) { return d.allFinite(); })) {
+  if (!coarse.arm.empty() &&
+      !std::all_of(coarse.arm.begin(), coarse.arm.end(), [](const Eigen::Vector3d& d) { return d.allFinite(); })) {
     return false;
   }
 
@@ -167,7 +168,8 @@ bool build_coarse_space(const MechanicalModel& model, MechanicalState& state) {
       if (single) {
         const float* values = a.single_block(s);
         for (int q = 0; q < 3; ++q) {
-          for (int r = 0; r < 3; ++r) block(r, q) = static_cast<double>(values[BlockSparseMatrix::kSingleColumnStride * q + r]);
+          for (int r = 0; r < 3; ++r)
+            block(r, q) = static_cast<double>(values[BlockSparseMatrix::kSingleColumnStride * q + r]);
         }
       } else {
         block = a.block(s);
@@ -220,9 +222,11 @@ void prolong_from_coarse(const MechanicalModel& model, const CoarseSpace& coarse
   for (std::size_t i = first; i < last; ++i) {
     const double* yi = y + 6 * static_cast<std::size_t>(coarse.aggregate[i]);
     // Pᵢ y = translation + rotation × armᵢ.
-    const Eigen::Vector3d motion = Eigen::Vector3d(yi[0], yi[1], yi[2]) + Eigen::Vector3d(yi[3], yi[4], yi[5]).cross(coarse.arm[i]);
+    const Eigen::Vector3d motion =
+        Eigen::Vector3d(yi[0], yi[1], yi[2]) + Eigen::Vector3d(yi[3], yi[4], yi[5]).cross(coarse.arm[i]);
     for (int axis = 0; axis < 3; ++axis) {
-      if (!model.fixed_dof_mask[3 * i + static_cast<std::size_t>(axis)]) z[3 * i + static_cast<std::size_t>(axis)] += motion[axis];
+      if (!model.fixed_dof_mask[3 * i + static_cast<std::size_t>(axis)])
+        z[3 * i + static_cast<std::size_t>(axis)] += motion[axis];
     }
   }
 }

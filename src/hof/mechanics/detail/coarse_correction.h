@@ -25,8 +25,8 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "hof/mechanics/mechanical_model.h"
 #include "hof/mechanics/detail/solver_workspace.h"
+#include "hof/mechanics/mechanical_model.h"
 #include "hof/mechanics/mechanical_state.h"
 
 namespace hof::mechanics::detail {

@@ -26,8 +26,8 @@ Expected<std::unique_ptr<ConstantForceField>> ConstantForceField::make(std::size
     field->forces_ = config.forces;
   } else {
     return make_error(ErrorCode::kInvalidArgument,
-                      fmt::format("{}: {} forces for {} indices (give one per index, one for all, or totalForce)",
-                                  who, config.forces.size(), config.indices.size()));
+                      fmt::format("{}: {} forces for {} indices (give one per index, one for all, or totalForce)", who,
+                                  config.forces.size(), config.indices.size()));
   }
   for (const Vec3& force : field->forces_) {
     if (!force.allFinite()) return make_error(ErrorCode::kInvalidArgument, fmt::format("{}: non-finite force", who));
@@ -46,7 +46,8 @@ bool ConstantForceField::add_force_sum_on(const Eigen::VectorXd&, const Eigen::V
 
 void ConstantForceField::add_force(const Eigen::VectorXd&, const Eigen::VectorXd&, ForceFieldState&,
                                    Eigen::VectorXd& f) const {
-  for (std::size_t k = 0; k < indices_.size(); ++k) f.segment<3>(3 * static_cast<Eigen::Index>(indices_[k])) += forces_[k];
+  for (std::size_t k = 0; k < indices_.size(); ++k)
+    f.segment<3>(3 * static_cast<Eigen::Index>(indices_[k])) += forces_[k];
 }
 
 double ConstantForceField::potential_energy(const Eigen::VectorXd& x, const ForceFieldState&) const {

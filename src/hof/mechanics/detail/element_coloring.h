@@ -67,8 +67,10 @@ ElementColoring color_elements(std::span<const std::array<std::int32_t, K>> elem
     color[e] = c;
     colors = std::max(colors, c + 1);
     for (std::int32_t n : elements[e]) {
-      if (c < 64) used[n] |= std::uint64_t{1} << c;
-      else overflow_used[n].push_back(c);
+      if (c < 64)
+        used[n] |= std::uint64_t{1} << c;
+      else
+        overflow_used[n].push_back(c);
     }
   }
   ElementColoring out;

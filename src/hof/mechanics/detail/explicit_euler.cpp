@@ -1,6 +1,6 @@
 #include "hof/mechanics/detail/integrators.h"
-#include "hof/mechanics/detail/solver_workspace.h"
 #include "hof/mechanics/detail/parallel.h"
+#include "hof/mechanics/detail/solver_workspace.h"
 #include "hof/mechanics/detail/vector_kernels.h"
 
 namespace hof::mechanics::detail {
@@ -11,7 +11,8 @@ void apply_inverse_mass(const MechanicalModel& model, const Eigen::VectorXd& in,
     for (std::size_t i = b; i < e; ++i) {
       const Eigen::Index k = 3 * static_cast<Eigen::Index>(i);
       const double inverse_mass = 1.0 / model.node_mass_kg[i];
-      for (Eigen::Index a = 0; a < 3; ++a) out[k + a] = model.fixed_dof_mask[static_cast<std::size_t>(k + a)] ? 0.0 : inverse_mass * in[k + a];
+      for (Eigen::Index a = 0; a < 3; ++a)
+        out[k + a] = model.fixed_dof_mask[static_cast<std::size_t>(k + a)] ? 0.0 : inverse_mass * in[k + a];
     }
   });
 }

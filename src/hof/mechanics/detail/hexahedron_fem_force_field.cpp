@@ -136,10 +136,9 @@ HexahedronFemForceField::ElementMatrix hex_element_stiffness(const std::array<Ve
   return k;
 }
 
-Expected<std::unique_ptr<HexahedronFemForceField>> HexahedronFemForceField::make(const std::vector<Vec3>& rest_positions,
-                                                                                 const std::vector<mesh::Hex>& hexes,
-                                                                                 const HexahedronFemConfig& config,
-                                                                                 std::string name) {
+Expected<std::unique_ptr<HexahedronFemForceField>> HexahedronFemForceField::make(
+    const std::vector<Vec3>& rest_positions, const std::vector<mesh::Hex>& hexes, const HexahedronFemConfig& config,
+    std::string name) {
   const std::string who = fmt::format("HexahedronFEMForceField '{}'", name);
   const auto valid_poisson = [](double nu) { return nu > -1.0 && nu < 0.5; };
   const auto valid_young = [](double e) { return e > 0.0 && std::isfinite(e); };
@@ -154,8 +153,8 @@ Expected<std::unique_ptr<HexahedronFemForceField>> HexahedronFemForceField::make
   if (hexes.empty()) {
     return make_error(ErrorCode::kInvalidArgument, fmt::format("{}: the topology has no hexahedra", who));
   }
-  if (auto ok = check_element_list(config.element_young_modulus_pa, hexes.size(), who, "youngModulus", "> 0 Pa",
-                                   valid_young);
+  if (auto ok =
+          check_element_list(config.element_young_modulus_pa, hexes.size(), who, "youngModulus", "> 0 Pa", valid_young);
       !ok) {
     return std::unexpected(ok.error());
   }
@@ -212,10 +211,9 @@ Expected<std::unique_ptr<HexahedronFemForceField>> HexahedronFemForceField::make
       e.rest_offsets[c] = rest[c] - centre;
       extent = std::max(extent, e.rest_offsets[c].norm());
     }
-    const double element_young =
-        config.element_young_modulus_pa.empty() || config.element_young_modulus_pa[h] == 0.0
-            ? config.young_modulus_pa
-            : config.element_young_modulus_pa[h];
+    const double element_young = config.element_young_modulus_pa.empty() || config.element_young_modulus_pa[h] == 0.0
+                                     ? config.young_modulus_pa
+                                     : config.element_young_modulus_pa[h];
     const double element_poisson = config.element_poisson_ratio.empty() || config.element_poisson_ratio[h] == 0.0
                                        ? config.poisson_ratio
                                        : config.element_poisson_ratio[h];
@@ -224,8 +222,7 @@ Expected<std::unique_ptr<HexahedronFemForceField>> HexahedronFemForceField::make
     ShapeKey key{};
     for (int c = 1; c < 8; ++c) {
       for (int a = 0; a < 3; ++a) {
-        key[static_cast<std::size_t>(3 * (c - 1) + a)] =
-            std::llround((rest[c][a] - rest[0][a]) / model_size * 0x1p40);
+        key[static_cast<std::size_t>(3 * (c - 1) + a)] = std::llround((rest[c][a] - rest[0][a]) / model_size * 0x1p40);
       }
     }
     key[21] = std::bit_cast<std::int64_t>(element_poisson);
@@ -249,7 +246,8 @@ Expected<std::unique_ptr<HexahedronFemForceField>> HexahedronFemForceField::make
       // The same matrix as 64 padded column-major blocks (the system matrix's layout).
       for (int block = 0; block < 64; ++block) {
         for (int q = 0; q < 3; ++q) {
-          for (int row = 0; row < 3; ++row) field->stiffness_lanes_.push_back(k(3 * (block / 8) + row, 3 * (block % 8) + q));
+          for (int row = 0; row < 3; ++row)
+            field->stiffness_lanes_.push_back(k(3 * (block / 8) + row, 3 * (block % 8) + q));
           field->stiffness_lanes_.push_back(0.0);
         }
       }
@@ -267,7 +265,8 @@ Expected<std::unique_ptr<HexahedronFemForceField>> HexahedronFemForceField::make
   node_lists.reserve(field->elements_.size());
   for (const Element& e : field->elements_) node_lists.push_back(e.nodes);
   field->coloring_ = color_elements<8>(std::span<const std::array<std::int32_t, 8>>(node_lists), rest_positions.size());
-  field->incidence_ = make_node_incidence<8>(std::span<const std::array<std::int32_t, 8>>(node_lists), rest_positions.size());
+  field->incidence_ =
+      make_node_incidence<8>(std::span<const std::array<std::int32_t, 8>>(node_lists), rest_positions.size());
   return field;
 }
 
@@ -291,7 +290,8 @@ void HexahedronFemForceField::bind(const BlockSparseMatrix& pattern) {
     const Element& e = elements_[index];
     for (int a = 0; a < 8; ++a) {
       for (int b = 0; b < 8; ++b) {
-        slots_[index][static_cast<std::size_t>(8 * a + b)] = static_cast<std::int32_t>(pattern.slot(e.nodes[a], e.nodes[b]));
+        slots_[index][static_cast<std::size_t>(8 * a + b)] =
+            static_cast<std::int32_t>(pattern.slot(e.nodes[a], e.nodes[b]));
       }
     }
   }
@@ -361,7 +361,8 @@ void HexahedronFemForceField::add_force(const Eigen::VectorXd& x, const Eigen::V
     const Mat3 r = rotation(e, offsets);
     rotations[static_cast<std::size_t>(index)] = r;
     // f = −R K (Rᵀ x − x₀) (Nesme et al. 2005).
-    const Vector24 ku = e.young_modulus_pa * (stiffness_[static_cast<std::size_t>(e.stiffness)] * displacement(e, r, offsets));
+    const Vector24 ku =
+        e.young_modulus_pa * (stiffness_[static_cast<std::size_t>(e.stiffness)] * displacement(e, r, offsets));
     for (int c = 0; c < 8; ++c) {
       f.segment<3>(3 * static_cast<Eigen::Index>(e.nodes[c])) -= r * ku.segment<3>(3 * c);
     }

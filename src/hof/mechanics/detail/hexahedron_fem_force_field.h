@@ -22,11 +22,11 @@
 
 #include "hof/core/error.h"
 #include "hof/mechanics/detail/element_coloring.h"
-#include "hof/mechanics/force_field.h"
-#include "hof/mechanics/force_field_config.h"
 #include "hof/mechanics/detail/node_incidence.h"
 #include "hof/mechanics/detail/stiffness_writer.h"
 #include "hof/mechanics/detail/tetrahedron_fem_force_field.h"
+#include "hof/mechanics/force_field.h"
+#include "hof/mechanics/force_field_config.h"
 #include "hof/mesh/hex_grid.h"
 
 namespace hof::mechanics {
@@ -92,10 +92,10 @@ class HexahedronFemForceField final : public ForceField {
   // the assembly's four-lane arithmetic.
   static constexpr std::size_t kLaneMatrixSize = 64 * 12;
   std::vector<double> stiffness_lanes_;
-  ElementColoring coloring_;                               // elements sharing no node, per colour
-  NodeIncidence incidence_;                                // per node, its (element, corner) entries
-  std::vector<std::array<std::int32_t, 64>> slots_;        // per element, block (a, b) at [8a + b]
-  bool covers_pattern_{false};                             // every block of the pattern is ours
+  ElementColoring coloring_;                         // elements sharing no node, per colour
+  NodeIncidence incidence_;                          // per node, its (element, corner) entries
+  std::vector<std::array<std::int32_t, 64>> slots_;  // per element, block (a, b) at [8a + b]
+  bool covers_pattern_{false};                       // every block of the pattern is ours
   std::size_t node_count_{0};
 };
 
@@ -103,7 +103,7 @@ class HexahedronFemForceField final : public ForceField {
 /// parameters λ, μ: K_ab = Σ_g det J_g (λ g_a g_bᵀ + μ g_b g_aᵀ + μ (g_a·g_b) I) over the 2×2×2
 /// Gauss points, g_c = ∇N_c there (Hughes, "The finite element method", 1987, §3.5 and §4.2).
 /// Also the smallest Jacobian determinant met (≤ 0: degenerate or inverted), in `min_det`.
-[[nodiscard]] HexahedronFemForceField::ElementMatrix hex_element_stiffness(const std::array<Vec3, 8>& rest, double lambda,
-                                                                           double mu, double& min_det);
+[[nodiscard]] HexahedronFemForceField::ElementMatrix hex_element_stiffness(const std::array<Vec3, 8>& rest,
+                                                                           double lambda, double mu, double& min_det);
 
 }  // namespace hof::mechanics

@@ -1,8 +1,8 @@
 #include "hof/mechanics/detail/assembly.h"
-#include "hof/mechanics/detail/solver_workspace.h"
 #include "hof/mechanics/detail/integrators.h"
 #include "hof/mechanics/detail/linear_solve.h"
 #include "hof/mechanics/detail/parallel.h"
+#include "hof/mechanics/detail/solver_workspace.h"
 #include "hof/mechanics/detail/vector_kernels.h"
 
 namespace hof::mechanics::detail {
@@ -16,8 +16,8 @@ bool implicit_euler_step(const MechanicalModel& model, MechanicalState& state) {
   auto t0 = StageClock::now();
   const double mass_coeff = 1.0 + h * rm, stiffness_coeff = h * (h + rk);
   const bool reuse = w.system_assembled_step >= 0 && state.steps > w.system_assembled_step &&
-                     state.steps - w.system_assembled_step < model.ode.matrix_reuse_steps && w.system_mass_coeff == mass_coeff &&
-                     w.system_stiffness_coeff == stiffness_coeff;
+                     state.steps - w.system_assembled_step < model.ode.matrix_reuse_steps &&
+                     w.system_mass_coeff == mass_coeff && w.system_stiffness_coeff == stiffness_coeff;
   if (!reuse) {
     assemble_system(model, state, mass_coeff, stiffness_coeff);
     w.system_assembled_step = state.steps;

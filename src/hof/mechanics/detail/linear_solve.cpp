@@ -79,14 +79,14 @@ struct DirectSolver {
 
   cholmod_common common{};
   OpenMpLevels openmp;
-  Eigen::SparseMatrix<double> lower;         // lower triangle of P A Pᵀ; values refilled each step
+  Eigen::SparseMatrix<double> lower;           // lower triangle of P A Pᵀ; values refilled each step
   std::vector<std::int64_t> lower_from_block;  // lower value k <- block value index
-  std::vector<int> permutation;              // dof i of A is dof permutation[i] of P A Pᵀ
-  cholmod_factor* supernodal{nullptr};       // supernodal LLᵀ of P A Pᵀ
+  std::vector<int> permutation;                // dof i of A is dof permutation[i] of P A Pᵀ
+  cholmod_factor* supernodal{nullptr};         // supernodal LLᵀ of P A Pᵀ
   // Simplicial LDLᵀ of the same matrix, used when LLᵀ finds A not positive definite (a
   // static Newton step on a buckled hyperelastic body): LDLᵀ without pivoting, as before.
   cholmod_factor* simplicial{nullptr};
-  cholmod_dense* solution{nullptr};          // (n) P x
+  cholmod_dense* solution{nullptr};                 // (n) P x
   cholmod_dense* workspace_y[2]{nullptr, nullptr};  // cholmod_solve2's workspace, per factor
   cholmod_dense* workspace_e[2]{nullptr, nullptr};
   detail::DirectOrdering ordering{detail::DirectOrdering::kNone};
@@ -97,7 +97,6 @@ struct DirectSolver {
 };
 
 void DirectSolverDeleter::operator()(DirectSolver* solver) const noexcept { delete solver; }
-
 
 namespace {
 
@@ -120,10 +119,14 @@ cholmod_sparse view_lower(Eigen::SparseMatrix<double>& m) {
 
 DirectOrdering ordering_of(int cholmod_ordering) {
   switch (cholmod_ordering) {
-    case CHOLMOD_AMD: return DirectOrdering::kAmd;
-    case CHOLMOD_METIS: return DirectOrdering::kMetis;
-    case CHOLMOD_NESDIS: return DirectOrdering::kNestedDissection;
-    default: return DirectOrdering::kOther;
+    case CHOLMOD_AMD:
+      return DirectOrdering::kAmd;
+    case CHOLMOD_METIS:
+      return DirectOrdering::kMetis;
+    case CHOLMOD_NESDIS:
+      return DirectOrdering::kNestedDissection;
+    default:
+      return DirectOrdering::kOther;
   }
 }
 
@@ -159,7 +162,9 @@ void prepare_cg_exchange(const MechanicalModel& model, SolverWorkspace& w, int t
   const std::size_t nodes = model.node_count();
   const CgChunks split = cg_chunks(nodes);
   // Small systems are solved on one thread: the passes would cost more to share.
-  w.cg_parts = 3 * nodes >= kParallelThreshold ? std::min<std::size_t>(static_cast<std::size_t>(std::max(threads, 1)), split.count) : 1;
+  w.cg_parts = 3 * nodes >= kParallelThreshold
+                   ? std::min<std::size_t>(static_cast<std::size_t>(std::max(threads, 1)), split.count)
+                   : 1;
   const std::size_t parts = w.cg_parts;
   if (!uses_single_precision(model) || parts < 2) return;
   const BlockSparseMatrix& a = w.system;
@@ -187,7 +192,8 @@ void prepare_cg_exchange(const MechanicalModel& model, SolverWorkspace& w, int t
     for (std::size_t row = first; row < last; ++row) {
       for (std::int64_t k = 2 * pair_start[row]; k < 2 * pair_start[row + 1]; ++k) {
         std::int32_t& col = w.cg_pair_columns[static_cast<std::size_t>(k)];
-        if (static_cast<std::size_t>(col) < first || static_cast<std::size_t>(col) >= last) col = copy_of[static_cast<std::size_t>(col)];
+        if (static_cast<std::size_t>(col) < first || static_cast<std::size_t>(col) >= last)
+          col = copy_of[static_cast<std::size_t>(col)];
       }
     }
   }
@@ -243,7 +249,8 @@ void prepare_linear_solver(const MechanicalModel& model, MechanicalState& state,
               row = (*permutation)[static_cast<std::size_t>(row)];
               col = (*permutation)[static_cast<std::size_t>(col)];
             }
-            if (row >= col) triplets.emplace_back(row, col, static_cast<double>(BlockSparseMatrix::value_index(s, i, j) + 1));
+            if (row >= col)
+              triplets.emplace_back(row, col, static_cast<double>(BlockSparseMatrix::value_index(s, i, j) + 1));
           }
         }
       }
@@ -304,8 +311,13 @@ void prepare_linear_solver(const MechanicalModel& model, MechanicalState& state,
 DirectSolverInfo direct_solver_info(const MechanicalState& state) {
   const DirectSolver* d = state.work->direct.get();
   if (d == nullptr) return {};
-  return {true, d->supernodal != nullptr && d->supernodal->is_super != 0, d->last_used_fallback, d->factorisations,
-          d->ordering, d->factor_nonzeros, d->factor_flops};
+  return {true,
+          d->supernodal != nullptr && d->supernodal->is_super != 0,
+          d->last_used_fallback,
+          d->factorisations,
+          d->ordering,
+          d->factor_nonzeros,
+          d->factor_flops};
 }
 
 namespace {
@@ -341,7 +353,8 @@ bool solve_direct(MechanicalState& state, const Eigen::VectorXd& b, Eigen::Vecto
   rhs.x = w.z.data();
   rhs.xtype = CHOLMOD_REAL;
   rhs.dtype = CHOLMOD_DOUBLE;
-  if (cholmod_solve2(CHOLMOD_A, l, &rhs, nullptr, &d.solution, nullptr, &d.workspace_y[which], &d.workspace_e[which], &cc) == 0) {
+  if (cholmod_solve2(CHOLMOD_A, l, &rhs, nullptr, &d.solution, nullptr, &d.workspace_y[which], &d.workspace_e[which],
+                     &cc) == 0) {
     return false;
   }
   const double* px = static_cast<const double*>(d.solution->x);
@@ -356,7 +369,8 @@ void refresh_coarse_space(const MechanicalModel& model, MechanicalState& state) 
   const LinearSolverConfig& cfg = model.linear;
   const CoarseSpace& coarse = state.work->coarse;
   if (cfg.coarse_correction && coarse.aggregates > 0 &&
-      (coarse.built_step < 0 || state.steps < coarse.built_step || state.steps - coarse.built_step >= cfg.coarse_refresh_steps)) {
+      (coarse.built_step < 0 || state.steps < coarse.built_step ||
+       state.steps - coarse.built_step >= cfg.coarse_refresh_steps)) {
     build_coarse_space(model, state);
   }
 }
@@ -377,12 +391,14 @@ void warm_start_product(const BlockSparseMatrix& a, bool single, const Eigen::Ve
 }
 
 // The inverse diagonal of A's rows [n0, n1) (the two-level preconditioner's fine part).
-void invert_diagonal(const BlockSparseMatrix& a, bool single, std::size_t n0, std::size_t n1, double* diagonal_inverse) {
+void invert_diagonal(const BlockSparseMatrix& a, bool single, std::size_t n0, std::size_t n1,
+                     double* diagonal_inverse) {
   for (std::size_t n = n0; n < n1; ++n) {
     const std::int64_t slot = a.diagonal_slot(static_cast<std::int32_t>(n));
     for (int q = 0; q < 3; ++q) {
-      const double entry = single ? static_cast<double>(a.single_block(slot)[BlockSparseMatrix::kSingleColumnStride * q + q])
-                                  : a.block(slot)(q, q);
+      const double entry =
+          single ? static_cast<double>(a.single_block(slot)[BlockSparseMatrix::kSingleColumnStride * q + q])
+                 : a.block(slot)(q, q);
       diagonal_inverse[3 * n + static_cast<std::size_t>(q)] = 1.0 / entry;
     }
   }
@@ -521,8 +537,10 @@ bool solve_cg(const MechanicalModel& model, MechanicalState& state, const Eigen:
   };
   // Az over the rows of [d0, d1).
   auto multiply_z = [&](std::size_t d0, std::size_t d1) {
-    if (single) a.multiply_single_rows(z_single, product_columns, azs, d0 / 3, d1 / 3);
-    else a.multiply_rows(z, w.az, d0 / 3, d1 / 3);
+    if (single)
+      a.multiply_single_rows(z_single, product_columns, azs, d0 / 3, d1 / 3);
+    else
+      a.multiply_rows(z, w.az, d0 / 3, d1 / 3);
   };
 
   // A warm start begins at the last solution x₀: its residual b − A x₀ needs one product
@@ -599,8 +617,8 @@ bool solve_cg(const MechanicalModel& model, MechanicalState& state, const Eigen:
     // Pass A: x += αp, r −= αAp, z = M⁻¹r; rᵀr and rᵀz.
     over_chunks([&](std::size_t c, std::size_t d0, std::size_t d1) {
       // Without a preconditioner z is r: the update rounds it for the product as it goes.
-      const double rr = cg_update_solution(xs, rs, ps, aps, alpha, single && !precondition && !last ? z_single : nullptr,
-                                           d0 / 3, d1 / 3);
+      const double rr = cg_update_solution(xs, rs, ps, aps, alpha,
+                                           single && !precondition && !last ? z_single : nullptr, d0 / 3, d1 / 3);
       double rz = rr;
       if (last) {
         part1[c] = rr;

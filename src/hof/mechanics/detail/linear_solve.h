@@ -32,13 +32,13 @@ enum class DirectOrdering : std::uint8_t { kNone, kAmd, kMetis, kNestedDissectio
 
 /// What the sparse direct solver of a state factors with (tests, benchmarks, reports).
 struct DirectSolverInfo {
-  bool prepared{false};              ///< the state has a direct solver (kSparseLdlt and a matrix)
-  bool supernodal{false};            ///< the main factor is CHOLMOD's supernodal LLᵀ
-  bool last_used_fallback{false};    ///< the last factorisation found A not positive definite: simplicial LDLᵀ solved
-  std::int64_t factorisations{0};    ///< numeric factorisations so far (main and fallback)
+  bool prepared{false};            ///< the state has a direct solver (kSparseLdlt and a matrix)
+  bool supernodal{false};          ///< the main factor is CHOLMOD's supernodal LLᵀ
+  bool last_used_fallback{false};  ///< the last factorisation found A not positive definite: simplicial LDLᵀ solved
+  std::int64_t factorisations{0};  ///< numeric factorisations so far (main and fallback)
   DirectOrdering ordering{DirectOrdering::kNone};
-  double factor_nonzeros{0.0};       ///< nnz(L)
-  double factor_flops{0.0};          ///< floating-point operations of one factorisation
+  double factor_nonzeros{0.0};  ///< nnz(L)
+  double factor_flops{0.0};     ///< floating-point operations of one factorisation
 };
 
 /// The direct solver's figures for `state` (prepared false when it has none).

@@ -12,25 +12,31 @@
 
 namespace hof::mechanics {
 
-Expected<std::unique_ptr<MeshSpringForceField>> MeshSpringForceField::make(
-    const std::vector<Vec3>& rest_positions, const std::vector<mesh::Tet>& tets,
-    const std::vector<mesh::Tri>& triangles, const MeshSpringConfig& config, std::string name) {
+Expected<std::unique_ptr<MeshSpringForceField>> MeshSpringForceField::make(const std::vector<Vec3>& rest_positions,
+                                                                           const std::vector<mesh::Tet>& tets,
+                                                                           const std::vector<mesh::Tri>& triangles,
+                                                                           const MeshSpringConfig& config,
+                                                                           std::string name) {
   const std::string who = fmt::format("MeshSpringForceField '{}'", name);
   const auto valid = [](double value) { return value >= 0.0 && std::isfinite(value); };
   // Named as SOFA's data (stiffness, trianglesStiffness, ...).
-  const auto check_values = [&](const SpringValues& values, const char* stiffness, const char* damping) -> Expected<void> {
+  const auto check_values = [&](const SpringValues& values, const char* stiffness,
+                                const char* damping) -> Expected<void> {
     if (!valid(values.stiffness)) {
-      return make_error(ErrorCode::kInvalidArgument, fmt::format("{}: {} must be >= 0, got {}", who, stiffness, values.stiffness));
+      return make_error(ErrorCode::kInvalidArgument,
+                        fmt::format("{}: {} must be >= 0, got {}", who, stiffness, values.stiffness));
     }
     if (!valid(values.damping)) {
-      return make_error(ErrorCode::kInvalidArgument, fmt::format("{}: {} must be >= 0, got {}", who, damping, values.damping));
+      return make_error(ErrorCode::kInvalidArgument,
+                        fmt::format("{}: {} must be >= 0, got {}", who, damping, values.damping));
     }
     return {};
   };
   const SpringValues generic{config.stiffness_n_per_m, config.damping_n_s_per_m};
   if (auto ok = check_values(generic, "stiffness", "damping"); !ok) return std::unexpected(ok.error());
   if (config.triangles) {
-    if (auto ok = check_values(*config.triangles, "trianglesStiffness", "trianglesDamping"); !ok) return std::unexpected(ok.error());
+    if (auto ok = check_values(*config.triangles, "trianglesStiffness", "trianglesDamping"); !ok)
+      return std::unexpected(ok.error());
   }
   if (config.tetrahedra) {
     if (auto ok = check_values(*config.tetrahedra, "tetrahedraStiffness", "tetrahedraDamping"); !ok) {
@@ -50,8 +56,9 @@ Expected<std::unique_ptr<MeshSpringForceField>> MeshSpringForceField::make(
     std::vector<mesh::Edge> edges;
     SpringValues values;
   };
-  const std::array<KindEdges, 2> kinds = {KindEdges{mesh::triangle_edges(triangles), config.triangles.value_or(generic)},
-                                          KindEdges{mesh::tet_edges(tets), config.tetrahedra.value_or(generic)}};
+  const std::array<KindEdges, 2> kinds = {
+      KindEdges{mesh::triangle_edges(triangles), config.triangles.value_or(generic)},
+      KindEdges{mesh::tet_edges(tets), config.tetrahedra.value_or(generic)}};
   const bool any_active = std::ranges::any_of(kinds, [](const KindEdges& k) {
     return !k.edges.empty() && (k.values.stiffness != 0.0 || k.values.damping != 0.0);
   });
@@ -63,9 +70,11 @@ Expected<std::unique_ptr<MeshSpringForceField>> MeshSpringForceField::make(
     for (const mesh::Edge& e : kinds[kind].edges) claimed.emplace_back(e, kind);
   }
   std::sort(claimed.begin(), claimed.end());
-  claimed.erase(std::unique(claimed.begin(), claimed.end(), [](const auto& a, const auto& b) { return a.first == b.first; }),
-                claimed.end());
-  if (claimed.empty()) return make_error(ErrorCode::kInvalidArgument, fmt::format("{}: the topology has no edges", who));
+  claimed.erase(
+      std::unique(claimed.begin(), claimed.end(), [](const auto& a, const auto& b) { return a.first == b.first; }),
+      claimed.end());
+  if (claimed.empty())
+    return make_error(ErrorCode::kInvalidArgument, fmt::format("{}: the topology has no edges", who));
 
   auto field = std::unique_ptr<MeshSpringForceField>(new MeshSpringForceField());
   field->set_name(std::move(name));
@@ -73,7 +82,8 @@ Expected<std::unique_ptr<MeshSpringForceField>> MeshSpringForceField::make(
   field->springs_.reserve(claimed.size());
   for (const auto& [e, kind] : claimed) {
     if (e[0] < 0 || static_cast<std::size_t>(e[1]) >= rest_positions.size()) {
-      return make_error(ErrorCode::kInvalidMesh, fmt::format("{}: edge {}-{} refers to a missing node", who, e[0], e[1]));
+      return make_error(ErrorCode::kInvalidMesh,
+                        fmt::format("{}: edge {}-{} refers to a missing node", who, e[0], e[1]));
     }
     const double length = (rest_positions[e[1]] - rest_positions[e[0]]).norm();
     if (!(length > 0.0)) {
@@ -130,11 +140,14 @@ void gather_spring_forces(const double* __restrict records, const std::int32_t* 
   for (std::size_t n = first; n < last; ++n) {
     simd::Lanes sum = simd::splat(0.0);
     for (std::int32_t at = starts[n]; at < starts[n + 1]; ++at) {
-      if (at + kSpringPrefetchAhead < end) __builtin_prefetch(records + kRecord * static_cast<std::size_t>(entries[at + kSpringPrefetchAhead] >> 1));
+      if (at + kSpringPrefetchAhead < end)
+        __builtin_prefetch(records + kRecord * static_cast<std::size_t>(entries[at + kSpringPrefetchAhead] >> 1));
       const std::int32_t entry = entries[at];
       const simd::Lanes force_on_first = simd::load(records + kRecord * static_cast<std::size_t>(entry >> 1));
-      if (entry & 1) sum -= force_on_first;
-      else sum += force_on_first;
+      if (entry & 1)
+        sum -= force_on_first;
+      else
+        sum += force_on_first;
     }
     f[3 * n] += sum[0];
     f[3 * n + 1] += sum[1];
@@ -152,16 +165,16 @@ inline void add_spring_block(const double* record, simd::Lanes& a0, simd::Lanes&
 }
 
 template <StiffnessTarget kTarget>
-void write_spring_block(BlockSparseMatrix& k, std::int64_t slot, simd::Lanes a0, simd::Lanes a1, simd::Lanes a2, double t,
-                        double factor) {
-  write_block<kTarget>(k, slot, factor * (a0 + simd::Lanes{t, 0.0, 0.0, 0.0}), factor * (a1 + simd::Lanes{0.0, t, 0.0, 0.0}),
-                       factor * (a2 + simd::Lanes{0.0, 0.0, t, 0.0}));
+void write_spring_block(BlockSparseMatrix& k, std::int64_t slot, simd::Lanes a0, simd::Lanes a1, simd::Lanes a2,
+                        double t, double factor) {
+  write_block<kTarget>(k, slot, factor * (a0 + simd::Lanes{t, 0.0, 0.0, 0.0}),
+                       factor * (a1 + simd::Lanes{0.0, t, 0.0, 0.0}), factor * (a2 + simd::Lanes{0.0, 0.0, t, 0.0}));
 }
 
 template <StiffnessTarget kTarget>
 void fill_spring_diagonal(const double* __restrict records, const std::int32_t* __restrict starts,
-                          const std::int32_t* __restrict entries, const std::int32_t* __restrict slots, std::size_t first,
-                          std::size_t last, double scale, BlockSparseMatrix& k) {
+                          const std::int32_t* __restrict entries, const std::int32_t* __restrict slots,
+                          std::size_t first, std::size_t last, double scale, BlockSparseMatrix& k) {
   const std::int32_t end = starts[last];
   for (std::size_t n = first; n < last; ++n) {
     simd::Lanes a0 = simd::splat(0.0), a1 = a0, a2 = a0;
@@ -222,8 +235,8 @@ void MeshSpringForceField::bind(const BlockSparseMatrix& pattern) {
 }
 
 void MeshSpringForceField::spring_groups(const SpringGroup* __restrict groups, std::size_t begin, std::size_t end,
-                                         const double* __restrict xs, const double* __restrict vs,
-                                         bool exact_tangent, double* __restrict records) {
+                                         const double* __restrict xs, const double* __restrict vs, bool exact_tangent,
+                                         double* __restrict records) {
   using simd::Lanes;
   const Lanes zero = simd::splat(0.0);
   for (std::size_t g = begin; g < end; ++g) {
@@ -358,7 +371,8 @@ bool MeshSpringForceField::set_stiffness(const ForceFieldState& state, double sc
   return true;
 }
 
-bool MeshSpringForceField::set_stiffness_single(const ForceFieldState& state, double scale, BlockSparseMatrix& k) const {
+bool MeshSpringForceField::set_stiffness_single(const ForceFieldState& state, double scale,
+                                                BlockSparseMatrix& k) const {
   if (!covers_pattern_) return false;
   write_stiffness<StiffnessTarget::kSetSingle>(state, scale, k);
   return true;
@@ -367,9 +381,10 @@ bool MeshSpringForceField::set_stiffness_single(const ForceFieldState& state, do
 double MeshSpringForceField::potential_energy(const Eigen::VectorXd& x, const ForceFieldState&) const {
   double energy = 0.0;
   for (const Spring& s : springs_) {
-    const double stretch =
-        (x.segment<3>(3 * static_cast<Eigen::Index>(s.nodes[1])) - x.segment<3>(3 * static_cast<Eigen::Index>(s.nodes[0])))
-            .norm() - s.rest_length;
+    const double stretch = (x.segment<3>(3 * static_cast<Eigen::Index>(s.nodes[1])) -
+                            x.segment<3>(3 * static_cast<Eigen::Index>(s.nodes[0])))
+                               .norm() -
+                           s.rest_length;
     energy += 0.5 * s.stiffness * stretch * stretch;
   }
   return energy;

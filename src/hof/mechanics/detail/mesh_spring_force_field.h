@@ -12,9 +12,9 @@
 
 #include "hof/core/error.h"
 #include "hof/mechanics/detail/node_incidence.h"
+#include "hof/mechanics/detail/stiffness_writer.h"
 #include "hof/mechanics/force_field.h"
 #include "hof/mechanics/force_field_config.h"
-#include "hof/mechanics/detail/stiffness_writer.h"
 #include "hof/mesh/mesh.h"
 
 namespace hof::mechanics {
@@ -84,7 +84,7 @@ class MeshSpringForceField final : public ForceField {
   std::vector<Spring> springs_;
   std::vector<SpringGroup> groups_;
   bool exact_tangent_{false};  // SpringTangent::kExact
-  NodeIncidence incidence_;  // spring·2 + end
+  NodeIncidence incidence_;    // spring·2 + end
   std::vector<std::int32_t> diagonal_slots_;
   bool covers_pattern_{false};  // the pattern is the springs' node pairs and the diagonal
 };

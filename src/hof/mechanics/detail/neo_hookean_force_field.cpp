@@ -49,7 +49,8 @@ SignedSvd signed_svd(const Mat3& f) {
 // g(σ): ln σ above the threshold, its tangent line ln c + (σ − c)/c below; g' = 1/max(σ, c),
 // g'' = −1/σ² above and 0 below. g is C¹, finite for every finite σ (also σ ≤ 0).
 double extended_log(double s) {
-  return s >= kMinSingularValue ? std::log(s) : std::log(kMinSingularValue) + (s - kMinSingularValue) / kMinSingularValue;
+  return s >= kMinSingularValue ? std::log(s)
+                                : std::log(kMinSingularValue) + (s - kMinSingularValue) / kMinSingularValue;
 }
 double extended_log_slope(double s) { return 1.0 / std::max(s, kMinSingularValue); }
 double extended_log_curvature(double s) { return s >= kMinSingularValue ? -1.0 / (s * s) : 0.0; }
@@ -172,7 +173,8 @@ Expected<std::unique_ptr<NeoHookeanForceField>> NeoHookeanForceField::make(const
   const Lame lame = lame_parameters(config.young_modulus_pa, config.poisson_ratio);
   field->lambda_ = lame.lambda;
   field->mu_ = lame.mu;
-  const auto weights = element_modulus_weights(config.element_young_modulus_pa, config.young_modulus_pa, tets.size(), who);
+  const auto weights =
+      element_modulus_weights(config.element_young_modulus_pa, config.young_modulus_pa, tets.size(), who);
   if (!weights) return std::unexpected(weights.error());
   field->elements_.reserve(tets.size());
   for (std::size_t t = 0; t < tets.size(); ++t) {
@@ -250,7 +252,7 @@ void NeoHookeanForceField::add_stiffness(const ForceFieldState& state, double sc
     const double w = scale * e.volume;
     auto block_at = [&](int i, int j) {
       return BlockSparseMatrix::BlockRef(values + BlockSparseMatrix::kBlockStride *
-                                                                   static_cast<std::int64_t>(e.slots[4 * i + j]));
+                                                      static_cast<std::int64_t>(e.slots[4 * i + j]));
     };
     // T is symmetric, so K_ji = K_ijᵀ: compute i ≤ j and mirror, keeping K exactly symmetric.
     for (int i = 0; i < 4; ++i) {

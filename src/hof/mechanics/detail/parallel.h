@@ -41,8 +41,7 @@ void parallel_chunks(std::size_t n, std::size_t chunk, const Body& body,
 /// Sum over [0, n) of term(begin, end) per fixed chunk, added in chunk order (deterministic).
 /// `partials` is caller-owned scratch so that the loop does not allocate.
 template <class Term>
-double deterministic_sum(std::size_t n, std::size_t chunk, std::vector<double>& partials,
-                         const Term& term) {
+double deterministic_sum(std::size_t n, std::size_t chunk, std::vector<double>& partials, const Term& term) {
   if (n == 0) return 0.0;
   const std::size_t chunks = (n + chunk - 1) / chunk;
   if (partials.size() < chunks) partials.resize(chunks);

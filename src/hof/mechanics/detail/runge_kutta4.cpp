@@ -1,7 +1,7 @@
 #include "hof/mechanics/detail/integrators.h"
 #include "hof/mechanics/detail/solver_workspace.h"
-#include "hof/mechanics/forces.h"
 #include "hof/mechanics/detail/vector_kernels.h"
+#include "hof/mechanics/forces.h"
 
 namespace hof::mechanics::detail {
 

@@ -81,9 +81,7 @@ inline void store_four_nodes_single(float* p, Lanes a, Lanes b, Lanes c) {
 // 7) is spelled the same by GCC (12 and later) and clang, which has no __builtin_shuffle.
 
 /// v with lane 3 set to zero.
-[[nodiscard]] inline Lanes clear_lane3(Lanes v) {
-  return __builtin_shufflevector(v, splat(0.0), 0, 1, 2, 4);
-}
+[[nodiscard]] inline Lanes clear_lane3(Lanes v) { return __builtin_shufflevector(v, splat(0.0), 0, 1, 2, 4); }
 
 /// Lanes (x_k, y_k, z_k, 0) of element k from the x, y, z lanes of four elements: the 4x4
 /// transpose, for storing per-element vectors with whole-register writes.

@@ -2,10 +2,10 @@
 #include <cmath>
 
 #include "hof/mechanics/detail/assembly.h"
-#include "hof/mechanics/detail/solver_workspace.h"
 #include "hof/mechanics/detail/integrators.h"
-#include "hof/mechanics/forces.h"
 #include "hof/mechanics/detail/linear_solve.h"
+#include "hof/mechanics/detail/solver_workspace.h"
+#include "hof/mechanics/forces.h"
 
 namespace hof::mechanics::detail {
 

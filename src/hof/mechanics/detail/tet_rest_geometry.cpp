@@ -12,8 +12,8 @@ Expected<TetRestGeometry> tet_rest_geometry(const std::vector<Vec3>& rest_positi
   g.nodes = tet;
   for (std::int32_t n : g.nodes) {
     if (n < 0 || static_cast<std::size_t>(n) >= rest_positions.size()) {
-      return make_error(ErrorCode::kInvalidMesh,
-                        fmt::format("{}: tetrahedron {} refers to node {} of {}", who, index, n, rest_positions.size()));
+      return make_error(ErrorCode::kInvalidMesh, fmt::format("{}: tetrahedron {} refers to node {} of {}", who, index,
+                                                             n, rest_positions.size()));
     }
   }
   const Vec3& p0 = rest_positions[g.nodes[0]];
@@ -25,8 +25,8 @@ Expected<TetRestGeometry> tet_rest_geometry(const std::vector<Vec3>& rest_positi
   const double scale = dm.colwise().norm().maxCoeff();
   if (!(std::abs(det) > 1e-12 * scale * scale * scale)) {
     return make_error(ErrorCode::kInvalidMesh,
-                      fmt::format("{}: tetrahedron {} (nodes {} {} {} {}) is degenerate at rest (volume {:.3g} m^3)", who,
-                                  index, g.nodes[0], g.nodes[1], g.nodes[2], g.nodes[3], det / 6.0));
+                      fmt::format("{}: tetrahedron {} (nodes {} {} {} {}) is degenerate at rest (volume {:.3g} m^3)",
+                                  who, index, g.nodes[0], g.nodes[1], g.nodes[2], g.nodes[3], det / 6.0));
   }
   if (det < 0.0) {
     std::swap(g.nodes[2], g.nodes[3]);
@@ -43,19 +43,20 @@ Expected<TetRestGeometry> tet_rest_geometry(const std::vector<Vec3>& rest_positi
 }
 
 Expected<std::vector<double>> element_modulus_weights(const std::vector<double>& per_element, double young_modulus_pa,
-                                                     std::size_t element_count, const std::string& who) {
+                                                      std::size_t element_count, const std::string& who) {
   std::vector<double> weights(element_count, 1.0);
   if (per_element.empty()) return weights;
   if (per_element.size() != element_count) {
     return make_error(ErrorCode::kInvalidArgument,
-                      fmt::format("{}: youngModulus lists {} values; a per-element list needs one per element ({})", who,
-                                  per_element.size(), element_count));
+                      fmt::format("{}: youngModulus lists {} values; a per-element list needs one per element ({})",
+                                  who, per_element.size(), element_count));
   }
   for (std::size_t t = 0; t < element_count; ++t) {
     const double e = per_element[t];
     if (!(e >= 0.0) || !std::isfinite(e)) {
-      return make_error(ErrorCode::kInvalidArgument,
-                        fmt::format("{}: youngModulus of tetrahedron {} must be > 0 Pa (0: the field's own), got {}", who, t, e));
+      return make_error(
+          ErrorCode::kInvalidArgument,
+          fmt::format("{}: youngModulus of tetrahedron {} must be > 0 Pa (0: the field's own), got {}", who, t, e));
     }
     weights[t] = e > 0.0 ? e / young_modulus_pa : 1.0;
   }

@@ -48,7 +48,8 @@ void gather_corner_vectors(const double* __restrict vectors, const std::int32_t*
   for (std::size_t n = first; n < last; ++n) {
     simd::Lanes sum = simd::splat(0.0);
     for (std::int32_t k = starts[n]; k < starts[n + 1]; ++k) {
-      if (k + kTetPrefetchAhead < end) __builtin_prefetch(vectors + kCornerStride * static_cast<std::size_t>(entries[k + kTetPrefetchAhead]));
+      if (k + kTetPrefetchAhead < end)
+        __builtin_prefetch(vectors + kCornerStride * static_cast<std::size_t>(entries[k + kTetPrefetchAhead]));
       sum += simd::load(vectors + kCornerStride * static_cast<std::size_t>(entries[k]));
     }
     f[3 * n] += sum[0];
@@ -66,8 +67,8 @@ Lame lame_parameters(double young_modulus_pa, double poisson_ratio) {
 }
 
 Expected<std::unique_ptr<TetrahedronFemForceField>> TetrahedronFemForceField::make(
-    const std::vector<Vec3>& rest_positions, const std::vector<mesh::Tet>& tets,
-    const TetrahedronFemConfig& config, std::string name) {
+    const std::vector<Vec3>& rest_positions, const std::vector<mesh::Tet>& tets, const TetrahedronFemConfig& config,
+    std::string name) {
   const std::string who = fmt::format("TetrahedronFEMForceField '{}'", name);
   if (!(config.young_modulus_pa > 0.0) || !std::isfinite(config.young_modulus_pa)) {
     return make_error(ErrorCode::kInvalidArgument,
@@ -84,7 +85,8 @@ Expected<std::unique_ptr<TetrahedronFemForceField>> TetrahedronFemForceField::ma
   field->set_name(std::move(name));
   field->config_ = config;
   field->lame_ = lame_parameters(config.young_modulus_pa, config.poisson_ratio);
-  const auto weights = element_modulus_weights(config.element_young_modulus_pa, config.young_modulus_pa, tets.size(), who);
+  const auto weights =
+      element_modulus_weights(config.element_young_modulus_pa, config.young_modulus_pa, tets.size(), who);
   if (!weights) return std::unexpected(weights.error());
   field->elements_.reserve(tets.size());
   for (std::size_t t = 0; t < tets.size(); ++t) {
@@ -96,9 +98,9 @@ Expected<std::unique_ptr<TetrahedronFemForceField>> TetrahedronFemForceField::ma
   return field;
 }
 
-Expected<TetrahedronFemForceField::Element> TetrahedronFemForceField::make_element(const std::vector<Vec3>& rest_positions,
-                                                                                const mesh::Tet& tet, std::size_t index,
-                                                                                double modulus_weight, const std::string& who) {
+Expected<TetrahedronFemForceField::Element> TetrahedronFemForceField::make_element(
+    const std::vector<Vec3>& rest_positions, const mesh::Tet& tet, std::size_t index, double modulus_weight,
+    const std::string& who) {
   auto rest = tet_rest_geometry(rest_positions, tet, index, who);
   if (!rest) return std::unexpected(rest.error());
   Element e{};
@@ -149,8 +151,10 @@ void TetrahedronFemForceField::index_elements(std::size_t node_count) {
     const auto base = static_cast<std::int32_t>(4 * e);
     for (int i = 0; i < 4; ++i) {
       for (int j = i + 1; j < 4; ++j) {
-        if (n[i] < n[j]) terms.push_back({n[i], n[j], base + i, base + j});
-        else terms.push_back({n[j], n[i], base + j, base + i});
+        if (n[i] < n[j])
+          terms.push_back({n[i], n[j], base + i, base + j});
+        else
+          terms.push_back({n[j], n[i], base + j, base + i});
       }
     }
   }
@@ -173,8 +177,10 @@ Expected<std::unique_ptr<TetrahedronFemForceField>> TetrahedronFemForceField::re
     const std::vector<std::int32_t>& old_element, const std::vector<std::int32_t>& new_of_old_node,
     const TetrahedronFemConfig& config, std::size_t& rebuilt) const {
   const std::string who = fmt::format("TetrahedronFEMForceField '{}'", name());
-  if (tets.empty()) return make_error(ErrorCode::kInvalidArgument, fmt::format("{}: the topology has no tetrahedra", who));
-  const auto weights = element_modulus_weights(config.element_young_modulus_pa, config.young_modulus_pa, tets.size(), who);
+  if (tets.empty())
+    return make_error(ErrorCode::kInvalidArgument, fmt::format("{}: the topology has no tetrahedra", who));
+  const auto weights =
+      element_modulus_weights(config.element_young_modulus_pa, config.young_modulus_pa, tets.size(), who);
   if (!weights) return std::unexpected(weights.error());
   auto field = std::unique_ptr<TetrahedronFemForceField>(new TetrahedronFemForceField());
   field->set_name(name());
@@ -208,7 +214,8 @@ ForceFieldState TetrahedronFemForceField::make_state() const {
   for (std::size_t e = 0; e < elements_.size(); ++e) {
     const double root_volume = std::sqrt(elements_[e].volume);
     for (int i = 0; i < 4; ++i) {
-      for (int q = 0; q < 3; ++q) s.scaled_gradients[kElementStride * e + kCornerStride * i + q] = root_volume * elements_[e].gradients[i][q];
+      for (int q = 0; q < 3; ++q)
+        s.scaled_gradients[kElementStride * e + kCornerStride * i + q] = root_volume * elements_[e].gradients[i][q];
     }
   }
   return s;
@@ -368,7 +375,7 @@ void TetrahedronFemForceField::large_groups(const ElementGroup* __restrict group
     // lane is overwritten by the next corner's. The last corner of the group's last element
     // is stored as three doubles: the next double belongs to the next group, which another
     // thread may be writing.
-    auto store_group = [](Lanes (&v)[4][3], double* out) {
+    auto store_group = [](Lanes(&v)[4][3], double* out) {
       Lanes per_corner[4][4];
       for (int i = 0; i < 4; ++i) simd::transpose_xyz(v[i][0], v[i][1], v[i][2], per_corner[i]);
       for (int lane = 0; lane < simd::kLanes; ++lane) {
@@ -392,7 +399,8 @@ void TetrahedronFemForceField::element_pass_large(const Eigen::VectorXd& x, Tetr
   parallel_chunks(
       groups_.size(), 16,
       [&](std::size_t begin, std::size_t end) {
-        large_groups(groups_.data(), begin, end, x.data(), lame_.lambda, 2.0 * lame_.mu, stiffness_vectors, corner_forces);
+        large_groups(groups_.data(), begin, end, x.data(), lame_.lambda, 2.0 * lame_.mu, stiffness_vectors,
+                     corner_forces);
       },
       /*min_parallel=*/64);
 }
@@ -422,7 +430,8 @@ void TetrahedronFemForceField::element_pass_general(const Eigen::VectorXd& x, Te
           const double root_volume = std::sqrt(e.volume);
           for (int i = 0; i < 4; ++i) {
             Eigen::Map<Vec3>(corner_forces + kElementStride * index + kCornerStride * i) = force_map * e.gradients[i];
-            Eigen::Map<Vec3>(stiffness_vectors + kElementStride * index + kCornerStride * i) = root_volume * (r * e.gradients[i]);
+            Eigen::Map<Vec3>(stiffness_vectors + kElementStride * index + kCornerStride * i) =
+                root_volume * (r * e.gradients[i]);
           }
         }
       },
@@ -433,7 +442,8 @@ void TetrahedronFemForceField::element_pass_general(const Eigen::VectorXd& x, Te
 // rotation method: `large` takes the same QR frame as the SIMD pass, so the sums agree to
 // round-off), their corners' forces summed where the corner is in the set.
 bool TetrahedronFemForceField::add_force_sum_on(const Eigen::VectorXd& x, const Eigen::VectorXd& /*v*/,
-                                                std::span<const std::int32_t> nodes, std::span<const std::uint8_t> in_set,
+                                                std::span<const std::int32_t> nodes,
+                                                std::span<const std::uint8_t> in_set,
                                                 std::vector<std::int32_t>& scratch, Vec3& total) const {
   scratch.clear();
   for (const std::int32_t n : nodes) {
@@ -455,8 +465,10 @@ bool TetrahedronFemForceField::add_force_sum_on(const Eigen::VectorXd& x, const 
 void TetrahedronFemForceField::add_force(const Eigen::VectorXd& x, const Eigen::VectorXd& /*v*/,
                                          ForceFieldState& field_state, Eigen::VectorXd& f) const {
   TetrahedronFemState& state = std::get<TetrahedronFemState>(field_state);
-  if (config_.method == FemMethod::kLarge) element_pass_large(x, state);
-  else element_pass_general(x, state);
+  if (config_.method == FemMethod::kLarge)
+    element_pass_large(x, state);
+  else
+    element_pass_general(x, state);
   // Node pass: each node gathers its corners' forces over its elements, in a fixed order.
   const double* corner_forces = state.corner_forces.data();
   parallel_chunks(
@@ -509,14 +521,15 @@ void write_pair(BlockSparseMatrix& k, simd::Lanes a0, simd::Lanes a1, simd::Lane
 // Diagonal blocks of nodes [first, last): A = Σ c̃ c̃ᵀ over the node's corners.
 template <StiffnessTarget kTarget>
 void fill_diagonal_blocks(const double* __restrict c, const std::int32_t* __restrict starts,
-                          const std::int32_t* __restrict entries, const std::int32_t* __restrict slots, std::size_t first,
-                          std::size_t last, double lambda, double mu, BlockSparseMatrix& k) {
+                          const std::int32_t* __restrict entries, const std::int32_t* __restrict slots,
+                          std::size_t first, std::size_t last, double lambda, double mu, BlockSparseMatrix& k) {
   using simd::Lanes;
   const std::int32_t end = starts[last];
   for (std::size_t n = first; n < last; ++n) {
     Lanes a0 = simd::splat(0.0), a1 = a0, a2 = a0;
     for (std::int32_t at = starts[n]; at < starts[n + 1]; ++at) {
-      if (at + kTetPrefetchAhead < end) __builtin_prefetch(c + kCornerStride * static_cast<std::size_t>(entries[at + kTetPrefetchAhead]));
+      if (at + kTetPrefetchAhead < end)
+        __builtin_prefetch(c + kCornerStride * static_cast<std::size_t>(entries[at + kTetPrefetchAhead]));
       const double* pi = c + kCornerStride * static_cast<std::size_t>(entries[at]);
       const Lanes ci = simd::load(pi);
       a0 += ci * simd::broadcast(pi);

@@ -17,9 +17,9 @@
 
 #include "hof/core/error.h"
 #include "hof/mechanics/detail/node_incidence.h"
+#include "hof/mechanics/detail/stiffness_writer.h"
 #include "hof/mechanics/force_field.h"
 #include "hof/mechanics/force_field_config.h"
-#include "hof/mechanics/detail/stiffness_writer.h"
 #include "hof/mesh/mesh.h"
 
 namespace hof::mechanics {
@@ -37,8 +37,7 @@ class TetrahedronFemForceField final : public ForceField {
   /// element that is degenerate or inverted at rest, or the parameter out of range.
   static Expected<std::unique_ptr<TetrahedronFemForceField>> make(const std::vector<Vec3>& rest_positions,
                                                                   const std::vector<mesh::Tet>& tets,
-                                                                  const TetrahedronFemConfig& config,
-                                                                  std::string name);
+                                                                  const TetrahedronFemConfig& config, std::string name);
 
   /// The field over a changed mesh (topology_change.h), rebuilding only what the change
   /// touched: element t of the result is element old_element[t] of this one — its rest data
@@ -47,12 +46,10 @@ class TetrahedronFemForceField final : public ForceField {
   /// index structures (incidence, SIMD groups, coupled pairs) are redone from the elements'
   /// node ids. `config` is the field's configuration over the new mesh (its per-element
   /// moduli are read for the new elements only: a kept element keeps its material).
-  [[nodiscard]] Expected<std::unique_ptr<TetrahedronFemForceField>> remade(const std::vector<Vec3>& rest_positions,
-                                                                           const std::vector<mesh::Tet>& tets,
-                                                                           const std::vector<std::int32_t>& old_element,
-                                                                           const std::vector<std::int32_t>& new_of_old_node,
-                                                                           const TetrahedronFemConfig& config,
-                                                                           std::size_t& rebuilt) const;
+  [[nodiscard]] Expected<std::unique_ptr<TetrahedronFemForceField>> remade(
+      const std::vector<Vec3>& rest_positions, const std::vector<mesh::Tet>& tets,
+      const std::vector<std::int32_t>& old_element, const std::vector<std::int32_t>& new_of_old_node,
+      const TetrahedronFemConfig& config, std::size_t& rebuilt) const;
 
   [[nodiscard]] std::string_view type_name() const override { return "TetrahedronFEMForceField"; }
   [[nodiscard]] ForceFieldState make_state() const override;
@@ -76,17 +73,17 @@ class TetrahedronFemForceField final : public ForceField {
  private:
   struct Element {
     std::array<std::int32_t, 4> nodes;
-    double volume;                       // rest volume × modulus weight (element_modulus_weights), m^3
-    std::array<Vec3, 4> gradients;       // shape-function gradients b_i at rest, 1/m
-    Mat3 rest_frame_transposed;          // QR frame of the rest element, transposed
+    double volume;                  // rest volume × modulus weight (element_modulus_weights), m^3
+    std::array<Vec3, 4> gradients;  // shape-function gradients b_i at rest, 1/m
+    Mat3 rest_frame_transposed;     // QR frame of the rest element, transposed
   };
   // Four elements side by side for the `large` element pass (one SIMD lane each). Groups are
   // padded with copies of element 0 whose volume is zero, so they produce nothing.
   struct ElementGroup {
-    std::int32_t nodes[4][4];         // [corner][lane]
-    double rest_gradients[9][4];      // H b_j, j = 1..3, in the rest QR frame: [3(j−1)+q][lane]
-    double volume[4];                 // V, zero for padding
-    double root_volume[4];            // √V
+    std::int32_t nodes[4][4];     // [corner][lane]
+    double rest_gradients[9][4];  // H b_j, j = 1..3, in the rest QR frame: [3(j−1)+q][lane]
+    double volume[4];             // V, zero for padding
+    double root_volume[4];        // √V
   };
   // One block pair (i, j), i < j, of the stiffness: the slots of (i, j) and (j, i) and the
   // element corners that couple the two nodes, terms [first, last).
@@ -100,8 +97,8 @@ class TetrahedronFemForceField final : public ForceField {
   TetrahedronFemForceField() = default;
   // One element's rest data (tet `index` of the mesh, for messages), its volume weighted by
   // its modulus (element_modulus_weights).
-  static Expected<Element> make_element(const std::vector<Vec3>& rest_positions, const mesh::Tet& tet, std::size_t index,
-                                        double modulus_weight, const std::string& who);
+  static Expected<Element> make_element(const std::vector<Vec3>& rest_positions, const mesh::Tet& tet,
+                                        std::size_t index, double modulus_weight, const std::string& who);
   // The structures that follow from the elements' node ids (incidence, groups, edges).
   void index_elements(std::size_t node_count);
   // Rotation of element e at positions x (identity for `small`).
@@ -123,10 +120,10 @@ class TetrahedronFemForceField final : public ForceField {
   std::vector<ElementGroup> groups_;
   // Per node, the element corners that use it (entry = 4·element + corner), for the gathers.
   NodeIncidence incidence_;
-  std::vector<EdgeBlocks> edges_;                      // sorted by (i, j)
+  std::vector<EdgeBlocks> edges_;                        // sorted by (i, j)
   std::vector<std::array<std::int32_t, 2>> edge_terms_;  // (entry of i, entry of j)
-  std::vector<std::int32_t> diagonal_slots_;           // per node
-  bool covers_pattern_{false};                         // every block of the pattern is ours
+  std::vector<std::int32_t> diagonal_slots_;             // per node
+  bool covers_pattern_{false};                           // every block of the pattern is ours
 };
 
 }  // namespace hof::mechanics

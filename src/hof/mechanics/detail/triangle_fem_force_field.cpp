@@ -1,7 +1,7 @@
 #include "hof/mechanics/detail/triangle_fem_force_field.h"
 
-#include <Eigen/Eigenvalues>
 #include <fmt/format.h>
+#include <Eigen/Eigenvalues>
 
 #include <algorithm>
 #include <cmath>
@@ -43,22 +43,27 @@ Eigen::Matrix3d elasticity(double e, double nu, bool plane_strain) {
 }  // namespace
 
 Expected<std::unique_ptr<TriangleFemForceField>> TriangleFemForceField::make(const std::vector<Vec3>& rest_positions,
-                                                                           const std::vector<mesh::Tri>& triangles,
-                                                                           const TriangleFemConfig& config,
-                                                                           std::string name) {
+                                                                             const std::vector<mesh::Tri>& triangles,
+                                                                             const TriangleFemConfig& config,
+                                                                             std::string name) {
   const std::string who = fmt::format("{} '{}'", config.sofa_type, name);
-  auto bad = [&](std::string what) { return make_error(ErrorCode::kInvalidArgument, fmt::format("{}: {}", who, what)); };
+  auto bad = [&](std::string what) {
+    return make_error(ErrorCode::kInvalidArgument, fmt::format("{}: {}", who, what));
+  };
   if (triangles.empty()) return bad("no triangles (give the node a triangle topology)");
   if (!(config.young_modulus_pa > 0.0) || !std::isfinite(config.young_modulus_pa)) {
     return bad(fmt::format("youngModulus must be > 0 Pa, got {}", config.young_modulus_pa));
   }
   auto valid_nu = [](double nu) { return nu > -1.0 && nu < 0.5; };
-  if (!valid_nu(config.poisson_ratio)) return bad(fmt::format("poissonRatio must be in (-1, 0.5), got {}", config.poisson_ratio));
-  if (!(config.rest_scale > 0.0 && config.rest_scale <= 2.0)) return bad(fmt::format("restScale must be in (0, 2], got {}", config.rest_scale));
+  if (!valid_nu(config.poisson_ratio))
+    return bad(fmt::format("poissonRatio must be in (-1, 0.5), got {}", config.poisson_ratio));
+  if (!(config.rest_scale > 0.0 && config.rest_scale <= 2.0))
+    return bad(fmt::format("restScale must be in (0, 2], got {}", config.rest_scale));
   if (!(config.thickness_m > 0.0) || !std::isfinite(config.thickness_m)) {
     return bad(fmt::format("thickness must be > 0, got {}", config.thickness_m));
   }
-  const auto weights = element_modulus_weights(config.element_young_modulus_pa, config.young_modulus_pa, triangles.size(), who);
+  const auto weights =
+      element_modulus_weights(config.element_young_modulus_pa, config.young_modulus_pa, triangles.size(), who);
   if (!weights) return std::unexpected(weights.error());
   if (!config.element_poisson_ratio.empty()) {
     if (config.element_poisson_ratio.size() != triangles.size()) {
@@ -67,7 +72,8 @@ Expected<std::unique_ptr<TriangleFemForceField>> TriangleFemForceField::make(con
     }
     for (std::size_t t = 0; t < triangles.size(); ++t) {
       const double nu = config.element_poisson_ratio[t];
-      if (nu != 0.0 && !valid_nu(nu)) return bad(fmt::format("poissonRatio of triangle {} must be in (-1, 0.5), got {}", t, nu));
+      if (nu != 0.0 && !valid_nu(nu))
+        return bad(fmt::format("poissonRatio of triangle {} must be in (-1, 0.5), got {}", t, nu));
     }
   }
 
@@ -91,8 +97,8 @@ Expected<std::unique_ptr<TriangleFemForceField>> TriangleFemForceField::make(con
     const double area = 0.5 * (p1 - p0).cross(p2 - p0).norm();
     if (e.rest_frame.isZero() || !(area > 1e-14 * std::max(1e-30, (p1 - p0).squaredNorm() + (p2 - p0).squaredNorm()))) {
       return make_error(ErrorCode::kInvalidMesh,
-                        fmt::format("{}: triangle {} (nodes {} {} {}) is degenerate at rest (zero area)", who, t, tri[0],
-                                    tri[1], tri[2]));
+                        fmt::format("{}: triangle {} (nodes {} {} {}) is degenerate at rest (zero area)", who, t,
+                                    tri[0], tri[1], tri[2]));
     }
     e.rest_origin = p0;
     e.rest[0] = Eigen::Vector2d::Zero();
@@ -126,7 +132,8 @@ Expected<std::unique_ptr<TriangleFemForceField>> TriangleFemForceField::make(con
     e.gradients = grad;
     e.thickness_area = config.thickness_m * area * config.rest_scale * config.rest_scale * config.rest_scale;
     e.stress = elasticity(young, nu, config.plane_strain) * b;
-    e.stiffness = config.thickness_m * area * config.rest_scale * config.rest_scale * b.transpose() * elasticity(young, nu, config.plane_strain) * b;
+    e.stiffness = config.thickness_m * area * config.rest_scale * config.rest_scale * b.transpose() *
+                  elasticity(young, nu, config.plane_strain) * b;
     field->elements_.push_back(e);
   }
   return field;
@@ -143,7 +150,8 @@ ForceFieldState TriangleFemForceField::make_state() const {
 void TriangleFemForceField::collect_couplings(std::vector<std::pair<std::int32_t, std::int32_t>>& pairs) const {
   for (const Element& e : elements_) {
     for (int a = 0; a < 3; ++a) {
-      for (int b = a + 1; b < 3; ++b) pairs.emplace_back(e.nodes[static_cast<std::size_t>(a)], e.nodes[static_cast<std::size_t>(b)]);
+      for (int b = a + 1; b < 3; ++b)
+        pairs.emplace_back(e.nodes[static_cast<std::size_t>(a)], e.nodes[static_cast<std::size_t>(b)]);
     }
   }
 }
@@ -151,7 +159,8 @@ void TriangleFemForceField::collect_couplings(std::vector<std::pair<std::int32_t
 void TriangleFemForceField::bind(const BlockSparseMatrix& pattern) {
   for (Element& e : elements_) {
     for (std::size_t a = 0; a < 3; ++a) {
-      for (std::size_t b = 0; b < 3; ++b) e.slots[3 * a + b] = static_cast<std::int32_t>(pattern.slot(e.nodes[a], e.nodes[b]));
+      for (std::size_t b = 0; b < 3; ++b)
+        e.slots[3 * a + b] = static_cast<std::int32_t>(pattern.slot(e.nodes[a], e.nodes[b]));
     }
   }
 }
@@ -208,7 +217,8 @@ void TriangleFemForceField::add_stiffness(const ForceFieldState& state, double s
         eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).asDiagonal() * eig.eigenvectors().transpose();
     for (std::size_t a = 0; a < 3; ++a) {
       for (std::size_t b = 0; b < 3; ++b) {
-        const Eigen::Matrix2d local = e.stiffness.block<2, 2>(static_cast<Eigen::Index>(2 * a), static_cast<Eigen::Index>(2 * b));
+        const Eigen::Matrix2d local =
+            e.stiffness.block<2, 2>(static_cast<Eigen::Index>(2 * a), static_cast<Eigen::Index>(2 * b));
         const double geometric = e.thickness_area * e.gradients[a].dot(tension * e.gradients[b]);
         k.block(e.slots[3 * a + b]) += scale * (r * local * r.transpose() + geometric * Mat3::Identity());
       }

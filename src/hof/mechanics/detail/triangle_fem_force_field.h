@@ -21,9 +21,9 @@
 #include <Eigen/Core>
 
 #include "hof/core/error.h"
+#include "hof/mechanics/detail/tetrahedron_fem_force_field.h"
 #include "hof/mechanics/force_field.h"
 #include "hof/mechanics/force_field_config.h"
-#include "hof/mechanics/detail/tetrahedron_fem_force_field.h"
 #include "hof/mesh/mesh.h"
 
 namespace hof::mechanics {
@@ -33,8 +33,8 @@ class TriangleFemForceField final : public ForceField {
   /// Errors name the component and the first triangle that is degenerate, or the parameter
   /// out of range.
   static Expected<std::unique_ptr<TriangleFemForceField>> make(const std::vector<Vec3>& rest_positions,
-                                                              const std::vector<mesh::Tri>& triangles,
-                                                              const TriangleFemConfig& config, std::string name);
+                                                               const std::vector<mesh::Tri>& triangles,
+                                                               const TriangleFemConfig& config, std::string name);
 
   [[nodiscard]] std::string_view type_name() const override { return config_.sofa_type; }
   [[nodiscard]] ForceFieldState make_state() const override;
@@ -55,12 +55,12 @@ class TriangleFemForceField final : public ForceField {
     std::array<std::int32_t, 3> nodes;
     std::array<Eigen::Vector2d, 3> rest;  // rest corners in the rest frame, corner 0 at the origin
     Frame rest_frame;
-    Vec3 rest_origin;                     // rest position of corner 0
-    Matrix6 stiffness;                    // t·A·BᵀDB in the element frame, (u0x u0y u1x u1y u2x u2y)
-    Eigen::Matrix<double, 3, 6> stress;   // D·B: the Voigt stress (xx, yy, xy) of a displacement
+    Vec3 rest_origin;                          // rest position of corner 0
+    Matrix6 stiffness;                         // t·A·BᵀDB in the element frame, (u0x u0y u1x u1y u2x u2y)
+    Eigen::Matrix<double, 3, 6> stress;        // D·B: the Voigt stress (xx, yy, xy) of a displacement
     std::array<Eigen::Vector2d, 3> gradients;  // ∇N_i in the element frame, 1/m
-    double thickness_area;                // t·A of the rest shape × restScale (initial-stress term), m³
-    std::array<std::int32_t, 9> slots;    // block (a, b) at 3a + b
+    double thickness_area;                     // t·A of the rest shape × restScale (initial-stress term), m³
+    std::array<std::int32_t, 9> slots;         // block (a, b) at 3a + b
   };
 
   TriangleFemForceField() = default;

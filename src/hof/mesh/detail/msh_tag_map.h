@@ -49,12 +49,9 @@ class TagMap {
   /// Index of the node with `tag`, or -1 when there is none.
   [[nodiscard]] NodeIndex find(std::int64_t tag) const {
     if (use_dense_) {
-      return tag >= 0 && tag < static_cast<std::int64_t>(dense_.size())
-                 ? dense_[static_cast<std::size_t>(tag)]
-                 : -1;
+      return tag >= 0 && tag < static_cast<std::int64_t>(dense_.size()) ? dense_[static_cast<std::size_t>(tag)] : -1;
     }
-    const auto it = std::lower_bound(sorted_.begin(), sorted_.end(),
-                                     std::pair<std::int64_t, NodeIndex>{tag, -1});
+    const auto it = std::lower_bound(sorted_.begin(), sorted_.end(), std::pair<std::int64_t, NodeIndex>{tag, -1});
     return it != sorted_.end() && it->first == tag ? it->second : -1;
   }
 

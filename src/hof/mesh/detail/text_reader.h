@@ -33,14 +33,12 @@ namespace hof::mesh::detail {
 [[nodiscard]] Expected<std::string> read_whole_file(const std::filesystem::path& path);
 
 /// Replaces the file's content by `bytes`. kIo naming the file on any failure.
-[[nodiscard]] Expected<void> write_whole_file(const std::filesystem::path& path,
-                                              std::string_view bytes);
+[[nodiscard]] Expected<void> write_whole_file(const std::filesystem::path& path, std::string_view bytes);
 
 /// Checks a mesh before writing: at least one node, finite coordinates, element indices in
 /// range, region and normal arrays empty or of matching length. kInvalidArgument naming the
 /// file about to be written.
-[[nodiscard]] Expected<void> check_mesh_for_write(const Mesh& mesh,
-                                                  const std::filesystem::path& path);
+[[nodiscard]] Expected<void> check_mesh_for_write(const Mesh& mesh, const std::filesystem::path& path);
 
 // ---------------------------------------------------------------------------------------
 // Characters and tokens
@@ -145,24 +143,21 @@ inline void append_int(std::string& out, std::int64_t value) {
 /// Whether `count` records of at least `min_bytes` each can be stored in `bytes_left`
 /// bytes. Every count read from a file passes this before it sizes an allocation, so a
 /// corrupt count fails at once instead of reserving gigabytes.
-[[nodiscard]] inline bool count_fits(std::int64_t count, std::int64_t min_bytes,
-                                     std::size_t bytes_left) {
+[[nodiscard]] inline bool count_fits(std::int64_t count, std::int64_t min_bytes, std::size_t bytes_left) {
   return count >= 0 && count <= static_cast<std::int64_t>(bytes_left) / min_bytes;
 }
 
 /// The message for a count that fails count_fits.
-[[nodiscard]] inline std::string impossible_count(const std::string& what, std::int64_t count,
-                                                  std::int64_t min_bytes, std::size_t bytes_left) {
+[[nodiscard]] inline std::string impossible_count(const std::string& what, std::int64_t count, std::int64_t min_bytes,
+                                                  std::size_t bytes_left) {
   std::string message = what + " " + std::to_string(count) + " is impossible: ";
   if (count < 0) return message + "it is negative";
-  return message + "it needs more than the " + std::to_string(bytes_left) +
-         " bytes left in the file (at least " + std::to_string(min_bytes) +
-         " per entry); the file is truncated or the count is wrong";
+  return message + "it needs more than the " + std::to_string(bytes_left) + " bytes left in the file (at least " +
+         std::to_string(min_bytes) + " per entry); the file is truncated or the count is wrong";
 }
 
 /// Error for a binary file: byte offset instead of a line.
-[[nodiscard]] inline std::unexpected<Error> make_byte_error(ErrorCode code, std::string message,
-                                                            std::string file,
+[[nodiscard]] inline std::unexpected<Error> make_byte_error(ErrorCode code, std::string message, std::string file,
                                                             std::int64_t byte_offset) {
   return std::unexpected<Error>(Error{code, std::move(message), std::move(file), 0, byte_offset});
 }
@@ -176,10 +171,15 @@ inline void append_int(std::string& out, std::int64_t value) {
 /// binary blocks make line numbers meaningless).
 class Scanner {
  public:
-  Scanner(std::string_view text, std::string file, char comment = '\0',
-          std::int64_t first_line = 1, std::int64_t base_offset = 0)
-      : text_(text), file_(std::move(file)), comment_(comment), line_(first_line),
-        token_line_(first_line), first_line_(first_line), base_offset_(base_offset) {}
+  Scanner(std::string_view text, std::string file, char comment = '\0', std::int64_t first_line = 1,
+          std::int64_t base_offset = 0)
+      : text_(text),
+        file_(std::move(file)),
+        comment_(comment),
+        line_(first_line),
+        token_line_(first_line),
+        first_line_(first_line),
+        base_offset_(base_offset) {}
 
   /// The next token, or an empty view at the end of the text.
   std::string_view next() {
@@ -247,12 +247,13 @@ class Scanner {
     const std::string_view token = next();
     double value = 0.0;
     switch (parse_real(token, value)) {
-      case RealParse::kOk: return value;
+      case RealParse::kOk:
+        return value;
       case RealParse::kNotFinite:
-        fail(ErrorCode::kInvalidMesh, std::string(what) + " is " + quoted(token) +
-                                          ", not a finite number");
+        fail(ErrorCode::kInvalidMesh, std::string(what) + " is " + quoted(token) + ", not a finite number");
         return 0.0;
-      case RealParse::kNotANumber: break;
+      case RealParse::kNotANumber:
+        break;
     }
     fail_token(token, what, "a number");
     return 0.0;
@@ -277,8 +278,7 @@ class Scanner {
   void fail_at_byte(ErrorCode code, std::string message, std::size_t offset) {
     if (failed_) return;
     failed_ = true;
-    error_ = Error{code, std::move(message), file_, 0,
-                   base_offset_ + static_cast<std::int64_t>(offset)};
+    error_ = Error{code, std::move(message), file_, 0, base_offset_ + static_cast<std::int64_t>(offset)};
   }
 
   /// Adds where in the file's structure the error happened, e.g. "(node 5 of 6 in $Nodes)".
@@ -288,9 +288,7 @@ class Scanner {
 
   [[nodiscard]] bool failed() const { return failed_; }
   [[nodiscard]] const Error& error() const { return error_; }
-  [[nodiscard]] std::unexpected<Error> unexpected_error() const {
-    return std::unexpected<Error>(error_);
-  }
+  [[nodiscard]] std::unexpected<Error> unexpected_error() const { return std::unexpected<Error>(error_); }
 
   [[nodiscard]] const std::string& file() const { return file_; }
   [[nodiscard]] std::string_view text() const { return text_; }

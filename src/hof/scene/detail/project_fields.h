@@ -96,7 +96,8 @@ std::string write_fields(const Fields<T>& fields, const T& from);
 /// haptics::validate of a surface.
 [[nodiscard]] std::optional<std::string> check_surface(const haptics::SurfaceMaterial& surface);
 /// procedures::validate of a tissue set; `body` empty: the set for every body.
-[[nodiscard]] std::optional<std::string> check_tissue(const procedures::TissueNeedleParameters& tissue, std::string_view body);
+[[nodiscard]] std::optional<std::string> check_tissue(const procedures::TissueNeedleParameters& tissue,
+                                                      std::string_view body);
 /// procedures::validate of a needle.
 [[nodiscard]] std::optional<std::string> check_needle(const procedures::NeedleConfig& needle);
 /// The haptic rate in [100, 20000] Hz (checked once the whole file is read).

@@ -27,10 +27,9 @@ namespace hof::scene::detail {
 /// A model as a deformable body: its visual mesh (barycentric) as the touchable surface when
 /// it has one, else a hexahedral grid's fine surface, else the boundary of its volume elements,
 /// else (a surface model) itself.
-[[nodiscard]] Expected<coupling::SessionBody> make_deformable(const mechanics::ModelConfig& config,
-                                                              const std::optional<std::filesystem::path>& visual_mesh,
-                                                              bool visual_barycentric,
-                                                              const std::optional<mesh::TriMesh>& fine_surface = std::nullopt);
+[[nodiscard]] Expected<coupling::SessionBody> make_deformable(
+    const mechanics::ModelConfig& config, const std::optional<std::filesystem::path>& visual_mesh,
+    bool visual_barycentric, const std::optional<mesh::TriMesh>& fine_surface = std::nullopt);
 
 /// An X3D scene's shapes, effects, device settings and viewpoint added to `w`; a scene with
 /// nothing to touch opens and says why (World::nothing_to_touch).

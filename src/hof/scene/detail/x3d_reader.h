@@ -134,9 +134,9 @@ class X3dReader {
   std::int64_t visited_{0};
   X3dScene scene_;
   X3dSource source_{scene_.warnings};  // after scene_: it writes scene_.warnings
-  pugi::xml_node root_;  // the file's root element
-  int layer_{0};  // haptic layer of the shapes being visited
-  int haptics_off_{0};  // ToggleGroups with hapticsOn false around the nodes being visited
+  pugi::xml_node root_;                // the file's root element
+  int layer_{0};                       // haptic layer of the shapes being visited
+  int haptics_off_{0};                 // ToggleGroups with hapticsOn false around the nodes being visited
   bool dynamic_transform_noted_{false};
   std::set<std::string, std::less<>> approximated_;  // surface types already said to be approximated
 };

@@ -35,7 +35,8 @@ std::vector<std::string> x3d_mf_string(std::string_view text) {
   if (text.find('"') == std::string_view::npos) {
     const auto t = x3d_tokens(text);
     if (!t.empty()) out.emplace_back(text.substr(text.find_first_not_of(" \t\r\n")));
-    while (!out.empty() && !out.back().empty() && std::isspace(static_cast<unsigned char>(out.back().back()))) out.back().pop_back();
+    while (!out.empty() && !out.back().empty() && std::isspace(static_cast<unsigned char>(out.back().back())))
+      out.back().pop_back();
     return out;
   }
   for (std::size_t i = 0; i < text.size(); ++i) {
@@ -50,7 +51,9 @@ std::vector<std::string> x3d_mf_string(std::string_view text) {
   return out;
 }
 
-bool x3d_is_remote(std::string_view url) { return url.find("://") != std::string_view::npos || url.starts_with("urn:"); }
+bool x3d_is_remote(std::string_view url) {
+  return url.find("://") != std::string_view::npos || url.starts_with("urn:");
+}
 
 std::filesystem::path X3dSource::weakly_canonical(const std::filesystem::path& p) {
   std::error_code ec;
@@ -67,7 +70,9 @@ X3dDocument& X3dSource::parse(fs::path file, std::string text, const X3dDocument
   for (std::size_t i = 0; i < doc->text.size(); ++i)
     if (doc->text[i] == '\n') doc->line_starts.push_back(static_cast<std::ptrdiff_t>(i + 1));
   const auto parsed = doc->xml.load_buffer(doc->text.data(), doc->text.size(), pugi::parse_default);
-  if (!parsed) fail_at(doc->file, line_in(*doc, parsed.offset), ErrorCode::kParse, fmt::format("malformed XML: {}", parsed.description()));
+  if (!parsed)
+    fail_at(doc->file, line_in(*doc, parsed.offset), ErrorCode::kParse,
+            fmt::format("malformed XML: {}", parsed.description()));
   if (const pugi::xml_node deep = mesh::first_too_deep_element(doc->xml)) {
     fail_at(doc->file, line_in(*doc, deep.offset_debug()), ErrorCode::kParse,
             fmt::format("<{}> is nested deeper than {} levels", deep.name(), mesh::kMaxXmlDepth));
@@ -108,7 +113,9 @@ std::int64_t X3dSource::line_of(pugi::xml_node n) const {
   return line_in(doc_of(n), n.offset_debug());
 }
 
-std::string X3dSource::where(pugi::xml_node n) const { return fmt::format("{}:{}", doc_of(n).file.string(), line_of(n)); }
+std::string X3dSource::where(pugi::xml_node n) const {
+  return fmt::format("{}:{}", doc_of(n).file.string(), line_of(n));
+}
 
 void X3dSource::fail_at(const std::filesystem::path& file, std::int64_t line, ErrorCode code, std::string message) {
   throw X3dParseFailure{Error{code, std::move(message), file.string(), line, -1}};
@@ -118,11 +125,13 @@ void X3dSource::fail(pugi::xml_node n, ErrorCode code, std::string message) cons
   fail_at(doc_of(n).file, line_of(n), code, std::move(message));
 }
 
-void X3dSource::warn(pugi::xml_node n, std::string_view message) { warnings_.push_back(fmt::format("{}: {}", where(n), message)); }
+void X3dSource::warn(pugi::xml_node n, std::string_view message) {
+  warnings_.push_back(fmt::format("{}: {}", where(n), message));
+}
 
-  // ---- DEF/USE and PROTO instances
-  // The node a possible USE element stands for: the last node DEF'd with that name before it
-  // (in a PROTO body, else in the document it was declared in).
+// ---- DEF/USE and PROTO instances
+// The node a possible USE element stands for: the last node DEF'd with that name before it
+// (in a PROTO body, else in the document it was declared in).
 pugi::xml_node X3dSource::resolve_use(pugi::xml_node n) const {
   const std::string_view use = n.attribute("USE").as_string();
   if (use.empty()) return n;
@@ -133,7 +142,8 @@ pugi::xml_node X3dSource::resolve_use(pugi::xml_node n) const {
     for (pugi::xml_node def : it->second)
       if (d != &doc_of(n) || def.offset_debug() < n.offset_debug()) found = def;
   }
-  if (!found) fail(n, ErrorCode::kParse, fmt::format("<{} USE='{}'>: no node DEF'd with that name before", n.name(), use));
+  if (!found)
+    fail(n, ErrorCode::kParse, fmt::format("<{} USE='{}'>: no node DEF'd with that name before", n.name(), use));
   // A USE inside the node it names would contain itself: an endless tree.
   for (pugi::xml_node a = n.parent(); a; a = a.parent()) {
     if (a == found) {
@@ -172,7 +182,8 @@ pugi::xml_node X3dSource::declaration(pugi::xml_node at, std::string_view name) 
       const auto found = ext.protos.find(target);
       if (found != ext.protos.end() && std::string_view(found->second.name()) == "ProtoDeclare") return found->second;
     }
-    warn(decl, fmt::format("ExternProtoDeclare '{}': no ProtoDeclare found at its url {}", name, decl.attribute("url").as_string()));
+    warn(decl, fmt::format("ExternProtoDeclare '{}': no ProtoDeclare found at its url {}", name,
+                           decl.attribute("url").as_string()));
     return {};
   }
   return {};
@@ -189,12 +200,16 @@ pugi::xml_node X3dSource::instantiate(pugi::xml_node instance) {
   const X3dDocument& home = doc_of(decl);
   if (doc_of(instance).proto_depth >= kMaxProtoDepth) {
     fail(instance, ErrorCode::kParse,
-         fmt::format("ProtoInstance '{}': PROTOs instantiated more than {} deep (a PROTO whose body instantiates itself?)",
-                     name, kMaxProtoDepth));
+         fmt::format(
+             "ProtoInstance '{}': PROTOs instantiated more than {} deep (a PROTO whose body instantiates itself?)",
+             name, kMaxProtoDepth));
   }
   pugi::xml_node first;
   for (pugi::xml_node c : decl.child("ProtoBody").children())
-    if (c.type() == pugi::node_element) { first = c; break; }
+    if (c.type() == pugi::node_element) {
+      first = c;
+      break;
+    }
   if (!first) {
     warn(instance, fmt::format("ProtoInstance '{}': its ProtoBody is empty", name));
     instances_[instance.hash_value()] = {};
@@ -225,7 +240,8 @@ void X3dSource::mark_lines(pugi::xml_node original, pugi::xml_node copy) const {
     if (o.type() == pugi::node_element) mark_lines(o, c);
 }
 
-void X3dSource::substitute(pugi::xml_node n, const std::map<std::string, pugi::xml_node, std::less<>>& values, pugi::xml_node instance) {
+void X3dSource::substitute(pugi::xml_node n, const std::map<std::string, pugi::xml_node, std::less<>>& values,
+                           pugi::xml_node instance) {
   for (pugi::xml_node is = n.child("IS"); is; is = n.child("IS")) {
     for (pugi::xml_node connect : is.children("connect")) {
       const std::string node_field = connect.attribute("nodeField").as_string();
@@ -282,11 +298,13 @@ std::vector<double> X3dSource::numbers(pugi::xml_node n, const char* field) cons
   return out;
 }
 
-std::vector<double> X3dSource::numbers(pugi::xml_node n, const char* field, std::size_t count, std::vector<double> def) const {
+std::vector<double> X3dSource::numbers(pugi::xml_node n, const char* field, std::size_t count,
+                                       std::vector<double> def) const {
   auto v = numbers(n, field);
   if (v.empty()) return def;
   if (v.size() != count)
-    fail(n, ErrorCode::kParse, fmt::format("<{}> field {}: expected {} numbers, got {}", n.name(), field, count, v.size()));
+    fail(n, ErrorCode::kParse,
+         fmt::format("<{}> field {}: expected {} numbers, got {}", n.name(), field, count, v.size()));
   return v;
 }
 
@@ -295,18 +313,21 @@ Vec3 X3dSource::vec3(pugi::xml_node n, const char* field, const Vec3& def) const
   return {v[0], v[1], v[2]};
 }
 
-std::vector<double> X3dSource::tuples(pugi::xml_node n, const char* field, std::size_t width, std::vector<double> def) const {
+std::vector<double> X3dSource::tuples(pugi::xml_node n, const char* field, std::size_t width,
+                                      std::vector<double> def) const {
   auto v = numbers(n, field);
   if (v.empty() && !n.attribute(field)) return def;
   if (v.size() % width != 0)
-    fail(n, ErrorCode::kParse, fmt::format("<{}> field {}: {} numbers, not a multiple of {}", n.name(), field, v.size(), width));
+    fail(n, ErrorCode::kParse,
+         fmt::format("<{}> field {}: {} numbers, not a multiple of {}", n.name(), field, v.size(), width));
   return v;
 }
 
 std::vector<std::int64_t> X3dSource::integers(pugi::xml_node n, const char* field) const {
   std::vector<std::int64_t> out;
   for (double v : numbers(n, field)) {
-    if (v != std::floor(v)) fail(n, ErrorCode::kParse, fmt::format("<{}> field {}: {} is not an integer", n.name(), field, v));
+    if (v != std::floor(v))
+      fail(n, ErrorCode::kParse, fmt::format("<{}> field {}: {} is not an integer", n.name(), field, v));
     // Past ±2⁶³ the conversion is undefined (found by fuzz_x3d): no index or count is that large.
     if (!(v >= -0x1p63 && v < 0x1p63))
       fail(n, ErrorCode::kParse, fmt::format("<{}> field {}: {} is out of range", n.name(), field, v));

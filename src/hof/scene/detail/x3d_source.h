@@ -68,7 +68,8 @@ class X3dSource {
   [[nodiscard]] std::string where(pugi::xml_node n) const;
   [[nodiscard]] static std::filesystem::path weakly_canonical(const std::filesystem::path& p);
 
-  [[noreturn]] static void fail_at(const std::filesystem::path& file, std::int64_t line, ErrorCode code, std::string message);
+  [[noreturn]] static void fail_at(const std::filesystem::path& file, std::int64_t line, ErrorCode code,
+                                   std::string message);
   [[noreturn]] void fail(pugi::xml_node n, ErrorCode code, std::string message) const;
   void warn(pugi::xml_node n, std::string_view message);
 
@@ -96,8 +97,8 @@ class X3dSource {
   [[nodiscard]] std::string string(pugi::xml_node n, const char* field, std::string_view def) const;
   /// A field whose value is one of `options` (refused otherwise, listing them).
   template <class E>
-  [[nodiscard]] E choice(pugi::xml_node n, const char* field, std::initializer_list<std::pair<std::string_view, E>> options,
-                         E def) const {
+  [[nodiscard]] E choice(pugi::xml_node n, const char* field,
+                         std::initializer_list<std::pair<std::string_view, E>> options, E def) const {
     const std::string s = string(n, field, "");
     if (s.empty()) return def;
     std::string names;
@@ -114,7 +115,8 @@ class X3dSource {
   pugi::xml_node declaration(pugi::xml_node at, std::string_view name);
   pugi::xml_node instantiate(pugi::xml_node instance);
   void mark_lines(pugi::xml_node original, pugi::xml_node copy) const;
-  void substitute(pugi::xml_node n, const std::map<std::string, pugi::xml_node, std::less<>>& values, pugi::xml_node instance);
+  void substitute(pugi::xml_node n, const std::map<std::string, pugi::xml_node, std::less<>>& values,
+                  pugi::xml_node instance);
 
   std::vector<std::string>& warnings_;
   std::vector<std::unique_ptr<X3dDocument>> docs_;   // [0] the scene; then Inlines and PROTO bodies

@@ -29,7 +29,7 @@ extern const std::vector<std::string> kForceFields;
 [[nodiscard]] std::vector<std::pair<std::string, std::string>> components_of(const mechanics::ModelConfig& c);
 /// The edit that makes `component` of body `body` (model `c`) a `choice` (one of the lists
 /// above).
-[[nodiscard]] Expected<scene::SceneEdit> switch_edit(const mechanics::ModelConfig& c, const std::string& body, const std::string& component,
-                                                     const std::string& choice);
+[[nodiscard]] Expected<scene::SceneEdit> switch_edit(const mechanics::ModelConfig& c, const std::string& body,
+                                                     const std::string& component, const std::string& choice);
 
 }  // namespace hof::app::gui

@@ -19,8 +19,8 @@ struct FileDialog {
   std::array<char, 512> name{};
   std::function<void(const std::filesystem::path&)> on_choose;
 
-  void show(const std::string& t, bool save, std::vector<std::string> exts, std::function<void(const std::filesystem::path&)> f,
-            const std::string& suggested = {});
+  void show(const std::string& t, bool save, std::vector<std::string> exts,
+            std::function<void(const std::filesystem::path&)> f, const std::string& suggested = {});
   void draw();
 };
 

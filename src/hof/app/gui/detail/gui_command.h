@@ -107,10 +107,12 @@ struct Report {
 };
 }  // namespace action
 
-using GuiCommand = std::variant<coupling::Command, action::SetAttribute, action::SetGraphics, action::SetSurface, action::SetRendering, action::EditScene, action::AddComponent, action::AddRegionAtStylus, action::SwitchComponent, action::SetRegions,
-                                action::SetEffects, action::MountNeedle, action::SetAnimating, action::ResetWorld,
-                                action::SetRealtimePacing, action::StartRecording, action::StopRecording, action::ResetCamera,
-                                action::DismissError, action::Report>;
+using GuiCommand =
+    std::variant<coupling::Command, action::SetAttribute, action::SetGraphics, action::SetSurface, action::SetRendering,
+                 action::EditScene, action::AddComponent, action::AddRegionAtStylus, action::SwitchComponent,
+                 action::SetRegions, action::SetEffects, action::MountNeedle, action::SetAnimating, action::ResetWorld,
+                 action::SetRealtimePacing, action::StartRecording, action::StopRecording, action::ResetCamera,
+                 action::DismissError, action::Report>;
 using GuiCommands = std::vector<GuiCommand>;
 
 }  // namespace hof::app::gui

@@ -22,11 +22,11 @@
 #include <vector>
 
 #include "hof/app/gui/detail/file_dialog.h"
-#include "hof/app/gui/gui_app.h"
 #include "hof/app/gui/detail/gui_command.h"
-#include "hof/app/gui/gui_script.h"
 #include "hof/app/gui/detail/panels.h"
 #include "hof/app/gui/detail/world_view.h"
+#include "hof/app/gui/gui_app.h"
+#include "hof/app/gui/gui_script.h"
 #include "hof/haptics/device_backends/mouse_device.h"
 #include "hof/scene/world.h"
 
@@ -81,7 +81,8 @@ class GuiWindow {
   /// A typed edit of the project made, with the session's commands that carry it (`name`:
   /// element@attribute, for messages).
   Expected<void> apply_project_edit(const scene::ProjectEdit& edit, const std::string& name);
-  Expected<void> set_mechanics_parameter(const std::string& element, const std::string& attribute, const std::string& value);
+  Expected<void> set_mechanics_parameter(const std::string& element, const std::string& attribute,
+                                         const std::string& value);
   Expected<void> set_device(const scene::HofProject& next, const std::string& name);
   /// A structural change (the scene made inline in the project and edited; and/or the material
   /// regions replaced): the world's models are rebuilt from it and swapped in through the seam.
@@ -128,7 +129,9 @@ class GuiWindow {
   }
   [[nodiscard]] double scene_size() const { return std::max((bounds_max_ - bounds_min_).norm(), 1e-6); }
   /// The calibration the haptic loop reads the mouse stylus through right now.
-  [[nodiscard]] const haptics::Calibration& mouse_calibration() const { return calibration_pending_ ? pending_calibration_ : calibration_; }
+  [[nodiscard]] const haptics::Calibration& mouse_calibration() const {
+    return calibration_pending_ ? pending_calibration_ : calibration_;
+  }
 
   GuiOptions options_;
   GLFWwindow* window_{nullptr};

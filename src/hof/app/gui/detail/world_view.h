@@ -18,11 +18,11 @@
 #include "hof/coupling/session.h"
 #include "hof/haptics/device_backends/replay_device.h"
 #include "hof/haptics/surface_snapshot.h"
-#include "hof/scene/model_parameters.h"
 #include "hof/mechanics/von_mises_stress.h"
 #include "hof/procedures/needle.h"
 #include "hof/render/camera.h"
 #include "hof/render/gl_renderer.h"
+#include "hof/scene/model_parameters.h"
 #include "hof/scene/project.h"
 
 namespace hof::app::gui {
@@ -33,7 +33,9 @@ constexpr double kPlotSeconds = 5.0;
 constexpr double kPlotRateHz = 100.0;
 constexpr std::size_t kPlotPoints = static_cast<std::size_t>(kPlotSeconds * kPlotRateHz);
 
-inline double seconds_between(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
+inline double seconds_between(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double>(b - a).count();
+}
 
 /// A snapshot layer as the window draws it.
 struct LayerView {
@@ -77,7 +79,8 @@ struct BodyView {
     fixed_points.clear();
     for (const auto& f : c.fixed) {
       for (const std::int32_t i : f.indices) {
-        if (i >= 0 && static_cast<std::size_t>(i) < c.positions.size()) fixed_points.push_back(c.positions[static_cast<std::size_t>(i)]);
+        if (i >= 0 && static_cast<std::size_t>(i) < c.positions.size())
+          fixed_points.push_back(c.positions[static_cast<std::size_t>(i)]);
       }
     }
     stress.reset();
@@ -111,7 +114,8 @@ struct LiveStats {
   }
   void update(Clock::time_point now) {
     while (!frames.empty() && seconds_between(frames.front(), now) > 1.0) frames.pop_front();
-    fps = static_cast<double>(frames.size()) / std::clamp(frames.empty() ? 1.0 : seconds_between(frames.front(), now), 0.25, 1.0);
+    fps = static_cast<double>(frames.size()) /
+          std::clamp(frames.empty() ? 1.0 : seconds_between(frames.front(), now), 0.25, 1.0);
     const auto rate = [&](auto& q) {
       while (q.size() > 2 && seconds_between(q.front().first, now) > 1.0) q.pop_front();
       if (q.size() < 2) return 0.0;
@@ -129,7 +133,6 @@ struct LiveStats {
     }
   }
 };
-
 
 /// A stylus trajectory being recorded (the replay format, device frame) and the settings
 /// changed meanwhile.
