@@ -38,6 +38,7 @@
 #include "hof/core/error.h"
 #include "hof/core/progress.h"
 #include "hof/core/triple_buffer.h"
+#include "hof/coupling/contact_settings.h"
 #include "hof/coupling/command_seam.h"
 #include "hof/coupling/surface_mapping.h"
 #include "hof/coupling/tool_coupling.h"
@@ -74,6 +75,8 @@ struct SessionConfig {
   /// per-step hook that gives its reaction to the tissue. Null: the stylus is a point/sphere.
   std::shared_ptr<haptics::Tool> tool;
   std::shared_ptr<ToolTissueCoupling> tool_coupling;
+  /// Contact between bodies (off unless the scene asks for it).
+  ContactSettings contacts{};
   /// Threads of the simulation in real time (0: automatic, every core but one, which the
   /// haptic loop and the window share). Virtual-time runs step on the caller's thread.
   int simulation_threads{0};
@@ -96,6 +99,8 @@ struct SessionBody {
   /// Haptic layer (H3D HapticLayeredGroup): bodies of each layer are felt through a proxy of
   /// their own, and the layers' forces add up. Layers are taken in increasing order.
   int layer{0};
+  /// Its collision models for contact between bodies (enabled only when the scene gives some).
+  BodyCollision collision{};
 
   [[nodiscard]] bool deformable() const { return model.has_value(); }
 };
