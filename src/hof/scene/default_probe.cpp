@@ -19,6 +19,20 @@ namespace {
 constexpr double kProbeSpeed = 0.02;  // m/s of device travel
 }  // namespace
 
+Vec3 default_probe_effects_centre(const haptics::ForceEffects& effects) {
+  if (!effects.springs.empty()) return effects.springs.front().position_m;
+  for (const haptics::MagneticGeometryEffect& magnet : effects.magnets) {
+    if (!magnet.surface || magnet.surface->vertices.empty()) continue;
+    // A hand coming from above meets the shape at its top. The probe's (horizontal, 5 mm)
+    // circle 5 mm above it stays within the magnet's start distance (H3D's default 1 cm) and
+    // about 5 mm from the surface, so it is caught and pulled: about k · 5 mm.
+    const Vec3 top =
+        *std::ranges::max_element(magnet.surface->vertices, [](const Vec3& a, const Vec3& b) { return a.y() < b.y(); });
+    return top + Vec3(0.0, 0.005, 0.0);
+  }
+  return Vec3::Zero();
+}
+
 DefaultProbe default_probe(const std::vector<coupling::SessionBody>& bodies, double workspace_radius_m,
                            double device_stiffness_n_per_m, double max_force_n,
                            const std::array<double, 16>* calibration, double device_max_stiffness_n_per_m,
@@ -27,7 +41,7 @@ DefaultProbe default_probe(const std::vector<coupling::SessionBody>& bodies, dou
   probe.calibration = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
   if (bodies.empty()) {
     // Force effects only: circle through them (a still probe feels no viscosity and sits at a
-    // spring's rest point), 5 mm around the first spring's anchor or the origin.
+    // spring's rest point), 5 mm around default_probe_effects_centre().
     const Vec3 centre = effects_centre;
     probe.device = fmt::format("scripted:circle,centre={};{};{},radius=0.005,period=1,repeat=0", centre.x(), centre.y(),
                                centre.z());

@@ -538,8 +538,7 @@ Expected<World> finish_world(World w, bool sofa_scene, bool bare, const std::str
     const double k = w.project.surface.stiffness_n_per_m(spec.max_stiffness_n_per_m);
     // A calibration the file gives is kept; a bare scene gets the fitted one.
     const bool given = !identity(w.project.position_calibration);
-    const Vec3 effects_centre =
-        w.project.effects.springs.empty() ? Vec3::Zero() : w.project.effects.springs.front().position_m;
+    const Vec3 effects_centre = default_probe_effects_centre(w.project.effects);
     const double radius = w.project.renderer == haptics::RendererKind::kRuspini ? w.project.proxy_radius_m : 0.0;
     DefaultProbe probe = default_probe(w.bodies, spec.workspace_radius_m, k, spec.max_force_n,
                                        given ? &w.project.position_calibration : nullptr, spec.max_stiffness_n_per_m,

@@ -141,5 +141,9 @@ struct DefaultProbe {
                                          const std::array<double, 16>* calibration = nullptr,
                                          double device_max_stiffness_n_per_m = 3000.0,
                                          const Vec3& effects_centre = Vec3::Zero(), double proxy_radius = 0.0);
+/// Where the default probe circles in a world of force effects only: where the first effect
+/// that acts at one place is (a spring's anchor; 5 mm above a magnet's highest vertex);
+/// the origin when every effect acts everywhere (viscosity, constant and function effects).
+[[nodiscard]] Vec3 default_probe_effects_centre(const haptics::ForceEffects& effects);
 
 }  // namespace hof::scene
