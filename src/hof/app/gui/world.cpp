@@ -132,6 +132,8 @@ Expected<void> GuiWindow::open(const std::filesystem::path& file, const scene::H
   plot_force_.assign(kPlotPoints, 0.0f);
   plot_indentation_.assign(kPlotPoints, 0.0f);
   next_plot_time_ = 0.0;
+  plot_force_sum_n_ = 0.0;
+  plot_force_ticks_ = 0;
   stats_ = LiveStats{};
   max_force_seen_n_ = max_displacement_seen_m_ = 0.0;
   contact_ticks_ = 0;

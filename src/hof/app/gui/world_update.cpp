@@ -107,11 +107,18 @@ void GuiWindow::take_sample(const haptics::HapticSample& s) {
     needle_phase_ = phase;
     indentation = s.tool.depth_m;  // the second plot shows the depth
   }
+  // A plot point is the mean of |F| over the ticks since the last point (a box filter before
+  // keeping one point in ten): one tick picked out of a rippling force drew spikes that the
+  // hand never felt and the telemetry's plots do not show.
+  plot_force_sum_n_ += s.force.norm();
+  ++plot_force_ticks_;
   if (s.time_s >= next_plot_time_) {
     next_plot_time_ = s.time_s + 1.0 / kPlotRateHz;
     std::rotate(plot_force_.begin(), plot_force_.begin() + 1, plot_force_.end());
     std::rotate(plot_indentation_.begin(), plot_indentation_.begin() + 1, plot_indentation_.end());
-    plot_force_.back() = static_cast<float>(s.force.norm());
+    plot_force_.back() = static_cast<float>(plot_force_sum_n_ / static_cast<double>(plot_force_ticks_));
+    plot_force_sum_n_ = 0.0;
+    plot_force_ticks_ = 0;
     plot_indentation_.back() = static_cast<float>(1e3 * indentation);
   }
   last_ = s;

@@ -166,6 +166,8 @@ class GuiWindow {
   std::vector<float> plot_force_ = std::vector<float>(kPlotPoints, 0.0f);  // the last kPlotSeconds, oldest first
   std::vector<float> plot_indentation_ = std::vector<float>(kPlotPoints, 0.0f);
   double next_plot_time_{0.0};
+  double plot_force_sum_n_{0.0};  // |F| summed over the ticks since the last plot point, N
+  std::int64_t plot_force_ticks_{0};
   bool was_in_contact_{false};
   double displaced_at_contact_{0.0};
   double indentation_m_{0.0};
