@@ -24,6 +24,11 @@ Expected<SofaSceneModel> Reader::make_model(SceneNode& node, Component* state) {
   if (auto r = apply_solvers(node, m); !r) return std::unexpected(r.error());
   if (auto r = apply_components(node, m); !r) return std::unexpected(r.error());
   if (auto r = apply_visual(node, out); !r) return std::unexpected(r.error());
+  const bool has_surface =
+      !m.tets.empty() || !m.triangles.empty() || !m.hexahedra.empty() || out.fine_surface || out.visual_mesh;
+  auto collision = body_collision(node, has_surface, false);
+  if (!collision) return std::unexpected(collision.error());
+  out.collision = std::move(*collision);
   return out;
 }
 
@@ -247,6 +252,9 @@ Expected<std::optional<SofaSceneObstacle>> Reader::make_obstacle(SceneNode& node
   o.name = node.name;
   o.surface.vertices = data.positions;
   o.surface.triangles = data.triangles;
+  auto models = body_collision(node, true, true);
+  if (!models) return std::unexpected(models.error());
+  o.collision = std::move(*models);
   return std::optional<SofaSceneObstacle>{std::move(o)};
 }
 
