@@ -148,6 +148,18 @@ TEST_F(SofaCollisionFiles, ALiverOnARigidFloorCollides) {
   EXPECT_DOUBLE_EQ(world->config.contacts.friction, 0.3);
 }
 
+TEST_F(SofaCollisionFiles, ConstraintSolversOfFrictionContactsAreNamedAsUnused) {
+  auto s = read_sofa_scene(
+      write("lcp.scn", scene("<FreeMotionAnimationLoop/>\n<GenericConstraintSolver name='gcs'/>\n" + kPipeline,
+                             kLiverSurface + "<UncoupledConstraintCorrection name='ucc'/>\n")));
+  ASSERT_TRUE(s) << s.error().to_string();
+  EXPECT_TRUE(contains(s->warnings,
+                       "GenericConstraintSolver 'gcs' (line 3) is not used by HoF: the contacts are solved "
+                       "as penalty contacts"));
+  EXPECT_TRUE(contains(s->warnings, "UncoupledConstraintCorrection 'ucc'"));
+  EXPECT_FALSE(contains(s->warnings, "constraint-based contacts and constraints are not solved"));
+}
+
 TEST_F(SofaCollisionFiles, ProximityMethodsTakeSofasDefaultDistances) {
   auto s = read_sofa_scene(write("defaults.scn", scene("<DefaultPipeline/>\n<NewProximityIntersection/>\n"
                                                        "<DefaultContactManager/>\n",

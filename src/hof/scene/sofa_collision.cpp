@@ -221,11 +221,11 @@ Expected<coupling::BodyCollision> Reader::body_collision(SceneNode& node, bool h
   std::optional<std::int32_t> group;
   for (SceneNode* n : nodes) {
     const bool mapped_node = n != &node;
-    bool has_models = false;
+    bool node_has_models = false;
     for (auto& owned : n->components) {
       Component& c = *owned;
       if (!is_collision_model(c.type)) continue;
-      has_models = true;
+      node_has_models = true;
       c.used = true;
       out.enabled = true;
       if (among(kSphereModels, c.type)) {
@@ -280,7 +280,7 @@ Expected<coupling::BodyCollision> Reader::body_collision(SceneNode& node, bool h
         }
       }
     }
-    if (!has_models || !mapped_node) continue;
+    if (!node_has_models || !mapped_node) continue;
     // The node carries the body's collision models: its state, topology and mapping are part
     // of them (the surface the body collides is its own touchable surface).
     bool own_mesh = false;

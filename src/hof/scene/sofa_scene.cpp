@@ -515,6 +515,18 @@ void Reader::list_skipped(const SceneNode& node) {
           return o->type.ends_with("CollisionModel") ||
                  std::ranges::find(kOlderCollisionModels, o->type) != std::end(kOlderCollisionModels);
         });
+    // With friction contacts, the constraint solver and its corrections are what SOFA solves the
+    // contacts with; HoF solves them as penalty contacts, which those settings do not tune.
+    const bool contact_constraints = scene_.contacts.enabled &&
+                                     scene_.contacts.response == coupling::ContactResponse::kFrictionConstraint &&
+                                     (c->type == "FreeMotionAnimationLoop" || c->type.ends_with("ConstraintSolver") ||
+                                      c->type.ends_with("ConstraintCorrection"));
+    if (contact_constraints) {
+      warn(c->line, fmt::format("{} is not used by HoF: the contacts are solved as penalty contacts (constraint "
+                                "contacts are next), which its settings do not tune",
+                                c->label()));
+      continue;
+    }
     if (const std::string_view why = what_changes(c->type); !why.empty() && !carries_collision) {
       warn(c->line, fmt::format("{} changes SOFA's result and is not simulated by HoF: {}", c->label(), why));
     }
