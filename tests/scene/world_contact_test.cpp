@@ -113,5 +113,46 @@ TEST(WorldContact, PairsAndBodiesNotInTheWorldAreErrorsNamingTheProject) {
       << world.error().message;
 }
 
+// Over a SOFA scene: the scene's pipeline turns contact on and its bodies keep their own
+// collision models; the project's obstacles collide with them; a <contact> replaces the
+// scene's settings; contact="true" gives a body without models its whole surface.
+TEST(WorldContact, OverASofaSceneTheProjectAddsAndReplaces) {
+  write("plate.obj", kPlate);
+  const std::string scene = std::string(HOF_SOURCE_DIR) + "/examples/organs-in-contact.scn";
+  const std::string obstacle =
+      "  <bodies>\n    <obstacle name=\"Tray\" mesh=\"plate.obj\" translation=\"0 0 -0.2\"/>\n  </bodies>\n";
+  const auto with = [&](const std::string& bodies, const std::string& contact) {
+    return "<hof version=\"1\" name=\"sofa\">\n  <mechanics scene=\"" + scene + "\" unit=\"m\"/>\n" + bodies + contact +
+           "</hof>\n";
+  };
+  auto world = build_world(write("sofa_scene.hof", with(obstacle, "")));
+  ASSERT_TRUE(world) << world.error().to_string();
+  const coupling::ContactSettings& s = world->config.contacts;
+  EXPECT_TRUE(s.enabled);
+  EXPECT_DOUBLE_EQ(s.alarm_distance_m, 0.005);  // MinProximityIntersection in the scene
+  EXPECT_DOUBLE_EQ(s.contact_distance_m, 0.0015);
+  ASSERT_EQ(world->bodies.size(), 4u);  // Stomach, Liver, Support, Tray
+  for (const auto& b : world->bodies) EXPECT_TRUE(b.collision.enabled) << b.name;
+  EXPECT_EQ(world->bodies[0].collision.stiffness_n_per_m, 1000.0);  // its contactStiffness
+  EXPECT_EQ(world->bodies[3].name, "Tray");
+  EXPECT_FALSE(world->bodies[3].collision.moving);
+  // <contact> replaces the scene's settings; the SOFA bodies keep their models.
+  world = build_world(write("sofa_replaced.hof", with(obstacle,
+                                                      "  <contact stiffness=\"300\" alarmDistance=\"0.01\" "
+                                                      "contactDistance=\"0.002\"/>\n")));
+  ASSERT_TRUE(world) << world.error().to_string();
+  EXPECT_DOUBLE_EQ(world->config.contacts.alarm_distance_m, 0.01);
+  EXPECT_DOUBLE_EQ(world->config.contacts.stiffness_n_per_m, 300.0);
+  EXPECT_EQ(world->bodies[0].collision.stiffness_n_per_m, 1000.0);
+  // A SOFA scene without collision models: contact="true" gives the body its whole surface.
+  world = build_world(write("opt_in.hof", "<hof version=\"1\" name=\"in\">\n  <mechanics scene=\"" +
+                                              std::string(HOF_SOURCE_DIR) +
+                                              "/examples/liver-medium-fem.scn\" unit=\"m\"/>\n  <bodies>\n"
+                                              "    <body name=\"Liver\" contact=\"true\"/>\n  </bodies>\n</hof>\n"));
+  ASSERT_TRUE(world) << world.error().to_string();
+  EXPECT_FALSE(world->config.contacts.enabled);  // no pipeline, no <contact>: nothing to collide with
+  EXPECT_TRUE(world->bodies[0].collision.enabled && world->bodies[0].collision.triangles);
+}
+
 }  // namespace
 }  // namespace hof::scene
