@@ -456,3 +456,103 @@ TEST(ProjectEdit, EachKindOfErrorNamesTheSettingAndWhatIsKnown) {
 
 }  // namespace
 }  // namespace hof::scene
+
+namespace hof::scene {
+namespace {
+
+// <contact>: every attribute and the pairs switched off read, written and read again equal; the
+// bodies' contact="…" too.
+TEST(ProjectContact, RoundTripsEverySettingAndPair) {
+  const std::string text =
+      "<hof version=\"1\" name=\"contact\">\n  <mechanics scene=\"organs.scn\"/>\n"
+      "  <bodies>\n    <body name=\"Liver\" contact=\"true\"/>\n    <body name=\"Stomach\" contact=\"false\"/>\n"
+      "    <obstacle name=\"Table\" mesh=\"table.obj\" translation=\"0 0 -0.1\" contact=\"false\"/>\n  </bodies>\n"
+      "  <contact enabled=\"true\" response=\"friction\" stiffness=\"2500\" friction=\"0.4\" "
+      "alarmDistance=\"0.004\" contactDistance=\"0.0015\" selfCollision=\"true\">\n"
+      "    <pair a=\"Liver\" b=\"Table\" enabled=\"false\"/>\n    <pair a=\"Liver\" b=\"Stomach\"/>\n"
+      "  </contact>\n</hof>\n";
+  auto p = parse_project(text, "contact.hof");
+  ASSERT_TRUE(p) << p.error().to_string();
+  ASSERT_TRUE(p->contact);
+  const coupling::ContactSettings& s = p->contact->settings;
+  EXPECT_TRUE(s.enabled);
+  EXPECT_EQ(s.response, coupling::ContactResponse::kFrictionConstraint);
+  EXPECT_EQ(s.stiffness_n_per_m, 2500.0);
+  EXPECT_EQ(s.friction, 0.4);
+  EXPECT_EQ(s.alarm_distance_m, 0.004);
+  EXPECT_EQ(s.contact_distance_m, 0.0015);
+  EXPECT_TRUE(s.self_collision);
+  // Only the pair switched off is kept (a pair left on is the default).
+  ASSERT_EQ(p->contact->disabled_pairs.size(), 1u);
+  EXPECT_EQ(p->contact->disabled_pairs[0], (std::pair<std::string, std::string>{"Liver", "Table"}));
+  ASSERT_EQ(p->bodies.size(), 2u);
+  EXPECT_EQ(p->bodies[0].contact, true);
+  EXPECT_EQ(p->bodies[1].contact, false);
+  EXPECT_EQ(p->obstacles[0].contact, false);
+  // read → write → read: equal, and the text canonical from then on.
+  const std::string written = to_xml(*p);
+  auto again = parse_project(written, "contact.hof");
+  ASSERT_TRUE(again) << again.error().to_string();
+  ASSERT_TRUE(again->contact);
+  EXPECT_EQ(again->contact->settings.response, s.response);
+  EXPECT_EQ(again->contact->settings.stiffness_n_per_m, s.stiffness_n_per_m);
+  EXPECT_EQ(again->contact->settings.friction, s.friction);
+  EXPECT_EQ(again->contact->settings.alarm_distance_m, s.alarm_distance_m);
+  EXPECT_EQ(again->contact->settings.contact_distance_m, s.contact_distance_m);
+  EXPECT_EQ(again->contact->settings.self_collision, s.self_collision);
+  EXPECT_EQ(again->contact->disabled_pairs, p->contact->disabled_pairs);
+  EXPECT_EQ(again->bodies[1].contact, false);
+  EXPECT_EQ(again->obstacles[0].contact, false);
+  EXPECT_EQ(to_xml(*again), written);
+  EXPECT_NE(written.find("<pair a=\"Liver\" b=\"Table\" enabled=\"false\"/>"), std::string::npos) << written;
+  // A bare <contact/>: on, with the documented defaults, written in full.
+  auto bare = parse_project("<hof>\n  <mechanics scene=\"x.scn\"/>\n  <contact/>\n</hof>\n", "bare.hof");
+  ASSERT_TRUE(bare) << bare.error().to_string();
+  ASSERT_TRUE(bare->contact);
+  EXPECT_TRUE(bare->contact->settings.enabled);
+  EXPECT_EQ(bare->contact->settings.response, coupling::ContactResponse::kPenalty);
+  EXPECT_NE(to_xml(*bare).find("<contact enabled=\"true\" response=\"penalty\" stiffness=\"1000\" friction=\"0\" "
+                               "alarmDistance=\"0.005\" contactDistance=\"0.001\" selfCollision=\"false\"/>"),
+            std::string::npos)
+      << to_xml(*bare);
+  // No <contact>: none written (the bundled examples stay as they are).
+  auto none = parse_project("<hof>\n  <mechanics scene=\"x.scn\"/>\n</hof>\n", "none.hof");
+  ASSERT_TRUE(none);
+  EXPECT_FALSE(none->contact);
+  EXPECT_EQ(to_xml(*none).find("<contact"), std::string::npos);
+}
+
+TEST(ProjectContact, BadSettingsNameTheFileAndLine) {
+  const auto error_of = [](const std::string& contact) {
+    auto p = parse_project("<hof>\n  <mechanics scene=\"x.scn\"/>\n  " + contact + "\n</hof>\n", "bad.hof");
+    return p ? std::string("accepted") : p.error().to_string();
+  };
+  struct Case {
+    std::string contact;
+    std::string says;
+  };
+  for (const Case& c : {Case{"<contact stiffness=\"-1\"/>", "<contact> stiffness must be ≥ 0 N/m, got -1"},
+                        Case{"<contact alarmDistance=\"-0.01\"/>", "alarmDistance must be ≥ 0 m"},
+                        Case{"<contact contactDistance=\"-0.01\"/>", "contactDistance must be ≥ 0 m"},
+                        Case{"<contact friction=\"-0.2\"/>", "friction must be ≥ 0"},
+                        Case{"<contact alarmDistance=\"0.001\" contactDistance=\"0.002\"/>",
+                             "contactDistance 0.002 is larger than alarmDistance 0.001"},
+                        Case{"<contact response=\"springs\"/>", "response=\"springs\": expected penalty"},
+                        Case{"<contact enabled=\"maybe\"/>", "enabled=\"maybe\" must be true or false"},
+                        Case{"<contact><pair a=\"Liver\"/></contact>", "<pair> needs a="},
+                        Case{"<contact><group/></contact>", "unknown element <group> in <contact>"}}) {
+    const std::string e = error_of(c.contact);
+    EXPECT_NE(e.find("bad.hof:3"), std::string::npos) << e;
+    EXPECT_NE(e.find(c.says), std::string::npos) << e;
+  }
+  auto p = parse_project(
+      "<hof>\n  <mechanics scene=\"x.scn\"/>\n  <bodies>\n    <body name=\"L\" contact=\"yes\"/>\n"
+      "  </bodies>\n</hof>\n",
+      "bad.hof");
+  ASSERT_FALSE(p);
+  EXPECT_NE(p.error().to_string().find("bad.hof:4"), std::string::npos) << p.error().to_string();
+  EXPECT_NE(p.error().message.find("<body> contact=\"yes\" must be true or false"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace hof::scene

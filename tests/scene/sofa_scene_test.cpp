@@ -86,16 +86,18 @@ TEST(SofaScene, LiverScn) {
   EXPECT_EQ(model.visual_mesh->filename(), "liver-smooth.obj");
   EXPECT_TRUE(fs::exists(*model.visual_mesh));
   EXPECT_TRUE(model.visual_barycentric);
-  // Plugins, the collision pipeline and (one body: nothing to collide with) the collision
-  // response need no counterpart; the rest not simulated is named once.
-  EXPECT_TRUE(contains(s.ignored, "CollisionPipeline 'CollisionPipeline' (line 18)"));
+  // Plugins need no counterpart; the collision pipeline, the response and the collision
+  // spheres are contact settings now (sofa_collision_test.cpp): neither ignored nor skipped.
   EXPECT_TRUE(contains(s.ignored, "RequiredPlugin"));
-  EXPECT_TRUE(contains(s.ignored, "CollisionResponse"));
-  EXPECT_TRUE(contains(s.skipped, "SphereCollisionModel 'CollisionModel'"));
-  EXPECT_TRUE(contains(s.ignored, "SphereLoader"));
+  EXPECT_FALSE(contains(s.ignored, "CollisionPipeline"));
+  EXPECT_FALSE(contains(s.ignored, "CollisionResponse"));
+  EXPECT_FALSE(contains(s.skipped, "SphereCollisionModel 'CollisionModel'"));
+  EXPECT_FALSE(contains(s.ignored, "SphereLoader"));
   EXPECT_FALSE(contains(s.skipped, "LiverSurface"));  // used by the OglModel
   EXPECT_FALSE(contains(s.skipped, "'dofs'"));
-  EXPECT_TRUE(contains(s.warnings, "not simulated by HoF and skipped"));
+  EXPECT_TRUE(s.skipped.empty()) << s.skipped.front();
+  EXPECT_TRUE(s.contacts.enabled);
+  EXPECT_TRUE(s.models[0].collision.enabled);
   EXPECT_GT(run_ten_steps(c), 0.0);
 }
 
@@ -138,7 +140,9 @@ TEST(SofaScene, History2008ObjectSyntaxWithMeshAndXs3) {
   EXPECT_EQ(c.fixed[0].indices, (std::vector<std::int32_t>{3, 39, 64}));
   EXPECT_TRUE(s.models[0].visual_barycentric);
   EXPECT_EQ(s.models[0].visual_mesh->filename(), "liver-smooth.obj");
-  EXPECT_TRUE(contains(s.skipped, "Sphere 'CollisionModel'"));
+  // 2008's Sphere model with its .sph file: the body's collision spheres.
+  EXPECT_FALSE(contains(s.skipped, "Sphere 'CollisionModel'"));
+  EXPECT_FALSE(s.models[0].collision.sphere_centers.empty());
   EXPECT_GT(run_ten_steps(c), 0.0);
 }
 
@@ -535,11 +539,13 @@ TEST_F(SofaSceneFiles, AComponentThatChangesTheResultIsAWarningOfItsOwnAndEachIs
                                      body + "    <Mystery name=\"m\"/>\n  </Node>\n</Node>\n"));
   ASSERT_TRUE(s) << s.error().to_string();
   ASSERT_EQ(s->models.size(), 2u);
-  // Two bodies: the collision response changes the result; so does a force field left out.
+  // A collision response without a pipeline detects nothing (as in SOFA), said once; a force
+  // field left out changes the result.
   const auto count = [&](const std::string& what) {
     return std::ranges::count_if(s->warnings, [&](const std::string& w) { return w.find(what) != std::string::npos; });
   };
-  EXPECT_EQ(count("CollisionResponse 'response' (line 3) changes SOFA's result"), 1);
+  EXPECT_EQ(count("CollisionResponse 'response' (line 3): no CollisionPipeline in the scene"), 1);
+  EXPECT_FALSE(s->contacts.enabled);
   EXPECT_EQ(count("RestShapeSpringsForceField 'anchor' (line 9) changes SOFA's result"), 1);
   // The others not simulated are listed together, each once; plugins only counted.
   EXPECT_EQ(count("Mystery 'm' (line 16)"), 1);

@@ -386,10 +386,10 @@ TEST(World, ProjectHoldsBodySurfacesAndRigidObstaclesAndRoundTrips) {
   haptics::SurfaceMaterial soft;
   soft.kind = haptics::SurfaceKind::kFrictional;
   soft.stiffness = 0.25;
-  p.bodies.push_back({"Liver", soft, {}, {}});
+  p.bodies.push_back({"Liver", soft, {}, {}, {}});
   haptics::SurfaceMaterial hard;
   hard.stiffness = 0.9;
-  p.obstacles.push_back({"Table", "plate.obj", Vec3(0, 0, -0.06), hard});
+  p.obstacles.push_back({"Table", "plate.obj", Vec3(0, 0, -0.06), hard, {}});
   const fs::path file = fs::temp_directory_path() / "hof_world_test" / "bodies.hof";
   ASSERT_TRUE(write_project(p, file));
   auto again = read_project(file);

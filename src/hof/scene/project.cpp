@@ -204,6 +204,16 @@ void read_bodies(ProjectReader& r, const pugi::xml_node& bodies, HofProject& p) 
     }
     std::optional<haptics::SurfaceMaterial> surface;
     if (const pugi::xml_node s = b.child("surface")) surface = read_surface(r, s);
+    std::optional<bool> contact;
+    if (const pugi::xml_attribute a = b.attribute("contact")) {
+      const std::string_view v = a.value();
+      if (v == "true" || v == "1")
+        contact = true;
+      else if (v == "false" || v == "0")
+        contact = false;
+      else
+        r.fail(b, fmt::format("<{}> contact=\"{}\" must be true or false", tag, v));
+    }
     if (tag == "body") {
       const std::string model = b.attribute("model").as_string("");
       if (!model.empty() && model != "springs" && model != "membrane" && model != "hexahedra") {
@@ -221,7 +231,7 @@ void read_bodies(ProjectReader& r, const pugi::xml_node& bodies, HofProject& p) 
           for (int a = 0; a < 3; ++a) grid[static_cast<std::size_t>(a)] = static_cast<int>(n[a]);
         }
       }
-      p.bodies.push_back(BodySetup{name, surface, model, grid});
+      p.bodies.push_back(BodySetup{name, surface, model, grid, contact});
     } else if (tag == "obstacle") {
       ObstacleSetup o;
       o.name = name;
@@ -229,11 +239,39 @@ void read_bodies(ProjectReader& r, const pugi::xml_node& bodies, HofProject& p) 
       if (o.mesh.empty()) r.fail(b, "<obstacle> needs mesh=\"FILE\" (OBJ, STL, OFF or a tetrahedral mesh)");
       o.translation = r.get_vec(b, "translation", Vec3::Zero());
       o.surface = surface;
+      o.contact = contact;
       p.obstacles.push_back(std::move(o));
     } else {
       r.fail(b, fmt::format("unknown element <{}> in <bodies> (body, obstacle)", tag));
     }
   }
+}
+
+// <contact>: contact between bodies, and the pairs switched off (<pair a b enabled="false">).
+ContactSetup read_contact(ProjectReader& r, const pugi::xml_node& node) {
+  ContactSetup c;
+  r.read(node, detail::contact_fields(), c.settings);
+  if (auto problem = detail::check_contact(c.settings)) r.fail(node, *problem);
+  for (const pugi::xml_node pair : node.children()) {
+    if (pair.type() != pugi::node_element) continue;
+    if (std::string_view(pair.name()) != "pair") {
+      r.fail(pair, fmt::format("unknown element <{}> in <contact> (pair)", pair.name()));
+      continue;
+    }
+    const std::string a = pair.attribute("a").as_string("");
+    const std::string b = pair.attribute("b").as_string("");
+    if (a.empty() || b.empty()) {
+      r.fail(pair, "<pair> needs a=\"BODY\" and b=\"BODY\"");
+      continue;
+    }
+    const std::string_view enabled = pair.attribute("enabled").as_string("true");
+    if (enabled == "false" || enabled == "0") {
+      c.disabled_pairs.emplace_back(a, b);
+    } else if (enabled != "true" && enabled != "1") {
+      r.fail(pair, fmt::format("<pair> enabled=\"{}\" must be true or false", enabled));
+    }
+  }
+  return c;
 }
 
 // <haptics>: the device, rate, renderer, contact coupling, calibration, surface, options,
@@ -350,6 +388,7 @@ Expected<HofProject> parse_project(const std::string& text, const std::filesyste
   }
   for (const pugi::xml_node node : mechanics.children("region")) p.regions.push_back(read_region(r, node));
   read_bodies(r, root.child("bodies"), p);
+  if (const pugi::xml_node c = root.child("contact")) p.contact = read_contact(r, c);
   if (const pugi::xml_node h = root.child("haptics")) read_haptics(r, h, p);
   if (auto ok = read_h3d_files(root.child("h3d"), path, p); !ok) return std::unexpected(ok.error());
   if (const pugi::xml_node g = root.child("graphics")) read_graphics(r, g, p);

@@ -67,6 +67,10 @@ struct BodySetup {
   /// "hexahedra": nodes per axis of the grid (SOFA's n); 0 = cells of a tenth of the body's
   /// largest extent.
   std::array<int, 3> grid{0, 0, 0};
+  /// contact="false": the body takes no part in contact between bodies; "true": it does even
+  /// where its scene gives it no collision model. Unset: with <contact>, every body collides
+  /// (a SOFA body through the collision models its scene gives, else its whole surface).
+  std::optional<bool> contact;
 };
 
 /// A rigid, fixed obstacle the project adds to the scene (a table, a rib cage): a surface mesh
@@ -76,6 +80,25 @@ struct ObstacleSetup {
   std::filesystem::path mesh;
   Vec3 translation{Vec3::Zero()};                   ///< m, added to the mesh's coordinates
   std::optional<haptics::SurfaceMaterial> surface;  ///< else the project's
+  std::optional<bool> contact;                      ///< as BodySetup::contact
+};
+
+/// Contact between bodies (<contact>): on for every body with a surface (its triangles, edges
+/// and nodes), unless a body says contact="false" or a <pair> is switched off. Replaces the
+/// contact settings of the project's SOFA scene (its collision pipeline) when given.
+struct ContactSetup {
+  /// The world's settings. Lengths in the scene's unit (m unless <mechanics unit>), the
+  /// stiffness in N per that unit. `disabled_pairs` stays empty here: pairs go by name below.
+  coupling::ContactSettings settings{.enabled = true,
+                                     .response = coupling::ContactResponse::kPenalty,
+                                     .alarm_distance_m = 0.005,
+                                     .contact_distance_m = 0.001,
+                                     .stiffness_n_per_m = 1000.0,
+                                     .friction = 0.0,
+                                     .self_collision = false,
+                                     .disabled_pairs = {}};
+  /// Pairs of bodies (by name, as <pair a="…" b="…" enabled="false"/>) that do not collide.
+  std::vector<std::pair<std::string, std::string>> disabled_pairs;
 };
 
 /// A tissue region (a tumour, a stiffer lobe): the elements of a body (tetrahedra; a
@@ -115,6 +138,7 @@ struct HofProject {
   std::string scene_unit;
   std::vector<BodySetup> bodies;         ///< per-body settings (<bodies><body>)
   std::vector<ObstacleSetup> obstacles;  ///< rigid obstacles (<bodies><obstacle>)
+  std::optional<ContactSetup> contact;   ///< contact between bodies (<contact>); unset: the scene's
   std::array<double, 16> position_calibration{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};  ///< row-major 4x4
   double haptic_rate_hz{1000.0};
   haptics::RendererKind renderer{haptics::RendererKind::kRuspini};

@@ -256,6 +256,7 @@ template std::string write_fields(const Fields<haptics::SpringEffect>&, const ha
 template std::string write_fields(const Fields<haptics::ViscosityEffect>&, const haptics::ViscosityEffect&);
 template std::string write_fields(const Fields<haptics::ConstantForceEffect>&, const haptics::ConstantForceEffect&);
 template std::string write_fields(const Fields<GraphicsSetup>&, const GraphicsSetup&);
+template std::string write_fields(const Fields<coupling::ContactSettings>&, const coupling::ContactSettings&);
 
 const Fields<HofProject>& haptics_fields() {
   using P = HofProject;
@@ -518,6 +519,30 @@ const Fields<GraphicsSetup>& light_fields() {
   return fields;
 }
 
+const Fields<coupling::ContactSettings>& contact_fields() {
+  using C = coupling::ContactSettings;
+  const auto non_negative = [](std::string_view name, std::string_view unit) {
+    return [name, unit](double v, std::string_view element) -> Problem {
+      if (v >= 0.0) return std::nullopt;
+      return fmt::format("<{}> {} must be ≥ 0{}, got {}", element, name, unit, v);
+    };
+  };
+  static const Fields<C> fields{
+      boolean<C>("enabled", HOF_MEMBER(enabled)),
+      choice<C, coupling::ContactResponse>("response", HOF_MEMBER(response),
+                                           {{"penalty", coupling::ContactResponse::kPenalty},
+                                            {"friction", coupling::ContactResponse::kFrictionConstraint}},
+                                           "<contact> response=\"{}\": expected penalty (SOFA's "
+                                           "PenalityContactForceField) or friction (FrictionContactConstraint)"),
+      number<C>("stiffness", HOF_MEMBER(stiffness_n_per_m), non_negative("stiffness", " N/m")),
+      number<C>("friction", HOF_MEMBER(friction), non_negative("friction", "")),
+      number<C>("alarmDistance", HOF_MEMBER(alarm_distance_m), non_negative("alarmDistance", " m")),
+      number<C>("contactDistance", HOF_MEMBER(contact_distance_m), non_negative("contactDistance", " m")),
+      boolean<C>("selfCollision", HOF_MEMBER(self_collision)),
+  };
+  return fields;
+}
+
 #undef HOF_MEMBER
 
 }  // namespace hof::scene::detail
@@ -556,6 +581,14 @@ std::optional<std::string> check_tissue(const procedures::TissueNeedleParameters
 std::optional<std::string> check_needle(const procedures::NeedleConfig& needle) {
   if (auto ok = procedures::validate(needle); !ok) return ok.error().message;
   return std::nullopt;
+}
+
+std::optional<std::string> check_contact(const coupling::ContactSettings& contact) {
+  if (contact.contact_distance_m <= contact.alarm_distance_m) return std::nullopt;
+  return fmt::format(
+      "<contact> contactDistance {} is larger than alarmDistance {} (pairs are detected within the "
+      "alarm distance: the contact distance must not exceed it)",
+      contact.contact_distance_m, contact.alarm_distance_m);
 }
 
 std::optional<std::string> check_haptic_rate(const HofProject& project) {

@@ -86,6 +86,7 @@ std::string to_xml(const HofProject& p) {
     for (const BodySetup& b : p.bodies) {
       std::string model = b.model.empty() ? std::string() : fmt::format(" model=\"{}\"", xml_escape(b.model));
       if (b.grid[0] > 0) model += fmt::format(" grid=\"{} {} {}\"", b.grid[0], b.grid[1], b.grid[2]);
+      if (b.contact) model += fmt::format(" contact=\"{}\"", *b.contact ? "true" : "false");
       if (b.surface) {
         out += fmt::format("    <body name=\"{}\"{}>\n", xml_escape(b.name), model) +
                surface_xml(*b.surface, "      ") + "    </body>\n";
@@ -94,11 +95,24 @@ std::string to_xml(const HofProject& p) {
       }
     }
     for (const ObstacleSetup& o : p.obstacles) {
-      const std::string open = fmt::format("    <obstacle name=\"{}\" mesh=\"{}\" translation=\"{}\"",
-                                           xml_escape(o.name), xml_escape(o.mesh.generic_string()), vec(o.translation));
+      const std::string open =
+          fmt::format("    <obstacle name=\"{}\" mesh=\"{}\" translation=\"{}\"{}", xml_escape(o.name),
+                      xml_escape(o.mesh.generic_string()), vec(o.translation),
+                      o.contact ? fmt::format(" contact=\"{}\"", *o.contact ? "true" : "false") : std::string());
       out += o.surface ? open + ">\n" + surface_xml(*o.surface, "      ") + "    </obstacle>\n" : open + "/>\n";
     }
     out += "  </bodies>\n";
+  }
+  if (p.contact) {
+    const std::string attributes = write_fields(detail::contact_fields(), p.contact->settings);
+    if (p.contact->disabled_pairs.empty()) {
+      out += fmt::format("  <contact {}/>\n", attributes);
+    } else {
+      out += fmt::format("  <contact {}>\n", attributes);
+      for (const auto& [a, b] : p.contact->disabled_pairs)
+        out += fmt::format("    <pair a=\"{}\" b=\"{}\" enabled=\"false\"/>\n", xml_escape(a), xml_escape(b));
+      out += "  </contact>\n";
+    }
   }
   out += fmt::format("  <haptics {}>\n", write_fields(detail::haptics_fields(), p));
   out += fmt::format("    <calibration {}/>\n", write_fields(detail::calibration_fields(), p));

@@ -135,6 +135,7 @@ Expected<SofaScene> Reader::run() {
   if (auto r = build_node(xml_root, *root_); !r) return std::unexpected(r.error());
   if (auto r = check_types_and_attributes(); !r) return std::unexpected(r.error());
   if (auto r = collect_models(*root_); !r) return std::unexpected(r.error());
+  if (auto r = read_contacts(*root_); !r) return std::unexpected(r.error());
   list_skipped(*root_);
   // Each component not simulated is named once: those that change SOFA's result have a warning
   // of their own (list_skipped); the others are listed here together.
@@ -444,23 +445,12 @@ bool needs_no_counterpart(std::string_view type) {
                                                 "OglSceneFrame",
                                                 "OglGrid",
                                                 "OglLabel",
-                                                "CollisionPipeline",
-                                                "DefaultPipeline",
-                                                "BruteForceBroadPhase",
-                                                "BVHNarrowPhase",
-                                                "BruteForceDetection",
-                                                "BruteForce",
-                                                "DiscreteIntersection",
-                                                "MinProximityIntersection",
-                                                "NewProximityIntersection",
-                                                "LocalMinDistance",
                                                 "AttachBodyButtonSetting",
                                                 "FixedPlaneConstraintSetting",
                                                 "OglModel",
                                                 "VisualModel",
                                                 "OglShader",
                                                 "MeshOBJLoader",
-                                                "SphereLoader",
                                                 "VisualGrid",
                                                 "LineAxis"};
   return std::ranges::find(kTypes, type) != std::end(kTypes);
@@ -468,9 +458,11 @@ bool needs_no_counterpart(std::string_view type) {
 
 // Why a component HoF does not simulate changes SOFA's result ("" when it does not).
 std::string_view what_changes(std::string_view type) {
-  if (type == "CollisionResponse" || type == "DefaultContactManager" || type == "RuleBasedContactManager") {
-    return "contacts between bodies: in HoF bodies do not collide with each other, only with the stylus";
+  if (type.ends_with("CollisionModel") || type == "CubeModel" || type == "TriangleOctreeModel") {
+    return "HoF detects contact with triangle, line, point and sphere models only; this shape does not collide";
   }
+  if (type.ends_with("Intersection"))
+    return "HoF does not have this intersection method (it has SOFA's discrete and proximity ones)";
   if (type == "FreeMotionAnimationLoop" || type.ends_with("ConstraintSolver") ||
       type.ends_with("ConstraintCorrection")) {
     return "constraint-based contacts and constraints are not solved";
@@ -501,11 +493,6 @@ void Reader::list_skipped(const SceneNode& node) {
       scene_.ignored.push_back(c->label());
       continue;
     }
-    const bool contact = c->type == "CollisionResponse" || c->type.ends_with("ContactManager");
-    if (contact && scene_.models.size() + scene_.obstacles.size() < 2) {
-      scene_.ignored.push_back(c->label());  // one body: nothing for it to collide with
-      continue;
-    }
     scene_.skipped.push_back(c->label());
     // The node is not a body (its state is rigid, 1D, ...): its components are skipped with it,
     // and the state's own warning says why once; "a second mass" or "missing forces" would not
@@ -528,6 +515,18 @@ void Reader::list_skipped(const SceneNode& node) {
           return o->type.ends_with("CollisionModel") ||
                  std::ranges::find(kOlderCollisionModels, o->type) != std::end(kOlderCollisionModels);
         });
+    // With friction contacts, the constraint solver and its corrections are what SOFA solves the
+    // contacts with; HoF solves them as penalty contacts, which those settings do not tune.
+    const bool contact_constraints = scene_.contacts.enabled &&
+                                     scene_.contacts.response == coupling::ContactResponse::kFrictionConstraint &&
+                                     (c->type == "FreeMotionAnimationLoop" || c->type.ends_with("ConstraintSolver") ||
+                                      c->type.ends_with("ConstraintCorrection"));
+    if (contact_constraints) {
+      warn(c->line, fmt::format("{} is not used by HoF: the contacts are solved as penalty contacts (constraint "
+                                "contacts are next), which its settings do not tune",
+                                c->label()));
+      continue;
+    }
     if (const std::string_view why = what_changes(c->type); !why.empty() && !carries_collision) {
       warn(c->line, fmt::format("{} changes SOFA's result and is not simulated by HoF: {}", c->label(), why));
     }

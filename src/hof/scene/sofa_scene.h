@@ -4,8 +4,9 @@
 /// names — for the components HoF's mechanics has, with the loaders that bring their data
 /// (MeshGmshLoader, MeshOBJLoader, MeshTopology/`Mesh` with a file, the old `MeshLoader`,
 /// `MechanicalObject filename=….xs3`), `@link` references and `src="@loader"`. Components
-/// HoF does not simulate (collision pipeline, RequiredPlugin, visual style, …) are listed in
-/// one warning and skipped; nothing the user wrote is silently lost (`skipped` names them).
+/// HoF does not simulate (RequiredPlugin, visual style, …) are listed in one warning and
+/// skipped; the collision pipeline and the bodies' collision models become contact settings
+/// (sofa_collision.cpp); nothing the user wrote is silently lost (`skipped` names them).
 /// File paths resolve as SOFA's data repository does: the scene's folder (then its parent
 /// folders), then each folder of `SOFA_DATA_PATH`, then `share/` and `examples/` under
 /// `SOFA_ROOT` (sofa_data_folders()).
@@ -16,6 +17,7 @@
 #include <vector>
 
 #include "hof/core/error.h"
+#include "hof/coupling/contact_settings.h"
 #include "hof/mechanics/mechanical_model.h"
 #include "hof/mesh/mesh.h"
 
@@ -30,6 +32,9 @@ struct SofaSceneModel {
   /// A hexahedral grid's fine surface (the closed surface a SparseGridTopology was built
   /// from), to touch when the node has no mapped visual model: it follows the grid trilinearly.
   std::optional<mesh::TriMesh> fine_surface;
+  /// Its collision models (Triangle/Line/Point/SphereCollisionModel in its node or in a node
+  /// mapped from it); `enabled` false when it has none.
+  coupling::BodyCollision collision;
 };
 
 /// A rigid, fixed obstacle: a node with a triangle collision model on a state (or loader) that
@@ -37,13 +42,18 @@ struct SofaSceneModel {
 struct SofaSceneObstacle {
   std::string node_path;
   std::string name;
-  mesh::TriMesh surface;  ///< scene units
+  mesh::TriMesh surface;              ///< scene units
+  coupling::BodyCollision collision;  ///< its collision models (a floor collides with the bodies)
 };
 
 struct SofaScene {
   std::filesystem::path file;
   std::vector<SofaSceneModel> models;
   std::vector<SofaSceneObstacle> obstacles;
+  /// Contact between bodies: the collision pipeline, intersection method and response
+  /// (`enabled` when the scene has a pipeline and a response). Distances and stiffnesses are in
+  /// scene units.
+  coupling::ContactSettings contacts;
   std::vector<std::string> skipped;  ///< "TYPE 'name' (line N)" of every component not simulated
   /// Components HoF needs no counterpart of (plugins, display, the default loops, collision
   /// detection without a response): read, not simulated, changing nothing.

@@ -188,6 +188,19 @@ class Reader {
   Expected<void> apply_visual(SceneNode& node, SofaSceneModel& model);
   void list_skipped(const SceneNode& node);
 
+  // Contact between bodies (sofa_collision.cpp).
+  /// The collision pipeline, intersection method and response anywhere in the scene, as the
+  /// world's contact settings (scene_.contacts).
+  Expected<void> read_contacts(SceneNode& root);
+  /// The collision models of a body: those in its node and in the nodes mapped from it (a
+  /// collision surface, SOFA's collision spheres). `has_surface`: the body has a surface to
+  /// collide (its volume's boundary, its triangles, a mapped visual surface); `rigid`: an
+  /// obstacle (only its own node is read; moving and simulated default to false).
+  Expected<coupling::BodyCollision> body_collision(SceneNode& node, bool has_surface, bool rigid);
+  /// SphereCollisionModel `model` in `node`: its centres (the node's state, or its SphereLoader)
+  /// and radii (listRadius, or radius), into `out`.
+  Expected<void> read_spheres(SceneNode& node, Component& model, coupling::BodyCollision& out);
+
   fs::path path_;
   std::string text_;
   bool have_text_{false};

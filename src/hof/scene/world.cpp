@@ -408,14 +408,18 @@ Expected<void> add_sofa(World& w, const std::filesystem::path& scene_path, const
     const std::string name = unique_name(w.bodies, body->name);
     body->name = name;
     if (body->config) body->config->name = name;
+    body->collision = m.collision;
     w.bodies.push_back(std::move(*body));
   }
   for (const SofaSceneObstacle& o : sofa->obstacles) {
     coupling::SessionBody body;
     body.name = unique_name(w.bodies, o.name);
     body.surface = o.surface;
+    body.collision = o.collision;
     w.bodies.push_back(std::move(body));
   }
+  // Kept through finish_world(), which makes the rest of the configuration from the project.
+  w.config.contacts = sofa->contacts;
   return {};
 }
 
@@ -455,7 +459,7 @@ void record_changes(HofProject& project, const coupling::Session& session) {
     auto body =
         std::find_if(project.bodies.begin(), project.bodies.end(), [&](const auto& b) { return b.name == name; });
     if (body == project.bodies.end()) {
-      project.bodies.push_back(BodySetup{name, material, {}, {}});
+      project.bodies.push_back(BodySetup{name, material, {}, {}, {}});
     } else {
       body->surface = material;
     }
@@ -551,7 +555,10 @@ Expected<World> finish_world(World w, bool sofa_scene, bool bare, const std::str
     w.defaults.push_back("device = " + device + " (the default probe: " + probe.description + ")");
   }
   w.device = device;
+  const coupling::ContactSettings scene_contacts = w.config.contacts;
   w.config = session_config(w.project);
+  w.config.contacts = scene_contacts;
+  if (auto ok = detail::apply_contact(w); !ok) return std::unexpected(ok.error());
   if (w.project.needle) {
     // The needle stylus: the tool in the haptic loop and its reaction in the tissue.
     std::vector<std::string> names;

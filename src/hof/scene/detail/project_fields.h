@@ -91,6 +91,9 @@ std::string write_fields(const Fields<T>& fields, const T& from);
 [[nodiscard]] const Fields<GraphicsSetup>& material_fields();
 /// <light> in <graphics>.
 [[nodiscard]] const Fields<GraphicsSetup>& light_fields();
+/// <contact>: enabled, response, stiffness, friction, alarmDistance, contactDistance,
+/// selfCollision.
+[[nodiscard]] const Fields<coupling::ContactSettings>& contact_fields();
 
 // ---- the checks of a whole element, after its attributes (reader and edit alike)
 /// haptics::validate of a surface.
@@ -100,6 +103,8 @@ std::string write_fields(const Fields<T>& fields, const T& from);
                                                       std::string_view body);
 /// procedures::validate of a needle.
 [[nodiscard]] std::optional<std::string> check_needle(const procedures::NeedleConfig& needle);
+/// contactDistance ≤ alarmDistance.
+[[nodiscard]] std::optional<std::string> check_contact(const coupling::ContactSettings& contact);
 /// The haptic rate in [100, 20000] Hz (checked once the whole file is read).
 [[nodiscard]] std::optional<std::string> check_haptic_rate(const HofProject& project);
 

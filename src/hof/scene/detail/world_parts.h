@@ -1,6 +1,7 @@
 #pragma once
 /// @file
-/// The builder's parts shared by its files (world.cpp, world_x3d.cpp): naming bodies, making a
+/// The builder's parts shared by its files (world.cpp, world_x3d.cpp,
+/// world_contact.cpp): naming bodies, making a
 /// deformable body from a model configuration, reading an X3D scene into a world.
 
 #include <cstdint>
@@ -34,5 +35,11 @@ namespace hof::scene::detail {
 /// An X3D scene's shapes, effects, device settings and viewpoint added to `w`; a scene with
 /// nothing to touch opens and says why (World::nothing_to_touch).
 [[nodiscard]] Expected<void> add_x3d(World& w, const std::filesystem::path& file);
+
+/// Contact between bodies (world_contact.cpp): the project's <contact> over the scene's settings
+/// (w.config.contacts), each body's contact="…", the pairs switched off (by index). Errors name
+/// the project file: a pair or a body that is not in the world, a body asked to collide that
+/// has no surface.
+[[nodiscard]] Expected<void> apply_contact(World& w);
 
 }  // namespace hof::scene::detail
