@@ -31,22 +31,6 @@ std::optional<ComponentRef> find_component(const mechanics::ModelConfig& c, std:
   return std::nullopt;
 }
 
-std::string_view kind_name(ComponentKind kind) {
-  switch (kind) {
-    case ComponentKind::kModel:
-      return "model";
-    case ComponentKind::kForceField:
-      return "force field";
-    case ComponentKind::kOdeSolver:
-      return "ODE solver";
-    case ComponentKind::kLinearSolver:
-      return "linear solver";
-    case ComponentKind::kMass:
-      return "mass";
-  }
-  return "component";
-}
-
 }  // namespace
 
 Expected<ParameterId> parameter_id(std::string_view name) {
@@ -86,17 +70,18 @@ Expected<ParameterRef> resolve_parameter(const mechanics::ModelConfig& config, s
     std::string closest;
     const std::string& why = id.error().message;
     if (const auto at = why.find(" (closest"); at != std::string::npos) closest = why.substr(at);
-    return make_error(
-        ErrorCode::kInvalidArgument,
-        fmt::format("{} '{}' has no parameter '{}'{}", kind_name(found->kind), component, parameter, closest),
-        config.name);
+    return make_error(ErrorCode::kInvalidArgument,
+                      fmt::format("{} '{}' has no parameter '{}'{}", mechanics::component_kind_name(found->kind),
+                                  component, parameter, closest),
+                      config.name);
   }
   const ParameterRef ref{*found, *id};
   // A parameter this component does not have (the model lists what each component has).
   if (const auto accepted = mechanics::parameter_refs(config); std::ranges::find(accepted, ref) == accepted.end()) {
-    return make_error(ErrorCode::kInvalidArgument,
-                      fmt::format("{} '{}' has no parameter '{}'", kind_name(found->kind), component, parameter),
-                      config.name);
+    return make_error(
+        ErrorCode::kInvalidArgument,
+        fmt::format("{} '{}' has no parameter '{}'", mechanics::component_kind_name(found->kind), component, parameter),
+        config.name);
   }
   return ref;
 }
