@@ -152,4 +152,24 @@ Expected<double> session_parameter(const coupling::Session& session, std::string
   return session.parameter(*id, *ref);
 }
 
+std::vector<ParameterChange> parameter_changes(const coupling::Session& session, bool with_queued) {
+  const std::vector<coupling::ParameterChange> changes = session.parameter_changes(with_queued);
+  // Each body's configuration once (a copy of its mesh: not one per change).
+  std::vector<std::optional<mechanics::ModelConfig>> configs(session.body_count());
+  std::vector<ParameterChange> named;
+  named.reserve(changes.size());
+  for (const coupling::ParameterChange& change : changes) {
+    const auto i = static_cast<std::size_t>(change.body);
+    if (!configs[i]) {
+      // A change is recorded for a body with mechanics only, which always has a configuration.
+      auto config = session.body_config(change.body);
+      configs[i] = config ? std::move(*config) : mechanics::ModelConfig{};
+    }
+    named.push_back(ParameterChange{session.body(i).name,
+                                    std::string(mechanics::component_name(*configs[i], change.parameter.component)),
+                                    std::string(mechanics::parameter_name(change.parameter.id)), change.value});
+  }
+  return named;
+}
+
 }  // namespace hof::scene

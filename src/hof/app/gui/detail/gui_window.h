@@ -185,7 +185,7 @@ class GuiWindow {
   ViewOptions view_options_;
   std::set<std::string> warned_;  // warnings already shown for this world
   // Parameter changes submitted since the last structural change (some may still be queued).
-  std::vector<coupling::ParameterChange> submitted_changes_;
+  std::vector<scene::ParameterChange> submitted_changes_;
   // A calibration change on its way to the haptic loop: the mouse keeps the old mapping until
   // the session has applied as many as were submitted.
   std::uint64_t calibrations_submitted_{0};
