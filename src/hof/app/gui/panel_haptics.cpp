@@ -18,22 +18,32 @@ namespace {
 void effects_editor(const WorldView& w, GuiCommands& out) {
   ImGui::Separator();
   ImGui::TextDisabled("force effects (H3D; Enter applies)");
-  const auto set = [&](const std::string& element, const char* attribute, const std::string& value) {
-    out.push_back(action::SetAttribute{element, attribute, value});
+  // The effects' settings changed this frame, as one typed edit of the force effects (each
+  // change named as the project file names it, for messages and a recording).
+  std::optional<action::EditProject> edit;
+  const auto set = [&](const std::string& element, const char* attribute, const std::string& value, const auto& apply) {
+    if (!edit) edit = action::EditProject{scene::project_edit::Effects{w.project.effects}, {}};
+    apply(std::get<scene::project_edit::Effects>(edit->edit).effects);
+    edit->settings.push_back(fmt::format("{}@{} {}", element, attribute, value));
   };
-  const auto number = [&](const std::string& element, const char* attribute, double value) {
+  // A number or a vector of the i-th effect of a list (ForceEffects::springs, ...).
+  const auto number = [&](const std::string& element, const char* attribute, auto list, std::size_t i, auto field) {
+    double value = (w.project.effects.*list)[i].*field;
     ImGui::SetNextItemWidth(160);
     if (ImGui::InputDouble(attribute, &value, 0.0, 0.0, "%.4g", ImGuiInputTextFlags_EnterReturnsTrue))
-      set(element, attribute, number_text(value));
+      set(element, attribute, number_text(value), [&](haptics::ForceEffects& f) { (f.*list)[i].*field = value; });
   };
-  const auto vector = [&](const std::string& element, const char* attribute, const Vec3& value) {
+  const auto vector = [&](const std::string& element, const char* attribute, auto list, std::size_t i, auto field) {
+    const Vec3 value = (w.project.effects.*list)[i].*field;
     double v[3] = {value.x(), value.y(), value.z()};
     ImGui::SetNextItemWidth(240);
     if (ImGui::InputScalarN(attribute, ImGuiDataType_Double, v, 3, nullptr, nullptr, "%.4g",
                             ImGuiInputTextFlags_EnterReturnsTrue)) {
-      set(element, attribute, fmt::format("{} {} {}", v[0], v[1], v[2]));
+      set(element, attribute, fmt::format("{} {} {}", v[0], v[1], v[2]),
+          [&](haptics::ForceEffects& f) { (f.*list)[i].*field = Vec3(v[0], v[1], v[2]); });
     }
   };
+  using haptics::ForceEffects, haptics::SpringEffect, haptics::ViscosityEffect;
   // Adding or removing an effect changes the list as a whole (one command).
   const auto change = [&](const auto& mutate) {
     haptics::ForceEffects effects = w.project.effects;
@@ -42,22 +52,20 @@ void effects_editor(const WorldView& w, GuiCommands& out) {
   };
   std::optional<std::function<void(haptics::ForceEffects&)>> pending;  // applied after the loops below
   for (std::size_t i = 0; i < w.project.effects.springs.size(); ++i) {
-    const haptics::SpringEffect e = w.project.effects.springs[i];
     const std::string element = fmt::format("haptics/effects/SpringEffect[{}]", i + 1);
     ImGui::PushID(element.c_str());
     ImGui::Text("SpringEffect %zu", i + 1);
     ImGui::SameLine();
     if (ImGui::SmallButton("remove"))
       pending = [i](haptics::ForceEffects& f) { f.springs.erase(f.springs.begin() + static_cast<std::ptrdiff_t>(i)); };
-    vector(element, "position", e.position_m);
-    number(element, "springConstant", e.spring_constant_n_per_m);
-    number(element, "startDistance", e.start_distance_m);
-    number(element, "escapeDistance", e.escape_distance_m);
-    number(element, "damping", e.damping_n_s_per_m);
+    vector(element, "position", &ForceEffects::springs, i, &SpringEffect::position_m);
+    number(element, "springConstant", &ForceEffects::springs, i, &SpringEffect::spring_constant_n_per_m);
+    number(element, "startDistance", &ForceEffects::springs, i, &SpringEffect::start_distance_m);
+    number(element, "escapeDistance", &ForceEffects::springs, i, &SpringEffect::escape_distance_m);
+    number(element, "damping", &ForceEffects::springs, i, &SpringEffect::damping_n_s_per_m);
     ImGui::PopID();
   }
   for (std::size_t i = 0; i < w.project.effects.viscosities.size(); ++i) {
-    const haptics::ViscosityEffect e = w.project.effects.viscosities[i];
     const std::string element = fmt::format("haptics/effects/ViscosityEffect[{}]", i + 1);
     ImGui::PushID(element.c_str());
     ImGui::Text("ViscosityEffect %zu", i + 1);
@@ -66,11 +74,13 @@ void effects_editor(const WorldView& w, GuiCommands& out) {
       pending = [i](haptics::ForceEffects& f) {
         f.viscosities.erase(f.viscosities.begin() + static_cast<std::ptrdiff_t>(i));
       };
-    number(element, "viscosity", e.viscosity_pa_s);
-    number(element, "radius", e.radius_m);
-    number(element, "dampingFactor", e.damping_factor);
-    bool enabled = e.enabled;
-    if (ImGui::Checkbox("enabled", &enabled)) set(element, "enabled", enabled ? "true" : "false");
+    number(element, "viscosity", &ForceEffects::viscosities, i, &ViscosityEffect::viscosity_pa_s);
+    number(element, "radius", &ForceEffects::viscosities, i, &ViscosityEffect::radius_m);
+    number(element, "dampingFactor", &ForceEffects::viscosities, i, &ViscosityEffect::damping_factor);
+    bool enabled = w.project.effects.viscosities[i].enabled;
+    if (ImGui::Checkbox("enabled", &enabled)) {
+      set(element, "enabled", enabled ? "true" : "false", [&](ForceEffects& f) { f.viscosities[i].enabled = enabled; });
+    }
     ImGui::PopID();
   }
   for (std::size_t i = 0; i < w.project.effects.constants.size(); ++i) {
@@ -82,7 +92,7 @@ void effects_editor(const WorldView& w, GuiCommands& out) {
       pending = [i](haptics::ForceEffects& f) {
         f.constants.erase(f.constants.begin() + static_cast<std::ptrdiff_t>(i));
       };
-    vector(element, "force", w.project.effects.constants[i].force_n);
+    vector(element, "force", &ForceEffects::constants, i, &haptics::ConstantForceEffect::force_n);
     ImGui::PopID();
   }
   // New effects start where the stylus is (a spring holds it there at once) and with H3D's defaults.
@@ -97,6 +107,7 @@ void effects_editor(const WorldView& w, GuiCommands& out) {
   if (ImGui::SmallButton("+ viscosity")) pending = [](haptics::ForceEffects& f) { f.viscosities.emplace_back(); };
   ImGui::SameLine();
   if (ImGui::SmallButton("+ force field")) pending = [](haptics::ForceEffects& f) { f.constants.emplace_back(); };
+  if (edit) out.push_back(std::move(*edit));
   if (pending && w.session) change(*pending);
 }
 
@@ -104,8 +115,12 @@ void effects_editor(const WorldView& w, GuiCommands& out) {
 
 GuiCommands haptics_panel(const WorldView& w, HapticsPanelState& ui) {
   GuiCommands out;
-  const auto set = [&](const std::string& element, const char* attribute, const std::string& value) {
-    out.push_back(action::SetAttribute{element, attribute, value});
+  // A typed edit of the project, named as the file names the setting (for messages and a recording).
+  const auto edit = [&](scene::ProjectEdit e, const std::string& setting) {
+    out.push_back(action::EditProject{std::move(e), {setting}});
+  };
+  const auto device = [&](const std::string& spec) {
+    edit(scene::project_edit::Device{spec}, fmt::format("haptics@device {}", spec));
   };
   ImGui::Text("device: %s", w.device_spec.c_str());
   ImGui::SameLine();
@@ -122,11 +137,11 @@ GuiCommands haptics_panel(const WorldView& w, HapticsPanelState& ui) {
   ImGui::SetNextItemWidth(220);
   ImGui::InputTextWithHint("##spec", "dhd, udp:5005, spacemouse, mouse", spec.data(), spec.size());
   ImGui::SameLine();
-  if (ImGui::Button("Connect") && spec[0] != '\0') set("haptics", "device", spec.data());
+  if (ImGui::Button("Connect") && spec[0] != '\0') device(spec.data());
   // The vendors' SDKs, loaded when asked for (docs/devices.md): a clear message when absent.
-  if (ImGui::Button("Force Dimension")) set("haptics", "device", "dhd");
+  if (ImGui::Button("Force Dimension")) device("dhd");
   ImGui::SameLine();
-  if (ImGui::Button("Mouse")) set("haptics", "device", "mouse");
+  if (ImGui::Button("Mouse")) device("mouse");
   // The renderer's settings changed this frame, as one typed edit of the project.
   std::optional<action::SetRendering> rendering;
   const auto render = [&](const char* attribute, const std::string& value, const auto& apply) {
@@ -158,8 +173,12 @@ GuiCommands haptics_panel(const WorldView& w, HapticsPanelState& ui) {
     ImGui::TextDisabled("device workspace radius %.3g m", w.workspace_radius_m);
     const auto apply = [&](const Eigen::Matrix4d& m) {
       std::string text;
-      for (int i = 0; i < 16; ++i) text += fmt::format("{}{}", i ? " " : "", m(i / 4, i % 4));
-      out.push_back(action::SetAttribute{"haptics/calibration", "positionCalibration", text});
+      scene::project_edit::Calibration calibration;
+      for (int i = 0; i < 16; ++i) {
+        text += fmt::format("{}{}", i ? " " : "", m(i / 4, i % 4));
+        calibration.position[static_cast<std::size_t>(i)] = m(i / 4, i % 4);  // row-major, as the file
+      }
+      edit(calibration, "haptics/calibration@positionCalibration " + text);
     };
     if (ImGui::Button("Fit the workspace to the scene")) {
       // The device's reach spans the scene's bounding sphere (keeping the axes).
@@ -175,7 +194,7 @@ GuiCommands haptics_panel(const WorldView& w, HapticsPanelState& ui) {
   }
   if (ImGui::InputDouble("force limit (N, 0: device's)", &limit, 0.0, 0.0, "%.3g",
                          ImGuiInputTextFlags_EnterReturnsTrue)) {
-    set("haptics/safety", "maxForce", number_text(limit));
+    edit(scene::project_edit::ForceLimit{limit}, "haptics/safety@maxForce " + number_text(limit));
   }
   bool shading = w.project.force_shading;
   if (ImGui::Checkbox("forceShading", &shading)) {
@@ -224,7 +243,10 @@ GuiCommands haptics_panel(const WorldView& w, HapticsPanelState& ui) {
   ImGui::Separator();
   ImGui::TextDisabled("options (saved; they apply when the project is reopened)");
   bool tree = w.project.use_bound_tree;
-  if (ImGui::Checkbox("useBoundTree", &tree)) set("haptics/options", "useBoundTree", tree ? "true" : "false");
+  if (ImGui::Checkbox("useBoundTree", &tree)) {
+    edit(scene::project_edit::BoundTree{tree, w.project.max_triangles_in_leaf},
+         fmt::format("haptics/options@useBoundTree {}", tree ? "true" : "false"));
+  }
   effects_editor(w, out);
   return out;
 }

@@ -208,6 +208,21 @@ Expected<void> GuiWindow::switch_component(const std::string& body, const std::s
   return done;
 }
 
+Expected<void> GuiWindow::edit_project(const action::EditProject& edit) {
+  // A typed edit of the project in memory, checked as the file's reader checks what it reads;
+  // the session's commands that carry it follow (apply_project_edit).
+  if (!session_) return make_error(ErrorCode::kInvalidArgument, "no world is open");
+  const std::string name = edit.settings.empty() ? std::string("haptics") : edit.settings.front();
+  if (auto ok = scene::check_edit(project_, edit.edit); !ok) {
+    Error e = ok.error();
+    e.message = fmt::format("'{}': {}", name, e.message);
+    return std::unexpected(e);
+  }
+  if (auto ok = apply_project_edit(edit.edit, name); !ok) return ok;
+  note_settings(edit.settings);
+  return {};
+}
+
 Expected<void> GuiWindow::set_graphics(const action::SetGraphics& edit) {
   // A typed edit of the project in memory: checked as a file's <graphics> is, drawn by the
   // window only (nothing for the session).
