@@ -111,6 +111,42 @@ void effects_editor(const WorldView& w, GuiCommands& out) {
   if (pending && w.session) change(*pending);
 }
 
+/// The project's surface (the bodies without one of their own take it).
+void surface_editor(const WorldView& w, GuiCommands& out) {
+  ImGui::Separator();
+  ImGui::TextDisabled("surface");
+  // The surface changed this frame, as one typed edit of the project's surface.
+  std::optional<action::SetSurface> surface;
+  const auto change = [&](const char* attribute, const std::string& value, const auto& apply) {
+    if (!surface) surface = action::SetSurface{w.project.surface, {}};
+    apply(surface->surface);
+    surface->settings.push_back(fmt::format("haptics/surface@{} {}", attribute, value));
+  };
+  int kind = static_cast<int>(w.project.surface.kind);
+  const char* kinds[] = {"SmoothSurface", "FrictionalSurface", "MagneticSurface"};
+  ImGui::SetNextItemWidth(200);
+  if (kind >= 0 && kind < 3 && ImGui::Combo("type", &kind, kinds, 3)) {
+    change("type", kinds[kind], [&](haptics::SurfaceMaterial& m) { m.kind = static_cast<haptics::SurfaceKind>(kind); });
+  }
+  const auto number = [&](const char* label, const char* attribute, double haptics::SurfaceMaterial::*field) {
+    double value = w.project.surface.*field;
+    ImGui::SetNextItemWidth(200);
+    if (ImGui::InputDouble(label, &value, 0.0, 0.0, "%.4g", ImGuiInputTextFlags_EnterReturnsTrue)) {
+      change(attribute, number_text(value), [&](haptics::SurfaceMaterial& m) { m.*field = value; });
+    }
+  };
+  number("stiffness", "stiffness", &haptics::SurfaceMaterial::stiffness);
+  number("damping (N s/m)", "damping", &haptics::SurfaceMaterial::damping_n_s_per_m);
+  number("staticFriction", "staticFriction", &haptics::SurfaceMaterial::static_friction);
+  number("dynamicFriction", "dynamicFriction", &haptics::SurfaceMaterial::dynamic_friction);
+  bool relative = w.project.surface.use_relative_values;
+  if (ImGui::Checkbox("useRelativeValues", &relative)) {
+    change("useRelativeValues", relative ? "true" : "false",
+           [&](haptics::SurfaceMaterial& m) { m.use_relative_values = relative; });
+  }
+  if (surface) out.push_back(std::move(*surface));
+}
+
 }  // namespace
 
 GuiCommands haptics_panel(const WorldView& w, HapticsPanelState& ui) {
@@ -208,38 +244,7 @@ GuiCommands haptics_panel(const WorldView& w, HapticsPanelState& ui) {
            [&](action::Rendering& r) { r.touchable_face = static_cast<collision::TouchableFace>(face); });
   }
   if (rendering) out.push_back(std::move(*rendering));
-  ImGui::Separator();
-  ImGui::TextDisabled("surface");
-  // The surface changed this frame, as one typed edit of the project's surface.
-  std::optional<action::SetSurface> surface;
-  const auto change = [&](const char* attribute, const std::string& value, const auto& apply) {
-    if (!surface) surface = action::SetSurface{w.project.surface, {}};
-    apply(surface->surface);
-    surface->settings.push_back(fmt::format("haptics/surface@{} {}", attribute, value));
-  };
-  int kind = static_cast<int>(w.project.surface.kind);
-  const char* kinds[] = {"SmoothSurface", "FrictionalSurface", "MagneticSurface"};
-  ImGui::SetNextItemWidth(200);
-  if (kind >= 0 && kind < 3 && ImGui::Combo("type", &kind, kinds, 3)) {
-    change("type", kinds[kind], [&](haptics::SurfaceMaterial& m) { m.kind = static_cast<haptics::SurfaceKind>(kind); });
-  }
-  const auto number = [&](const char* label, const char* attribute, double haptics::SurfaceMaterial::*field) {
-    double value = w.project.surface.*field;
-    ImGui::SetNextItemWidth(200);
-    if (ImGui::InputDouble(label, &value, 0.0, 0.0, "%.4g", ImGuiInputTextFlags_EnterReturnsTrue)) {
-      change(attribute, number_text(value), [&](haptics::SurfaceMaterial& m) { m.*field = value; });
-    }
-  };
-  number("stiffness", "stiffness", &haptics::SurfaceMaterial::stiffness);
-  number("damping (N s/m)", "damping", &haptics::SurfaceMaterial::damping_n_s_per_m);
-  number("staticFriction", "staticFriction", &haptics::SurfaceMaterial::static_friction);
-  number("dynamicFriction", "dynamicFriction", &haptics::SurfaceMaterial::dynamic_friction);
-  bool relative = w.project.surface.use_relative_values;
-  if (ImGui::Checkbox("useRelativeValues", &relative)) {
-    change("useRelativeValues", relative ? "true" : "false",
-           [&](haptics::SurfaceMaterial& m) { m.use_relative_values = relative; });
-  }
-  if (surface) out.push_back(std::move(*surface));
+  surface_editor(w, out);
   ImGui::Separator();
   ImGui::TextDisabled("options (saved; they apply when the project is reopened)");
   bool tree = w.project.use_bound_tree;
