@@ -56,9 +56,9 @@ TEST(CommandSeam, AWrongCommandIsAClearErrorAndChangesNothing) {
   auto steps = session->submit(command::SingleStep{0});
   ASSERT_FALSE(steps);
   EXPECT_NE(steps.error().message.find("steps must be in [1, 1000000]"), std::string::npos) << steps.error().message;
-  auto nobody = session->submit(command::SetMaterial{"spleen", {}});
+  auto nobody = session->submit(command::SetMaterial{BodyId{1}, {}});
   ASSERT_FALSE(nobody);
-  EXPECT_NE(nobody.error().message.find("no body 'spleen' (bodies: box)"), std::string::npos) << nobody.error().message;
+  EXPECT_NE(nobody.error().message.find("no body #1 (bodies: box)"), std::string::npos) << nobody.error().message;
   auto rigid = session->submit(
       command::SetParameter{BodyId{0}, {{mechanics::ComponentKind::kModel, 0}, mechanics::ParameterId::kDt}, 0.001});
   ASSERT_FALSE(rigid);
@@ -74,13 +74,13 @@ TEST(CommandSeam, AFullQueueIsAClearErrorNotAWait) {
   auto session = box_session();
   for (std::size_t i = 0; i < kCommandQueueCapacity; ++i)
     ASSERT_TRUE(session->submit(command::SetForceLimit{1.0})) << i;
-  auto full = session->submit(command::SetMaterial{"box", {}});
+  auto full = session->submit(command::SetMaterial{BodyId{0}, {}});
   ASSERT_FALSE(full);
   EXPECT_NE(full.error().message.find("queue is full"), std::string::npos) << full.error().message;
   EXPECT_TRUE(session->material_changes().empty()) << "a command refused for want of room changes nothing";
   const SessionReport report = session->run_virtual(0.01, {});  // one step takes them all
   EXPECT_EQ(report.applied_commands.size(), kCommandQueueCapacity);
-  EXPECT_TRUE(session->submit(command::SetMaterial{"box", {}}));
+  EXPECT_TRUE(session->submit(command::SetMaterial{BodyId{0}, {}}));
   EXPECT_EQ(session->material_changes().size(), 1u);
 }
 

@@ -357,7 +357,7 @@ TEST(CommandSeam, ABadValueIsRefusedWithAMessageAndChangesNothing) {
   EXPECT_FALSE(session->submit(command::SingleStep{0}));
   haptics::SurfaceMaterial negative;
   negative.stiffness = -1.0;
-  EXPECT_FALSE(session->submit(command::SetMaterial{"Liver", negative}));
+  EXPECT_FALSE(session->submit(command::SetMaterial{kLiver, negative}));
   const SessionReport report = session->run_virtual(0.1, {});
   EXPECT_TRUE(report.applied_commands.empty());
   EXPECT_TRUE(session->parameter_changes().empty());
@@ -491,7 +491,7 @@ TEST(CommandSeam, CommandsDuringARealTimeRunAreAppliedBetweenSteps) {
   ASSERT_TRUE(session->submit(command::SingleStep{2}));  // not paused any more: ignored
   haptics::SurfaceMaterial frictional;
   frictional.kind = haptics::SurfaceKind::kFrictional;
-  ASSERT_TRUE(session->submit(command::SetMaterial{"", frictional}));
+  ASSERT_TRUE(session->submit(command::SetMaterial{std::nullopt, frictional}));
   EXPECT_FALSE(session->submit(command::SetParameter{kLiver, kStiffness, -1.0}));
   // Wait for the simulation to take them (no timing asserted: however long it takes).
   std::int64_t samples = 0;

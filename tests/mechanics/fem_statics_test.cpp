@@ -8,7 +8,6 @@
 
 #include "hof/mechanics/detail/tetrahedron_fem_force_field.h"
 #include "hof/mechanics/step.h"
-#include "hof/mechanics/von_mises_stress.h"
 #include "hof/mesh/boundary.h"
 #include "test_meshes.h"
 
@@ -253,55 +252,6 @@ TEST(MaterialRegions, AListOfTheWrongLengthOrANegativeModulusIsRefused) {
   auto negative = build_model(c);
   ASSERT_FALSE(negative);
   EXPECT_NE(negative.error().message.find("tetrahedron 3"), std::string::npos) << negative.error().message;
-}
-
-// Display stress: under a uniform stretch ε along x (others held), σ = diag(λ+2μ, λ, λ) ε, whose
-// von Mises value is 2με; a rigid rotation has none; a region with 4E has 4 times the stress.
-TEST(VonMisesStress, MatchesTheAnalyticValueOfAUniformStretchAndIgnoresRotation) {
-  const BoxMesh box = box_mesh(3, 2, 2, Vec3(0.3, 0.2, 0.2));
-  ModelConfig c = static_config(box, FemMethod::kLarge, 3000.0, 0.3);
-  std::vector<double> per_element(box.tets.size(), 0.0);
-  per_element[5] = 12000.0;
-  c.force_fields[0].tetrahedron_fem->element_young_modulus_pa = per_element;
-  const VonMisesStress stress(c);
-  ASSERT_TRUE(stress.available());
-  EXPECT_EQ(stress.source(), "FEM");
-  const double strain = 0.01;
-  std::vector<double> x;
-  for (const Vec3& p : box.nodes) {
-    x.push_back((1.0 + strain) * p.x());
-    x.push_back(p.y());
-    x.push_back(p.z());
-  }
-  std::vector<double> element;
-  stress.element_stress(x, element);
-  const Lame lame = lame_parameters(3000.0, 0.3);
-  ASSERT_EQ(element.size(), box.tets.size());
-  for (std::size_t t = 0; t < element.size(); ++t) {
-    EXPECT_NEAR(element[t], (t == 5 ? 4.0 : 1.0) * 2.0 * lame.mu * strain, 1e-9) << "element " << t;
-  }
-  // Per node: the volume-weighted mean, so a node away from element 5 reads exactly 2με.
-  std::vector<double> node;
-  stress.node_stress(x, node);
-  EXPECT_NEAR(node[static_cast<std::size_t>(box.index(3, 2, 2))], 2.0 * lame.mu * strain, 1e-9);
-
-  const Mat3 rotation = Eigen::AngleAxisd(0.7, Vec3(1, 2, 3).normalized()).toRotationMatrix();
-  x.clear();
-  for (const Vec3& p : box.nodes) {
-    const Vec3 q = rotation * p + Vec3(0.1, -0.2, 0.3);
-    x.insert(x.end(), {q.x(), q.y(), q.z()});
-  }
-  stress.element_stress(x, element);
-  for (const double s : element) EXPECT_NEAR(s, 0.0, 1e-9);
-}
-
-TEST(VonMisesStress, IsUnavailableForASpringModel) {
-  const BoxMesh box = box_mesh(1, 1, 1, Vec3(0.1, 0.1, 0.1));
-  ModelConfig c = static_config(box, FemMethod::kLarge);
-  c.force_fields[0] = ForceFieldConfig{};
-  c.force_fields[0].name = "springs";
-  c.force_fields[0].mesh_springs = MeshSpringConfig{};
-  EXPECT_FALSE(VonMisesStress(c).available());
 }
 
 // Cantilever L/h = 10 clamped at x = 0, shear load P at the free end. Linear tets lock in

@@ -436,7 +436,7 @@ TEST(World, ChangesThroughTheCommandSeamAreInTheNextSavedProject) {
   EXPECT_NE(nobody.error().message.find("no body 'Spleen' (bodies: "), std::string::npos) << nobody.error().message;
   haptics::SurfaceMaterial magnetic;
   magnetic.kind = haptics::SurfaceKind::kMagnetic;
-  ASSERT_TRUE((*session)->submit(coupling::command::SetMaterial{"Liver", magnetic}));
+  ASSERT_TRUE((*session)->submit(coupling::command::SetMaterial{*body_id(**session, "Liver"), magnetic}));
   const coupling::SessionReport report = (*session)->run_virtual(0.02, {});
   ASSERT_EQ(report.applied_commands.size(), 2u);
   record_changes(world->project, **session);

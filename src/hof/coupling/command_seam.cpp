@@ -81,13 +81,6 @@ CommandSeam::~CommandSeam() {
   while (reports_.pop(r)) delete r.running;
 }
 
-std::int32_t CommandSeam::find_body(std::string_view name) const {
-  for (std::size_t i = 0; i < names_.size(); ++i) {
-    if (names_[i] == name) return static_cast<std::int32_t>(i);
-  }
-  return -1;
-}
-
 std::string CommandSeam::body_names() const {
   std::string names;
   for (const std::string& name : names_) names += (names.empty() ? "" : ", ") + name;
@@ -172,16 +165,8 @@ Expected<void> CommandSeam::submit(const Command& submitted) {
   }
   if (auto ok = std::visit([this](auto& c) { return validate(c); }, command); !ok) return ok;
   const std::uint64_t ticket = next_ticket_++;
-  if (const auto* set = std::get_if<command::SetParameter>(&command)) {
-    // Named as the body's configuration names it now (validate found the body).
-    const auto i = static_cast<std::size_t>(set->body);
-    const mechanics::ModelConfig& config = validated_configs_[i];
-    accepted_.push_back(
-        Accepted{ticket,
-                 ParameterChange{names_[i], std::string(mechanics::component_name(config, set->parameter.component)),
-                                 std::string(mechanics::parameter_name(set->parameter.id)), set->value},
-                 false});
-  }
+  if (const auto* set = std::get_if<command::SetParameter>(&command))
+    accepted_.push_back(Accepted{ticket, ParameterChange{set->body, set->parameter, set->value}, false});
   auto* queued = new Queued{ticket, std::move(command)};
   if (!queue_.push(queued)) {  // not reached: the room was checked above, under the same lock
     delete queued;
@@ -210,7 +195,7 @@ void CommandSeam::take_reports() const {
       case Outcome::kModelSwapped:
         // The changes before the new model are part of its config (those queued after it stay).
         std::erase_if(accepted_,
-                      [&](const Accepted& a) { return a.ticket < r.ticket && a.change.body == names_[r.body]; });
+                      [&](const Accepted& a) { return a.ticket < r.ticket && a.change.body == BodyId{r.body}; });
         break;
     }
   }
@@ -241,7 +226,7 @@ Expected<void> CommandSeam::validate(command::SetModel& model) {
   validated_configs_[*i] = model.config;
   // The caller took the body's changes into `config`: from now on they are not changes
   // (erased again when applied, for a parameter command still queued before this one).
-  std::erase_if(accepted_, [&](const Accepted& a) { return a.applied && a.change.body == names_[*i]; });
+  std::erase_if(accepted_, [&](const Accepted& a) { return a.applied && a.change.body == model.body; });
   return {};
 }
 
@@ -267,13 +252,14 @@ Expected<void> CommandSeam::validate(command::SingleStep& steps) {
 }
 
 Expected<void> CommandSeam::validate(command::SetMaterial& material) {
-  if (!material.body.empty() && find_body(material.body) < 0) {
+  if (material.body && static_cast<std::size_t>(*material.body) >= names_.size()) {
     return make_error(ErrorCode::kInvalidArgument,
-                      fmt::format("no body '{}' (bodies: {})", material.body, body_names()));
+                      fmt::format("no body #{} (bodies: {})", static_cast<std::size_t>(*material.body), body_names()));
   }
   if (auto ok = haptics::validate(material.material); !ok) return std::unexpected(ok.error());
-  for (const std::string& name : names_) {
-    if (material.body.empty() || name == material.body) material_changes_.emplace_back(name, material.material);
+  for (std::size_t i = 0; i < names_.size(); ++i) {
+    const auto body = static_cast<BodyId>(i);
+    if (!material.body || *material.body == body) material_changes_.push_back(MaterialChange{body, material.material});
   }
   return {};
 }
@@ -324,7 +310,7 @@ std::vector<ParameterChange> CommandSeam::parameter_changes(bool with_queued) co
   return changes;
 }
 
-std::vector<std::pair<std::string, haptics::SurfaceMaterial>> CommandSeam::material_changes() const {
+std::vector<MaterialChange> CommandSeam::material_changes() const {
   std::lock_guard lock(mutex_);
   return material_changes_;
 }
@@ -439,11 +425,12 @@ bool CommandSeam::apply(const command::Reset&, Applying& a) {
 
 bool CommandSeam::apply(const command::SetMaterial& material, Applying& a) {
   for (std::size_t i = 0; i < a.world.bodies.size(); ++i) {
-    if (material.body.empty() || a.world.bodies[i].body.name == material.body)
+    if (!material.body || *material.body == static_cast<BodyId>(i))
       a.world.current_settings.materials[i] = material.material;
   }
   a.settings_changed = true;
-  a.log(fmt::format("surface of {}", material.body.empty() ? "every body" : material.body));
+  a.log(fmt::format("surface of {}",
+                    material.body ? a.world.bodies[static_cast<std::size_t>(*material.body)].body.name : "every body"));
   return true;
 }
 

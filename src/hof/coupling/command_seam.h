@@ -18,6 +18,7 @@
 #include <cstdint>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -55,9 +56,9 @@ struct SingleStep {
   int steps{1};
 };
 struct Reset {};
-/// The haptic surface of one body ("" = every body).
+/// The haptic surface of one body, or of every body (nullopt).
 struct SetMaterial {
-  std::string body;
+  std::optional<BodyId> body;
   haptics::SurfaceMaterial material;
 };
 struct SetEffects {
@@ -102,11 +103,17 @@ using Command = std::variant<command::SetParameter, command::Pause, command::Res
                              command::Reset, command::SetMaterial, command::SetEffects, command::SetRenderer,
                              command::SetForceLimit, command::SetDevice, command::SetModel, command::SetCalibration>;
 
-/// A parameter changed through the seam, as a project saves it (named by the body's
-/// configuration when the change was submitted; "" for the model's own parameters).
+/// A parameter changed through the seam, to be saved with the project (scene::parameter_changes
+/// names it for the file: the project's <set>).
 struct ParameterChange {
-  std::string body, component, parameter;
+  BodyId body{};
+  mechanics::ParameterRef parameter;
   double value{0.0};
+};
+/// A body's haptic surface changed through the seam (command::SetMaterial).
+struct MaterialChange {
+  BodyId body{};
+  haptics::SurfaceMaterial material;
 };
 
 /// Commands that can wait in the seam at once (submitted, not yet applied).
@@ -142,7 +149,7 @@ class CommandSeam {
   [[nodiscard]] Expected<double> parameter(BodyId body, mechanics::ParameterRef parameter) const;
   [[nodiscard]] Expected<mechanics::ModelConfig> body_config(BodyId body) const;
   [[nodiscard]] std::vector<ParameterChange> parameter_changes(bool with_queued) const;
-  [[nodiscard]] std::vector<std::pair<std::string, haptics::SurfaceMaterial>> material_changes() const;
+  [[nodiscard]] std::vector<MaterialChange> material_changes() const;
   [[nodiscard]] haptics::Calibration calibration() const;
 
  private:
@@ -175,7 +182,6 @@ class CommandSeam {
   bool apply(const command::SetCalibration& calibration, Applying& a);
   bool apply(const command::SetForceLimit& limit, Applying& a);
   bool apply(const command::SetDevice& device, Applying& a);
-  [[nodiscard]] std::int32_t find_body(std::string_view name) const;
   [[nodiscard]] std::string body_names() const;
   // The index of a body that has mechanics; errors name the body (`rigid`: why a rigid body is refused).
   [[nodiscard]] Expected<std::size_t> deformable_body(BodyId body, std::string_view rigid) const;
@@ -206,7 +212,7 @@ class CommandSeam {
   std::uint64_t pushed_{0};
   mutable std::vector<Accepted> accepted_;
   haptics::Calibration submitted_calibration_;
-  std::vector<std::pair<std::string, haptics::SurfaceMaterial>> material_changes_;
+  std::vector<MaterialChange> material_changes_;
   mutable std::vector<mechanics::ModelConfig> validated_configs_;  // configs as the accepted commands leave them
   // ---- The rings (each owned pointer is handed from one side to the other).
   SpscRing<Queued*> queue_{kCommandQueueCapacity};           // submitting side → simulation

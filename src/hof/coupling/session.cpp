@@ -101,9 +101,7 @@ Expected<mechanics::ModelConfig> Session::body_config(BodyId body) const { retur
 std::vector<ParameterChange> Session::parameter_changes(bool with_queued) const {
   return seam_->parameter_changes(with_queued);
 }
-std::vector<std::pair<std::string, haptics::SurfaceMaterial>> Session::material_changes() const {
-  return seam_->material_changes();
-}
+std::vector<MaterialChange> Session::material_changes() const { return seam_->material_changes(); }
 haptics::Calibration Session::calibration() const { return seam_->calibration(); }
 std::uint64_t Session::calibrations_applied() const {
   return world_->calibrations_applied.load(std::memory_order_acquire);

@@ -208,7 +208,7 @@ class Session {
   /// the simulation has applied, and with `with_queued` those accepted for the next step too.
   [[nodiscard]] std::vector<ParameterChange> parameter_changes(bool with_queued = false) const;
   /// Surface materials set through submit() so far, by body name, in order.
-  [[nodiscard]] std::vector<std::pair<std::string, haptics::SurfaceMaterial>> material_changes() const;
+  [[nodiscard]] std::vector<MaterialChange> material_changes() const;
 
   [[nodiscard]] std::size_t body_count() const;
   [[nodiscard]] const SessionBody& body(std::size_t i) const;

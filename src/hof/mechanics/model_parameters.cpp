@@ -34,23 +34,6 @@ constexpr std::array<std::string_view, kParameterCount> kNames{
     "threshold",  "totalMass", "massDensity"};
 static_assert(static_cast<std::size_t>(ParameterId::kMassDensity) + 1 == kParameterCount);
 
-// The kind of component, as messages name it.
-std::string_view kind_name(ComponentKind kind) {
-  switch (kind) {
-    case ComponentKind::kModel:
-      return "model";
-    case ComponentKind::kForceField:
-      return "force field";
-    case ComponentKind::kOdeSolver:
-      return "ODE solver";
-    case ComponentKind::kLinearSolver:
-      return "linear solver";
-    case ComponentKind::kMass:
-      return "mass";
-  }
-  return "component";
-}
-
 constexpr double inf = std::numeric_limits<double>::infinity();
 
 // Each component's slots; nullopt when the component has no parameter `id`.
@@ -225,7 +208,7 @@ Expected<Slot> find_slot(ModelConfig& c, ParameterRef ref, int& integer_storage,
   }
   if (!slot) {
     return make_error(ErrorCode::kInvalidArgument,
-                      fmt::format("{} '{}' has no parameter '{}'", kind_name(ref.component.kind),
+                      fmt::format("{} '{}' has no parameter '{}'", component_kind_name(ref.component.kind),
                                   component_name(c, ref.component), parameter_name(ref.id)),
                       c.name);
   }
@@ -233,6 +216,22 @@ Expected<Slot> find_slot(ModelConfig& c, ParameterRef ref, int& integer_storage,
 }
 
 }  // namespace
+
+std::string_view component_kind_name(ComponentKind kind) {
+  switch (kind) {
+    case ComponentKind::kModel:
+      return "model";
+    case ComponentKind::kForceField:
+      return "force field";
+    case ComponentKind::kOdeSolver:
+      return "ODE solver";
+    case ComponentKind::kLinearSolver:
+      return "linear solver";
+    case ComponentKind::kMass:
+      return "mass";
+  }
+  return "component";
+}
 
 std::string_view parameter_name(ParameterId id) {
   const auto i = static_cast<std::size_t>(id);

@@ -57,6 +57,8 @@ struct ParameterRef {
 /// The scene's name of a parameter ("youngModulus"), for messages (names are mapped to ids in
 /// scene/, see scene::parameter_id).
 [[nodiscard]] std::string_view parameter_name(ParameterId id);
+/// The kind of a component as messages name it ("force field", "ODE solver", ...).
+[[nodiscard]] std::string_view component_kind_name(ComponentKind kind);
 /// The scene's name of a component of `config` ("" for the model itself), for messages.
 [[nodiscard]] std::string_view component_name(const ModelConfig& config, ComponentRef component);
 

@@ -270,7 +270,7 @@ class PyWorld {
     if (world_->default_probe) out.device = "auto";  // the probe is fitted again when it is read
     scene::record_changes(out, *session_);
     // And those accepted but not applied yet (no step since they were set).
-    scene::record_parameters(out, session_->parameter_changes(/*with_queued=*/true));
+    scene::record_parameters(out, scene::parameter_changes(*session_, /*with_queued=*/true));
     ok_or_raise(scene::write_project(out, path));
   }
 

@@ -31,22 +31,6 @@ std::optional<ComponentRef> find_component(const mechanics::ModelConfig& c, std:
   return std::nullopt;
 }
 
-std::string_view kind_name(ComponentKind kind) {
-  switch (kind) {
-    case ComponentKind::kModel:
-      return "model";
-    case ComponentKind::kForceField:
-      return "force field";
-    case ComponentKind::kOdeSolver:
-      return "ODE solver";
-    case ComponentKind::kLinearSolver:
-      return "linear solver";
-    case ComponentKind::kMass:
-      return "mass";
-  }
-  return "component";
-}
-
 }  // namespace
 
 Expected<ParameterId> parameter_id(std::string_view name) {
@@ -86,17 +70,18 @@ Expected<ParameterRef> resolve_parameter(const mechanics::ModelConfig& config, s
     std::string closest;
     const std::string& why = id.error().message;
     if (const auto at = why.find(" (closest"); at != std::string::npos) closest = why.substr(at);
-    return make_error(
-        ErrorCode::kInvalidArgument,
-        fmt::format("{} '{}' has no parameter '{}'{}", kind_name(found->kind), component, parameter, closest),
-        config.name);
+    return make_error(ErrorCode::kInvalidArgument,
+                      fmt::format("{} '{}' has no parameter '{}'{}", mechanics::component_kind_name(found->kind),
+                                  component, parameter, closest),
+                      config.name);
   }
   const ParameterRef ref{*found, *id};
   // A parameter this component does not have (the model lists what each component has).
   if (const auto accepted = mechanics::parameter_refs(config); std::ranges::find(accepted, ref) == accepted.end()) {
-    return make_error(ErrorCode::kInvalidArgument,
-                      fmt::format("{} '{}' has no parameter '{}'", kind_name(found->kind), component, parameter),
-                      config.name);
+    return make_error(
+        ErrorCode::kInvalidArgument,
+        fmt::format("{} '{}' has no parameter '{}'", mechanics::component_kind_name(found->kind), component, parameter),
+        config.name);
   }
   return ref;
 }
@@ -165,6 +150,26 @@ Expected<double> session_parameter(const coupling::Session& session, std::string
   const auto ref = resolve_parameter(*config, component, parameter);
   if (!ref) return std::unexpected(ref.error());
   return session.parameter(*id, *ref);
+}
+
+std::vector<ParameterChange> parameter_changes(const coupling::Session& session, bool with_queued) {
+  const std::vector<coupling::ParameterChange> changes = session.parameter_changes(with_queued);
+  // Each body's configuration once (a copy of its mesh: not one per change).
+  std::vector<std::optional<mechanics::ModelConfig>> configs(session.body_count());
+  std::vector<ParameterChange> named;
+  named.reserve(changes.size());
+  for (const coupling::ParameterChange& change : changes) {
+    const auto i = static_cast<std::size_t>(change.body);
+    if (!configs[i]) {
+      // A change is recorded for a body with mechanics only, which always has a configuration.
+      auto config = session.body_config(change.body);
+      configs[i] = config ? std::move(*config) : mechanics::ModelConfig{};
+    }
+    named.push_back(ParameterChange{session.body(i).name,
+                                    std::string(mechanics::component_name(*configs[i], change.parameter.component)),
+                                    std::string(mechanics::parameter_name(change.parameter.id)), change.value});
+  }
+  return named;
 }
 
 }  // namespace hof::scene

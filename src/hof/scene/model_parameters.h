@@ -69,4 +69,19 @@ namespace hof::scene {
 [[nodiscard]] Expected<double> session_parameter(const coupling::Session& session, std::string_view body,
                                                  std::string_view component, std::string_view parameter);
 
+/// A parameter set on a body by its scene names, as a project saves it (<set body component
+/// parameter value>): a project's own, or a session's change (coupling::ParameterChange) named.
+struct ParameterChange {
+  std::string body;
+  std::string component;  ///< "" for the model's own parameters (dt, gravity, ...)
+  std::string parameter;
+  double value{0.0};
+};
+/// A session's parameter changes (Session::parameter_changes, same order) named as the
+/// bodies' configurations name them: each body's configuration as the commands accepted so far
+/// leave it (a change still queued behind a structural SetModel, which will drop it, is named
+/// by the new configuration).
+[[nodiscard]] std::vector<ParameterChange> parameter_changes(const coupling::Session& session,
+                                                             bool with_queued = false);
+
 }  // namespace hof::scene

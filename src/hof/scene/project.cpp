@@ -375,7 +375,7 @@ Expected<HofProject> parse_project(const std::string& text, const std::filesyste
   }
   p.scene_unit = mechanics.attribute("unit").as_string("");
   for (const pugi::xml_node set : mechanics.children("set")) {
-    coupling::ParameterChange c;
+    ParameterChange c;
     c.body = set.attribute("body").as_string("");
     c.component = set.attribute("component").as_string("");
     c.parameter = set.attribute("parameter").as_string("");

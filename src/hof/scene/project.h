@@ -21,6 +21,7 @@
 #include "hof/haptics/safety.h"
 #include "hof/haptics/surface_material.h"
 #include "hof/procedures/needle.h"
+#include "hof/scene/model_parameters.h"
 
 namespace hof::scene {
 
@@ -132,7 +133,7 @@ struct HofProject {
   std::string device{"auto"};
   /// Parameters of the scene's bodies set by the project (<set> in <mechanics>), applied
   /// after the scene is read — what a session's command seam changed, saved.
-  std::vector<coupling::ParameterChange> parameters;
+  std::vector<ParameterChange> parameters;
   std::vector<MaterialRegion> regions;  ///< material regions (<region> in <mechanics>), in order
   /// The length unit of the scene ("" = metres); stated in reports.
   std::string scene_unit;

@@ -282,6 +282,97 @@ Expected<ProjectEdit> parse_project_edit(const HofProject& project, const std::f
   return edit_of(s, at, index);
 }
 
+namespace {
+
+// The first of `fields`' checks that `value` fails (a field without a check has none).
+template <class T>
+std::optional<std::string> check_each(const Fields<T>& fields, std::string_view element, const T& value) {
+  for (const detail::Field<T>& f : fields) {
+    if (!f.check) continue;
+    if (auto problem = f.check(value, element)) return problem;
+  }
+  return std::nullopt;
+}
+
+// The problem of the element(s) `edit` changes in `next` (the project with the edit made).
+std::optional<std::string> problem_of(const HofProject& next, const ProjectEdit& edit) {
+  struct Check {
+    const HofProject& p;
+    std::optional<std::string> operator()(const project_edit::Device& e) const {
+      if (e.spec.empty()) return std::string("haptics@device: name a device (auto, mouse, dhd, udp:PORT, ...)");
+      return std::nullopt;
+    }
+    std::optional<std::string> operator()(const project_edit::HapticRate&) const {
+      if (auto problem = check_each(detail::haptics_fields(), "haptics", p)) return problem;
+      return detail::check_haptic_rate(p);
+    }
+    std::optional<std::string> operator()(const project_edit::Rendering&) const {
+      return check_each(detail::haptics_fields(), "haptics", p);
+    }
+    std::optional<std::string> operator()(const project_edit::Coupling&) const {
+      return check_each(detail::haptics_fields(), "haptics", p);
+    }
+    std::optional<std::string> operator()(const project_edit::Calibration&) const {
+      return check_each(detail::calibration_fields(), "calibration", p);
+    }
+    std::optional<std::string> operator()(const project_edit::Surface&) const {
+      if (auto problem = check_each(detail::surface_fields(), "surface", p.surface)) return problem;
+      return detail::check_surface(p.surface);
+    }
+    std::optional<std::string> operator()(const project_edit::ForceLimit&) const {
+      return check_each(detail::safety_fields(), "safety", p.safety);
+    }
+    std::optional<std::string> operator()(const project_edit::Safety&) const {
+      return check_each(detail::safety_fields(), "safety", p.safety);
+    }
+    std::optional<std::string> operator()(const project_edit::BoundTree&) const {
+      return check_each(detail::options_fields(), "options", p);
+    }
+    std::optional<std::string> operator()(const project_edit::Stylus&) const {
+      return check_each(detail::stylus_fields(), "stylus", p);
+    }
+    std::optional<std::string> operator()(const project_edit::Needle& e) const {
+      const procedures::NeedleConfig& n = e.needle;
+      if (auto problem = check_each(detail::needle_fields(), "needle", n)) return problem;
+      if (auto problem = check_each(detail::tissue_fields(), "tissue", n.tissue)) return problem;
+      if (auto problem = detail::check_tissue(n.tissue, "")) return problem;
+      for (const auto& [body, tissue] : n.bodies) {
+        if (body.empty())
+          return std::string("<tissue body=\"\">: name the body, or leave body out for every deformable body");
+        if (auto problem = check_each(detail::tissue_fields(), "tissue", tissue)) return problem;
+        if (auto problem = detail::check_tissue(tissue, body)) return problem;
+      }
+      return detail::check_needle(n);
+    }
+    std::optional<std::string> operator()(const project_edit::Effects& e) const {
+      for (const auto& spring : e.effects.springs) {
+        if (auto problem = check_each(detail::spring_effect_fields(), "SpringEffect", spring)) return problem;
+      }
+      for (const auto& viscosity : e.effects.viscosities) {
+        if (auto problem = check_each(detail::viscosity_effect_fields(), "ViscosityEffect", viscosity)) return problem;
+      }
+      for (const auto& constant : e.effects.constants) {
+        if (auto problem = check_each(detail::force_field_fields(), "ForceField", constant)) return problem;
+      }
+      return std::nullopt;
+    }
+    std::optional<std::string> operator()(const project_edit::Graphics& e) const {
+      if (auto ok = check_graphics(e.graphics); !ok) return ok.error().message;
+      return std::nullopt;
+    }
+  };
+  return std::visit(Check{next}, edit);
+}
+
+}  // namespace
+
+Expected<void> check_edit(const HofProject& project, const ProjectEdit& edit) {
+  HofProject next = project;
+  apply_edit(next, edit);
+  if (auto problem = problem_of(next, edit)) return make_error(ErrorCode::kInvalidArgument, std::move(*problem));
+  return {};
+}
+
 void apply_edit(HofProject& p, const ProjectEdit& edit) {
   struct Apply {
     HofProject& p;

@@ -79,7 +79,13 @@ using ProjectEdit =
                                                        std::string_view element, std::string_view attribute,
                                                        std::string_view value);
 
-/// `edit` made in `project` (checked already: parse_project_edit made it).
+/// Checks an edit made in memory (a panel's, not parsed from text) as the file's reader checks
+/// what it reads: each changed element's attributes by the reader's table, then the checks of
+/// the whole element (a surface, a tissue set, the needle, the haptic rate). The error
+/// (kInvalidArgument) is the reader's wording; nothing is changed.
+[[nodiscard]] Expected<void> check_edit(const HofProject& project, const ProjectEdit& edit);
+
+/// `edit` made in `project` (checked already: parse_project_edit or check_edit).
 void apply_edit(HofProject& project, const ProjectEdit& edit);
 
 }  // namespace hof::scene

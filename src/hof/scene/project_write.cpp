@@ -44,7 +44,7 @@ std::string to_xml(const HofProject& p) {
   out += fmt::format("<hof version=\"1\" name=\"{}\">\n", xml_escape(p.name));
   // Parameters set on the scene's bodies (the command seam's changes), after the scene.
   std::string sets;
-  for (const coupling::ParameterChange& c : p.parameters) {
+  for (const ParameterChange& c : p.parameters) {
     sets += fmt::format("    <set body=\"{}\" component=\"{}\" parameter=\"{}\" value=\"{}\"/>\n", xml_escape(c.body),
                         xml_escape(c.component), xml_escape(c.parameter), number_text(c.value));
   }

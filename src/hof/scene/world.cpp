@@ -302,7 +302,7 @@ Expected<void> apply_body_models(World& w) {
 // Applies a project's <set> elements to the bodies they name (the same validation as the
 // command seam), rebuilding those bodies.
 Expected<void> apply_parameters(World& w) {
-  for (const coupling::ParameterChange& change : w.project.parameters) {
+  for (const ParameterChange& change : w.project.parameters) {
     auto it = std::find_if(w.bodies.begin(), w.bodies.end(), [&](const auto& b) { return b.name == change.body; });
     if (it == w.bodies.end() || !it->config) {
       return make_error(ErrorCode::kInvalidArgument,
@@ -434,8 +434,8 @@ bool identity(const std::array<double, 16>& m) {
 
 }  // namespace
 
-void record_parameters(HofProject& project, const std::vector<coupling::ParameterChange>& changes) {
-  for (const coupling::ParameterChange& change : changes) {
+void record_parameters(HofProject& project, const std::vector<ParameterChange>& changes) {
+  for (const ParameterChange& change : changes) {
     auto same = std::find_if(project.parameters.begin(), project.parameters.end(), [&](const auto& p) {
       return p.body == change.body && p.component == change.component && p.parameter == change.parameter;
     });
@@ -448,8 +448,9 @@ void record_parameters(HofProject& project, const std::vector<coupling::Paramete
 }
 
 void record_changes(HofProject& project, const coupling::Session& session) {
-  record_parameters(project, session.parameter_changes());
-  for (const auto& [name, material] : session.material_changes()) {
+  record_parameters(project, parameter_changes(session));
+  for (const auto& [id, material] : session.material_changes()) {
+    const std::string& name = session.body(static_cast<std::size_t>(id)).name;
     auto obstacle =
         std::find_if(project.obstacles.begin(), project.obstacles.end(), [&](const auto& o) { return o.name == name; });
     if (obstacle != project.obstacles.end()) {
@@ -600,12 +601,13 @@ std::optional<std::vector<coupling::Command>> live_commands(const HofProject& ne
   const coupling::SessionConfig config = session_config(next);
   std::vector<coupling::Command> commands;
   if (std::holds_alternative<project_edit::Surface>(edit)) {
-    for (const std::string& body : bodies) {
+    for (std::size_t i = 0; i < bodies.size(); ++i) {
+      const std::string& body = bodies[i];
       const bool own = std::any_of(next.bodies.begin(), next.bodies.end(),
                                    [&](const auto& b) { return b.name == body && b.surface; }) ||
                        std::any_of(next.obstacles.begin(), next.obstacles.end(),
                                    [&](const auto& o) { return o.name == body && o.surface; });
-      if (!own) commands.emplace_back(coupling::command::SetMaterial{body, next.surface});
+      if (!own) commands.emplace_back(coupling::command::SetMaterial{static_cast<coupling::BodyId>(i), next.surface});
     }
   } else if (std::holds_alternative<project_edit::Rendering>(edit)) {
     commands.emplace_back(coupling::command::SetRenderer{config.haptics.renderer});

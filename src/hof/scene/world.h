@@ -109,10 +109,11 @@ struct World {
 /// so that the next save holds them.
 void record_changes(HofProject& project, const coupling::Session& session);
 /// The parameter part of record_changes(): each change as a <set>, replacing an earlier value.
-void record_parameters(HofProject& project, const std::vector<coupling::ParameterChange>& changes);
+void record_parameters(HofProject& project, const std::vector<ParameterChange>& changes);
 
 /// The commands that carry a project edit (`next` is the project with `edit` made) to a
-/// running session of the world's `bodies`: the surface material of every body without one
+/// running session of the world's `bodies` (their names, in the session's order: BodyId i is
+/// bodies[i]): the surface material of every body without one
 /// of its own, the renderer, the force effects, the calibration, the force limit. An empty
 /// list: the change needs no command (the graphics and the stylus, drawn by the window).
 /// nullopt: it cannot be made live (it takes effect when the project is read again). The

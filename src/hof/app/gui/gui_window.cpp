@@ -449,6 +449,8 @@ Expected<void> GuiWindow::apply(const GuiCommand& command) {
           return session_->submit(c);
         } else if constexpr (std::is_same_v<T, action::SetAttribute>) {
           return apply_set(c.element, c.attribute, c.value);
+        } else if constexpr (std::is_same_v<T, action::EditProject>) {
+          return edit_project(c);
         } else if constexpr (std::is_same_v<T, action::SetGraphics>) {
           return set_graphics(c);
         } else if constexpr (std::is_same_v<T, action::SetSurface>) {

@@ -275,7 +275,7 @@ Expected<void> GuiWindow::save(const std::filesystem::path& path) {
 
 scene::HofProject GuiWindow::project_for(const std::filesystem::path& path) const {
   scene::HofProject out = scene::moved_project(project_, file_, path);
-  if (session_) scene::record_parameters(out, session_->parameter_changes());  // as <set> elements
+  if (session_) scene::record_parameters(out, scene::parameter_changes(*session_));  // as <set> elements
   // And those submitted but not applied yet (a save right after a change, the simulation busy).
   scene::record_parameters(out, submitted_changes_);
   return out;
@@ -288,7 +288,7 @@ Expected<void> GuiWindow::mount_needle(bool on) {
     return make_error(ErrorCode::kUnsupported, "the needle is mounted in a .hof project (save the scene as one)");
   scene::HofProject next = project_;
   // The parameters changed so far go with the reopened world.
-  scene::record_parameters(next, session_->parameter_changes());
+  scene::record_parameters(next, scene::parameter_changes(*session_));
   scene::record_parameters(next, submitted_changes_);
   if (on) {
     next.needle = procedures::NeedleConfig{};

@@ -90,7 +90,7 @@ Expected<void> GuiWindow::set_mechanics_parameter(const std::string& element, co
   for (BodyView& b : bodies_) {
     if (b.name == body) b.stress.reset();  // its moduli may have changed
   }
-  submitted_changes_.push_back(coupling::ParameterChange{body, component, attribute, v});
+  submitted_changes_.push_back(scene::ParameterChange{body, component, attribute, v});
   if (recording_) recording_->events.push_back(fmt::format("{:.3f}: set {} {}", recording_->seconds(), name, value));
   dirty_ = true;
   return {};
@@ -130,7 +130,7 @@ Expected<void> GuiWindow::change_structure(const std::optional<scene::SceneEdit>
   scene::HofProject next = project_;
   // The values changed so far go with the new models (the seam forgets them at the switch),
   // those still queued too.
-  scene::record_parameters(next, session_->parameter_changes());
+  scene::record_parameters(next, scene::parameter_changes(*session_));
   scene::record_parameters(next, submitted_changes_);
   if (next.mechanics_inline.empty()) {
     // From now on the project holds its scene (the file it came from is left as it was).
@@ -144,7 +144,7 @@ Expected<void> GuiWindow::change_structure(const std::optional<scene::SceneEdit>
     if (!text) return std::unexpected(text.error());
     next.mechanics_inline = std::move(*text);
     if (edit->action != scene::SceneEdit::Action::kAdd) {
-      std::erase_if(next.parameters, [&](const coupling::ParameterChange& c) {
+      std::erase_if(next.parameters, [&](const scene::ParameterChange& c) {
         return c.body == edit->node && c.component == edit->component;
       });
     }
@@ -208,6 +208,21 @@ Expected<void> GuiWindow::switch_component(const std::string& body, const std::s
   return done;
 }
 
+Expected<void> GuiWindow::edit_project(const action::EditProject& edit) {
+  // A typed edit of the project in memory, checked as the file's reader checks what it reads;
+  // the session's commands that carry it follow (apply_project_edit).
+  if (!session_) return make_error(ErrorCode::kInvalidArgument, "no world is open");
+  const std::string name = edit.settings.empty() ? std::string("haptics") : edit.settings.front();
+  if (auto ok = scene::check_edit(project_, edit.edit); !ok) {
+    Error e = ok.error();
+    e.message = fmt::format("'{}': {}", name, e.message);
+    return std::unexpected(e);
+  }
+  if (auto ok = apply_project_edit(edit.edit, name); !ok) return ok;
+  note_settings(edit.settings);
+  return {};
+}
+
 Expected<void> GuiWindow::set_graphics(const action::SetGraphics& edit) {
   // A typed edit of the project in memory: checked as a file's <graphics> is, drawn by the
   // window only (nothing for the session).
@@ -266,7 +281,7 @@ mechanics::ModelConfig GuiWindow::current_config(const BodyView& body) const {
   // The model as last built, with the values submitted since (all of them accepted by the
   // session's seam): what the session's own configuration holds, derived when it is needed.
   mechanics::ModelConfig c = *body.structure;
-  for (const coupling::ParameterChange& change : submitted_changes_) {
+  for (const scene::ParameterChange& change : submitted_changes_) {
     if (change.body == body.name) (void)scene::set_parameter(c, change.component, change.parameter, change.value);
   }
   return c;

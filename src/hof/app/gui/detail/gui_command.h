@@ -14,6 +14,7 @@
 #include "hof/coupling/session.h"
 #include "hof/haptics/force_effects.h"
 #include "hof/scene/project.h"
+#include "hof/scene/project_edit.h"
 #include "hof/scene/sofa_scene_edit.h"
 
 namespace hof::app::gui {
@@ -23,6 +24,14 @@ namespace action {
 /// haptics/surface@stiffness, graphics@renderMode, ...), as `set` in a script.
 struct SetAttribute {
   std::string element, attribute, value;
+};
+/// A typed edit of the project (the device, the calibration, the force limit, the options, the
+/// force effects, the needle and its tissues: scene::ProjectEdit), checked by scene::check_edit
+/// as the file's reader checks it; `settings` names each change as the project file does
+/// ("haptics/safety@maxForce 4"), for messages and a recording's events.
+struct EditProject {
+  scene::ProjectEdit edit;
+  std::vector<std::string> settings;
 };
 /// The project's graphics settings replaced (a typed edit of HofProject::graphics, checked by
 /// scene::check_graphics); `settings` names each change as the project file does
@@ -108,11 +117,11 @@ struct Report {
 }  // namespace action
 
 using GuiCommand =
-    std::variant<coupling::Command, action::SetAttribute, action::SetGraphics, action::SetSurface, action::SetRendering,
-                 action::EditScene, action::AddComponent, action::AddRegionAtStylus, action::SwitchComponent,
-                 action::SetRegions, action::SetEffects, action::MountNeedle, action::SetAnimating, action::ResetWorld,
-                 action::SetRealtimePacing, action::StartRecording, action::StopRecording, action::ResetCamera,
-                 action::DismissError, action::Report>;
+    std::variant<coupling::Command, action::SetAttribute, action::EditProject, action::SetGraphics, action::SetSurface,
+                 action::SetRendering, action::EditScene, action::AddComponent, action::AddRegionAtStylus,
+                 action::SwitchComponent, action::SetRegions, action::SetEffects, action::MountNeedle,
+                 action::SetAnimating, action::ResetWorld, action::SetRealtimePacing, action::StartRecording,
+                 action::StopRecording, action::ResetCamera, action::DismissError, action::Report>;
 using GuiCommands = std::vector<GuiCommand>;
 
 }  // namespace hof::app::gui

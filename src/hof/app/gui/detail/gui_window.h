@@ -91,6 +91,8 @@ class GuiWindow {
   /// A component's switch to another type, with the values that carry over (E, ν, masses).
   Expected<void> switch_component(const std::string& body, const std::string& component, const std::string& choice);
   Expected<void> set_effects(const haptics::ForceEffects& effects);
+  /// A panel's typed edit of the project: checked (scene::check_edit), then applied.
+  Expected<void> edit_project(const action::EditProject& edit);
   Expected<void> set_graphics(const action::SetGraphics& edit);
   Expected<void> set_surface(const action::SetSurface& edit);
   Expected<void> set_rendering(const action::SetRendering& edit);
@@ -187,7 +189,7 @@ class GuiWindow {
   ViewOptions view_options_;
   std::set<std::string> warned_;  // warnings already shown for this world
   // Parameter changes submitted since the last structural change (some may still be queued).
-  std::vector<coupling::ParameterChange> submitted_changes_;
+  std::vector<scene::ParameterChange> submitted_changes_;
   // A calibration change on its way to the haptic loop: the mouse keeps the old mapping until
   // the session has applied as many as were submitted.
   std::uint64_t calibrations_submitted_{0};
