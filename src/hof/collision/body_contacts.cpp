@@ -253,6 +253,13 @@ void ContactDetector::points_against_triangles(std::span<const CollisionBody> bo
   const AabbTree& tree = trees_[static_cast<std::size_t>(ib)];
   const bool self = ia == ib;
   const std::size_t n = bodies.size();
+  // Only what comes near b's box needs a tree query (most of a body is far from the other).
+  const BodyState& sb = states_[static_cast<std::size_t>(ib)];
+  const Vec3 zone_lo = sb.lo - Vec3::Constant(alarm);
+  const Vec3 zone_hi = sb.hi + Vec3::Constant(alarm);
+  const auto near_zone = [&](const Vec3& lo, const Vec3& hi) {
+    return (lo.array() <= zone_hi.array()).all() && (zone_lo.array() <= hi.array()).all();
+  };
 
   const auto emit = [&](std::int32_t v, const Vec3& p, std::int32_t triangle, const Vec3& barycentric, const Vec3& q,
                         const Vec3& normal, double distance) {
@@ -271,7 +278,7 @@ void ContactDetector::points_against_triangles(std::span<const CollisionBody> bo
       std::int32_t& known = sa.inside[v * n + static_cast<std::size_t>(ib)];
       std::int32_t& count = sa.inside_count[static_cast<std::size_t>(ib)];
       // Continuous: the motion since the previous pass entered b through a front face.
-      if (sa.use_previous) {
+      if (sa.use_previous && near_zone(a.previous_vertices[v].cwiseMin(p), a.previous_vertices[v].cwiseMax(p))) {
         const SweepHit hit = tree.first_hit_segment(b.surface, a.previous_vertices[v], p, TouchableFace::kFront);
         if (hit.triangle >= 0) {
           const Vec3 normal = face_normal(b.surface, hit.triangle);
@@ -306,6 +313,7 @@ void ContactDetector::points_against_triangles(std::span<const CollisionBody> bo
         --count;
       }
     }
+    if (!near_zone(p, p)) continue;
     const std::span<const std::int32_t> skip =
         self ? std::span<const std::int32_t>(sa.skip_triangles)
                    .subspan(static_cast<std::size_t>(sa.skip_offsets[v]),
@@ -330,6 +338,8 @@ void ContactDetector::edges_against_edges(std::span<const CollisionBody> bodies,
   const AabbTree& tree = trees_[static_cast<std::size_t>(ib)];
   const bool self = ia == ib;
   const double alarm2 = alarm * alarm;
+  const Vec3 zone_lo = sb.lo - Vec3::Constant(alarm);
+  const Vec3 zone_hi = sb.hi + Vec3::Constant(alarm);
 
   // Outward direction of an edge: the sum of its adjacent triangles' unit normals.
   const auto edge_normal = [](const CollisionBody& body, const BodyState& st, std::int32_t e) {
@@ -350,8 +360,11 @@ void ContactDetector::edges_against_edges(std::span<const CollisionBody> bodies,
     const std::array<std::int32_t, 2>& ea = sa.edges[e];
     const Vec3& p0 = a.surface.vertices[static_cast<std::size_t>(ea[0])];
     const Vec3& p1 = a.surface.vertices[static_cast<std::size_t>(ea[1])];
+    const Vec3 lo = p0.cwiseMin(p1);
+    const Vec3 hi = p0.cwiseMax(p1);
+    if (!((lo.array() <= zone_hi.array()).all() && (zone_lo.array() <= hi.array()).all())) continue;
     const std::size_t begin = contacts.size();
-    tree.visit_overlapping(p0.cwiseMin(p1), p0.cwiseMax(p1), alarm, [&](std::int32_t t) {
+    tree.visit_overlapping(lo, hi, alarm, [&](std::int32_t t) {
       for (const std::int32_t f : sb.triangle_edges[static_cast<std::size_t>(t)]) {
         // Each edge once: from its owner (lowest-index adjacent triangle), whose box holds it.
         if (f < 0 || sb.edge_triangles[static_cast<std::size_t>(f)][0] != t) continue;
