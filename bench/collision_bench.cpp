@@ -142,7 +142,11 @@ void bm_query(benchmark::State& state, LiverResolution r, Query query, bool use_
 
 enum class Placement { kOverlapping, kApart };
 
-void bm_detect(benchmark::State& state, const mesh::TriMesh& m, Placement placement, bool continuous) {
+// `medium`: the medium liver's boundary (made on first use: TetGen takes seconds), else the
+// 2,000-triangle liver surface.
+void bm_detect(benchmark::State& state, bool medium, Placement placement, bool continuous, int leaf) {
+  static const mesh::TriMesh liver2000 = mesh::make_liver_surface(10);
+  const mesh::TriMesh& m = medium ? surface(LiverResolution::kMedium) : liver2000;
   Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity());
   Vec3 hi = -lo;
   for (const Vec3& v : m.vertices) {
@@ -163,7 +167,7 @@ void bm_detect(benchmark::State& state, const mesh::TriMesh& m, Placement placem
   bodies[0].surface = {a[0], m.triangles};
   bodies[1].surface = {b[0], m.triangles};
   ContactDetector detector;
-  detector.reset(bodies);
+  detector.reset(bodies, {.max_triangles_in_leaf = leaf});
   std::vector<BodyContact> contacts;
   contacts.reserve(1 << 16);
   int pose = 0;
@@ -189,18 +193,21 @@ void register_all() {
   const std::pair<Query, const char*> queries[] = {{Query::kClosestPoint, "closest_point"},
                                                    {Query::kSegment, "first_hit_segment"},
                                                    {Query::kSweptSphere, "first_hit_swept_sphere"}};
-  static const mesh::TriMesh sphere_liver = mesh::make_liver_surface(10);  // 2,000 triangles
-  for (const bool continuous : {false, true}) {
-    const std::string mode = continuous ? "/continuous" : "/discrete";
-    benchmark::RegisterBenchmark(("detect/liver2000/overlapping" + mode).c_str(), bm_detect, sphere_liver,
-                                 Placement::kOverlapping, continuous)
-        ->Unit(benchmark::kMicrosecond);
-    benchmark::RegisterBenchmark(("detect/medium/overlapping" + mode).c_str(), bm_detect,
-                                 surface(LiverResolution::kMedium), Placement::kOverlapping, continuous)
+  for (const int leaf : {1, 4}) {
+    const std::string tree = "/leaf" + std::to_string(leaf);
+    for (const bool continuous : {false, true}) {
+      const std::string mode = continuous ? "/continuous" : "/discrete";
+      benchmark::RegisterBenchmark(("detect/liver2000/overlapping" + mode + tree).c_str(), bm_detect, false,
+                                   Placement::kOverlapping, continuous, leaf)
+          ->Unit(benchmark::kMicrosecond);
+      benchmark::RegisterBenchmark(("detect/medium/overlapping" + mode + tree).c_str(), bm_detect, true,
+                                   Placement::kOverlapping, continuous, leaf)
+          ->Unit(benchmark::kMicrosecond);
+    }
+    benchmark::RegisterBenchmark(("detect/liver2000/apart/discrete" + tree).c_str(), bm_detect, false,
+                                 Placement::kApart, false, leaf)
         ->Unit(benchmark::kMicrosecond);
   }
-  benchmark::RegisterBenchmark("detect/liver2000/apart/discrete", bm_detect, sphere_liver, Placement::kApart, false)
-      ->Unit(benchmark::kMicrosecond);
   for (LiverResolution r : resolutions) {
     const std::string res(mesh::to_string(r));
     for (int leaf : {1, 4}) {

@@ -84,6 +84,20 @@ void signed_gap(const Vec3& p, const Vec3& q, const Vec3& w, const Vec3& a, cons
   }
 }
 
+// Whether a closest point lies on a boundary edge of an open surface: a zero weight puts it
+// on the edge opposite that corner (edge k of a triangle joins corners k and k + 1), and a
+// boundary edge has one adjacent triangle.
+template <class State>
+bool on_rim(const State& st, const ClosestPoint& cp) {
+  for (int k = 0; k < 3; ++k) {
+    if (cp.barycentric[k] > 0.0) continue;
+    const std::int32_t e =
+        st.triangle_edges[static_cast<std::size_t>(cp.triangle)][static_cast<std::size_t>((k + 1) % 3)];
+    if (e >= 0 && st.edge_triangles[static_cast<std::size_t>(e)][1] < 0) return true;
+  }
+  return false;
+}
+
 }  // namespace
 
 void ContactDetector::reset(std::span<const CollisionBody> bodies, const AabbTreeOptions& tree) {
@@ -295,10 +309,11 @@ void ContactDetector::points_against_triangles(std::span<const CollisionBody> bo
           }
         }
       }
-      // Known to be inside: still reported while its nearest surface point is in front of it.
+      // Known to be inside: still reported while its nearest surface point is in front of it
+      // (not on an open surface's rim: a vertex that slid off a floor's edge is free).
       if (known >= 0) {
         const ClosestPoint cp = tree.closest_point(b.surface, p, kInf, TouchableFace::kFrontAndBack);
-        if (cp.triangle >= 0) {
+        if (cp.triangle >= 0 && !on_rim(sb, cp)) {
           double distance = 0.0;
           Vec3 normal;
           signed_gap(p, cp.point, cp.barycentric, corner(b.surface, cp.triangle, 0),

@@ -92,7 +92,8 @@ class ContactDetector {
   /// motion since the previous pass crossed a front face of j is reported whatever its depth
   /// (distance = its signed distance to that triangle's plane, normal = the face normal),
   /// and again at each later pass while its closest point on j's surface is in front of it
-  /// (it is still behind j's surface; distance = −the distance to that point). The motion is
+  /// (it is still behind j's surface; distance = −the distance to that point) and not on the
+  /// rim of an open surface (a vertex that slid off a floor's edge is released). The motion is
   /// judged against j's current surface (j's own motion is caught by j's vertices against i).
   /// Self-collision skips a vertex against the triangles that contain it and those sharing
   /// an edge with them, and edge pairs that share a vertex or such a triangle.
