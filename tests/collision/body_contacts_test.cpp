@@ -498,6 +498,36 @@ TEST(ContactDetector, DeterministicOutput) {
   }
 }
 
+TEST(ContactDetector, OutputDoesNotDependOnTreeHistory) {
+  // A large deformation makes refit() ask for a rebuild; the result equals that of a detector
+  // reset at the deformed positions (the order depends on the input, not on the tree).
+  TwoLivers livers;
+  std::vector<CollisionBody> bodies{body_of(livers.a), body_of(livers.b)};
+  ContactDetector detector;
+  detector.reset(bodies);
+  ASSERT_FALSE(run(detector, bodies, 0.005).empty());
+  std::vector<Vec3> stretched = livers.b.vertices;
+  Vec3 centroid = Vec3::Zero();
+  for (const Vec3& p : stretched) centroid += p / static_cast<double>(stretched.size());
+  for (Vec3& p : stretched) p = centroid + Vec3(2.5 * (p - centroid).x(), (p - centroid).y(), 1.5 * (p - centroid).z());
+  {  // the premise: this deformation asks for a rebuild
+    AabbTree tree = AabbTree::build(bodies[1].surface);
+    ASSERT_TRUE(tree.refit({stretched, livers.b.triangles}));
+  }
+  bodies[1].surface.vertices = stretched;
+  const auto after = run(detector, bodies, 0.005);
+  ContactDetector fresh;
+  fresh.reset(bodies);
+  const auto expected = run(fresh, bodies, 0.005);
+  ASSERT_FALSE(expected.empty());
+  ASSERT_EQ(after.size(), expected.size());
+  for (std::size_t k = 0; k < after.size(); ++k) {
+    EXPECT_EQ(after[k].a.vertices, expected[k].a.vertices);
+    EXPECT_EQ(after[k].b.vertices, expected[k].b.vertices);
+    EXPECT_EQ(after[k].distance, expected[k].distance);
+  }
+}
+
 TEST(ContactDetector, DetectAllocatesNothingOnceContactsHasGrown) {
   HOF_SKIP_UNLESS_COUNTING_ALLOCATIONS();
   TwoLivers livers;

@@ -1,3 +1,11 @@
+// Contact detection between bodies, after SOFA's pipeline (BruteForceBroadPhase: every pair of
+// bodies by their boxes; BVHNarrowPhase: each body's AABB tree; MinProximityIntersection /
+// LocalMinDistance: the closest primitive pairs within the alarm distance). Per pass: refit
+// the trees, box each body, then for each pair query the other body's tree with each vertex
+// (closest point), each edge (the triangles whose boxes overlap the edge's box, then their
+// edges) and each sphere. Geometry: Ericson, Real-Time Collision Detection (2005), §5.1.5
+// (point–triangle) and §5.1.9 (segment–segment), in triangle_queries.cpp.
+
 #include "hof/collision/body_contacts.h"
 
 #include <algorithm>

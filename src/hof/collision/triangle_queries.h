@@ -7,7 +7,8 @@
 ///
 /// Sources (re-derived and written for HoF, no code copied):
 ///   * C. Ericson, "Real-Time Collision Detection", Morgan Kaufmann 2005:
-///     §5.1.5 closest point on a triangle (Voronoi regions), §5.1.3 point–AABB distance,
+///     §5.1.5 closest point on a triangle (Voronoi regions), §5.1.9 closest points of two
+///     segments, §5.1.3 point–AABB distance,
 ///     §5.3.3 ray/segment–AABB slab test, §5.3.7 ray–cylinder, §5.3.2 ray–sphere.
 ///   * T. Möller, B. Trumbore, "Fast, minimum storage ray/triangle intersection",
 ///     Journal of Graphics Tools 2(1), 1997.
