@@ -7,6 +7,12 @@
 // moving 1 cm in a random direction, so about half of them cross the surface.
 // closest_point searches up to 1 cm (H3D HapticsOptions.maxDistance), the swept sphere has
 // the RuspiniRenderer proxy radius 2.5 mm. `per_query` is the time of one query.
+//
+// detect/…: ContactDetector::detect() on two copies of a liver surface (the second shifted
+// along x by 85% of the liver's width and raised 1 cm, so their lobes interpenetrate), each
+// iteration alternating between two poses 1 mm apart (so the trees are refitted, as in a
+// simulation), alarm distance 2 mm; "continuous" also passes the previous positions. "apart"
+// shifts the second copy by twice the width (the broad phase rejects the pair).
 
 #include <benchmark/benchmark.h>
 
@@ -19,6 +25,7 @@
 #include <vector>
 
 #include "hof/collision/aabb_tree.h"
+#include "hof/collision/body_contacts.h"
 #include "hof/mesh/boundary.h"
 #include "hof/mesh/liver_generator.h"
 
@@ -133,12 +140,67 @@ void bm_query(benchmark::State& state, LiverResolution r, Query query, bool use_
   state.counters["hit_fraction"] = static_cast<double>(hits) / kQueries;
 }
 
+enum class Placement { kOverlapping, kApart };
+
+void bm_detect(benchmark::State& state, const mesh::TriMesh& m, Placement placement, bool continuous) {
+  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity());
+  Vec3 hi = -lo;
+  for (const Vec3& v : m.vertices) {
+    lo = lo.cwiseMin(v);
+    hi = hi.cwiseMax(v);
+  }
+  const double width = hi.x() - lo.x();
+  const Vec3 shift(placement == Placement::kOverlapping ? 0.85 * width : 2.0 * width, 0.0, 0.01);
+  // Poses: [0] and [1] of each body, 1 mm apart along z and toward each other.
+  std::vector<Vec3> a[2] = {m.vertices, m.vertices};
+  std::vector<Vec3> b[2] = {m.vertices, m.vertices};
+  for (std::size_t k = 0; k < m.vertices.size(); ++k) {
+    a[1][k] += Vec3(0.0005, 0.0, 0.001);
+    b[0][k] += shift;
+    b[1][k] += shift - Vec3(0.0005, 0.0, 0.001);
+  }
+  std::vector<collision::CollisionBody> bodies(2);
+  bodies[0].surface = {a[0], m.triangles};
+  bodies[1].surface = {b[0], m.triangles};
+  ContactDetector detector;
+  detector.reset(bodies);
+  std::vector<BodyContact> contacts;
+  contacts.reserve(1 << 16);
+  int pose = 0;
+  for (auto _ : state) {
+    const int previous = pose;
+    pose = 1 - pose;
+    bodies[0].surface.vertices = a[pose];
+    bodies[1].surface.vertices = b[pose];
+    if (continuous) {
+      bodies[0].previous_vertices = a[previous];
+      bodies[1].previous_vertices = b[previous];
+    }
+    detector.detect(bodies, DetectionSettings{0.002}, contacts);
+    benchmark::DoNotOptimize(contacts.data());
+  }
+  state.counters["triangles"] = static_cast<double>(2 * m.triangles.size());
+  state.counters["contacts"] = static_cast<double>(contacts.size());
+}
+
 void register_all() {
   const LiverResolution resolutions[] = {LiverResolution::kSimple, LiverResolution::kCoarse, LiverResolution::kMedium,
                                          LiverResolution::kFine};
   const std::pair<Query, const char*> queries[] = {{Query::kClosestPoint, "closest_point"},
                                                    {Query::kSegment, "first_hit_segment"},
                                                    {Query::kSweptSphere, "first_hit_swept_sphere"}};
+  static const mesh::TriMesh sphere_liver = mesh::make_liver_surface(10);  // 2,000 triangles
+  for (const bool continuous : {false, true}) {
+    const std::string mode = continuous ? "/continuous" : "/discrete";
+    benchmark::RegisterBenchmark(("detect/liver2000/overlapping" + mode).c_str(), bm_detect, sphere_liver,
+                                 Placement::kOverlapping, continuous)
+        ->Unit(benchmark::kMicrosecond);
+    benchmark::RegisterBenchmark(("detect/medium/overlapping" + mode).c_str(), bm_detect,
+                                 surface(LiverResolution::kMedium), Placement::kOverlapping, continuous)
+        ->Unit(benchmark::kMicrosecond);
+  }
+  benchmark::RegisterBenchmark("detect/liver2000/apart/discrete", bm_detect, sphere_liver, Placement::kApart, false)
+      ->Unit(benchmark::kMicrosecond);
   for (LiverResolution r : resolutions) {
     const std::string res(mesh::to_string(r));
     for (int leaf : {1, 4}) {

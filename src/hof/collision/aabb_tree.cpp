@@ -243,7 +243,7 @@ void AabbTree::visit_along(const Vec3& a, const Vec3& d, double inflate, const d
 }
 
 ClosestPoint AabbTree::closest_point(const TriangleMeshView& mesh, const Vec3& p, double max_distance,
-                                     TouchableFace face) const {
+                                     TouchableFace face, std::span<const std::int32_t> skip) const {
   ClosestPoint best;
   if (!(max_distance >= 0.0)) return best;
   double best_d2 = max_distance * max_distance;  // inclusive: `better` accepts equality
@@ -254,7 +254,8 @@ ClosestPoint AabbTree::closest_point(const TriangleMeshView& mesh, const Vec3& p
     Vec3 weights;
     const Vec3 point = detail::closest_point_on_triangle(p, p0, p1, p2, weights);
     const double d2 = (p - point).squaredNorm();
-    if (!better(d2, triangle, best_d2, best.triangle) || !detail::closest_point_counts(p, p0, p1, p2, face)) {
+    if (!better(d2, triangle, best_d2, best.triangle) || !detail::closest_point_counts(p, p0, p1, p2, face) ||
+        (!skip.empty() && std::binary_search(skip.begin(), skip.end(), triangle))) {
       return;
     }
     best_d2 = d2;

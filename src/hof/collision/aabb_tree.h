@@ -38,9 +38,11 @@ class AabbTree {
   bool refit(const TriangleMeshView& mesh);
 
   /// Closest point on a touchable triangle within `max_distance` of `p` (inclusive).
-  /// `face` filters triangles by the side `p` is on.
+  /// `face` filters triangles by the side `p` is on. Triangles listed in `skip` (sorted
+  /// ascending) are ignored (self-collision: a vertex's own and adjacent triangles).
   [[nodiscard]] ClosestPoint closest_point(const TriangleMeshView& mesh, const Vec3& p, double max_distance,
-                                           TouchableFace face = TouchableFace::kFrontAndBack) const;
+                                           TouchableFace face = TouchableFace::kFrontAndBack,
+                                           std::span<const std::int32_t> skip = {}) const;
 
   /// First triangle crossed by the segment a→b from a touchable side (a segment leaving a
   /// triangle from its non-touchable side passes). Ties broken by lowest triangle index.
@@ -63,6 +65,38 @@ class AabbTree {
   /// several triangles per leaf, all triangles of a leaf whose box is near are returned; with
   /// use_bound_tree = false (one leaf) that is every triangle when the mesh's box is near.
   std::size_t triangles_near(const Vec3& center, double radius, std::span<std::int32_t> out) const;
+
+  /// Calls visit(triangle) for the triangles of every leaf whose box overlaps the box
+  /// [lo − inflate, hi + inflate] (boundaries inclusive), depth first, left child first: the
+  /// order depends only on the tree. Allocation-free (fixed stack). With use_bound_tree =
+  /// false (one leaf) every triangle is visited when the mesh's box overlaps.
+  template <class Visit>
+  void visit_overlapping(const Vec3& lo, const Vec3& hi, double inflate, Visit&& visit) const {
+    if (nodes_.empty()) return;
+    const Vec3 qlo = lo - Vec3::Constant(inflate);
+    const Vec3 qhi = hi + Vec3::Constant(inflate);
+    // NaN fails both comparisons, so a NaN query box overlaps nothing.
+    const auto overlaps = [&](const Node& n) {
+      return (n.lo.array() <= qhi.array()).all() && (qlo.array() <= n.hi.array()).all();
+    };
+    std::int32_t stack[kStackSize];
+    int top = 0;
+    if (!overlaps(nodes_[0])) return;
+    stack[top++] = 0;
+    while (top > 0) {
+      const Node& node = nodes_[static_cast<std::size_t>(stack[--top])];
+      if (node.count > 0) {
+        for (std::int32_t i = node.first; i < node.first + node.count; ++i) {
+          visit(triangle_order_[static_cast<std::size_t>(i)]);
+        }
+        continue;
+      }
+      // Right pushed first so the left subtree is visited first. The stack holds at most one
+      // pending right sibling per level: top <= depth_ + 1 < kStackSize.
+      if (overlaps(nodes_[static_cast<std::size_t>(node.first) + 1])) stack[top++] = node.first + 1;
+      if (overlaps(nodes_[static_cast<std::size_t>(node.first)])) stack[top++] = node.first;
+    }
+  }
 
   [[nodiscard]] const AabbTreeOptions& options() const { return options_; }
   [[nodiscard]] std::size_t node_count() const { return nodes_.size(); }

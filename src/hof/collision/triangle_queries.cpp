@@ -266,6 +266,47 @@ bool sweep_sphere_triangle(const Vec3& a, const Vec3& d, double radius, const Ve
   return finish_sphere_contact(best_t, best_point, best_weights, m, n, d, face, contact);
 }
 
+// Ericson §5.1.9. With d1 = p1 − p0, d2 = q1 − q0, r = p0 − q0 the squared distance
+// |r + s·d1 − t·d2|² is minimised by a·s − b·t = −c, b·s − e·t = −f (a = d1·d1, b = d1·d2,
+// c = d1·r, e = d2·d2, f = d2·r). Clamp s to [0, 1], take the t that is best for it, and if
+// that t must be clamped, recompute s for the clamped t (the distance is convex in (s, t)).
+SegmentClosest closest_points_segment_segment(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1) {
+  const Vec3 d1 = p1 - p0;
+  const Vec3 d2 = q1 - q0;
+  const Vec3 r = p0 - q0;
+  const double a = d1.squaredNorm();
+  const double e = d2.squaredNorm();
+  const double f = d2.dot(r);
+  const auto clamp01 = [](double x) { return x < 0.0 ? 0.0 : (x > 1.0 ? 1.0 : x); };
+  double s = 0.0;
+  double t = 0.0;
+  if (a > 0.0 && e > 0.0) {
+    const double b = d1.dot(d2);
+    const double c = d1.dot(r);
+    const double denom = a * e - b * b;  // = |d1×d2|² ≥ 0
+    s = denom > 1e-12 * a * e ? clamp01((b * f - c * e) / denom) : 0.0;
+    t = (b * s + f) / e;
+    if (t < 0.0) {
+      t = 0.0;
+      s = clamp01(-c / a);
+    } else if (t > 1.0) {
+      t = 1.0;
+      s = clamp01((b - c) / a);
+    }
+  } else if (e > 0.0) {  // p is a point
+    t = clamp01(f / e);
+  } else if (a > 0.0) {  // q is a point
+    s = clamp01(-d1.dot(r) / a);
+  }
+  SegmentClosest out;
+  out.s = s;
+  out.t = t;
+  out.on_p = p0 + s * d1;
+  out.on_q = q0 + t * d2;
+  out.distance_squared = (out.on_p - out.on_q).squaredNorm();
+  return out;
+}
+
 }  // namespace hof::collision::detail
 
 namespace hof::collision {

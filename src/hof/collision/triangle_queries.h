@@ -66,6 +66,22 @@ struct TriangleContact {
 [[nodiscard]] bool sweep_sphere_triangle(const Vec3& a, const Vec3& d, double radius, const Vec3& p0, const Vec3& p1,
                                          const Vec3& p2, TouchableFace face, TriangleContact& contact);
 
+/// Closest points of the segments p0–p1 and q0–q1 (Ericson §5.1.9): the parameters s, t ∈ [0, 1]
+/// of the points p0 + s·(p1 − p0) and q0 + t·(q1 − q0) that minimise their distance, found by
+/// solving the 2×2 normal equations for the infinite lines and clamping (re-solving the other
+/// parameter after a clamp). Parallel segments (|d1×d2|² ≤ 1e-12·|d1|²·|d2|²) and degenerate
+/// ones have no unique pair: s is first fixed at 0, so one of s, t ends at an endpoint (0 or
+/// 1). Gives the squared distance; NaN input gives NaN (never a crash).
+struct SegmentClosest {
+  double s{0.0};
+  double t{0.0};
+  Vec3 on_p{Vec3::Zero()};
+  Vec3 on_q{Vec3::Zero()};
+  double distance_squared{0.0};
+};
+[[nodiscard]] SegmentClosest closest_points_segment_segment(const Vec3& p0, const Vec3& p1, const Vec3& q0,
+                                                            const Vec3& q1);
+
 /// Squared distance from `p` to the box [lo, hi] (0 inside), Ericson §5.1.3. Branch-free
 /// (max instructions): traversal evaluates it twice per node. NaN input gives NaN.
 [[nodiscard]] inline double box_distance_squared(const Vec3& p, const Vec3& lo, const Vec3& hi) {
