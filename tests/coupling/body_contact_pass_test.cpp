@@ -12,12 +12,14 @@
 #include <limits>
 
 #include "hof/coupling/detail/body_contact_pass.h"
+#include "hof/coupling/detail/world_step.h"
 #include "hof/coupling/session.h"
 #include "hof/haptics/device_backends/scripted_device.h"
 #include "hof/mechanics/step.h"
 #include "hof/mesh/boundary.h"
 
 #include "mechanics/test_meshes.h"
+#include "support/allocation_counter.h"
 
 namespace hof::coupling {
 namespace {
@@ -164,6 +166,73 @@ TEST(BodyContactPass, SoftBlockComesToRestOnARigidFloorWithinTheContactDistance)
   EXPECT_NEAR(run.report.bodies[0].body_contact_force_n.y(), weight, 0.02 * weight);
   EXPECT_NEAR(run.report.bodies[1].body_contact_force_n.y(), -weight, 0.02 * weight);
   EXPECT_FALSE(run.report.friction_solved_as_penalty);
+}
+
+TEST(BodyContactPass, SphereModelsFollowTheVolumeAndCarryTheBlock) {
+  // SOFA's SphereCollisionModel on a deformable body: four spheres near the block's bottom
+  // corners, its surface taking no part; the block comes to rest on them.
+  BlockOptions block;
+  block.corner = Vec3(-0.02, 0.005, -0.02);
+  block.rayleigh_stiffness = 0.01;
+  SessionBody body = soft_block("block", block);
+  body.collision.triangles = body.collision.lines = body.collision.points = false;
+  const double radius = 0.004;
+  for (double x : {-0.01, 0.01}) {
+    for (double z : {-0.01, 0.01}) {
+      body.collision.sphere_centers.emplace_back(x, block.corner.y() + radius + 1e-3, z);
+      body.collision.sphere_radii.push_back(radius);
+    }
+  }
+  const std::vector<Vec3> centres = body.collision.sphere_centers;
+  std::vector<SessionBody> bodies;
+  bodies.push_back(std::move(body));
+  bodies.push_back(floor_body());
+  auto session = Session::make(std::move(bodies), idle_device(), contact_config(1000.0));
+  ASSERT_TRUE(session) << session.error().to_string();
+  const SessionReport report = (*session)->run_virtual(3.0, {});
+  ASSERT_FALSE(report.diverged) << report.divergence;
+  // Where the spheres are now: their centres through the volume, as the pass maps them.
+  const mechanics::MechanicalModel& model = (*session)->model();
+  auto mapping = SurfaceMapping::barycentric(model.rest_positions, model.tets, centres);
+  ASSERT_TRUE(mapping);
+  std::vector<Vec3> now(centres.size());
+  const Eigen::VectorXd& x = (*session)->state(0).x;
+  mapping->apply({x.data(), static_cast<std::size_t>(x.size())}, now);
+  const double contact_distance = 1e-3;
+  for (const Vec3& c : now) {
+    EXPECT_GE(c.y() - radius, -contact_distance);
+    EXPECT_LE(c.y() - radius, contact_distance);
+  }
+  // Only the spheres touch (the soft block's corners sag past them to the floor's plane, and
+  // its surface takes no part).
+  EXPECT_EQ(report.bodies[0].body_contacts, 4);
+  const double weight = 1000.0 * std::pow(block.size_m, 3) * 9.81;
+  EXPECT_NEAR(report.bodies[0].body_contact_force_n.y(), weight, 0.02 * weight);
+}
+
+TEST(BodyContactPass, APassInContactAllocatesNothingOnceTheContactsHaveBeenSeen) {
+  HOF_SKIP_UNLESS_COUNTING_ALLOCATIONS();
+  // The world's own step (contacts, the pass, the body's step) on a block resting on the
+  // floor; the surface follows the nodes as the snapshot publisher makes it.
+  BlockOptions block;
+  block.corner = Vec3(-0.02, 0.0005, -0.02);
+  std::vector<SessionBody> bodies;
+  bodies.push_back(soft_block("block", block));
+  bodies.push_back(floor_body());
+  detail::World world;
+  detail::init_world(world, std::move(bodies), idle_device(), contact_config(1000.0));
+  SessionReport report;
+  const auto step = [&] {
+    ASSERT_TRUE(detail::advance_bodies(world, report));
+    detail::BodyRuntime& r = world.bodies[0];
+    r.body.mapping.apply({r.state.x.data(), static_cast<std::size_t>(r.state.x.size())}, r.surface_positions);
+  };
+  for (int k = 0; k < 50; ++k) step();
+  ASSERT_GT(report.body_contacts, 0);
+  const long before = hof::testing::thread_allocation_count();
+  for (int k = 0; k < 50; ++k) step();
+  EXPECT_EQ(hof::testing::thread_allocation_count() - before, 0);
+  EXPECT_GT(report.body_contacts, 0);
 }
 
 TEST(BodyContactPass, BlockAtFiveMetresPerSecondDoesNotTunnelThroughTheFloorAtTenMillisecondSteps) {

@@ -47,9 +47,9 @@ struct BodyCollision {
   std::vector<double> sphere_radii;
   bool moving{true};
   bool simulated{true};
-  std::int32_t group{-1};                      ///< SOFA `group`; −1: none
-  std::optional<bool> self_collision;          ///< unset: ContactSettings::self_collision
-  std::optional<double> stiffness_n_per_m;     ///< SOFA `contactStiffness` on the model
+  std::int32_t group{-1};                   ///< SOFA `group`; −1: none
+  std::optional<bool> self_collision;       ///< unset: ContactSettings::self_collision
+  std::optional<double> stiffness_n_per_m;  ///< SOFA `contactStiffness` on the model
 };
 
 }  // namespace hof::coupling
