@@ -149,12 +149,17 @@ void BodyContactPass::init(World& w) {
   }
   // Room for the stiffness entries of many contacts on each body (a contact point carries at
   // most kMaxPointWeights nodes): filling them then allocates nothing.
+  // (It grows past that only when a pass has more.)
   for (const Member& m : members_) {
     BodyRuntime& r = w.bodies[m.body];
-    if (r.body.deformable())
-      r.state.external_stiffness.reserve(
-          std::min<std::size_t>(kInitialContactCapacity, 4 * r.body.surface.vertices.size()) *
-          SurfaceMapping::kMaxPointWeights);
+    if (!r.body.deformable()) continue;
+    stiffness_capacity_ = std::max(stiffness_capacity_,
+                                   std::min<std::size_t>(kInitialContactCapacity, 4 * r.body.surface.vertices.size()) *
+                                       SurfaceMapping::kMaxPointWeights);
+  }
+  for (const Member& m : members_) {
+    BodyRuntime& r = w.bodies[m.body];
+    if (r.body.deformable()) r.state.external_stiffness.reserve(stiffness_capacity_);
   }
 }
 
@@ -206,6 +211,14 @@ void BodyContactPass::apply(World& w, std::span<const char> due, SessionReport& 
     BodyRuntime& r = w.bodies[m.body];
     if (!r.body.deformable()) continue;
     if (due_[m.body]) r.state.external_stiffness.clear();  // keeps its capacity
+    // A command gave the body a new state (a reset, another model): room again for the
+    // entries, and no continuous motion from where it was (a reset jumps back to rest, which
+    // must not count as crossing what lies between).
+    if (r.state.external_stiffness.capacity() < stiffness_capacity_)
+      r.state.external_stiffness.reserve(stiffness_capacity_);
+    if (r.state.steps < m.steps_seen)
+      std::copy(r.surface_positions.begin(), r.surface_positions.end(), m.previous.begin());
+    m.steps_seen = r.state.steps;
     if (m.spheres_mapped) {
       m.sphere_mapping.apply({r.state.x.data(), static_cast<std::size_t>(r.state.x.size())}, m.spheres);
     }

@@ -66,6 +66,7 @@ class BodyContactPass {
     std::vector<Vec3> spheres;      // its sphere centres now
     SurfaceMapping sphere_mapping;  // deformable bodies with spheres: volume → centres
     bool spheres_mapped{false};
+    std::int64_t steps_seen{0};  // its state's step count at the last pass (a drop: a reset)
   };
 
   // Adds `force` (and the stiffness k·n·nᵀ, lumped) at one side's contact point.
@@ -81,6 +82,7 @@ class BodyContactPass {
   std::vector<std::int64_t> contact_count_;  // (bodies) this pass's contacts of each body
   std::vector<std::uint8_t> pair_disabled_;  // (bodies²) the settings' disabled pairs
   std::vector<char> due_;                    // (bodies) this pass's due bodies
+  std::size_t stiffness_capacity_{0};        // entries reserved per body for external_stiffness
 };
 
 }  // namespace hof::coupling::detail
