@@ -5,6 +5,7 @@
 
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "hof/coupling/session.h"
@@ -19,12 +20,15 @@ using namespace hof;
 // `count` co-rotational FEM livers (E = 5.4 kPa, ν = 0.45, 1060 kg/m³, implicit Euler + CG 25,
 // dt 0.01), 30 cm apart, and a device that holds still far away: each world step is the
 // bodies' mechanics plus the snapshot.
-std::unique_ptr<coupling::Session> livers(int count, mesh::LiverResolution resolution) {
+// `spacing_m` apart along x (each liver's nodes shifted by i·spacing); with `contacts`, contact
+// between bodies is on (penalty, 2 mm alarm, 1 mm contact distance, 200 N/m per contact).
+std::unique_ptr<coupling::Session> livers(int count, mesh::LiverResolution resolution, double spacing_m = 0.3,
+                                          bool contacts = false) {
   const mesh::Mesh liver = *mesh::generate_liver(resolution);
   std::vector<coupling::SessionBody> bodies;
   for (int i = 0; i < count; ++i) {
     mesh::Mesh placed = liver;
-    for (Vec3& p : placed.nodes) p.x() += 0.3 * i;
+    for (Vec3& p : placed.nodes) p.x() += spacing_m * i;
     const mesh::BoundarySurface b = mesh::extract_boundary(placed.nodes, placed.tets);
     mechanics::ModelConfig c;
     c.name = "liver" + std::to_string(i);
@@ -46,10 +50,15 @@ std::unique_ptr<coupling::Session> livers(int count, mesh::LiverResolution resol
     body.surface = b.surface;
     body.mapping = *coupling::SurfaceMapping::by_index(placed.nodes, b.surface.vertices, b.surface_to_volume);
     body.config = c;
+    body.collision.enabled = contacts;
     bodies.push_back(std::move(body));
   }
   coupling::SessionConfig config;
   config.haptics.realtime_priority = false;
+  config.contacts.enabled = contacts;
+  config.contacts.alarm_distance_m = 0.002;
+  config.contacts.contact_distance_m = 0.001;
+  config.contacts.stiffness_n_per_m = 200.0;
   auto device = std::make_unique<haptics::ScriptedDevice>(haptics::ScriptedMotion::stationary(Vec3(0, 0, 1.0)));
   return std::move(*coupling::Session::make(std::move(bodies), std::move(device), config));
 }
@@ -62,6 +71,28 @@ void BM_WorldStep(benchmark::State& state) {
     benchmark::DoNotOptimize(report.simulation_steps);
   }
   state.counters["bodies"] = static_cast<double>(state.range(0));
+}
+
+// Two medium livers with contact between bodies on: side by side with their facing ends
+// overlapping by range(0) mm along x (in contact: the penalty springs push them apart against
+// their held bases), or, with range 0, 30 cm apart (the same detection, no contact). The
+// issue's goal: in contact ≤ 1.5× apart.
+void BM_WorldStepContact(benchmark::State& state) {
+  const mesh::Mesh liver = *mesh::generate_liver(mesh::LiverResolution::kMedium);
+  double lo = 1e9, hi = -1e9;
+  for (const Vec3& p : liver.nodes) {
+    lo = std::min(lo, p.x());
+    hi = std::max(hi, p.x());
+  }
+  const double overlap_m = 1e-3 * static_cast<double>(state.range(0));
+  auto session = livers(2, mesh::LiverResolution::kMedium, overlap_m > 0.0 ? hi - lo - overlap_m : 0.3, true);
+  std::int64_t contacts = 0;
+  for (auto _ : state) {
+    const coupling::SessionReport report = session->run_virtual(0.01, {});
+    contacts = report.body_contacts;
+    benchmark::DoNotOptimize(report.simulation_steps);
+  }
+  state.counters["contacts"] = static_cast<double>(contacts);
 }
 
 // One bound tree over every body's surface (what the haptic loop uses) against one tree per
@@ -154,5 +185,7 @@ BENCHMARK(BM_WorldStep)
     ->Args({2, 1})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
+
+BENCHMARK(BM_WorldStepContact)->Arg(0)->Arg(10)->Arg(25)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 BENCHMARK_MAIN();

@@ -606,7 +606,17 @@ void RunRecording::print(const coupling::SessionReport& report, bool determinist
                 b.deformable ? "deformable" : "rigid", b.contact_time_s, b.max_force_n,
                 b.deformable ? (", max displacement " + length(b.max_displacement_m)).c_str() : "",
                 b.probe_started_inside ? ", the probe started inside it" : "");
+    if (b.max_body_contacts > 0) {
+      std::printf(
+          "              contact with bodies: %lld contacts at the end (at most %lld), force (%.3f, %.3f, %.3f) N "
+          "(largest %.3f N)\n",
+          static_cast<long long>(b.body_contacts), static_cast<long long>(b.max_body_contacts),
+          b.body_contact_force_n.x(), b.body_contact_force_n.y(), b.body_contact_force_n.z(),
+          b.max_body_contact_force_n);
+    }
   }
+  if (report.friction_solved_as_penalty)
+    std::printf("  contact     friction contact is not simulated yet: solved as penalty springs without friction\n");
   if (needle.mounted) {
     std::string visited;
     for (int k = 0; k < procedures::kNeedlePhaseCount; ++k) {

@@ -51,6 +51,7 @@ Expected<std::unique_ptr<Session>> Session::make(std::vector<SessionBody> bodies
                       fmt::format("session: haptic rate must be in [100, 20000] Hz, got {}", config.haptics.rate_hz));
   }
   if (auto ok = haptics::validate_effects(config.effects); !ok) return std::unexpected(ok.error());
+  if (auto ok = detail::validate_contacts(config.contacts, bodies); !ok) return std::unexpected(ok.error());
   if (config.coupling == ContactCoupling::kFemReaction) {
     for (const SessionBody& body : bodies) {
       if (body.deformable() && !detail::fem_reaction_step_fits(body.model->dt_s, config.haptics.rate_hz)) {

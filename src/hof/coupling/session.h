@@ -20,7 +20,8 @@
 ///    point's barycentric weights;
 ///  - `kCompliance`, `kFemReaction`: barycentric, and the felt force comes from the FEM (see
 ///    ContactCoupling).
-/// Bodies do not collide with each other (yet): each feels only the proxy.
+/// Bodies collide with each other when config.contacts asks for it (penalty springs:
+/// coupling/detail/body_contact_pass.h); otherwise each feels only the proxy.
 
 #include <atomic>
 #include <chrono>
@@ -115,6 +116,11 @@ struct BodyReport {
   double max_force_n{0.0};
   std::int64_t fall_through_events{0};
   bool probe_started_inside{false};  ///< the proxy was inside this body at its first reading
+  // Contact between bodies (SessionConfig::contacts), as the last pass left it and its largest.
+  std::int64_t body_contacts{0};            ///< contacts of this body with others (or itself)
+  std::int64_t max_body_contacts{0};        ///< the most at any pass of the run
+  Vec3 body_contact_force_n{Vec3::Zero()};  ///< total contact force on this body, N
+  double max_body_contact_force_n{0.0};     ///< the largest |total| at any pass, N
 };
 
 /// What a run measured.
@@ -140,6 +146,12 @@ struct SessionReport {
   /// when it did not. Its force was faded to zero first.
   std::string device_failure;
   double max_displacement_m{0.0};
+  /// Contact between bodies: the contacts within the contact distance at the last pass, and
+  /// the most at any pass of the run.
+  std::int64_t body_contacts{0}, max_body_contacts{0};
+  /// The scene asked for ContactResponse::kFrictionConstraint, which is not built yet: its
+  /// contacts were solved as penalty springs, without friction.
+  bool friction_solved_as_penalty{false};
   std::vector<BodyReport> bodies;
   std::vector<std::string> applied_commands;  ///< "step N: what", in order
   haptics::PeriodStats haptic_periods;

@@ -177,6 +177,8 @@ void init_world(World& w, std::vector<SessionBody> bodies, std::unique_ptr<hapti
     }
   }
   w.step_ok.reserve(w.bodies.size());
+  w.due_flags.assign(w.bodies.size(), 0);
+  w.body_contacts.init(w);
   // A world of rigid shapes (or of force effects only) still steps, to publish and report.
   w.dt = std::isfinite(dt) ? dt : 0.01;
   std::vector<TripleBuffer<haptics::SurfaceSnapshot>*> buffers = build_layers(w);
@@ -214,7 +216,11 @@ void begin_run(World& w) {
   // Each run reports on itself: per-body figures start again, as the session's do.
   for (BodyRuntime& r : w.bodies) {
     r.ticks_at_last_step = 0;
-    r.report = BodyReport{r.report.name, r.report.deformable, r.report.nodes, 0.0, 0.0, 0.0, 0, false};
+    BodyReport fresh;
+    fresh.name = r.report.name;
+    fresh.deformable = r.report.deformable;
+    fresh.nodes = r.report.nodes;
+    r.report = std::move(fresh);
     r.inside_since_start = false;
   }
   w.first_reading_seen = false;
@@ -416,6 +422,15 @@ bool advance_bodies(World& w, SessionReport& report) {
     if (r.body.deformable() && r.next_step_s <= next_time + 1e-9 * dt) due.push_back(&r);
   }
   for (BodyRuntime* r : due) load_contacts(w, *r, report.haptic_ticks);
+  if (w.body_contacts.active()) {
+    // Contact between bodies, from where every body is now. Bodies that step at different dt:
+    // the pass runs at every world step (the smallest dt) and a body takes its contact forces
+    // at the steps it makes, from the pass of that world step (a penalty force depends on the
+    // positions alone); the others' share of that pass is counted in the report only.
+    std::fill(w.due_flags.begin(), w.due_flags.end(), 0);
+    for (BodyRuntime* r : due) w.due_flags[static_cast<std::size_t>(r - w.bodies.data())] = 1;
+    w.body_contacts.apply(w, w.due_flags, report);
+  }
   // Every due body steps; several in parallel (each body's own loops are thread-count
   // independent, so results do not depend on how they are spread).
   std::vector<char>& ok = w.step_ok;

@@ -443,6 +443,7 @@ void reset(const MechanicalModel& model, MechanicalState& state) {
   state.v.setZero();
   state.f.setZero();
   state.external_force.setZero();
+  state.external_stiffness.clear();  // keeps its capacity
   state.time_s = 0.0;
   state.steps = 0;
   state.divergence = {};

@@ -46,6 +46,13 @@ namespace detail {
 struct SolverWorkspace;
 }  // namespace detail
 
+/// A stiffness block −∂f/∂x (N/m) that a force outside the model adds at one node for a step:
+/// a contact spring lumped onto the nodes that carry the contact point (coupling/).
+struct NodeStiffness {
+  std::int32_t node{-1};
+  Eigen::Matrix3d block{Eigen::Matrix3d::Zero()};
+};
+
 struct MechanicalState {
   MechanicalState();
   MechanicalState(MechanicalState&&) noexcept;
@@ -56,6 +63,13 @@ struct MechanicalState {
   Eigen::VectorXd v;               ///< (3N) velocities, m/s
   Eigen::VectorXd f;               ///< (3N) total force at the last evaluation, N
   Eigen::VectorXd external_force;  ///< (3N) N; written by the coupling before each step, kept
+  /// The stiffness of the external force (its −∂f/∂x at single nodes; a node may appear more
+  /// than once, the blocks add), written by the coupling with external_force and kept: the
+  /// implicit integrator adds h (h + r_K)·block to the node's diagonal block of A, so that
+  /// stiff contact springs stay stable at large steps. Empty (the default): A is exactly the
+  /// model's. The caller reserves its capacity, so that filling it does not allocate. The
+  /// other integrators read only external_force.
+  std::vector<NodeStiffness> external_stiffness;
   double time_s{0.0};
   std::int64_t steps{0};
   std::vector<ForceFieldState> field_states;  ///< one per model force field

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "hof/core/triple_buffer.h"
+#include "hof/coupling/detail/body_contact_pass.h"
 #include "hof/coupling/session.h"
 
 namespace hof::coupling {
@@ -107,6 +108,8 @@ struct World {
   std::vector<BodyRuntime> bodies;
   std::vector<BodyRuntime*> due;  // the bodies stepping this step (scratch)
   std::vector<char> step_ok;      // their results (scratch)
+  std::vector<char> due_flags;    // (bodies) 1 for the bodies stepping this step (scratch)
+  BodyContactPass body_contacts;  // contact between bodies (inactive unless config.contacts.enabled)
   std::vector<std::unique_ptr<LayerRuntime>> layers;
   std::atomic<double> dt{0.01};   // written by the simulation (a dt command), read anywhere
   double time_s{0.0};             // simulated time of the world

@@ -66,6 +66,10 @@ struct SolverWorkspace {
   std::uint64_t system_assemblies{0};  // counts assemble_system's fills of `system`
   std::uint64_t diag_inv_assembly{0};  // the fill diag_inv was taken from (0: none)
   double system_mass_coeff{0.0}, system_stiffness_coeff{0.0};
+  // The external stiffness (MechanicalState::external_stiffness) that `system` holds now, times
+  // the coefficient it was added with: a reused matrix takes it out again before the step's own.
+  std::vector<NodeStiffness> external_stiffness_applied;
+  double external_stiffness_coeff{0.0};
   std::vector<Eigen::Matrix3d> block_jacobi;  // (N) inverse diagonal blocks
   CoarseSpace coarse;                         // the CG's two-level preconditioner, when on
   // point_elastic_force: the set of a patch's nodes (one flag per node, cleared after each
