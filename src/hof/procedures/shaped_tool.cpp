@@ -301,10 +301,45 @@ void ShapedTool::restart() {
   candidate_count_ = 0;
 }
 
+void ShapedTool::Planes::add(const Vec3& n) {
+  for (std::size_t i = 0; i < count; ++i) {
+    if (normal[i].dot(n) > 1.0 - 1e-9) return;  // the same plane
+  }
+  if (count < kMaxPlanes) normal[count++] = n;
+}
+
+ShapedTool::Segment::Segment(const Vec3& from, const Vec3& to) : a(from), b(to), d(to - from) {
+  const double dd = d.squaredNorm();
+  inv_length_squared = dd > 0.0 ? 1.0 / dd : 0.0;
+}
+
+double ShapedTool::Segment::distance_squared(const Vec3& p) const {
+  const double t = std::clamp((p - a).dot(d) * inv_length_squared, 0.0, 1.0);
+  return (p - a - t * d).squaredNorm();
+}
+
+bool ShapedTool::may_reach(const Candidate& c, const Segment& s, double radius, double slack) {
+  // Both ends on one side of the triangle's plane, at least `radius − slack` from it: the
+  // segment is no closer than that to the triangle.
+  const double da = c.normal.dot(s.a) - c.offset;
+  const double db = c.normal.dot(s.b) - c.offset;
+  const double clear = radius - slack;
+  if ((da >= clear && db >= clear) || (da <= -clear && db <= -clear)) return false;
+  const double reach = c.radius + radius + slack;
+  return s.distance_squared(c.centre) <= reach * reach;
+}
+
 void ShapedTool::gather(const haptics::ToolTickInput& in, const Mat3& r, const Vec3& from, const Vec3& to) {
-  // One sphere around the whole motion of the shape this tick.
+  // One sphere around the whole motion of the shape this tick, from each layer's bound tree.
   const Vec3 centre = 0.5 * (from + to) + r * bound_centre_;
-  const double reach = 0.5 * (to - from).norm() + bound_radius_ + 2.0 * max_step_;
+  const double motion = (to - from).norm();
+  const double reach = 0.5 * motion + bound_radius_ + 2.0 * max_step_;
+  // A single primitive (a sphere, a capsule) keeps only the triangles its own swept segment
+  // may reach: a thin shaft's neighbourhood, not its bounding sphere's.
+  const bool prune = primitives_.size() == 1;
+  const ToolPrimitive& p = primitives_.front();
+  const Segment axis(from + r * p.a, from + r * p.b);
+  const double slack = motion + 2.0 * max_step_;
   candidate_count_ = 0;
   for (const haptics::SurfaceSnapshot* s : in.surfaces) {
     if (s == nullptr || s->triangles.empty()) continue;
@@ -312,11 +347,21 @@ void ShapedTool::gather(const haptics::ToolTickInput& in, const Mat3& r, const V
     if (room == 0) break;
     const std::size_t found = s->tree.triangles_near(centre, reach, std::span<std::int32_t>(query_.data(), room));
     for (std::size_t i = 0; i < std::min(found, room); ++i) {
-      Candidate& c = candidates_[candidate_count_++];
+      Candidate& c = candidates_[candidate_count_];
       c.surface = s;
       c.triangle = query_[i];
       const mesh::Tri& t = s->triangles[static_cast<std::size_t>(c.triangle)];
-      bounding_sphere(s->vertices[t[0]], s->vertices[t[1]], s->vertices[t[2]], c.centre, c.radius);
+      const Vec3& p0 = s->vertices[t[0]];
+      bounding_sphere(p0, s->vertices[t[1]], s->vertices[t[2]], c.centre, c.radius);
+      if (prune) {
+        const double keep = c.radius + p.radius + slack;
+        if (axis.distance_squared(c.centre) > keep * keep) continue;
+      }
+      const Vec3 n = (s->vertices[t[1]] - p0).cross(s->vertices[t[2]] - p0);
+      const double area = n.norm();
+      c.normal = area > 0.0 && std::isfinite(area) ? Vec3(n / area) : Vec3::Zero();
+      c.offset = c.normal.dot(p0);
+      ++candidate_count_;
     }
   }
 }
@@ -326,9 +371,10 @@ double ShapedTool::deepest(const Vec3& position, const Mat3& r) const {
   for (const ToolPrimitive& p : primitives_) {
     const Vec3 a = position + r * p.a;
     const Vec3 b = position + r * p.b;
+    const Segment segment(a, b);
     for (std::size_t i = 0; i < candidate_count_; ++i) {
       const Candidate& c = candidates_[i];
-      if (point_segment_distance(c.centre, a, b) > c.radius + p.radius) continue;
+      if (!may_reach(c, segment, p.radius, tolerance_)) continue;
       const mesh::Tri& t = c.surface->triangles[static_cast<std::size_t>(c.triangle)];
       Vec3 on_segment, on_triangle, w;
       const double d = closest_segment_triangle(a, b, c.surface->vertices[t[0]], c.surface->vertices[t[1]],
@@ -339,7 +385,7 @@ double ShapedTool::deepest(const Vec3& position, const Mat3& r) const {
   return worst;
 }
 
-bool ShapedTool::resolve(Vec3& position, const Mat3& r, const Vec3& reference) const {
+bool ShapedTool::resolve(Vec3& position, const Mat3& r, const Vec3& reference, Planes& planes) const {
   // The deepest overlap first, one at a time: on a flat surface of several triangles the
   // deepest is the face under the shape, and pushing it out clears the neighbours' edges
   // (which, pushed first, would tilt the correction and slide the tool).
@@ -349,9 +395,10 @@ bool ShapedTool::resolve(Vec3& position, const Mat3& r, const Vec3& reference) c
     for (const ToolPrimitive& p : primitives_) {
       const Vec3 a = position + r * p.a;
       const Vec3 b = position + r * p.b;
+      const Segment segment(a, b);
       for (std::size_t i = 0; i < candidate_count_; ++i) {
         const Candidate& c = candidates_[i];
-        if (point_segment_distance(c.centre, a, b) > c.radius + p.radius) continue;
+        if (!may_reach(c, segment, p.radius, tolerance_)) continue;
         const mesh::Tri& t = c.surface->triangles[static_cast<std::size_t>(c.triangle)];
         const Vec3& p0 = c.surface->vertices[t[0]];
         const Vec3& p1 = c.surface->vertices[t[1]];
@@ -376,6 +423,7 @@ bool ShapedTool::resolve(Vec3& position, const Mat3& r, const Vec3& reference) c
     }
     if (worst <= tolerance_) return true;
     position += push_by;
+    planes.add(push_by.normalized());
   }
   return deepest(position, r) <= tolerance_;
 }
@@ -408,22 +456,28 @@ Vec3 ShapedTool::tick(const haptics::ToolTickInput& in, std::span<Vec3> layer_fo
   last_proxy_ = proxy_;
   gather(in, r, proxy_, x);
   // Toward the device in sub-moves short enough not to pass through a triangle, each pushed
-  // out of what it overlaps; stop when a sub-move gains nothing.
+  // out of what it overlaps. As the god-object does with its constraint planes (Zilles &
+  // Salisbury 1995), the motion left loses its part into the planes already met, so the tool
+  // slides along them instead of pressing into them again each sub-move; it stops at the
+  // projected goal.
+  Planes planes;
   Vec3 free = proxy_;
   // A rotation of the device may have turned the shape into a surface: out first.
-  if (deepest(free, r) > tolerance_) {
-    Vec3 turned = free;
-    if (resolve(turned, r, free)) free = turned;
-  }
+  if (Vec3 turned = free; resolve(turned, r, free, planes)) free = turned;
   for (int k = 0; k < kMaxSubMoves; ++k) {
-    const Vec3 d = x - free;
+    Vec3 d = x - free;
+    for (std::size_t i = 0; i < planes.count; ++i) {
+      const double into = d.dot(planes.normal[i]);
+      if (into < 0.0) d -= into * planes.normal[i];
+    }
     const double length = d.norm();
     if (length <= tolerance_) break;
-    Vec3 next = length > max_step_ ? Vec3(free + d * (max_step_ / length)) : x;
-    if (!resolve(next, r, free)) break;
-    const double gained = (next - free).norm();
+    const bool last = length <= max_step_;
+    Vec3 next = last ? Vec3(free + d) : Vec3(free + d * (max_step_ / length));
+    const std::size_t met = planes.count;
+    if (!resolve(next, r, free, planes)) break;
     free = next;
-    if (gained <= 1e-3 * max_step_) break;
+    if (last && planes.count == met) break;
   }
   proxy_ = free;
   st.tip = proxy_;
@@ -443,9 +497,10 @@ Vec3 ShapedTool::tick(const haptics::ToolTickInput& in, std::span<Vec3> layer_fo
   for (const ToolPrimitive& p : primitives_) {
     const Vec3 a = proxy_ + r * p.a;
     const Vec3 b = proxy_ + r * p.b;
+    const Segment segment(a, b);
     for (std::size_t i = 0; i < candidate_count_; ++i) {
       const Candidate& c = candidates_[i];
-      if (point_segment_distance(c.centre, a, b) > c.radius + p.radius + band) continue;
+      if (!may_reach(c, segment, p.radius + band, 0.0)) continue;
       const mesh::Tri& t = c.surface->triangles[static_cast<std::size_t>(c.triangle)];
       Vec3 on_segment, on_triangle, w;
       const double d = closest_segment_triangle(a, b, c.surface->vertices[t[0]], c.surface->vertices[t[1]],

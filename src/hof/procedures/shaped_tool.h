@@ -127,10 +127,30 @@ class ShapedTool final : public haptics::Tool {
     std::int32_t triangle{-1};
     Vec3 centre{Vec3::Zero()};  // of the triangle's bounding sphere
     double radius{0.0};
+    Vec3 normal{Vec3::Zero()};  // unit face normal (zero: degenerate)
+    double offset{0.0};         // normal · a vertex
+  };
+  // The constraint normals met by this tick's pushes (the god-object's planes).
+  static constexpr std::size_t kMaxPlanes = 4;
+  struct Planes {
+    std::array<Vec3, kMaxPlanes> normal{};
+    std::size_t count{0};
+    void add(const Vec3& n);
   };
   void gather(const haptics::ToolTickInput& in, const Mat3& r, const Vec3& from, const Vec3& to);
-  // Pushes `position` out of every candidate (shape at rotation `r`); false when it cannot.
-  bool resolve(Vec3& position, const Mat3& r, const Vec3& reference) const;
+  // A primitive's axis placed in the world, for many distance tests in a row.
+  struct Segment {
+    Segment(const Vec3& from, const Vec3& to);
+    [[nodiscard]] double distance_squared(const Vec3& p) const;
+    Vec3 a, b, d;
+    double inv_length_squared;  // 0 for a point
+  };
+  // Whether segment s of `radius` may come closer than `radius − slack` to the candidate
+  // (cheap: the triangle's plane, then its bounding sphere; no division, no root).
+  [[nodiscard]] static bool may_reach(const Candidate& c, const Segment& s, double radius, double slack);
+  // Pushes `position` out of every candidate (shape at rotation `r`), the deepest overlap
+  // first; the push directions go to `planes`. False when it cannot.
+  bool resolve(Vec3& position, const Mat3& r, const Vec3& reference, Planes& planes) const;
   // The deepest overlap of the shape at (position, r) with any candidate.
   [[nodiscard]] double deepest(const Vec3& position, const Mat3& r) const;
 
