@@ -563,10 +563,15 @@ Vec3 ShapedTool::tick(const haptics::ToolTickInput& in, std::span<Vec3> layer_fo
 
 ShapedTissueCoupling::ShapedTissueCoupling(std::shared_ptr<const ShapedTool> tool, std::vector<ToolBodySurface> bodies)
     : tool_(std::move(tool)), bodies_(std::move(bodies)) {
+  // Sized here for the largest body: a step does not allocate.
   std::size_t most = 0;
-  for (const ToolBodySurface& b : bodies_) most = std::max(most, b.vertex_count);
+  std::size_t triangles = 1;
+  for (const ToolBodySurface& b : bodies_) {
+    most = std::max(most, b.vertex_count);
+    triangles = std::max(triangles, b.triangles.size());
+  }
   positions_.resize(most);
-  contacts_.reserve(1024);
+  contacts_.reserve(triangles);
 }
 
 void ShapedTissueCoupling::add_tissue_forces(const haptics::ToolState& tool, const mechanics::MechanicalModel& model,
