@@ -89,6 +89,7 @@ void add_run_command(CLI::App& app, int& status) {
   static double seconds = 0.0;
   static long steps = 0;
   static std::string device;
+  static std::string tool;
   static std::string out;
   CLI::App* run_cmd =
       app.add_subcommand("run", "Run a haptic session on a project (.hof), SOFA scene (.scn) or X3D scene (.x3d)");
@@ -103,6 +104,9 @@ void add_run_command(CLI::App& app, int& status) {
   seconds_opt->excludes(steps_opt);
   run_cmd->add_option("--device", device,
                       "Device spec, e.g. scripted:poke, replay:FILE.csv, udp:5005, virtual-hand:poke");
+  run_cmd->add_option("--tool", tool,
+                      "A tool with a shape on the stylus, as the project's <tool>: sphere,radius=0.005 | "
+                      "capsule,radius=0.004,length=0.05[,orientation=0 1 0 1.57] | mesh,mesh=FILE.stl");
   run_cmd->add_option("--out", out, "Folder for telemetry.csv, summary.json, the final state (.vtu) and plots");
   run_cmd->add_option("--telemetry-rate", run.telemetry_rate_hz,
                       "Rows per second in telemetry.csv (0 = every haptic tick)");
@@ -128,6 +132,7 @@ void add_run_command(CLI::App& app, int& status) {
     if (seconds_opt->count()) run.seconds = seconds;
     if (steps_opt->count()) run.steps = steps;
     if (!device.empty()) run.device = device;
+    if (!tool.empty()) run.tool = tool;
     if (!out.empty()) run.out = out;
     status = hof::app::run_session(run);
   });

@@ -203,6 +203,11 @@ int run_session(const RunOptions& options) {
   if (const std::string problem = numeric_option_problem(options); !problem.empty()) return fail(problem);
   auto world = scene::build_world(options.file, options.device.value_or(""));
   if (!world) return fail(world.error());
+  if (options.tool) {
+    auto tool = scene::parse_tool_spec(*options.tool);
+    if (!tool) return fail(tool.error());
+    if (auto mounted = scene::mount_tool(*world, *tool); !mounted) return fail(mounted.error());
+  }
   if (!world->nothing_to_touch.empty()) {
     // Shown by `hof gui`, but a headless run would render nothing: its own status, one line.
     std::fprintf(stderr, "hof: %s: %s; `hof gui` shows it\n", options.file.c_str(),
@@ -346,6 +351,10 @@ int run_check(const CheckOptions& options) {
                     valid_utf8(names[i]).c_str(), std::string(procedures::model_name(t.model)).c_str(), t.capsule_m,
                     t.puncture_force_n, t.relaxation_time_s);
       }
+    }
+    if (const auto& t = world->project.tool) {
+      std::printf("  tool: %s, radius %g m%s\n", std::string(procedures::shape_name(t->shape)).c_str(), t->radius_m,
+                  t->shape == procedures::ToolShape::kCapsule ? fmt::format(", shaft {} m", t->length_m).c_str() : "");
     }
     for (const auto& d : world->defaults) std::printf("default: %s\n", valid_utf8(d).c_str());
     // The components not simulated are named once, in the warnings below; those that need no

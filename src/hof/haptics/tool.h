@@ -36,6 +36,13 @@ struct ToolState {
   Vec3 axis{Vec3::Zero()};             ///< unit insertion direction (into the body)
   Vec3 normal{Vec3::Zero()};           ///< the surface's outward normal at the entry point
   Vec3 force{Vec3::Zero()};            ///< the tool's force on the hand (axial and lateral), N
+  // A tool with a shape (procedures/shaped_tool.h): its pose and dimensions, so that the
+  // simulation can place it on the tissue, and what it touched.
+  Vec3 torque{Vec3::Zero()};                                       ///< about the device point, N·(world unit)
+  Eigen::Quaterniond orientation{Eigen::Quaterniond::Identity()};  ///< the tool's orientation (world)
+  double radius{0.0};                                              ///< the shape's radius, world units
+  double length{0.0};                                              ///< a capsule's shaft, world units
+  std::int32_t contact_count{0};                                   ///< contact points this tick
 };
 
 /// What the loop gives a tool each tick.

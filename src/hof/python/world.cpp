@@ -35,12 +35,18 @@ class PyWorld {
     session_.reset();
   }
 
-  static std::unique_ptr<PyWorld> load(const std::filesystem::path& path, const std::string& device) {
+  static std::unique_ptr<PyWorld> load(const std::filesystem::path& path, const std::string& device,
+                                       const std::string& tool) {
     Expected<scene::World> world = [&] {
       py::gil_scoped_release release;
       return scene::build_world(path, device);
     }();
     if (!world) raise(world.error());
+    if (!tool.empty()) {
+      auto config = scene::parse_tool_spec(tool);
+      if (!config) raise(config.error());
+      if (auto mounted = scene::mount_tool(*world, *config); !mounted) raise(mounted.error());
+    }
     return make(std::move(*world));
   }
 
@@ -385,9 +391,10 @@ class PyWorld {
 
 void bind_world(py::module_& module) {
   py::class_<PyWorld>(module, "World", "A world of bodies and its haptic session (hof.load() makes one).")
-      .def_static("load", &PyWorld::load, py::arg("path"), py::arg("device") = "",
+      .def_static("load", &PyWorld::load, py::arg("path"), py::arg("device") = "", py::arg("tool") = "",
                   "Builds the world of a .hof project, SOFA .scn or X3D scene (the builder `hof run` uses). `device` "
-                  "replaces the file's device (a spec string, as --device).")
+                  "replaces the file's device (a spec string, as --device); `tool` mounts a tool with a shape on "
+                  "the stylus (a spec string, as --tool: 'capsule,radius=0.004,length=0.05').")
       .def_property_readonly("name", &PyWorld::name)
       .def_property_readonly("file", &PyWorld::file)
       .def_property_readonly("device", &PyWorld::device, "The device spec in use.")

@@ -283,6 +283,19 @@ void read_haptics(ProjectReader& r, const pugi::xml_node& h, HofProject& p) {
   if (const pugi::xml_node o = h.child("options")) r.read(o, detail::options_fields(), p);
   if (const pugi::xml_node st = h.child("stylus")) r.read(st, detail::stylus_fields(), p);
   if (const pugi::xml_node n = h.child("needle")) p.needle = read_needle(r, n);
+  if (const pugi::xml_node t = h.child("tool")) {
+    procedures::ShapedToolConfig tool;
+    r.read(t, detail::tool_fields(), tool);
+    if (auto problem = detail::check_tool(tool)) r.fail(t, *problem);
+    if (p.needle) r.fail(t, "<tool> and <needle>: the stylus carries one of them");
+    if (tool.shape == procedures::ToolShape::kMesh && !tool.mesh.empty()) {
+      const std::filesystem::path mesh = std::filesystem::path(r.file).parent_path() / tool.mesh;
+      if (auto surface = procedures::read_tool_mesh(mesh); !surface) {
+        r.fail(t, fmt::format("<tool> mesh=\"{}\": {}", tool.mesh, surface.error().to_string()));
+      }
+    }
+    p.tool = tool;
+  }
   for (const pugi::xml_node e : h.child("effects").children()) {
     const std::string type = e.name();
     if (type == "SpringEffect") {

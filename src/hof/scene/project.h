@@ -22,6 +22,7 @@
 #include "hof/haptics/surface_material.h"
 #include "hof/procedures/needle.h"
 #include "hof/scene/model_parameters.h"
+#include "hof/procedures/shaped_tool.h"
 
 namespace hof::scene {
 
@@ -157,6 +158,9 @@ struct HofProject {
   /// The needle stylus and its tissue parameters (<needle> in <haptics>); unset: a point or
   /// sphere stylus.
   std::optional<procedures::NeedleConfig> needle;
+  /// A rigid tool with a shape on the stylus (<tool> in <haptics>); `mesh` resolved against the
+  /// project's folder. Not with a needle.
+  std::optional<procedures::ShapedToolConfig> tool;
   GraphicsSetup graphics;
 };
 

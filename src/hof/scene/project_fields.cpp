@@ -250,6 +250,7 @@ template std::string write_fields(const Fields<HofProject>&, const HofProject&);
 template std::string write_fields(const Fields<haptics::SurfaceMaterial>&, const haptics::SurfaceMaterial&);
 template std::string write_fields(const Fields<haptics::SafetyConfig>&, const haptics::SafetyConfig&);
 template std::string write_fields(const Fields<procedures::NeedleConfig>&, const procedures::NeedleConfig&);
+template std::string write_fields(const Fields<procedures::ShapedToolConfig>&, const procedures::ShapedToolConfig&);
 template std::string write_fields(const Fields<procedures::TissueNeedleParameters>&,
                                   const procedures::TissueNeedleParameters&);
 template std::string write_fields(const Fields<haptics::SpringEffect>&, const haptics::SpringEffect&);
@@ -388,6 +389,32 @@ const Fields<procedures::NeedleConfig>& needle_fields() {
       number<N>("syringeLength", HOF_MEMBER(geometry.syringe_length_m)),
   };
   return fields;
+}
+
+const Fields<procedures::ShapedToolConfig>& tool_fields() {
+  using S = procedures::ShapedToolConfig;
+  static const Fields<S> fields{
+      choice<S, procedures::ToolShape>("shape", HOF_MEMBER(shape),
+                                       {{"sphere", procedures::ToolShape::kSphere},
+                                        {"capsule", procedures::ToolShape::kCapsule},
+                                        {"mesh", procedures::ToolShape::kMesh}},
+                                       "<tool> shape=\"{}\": expected sphere, capsule or mesh"),
+      number<S>("radius", HOF_MEMBER(radius_m)),
+      number<S>("length", HOF_MEMBER(length_m)),
+      string_field<S>("mesh", HOF_MEMBER(mesh)),
+      numbers<S, 4>(
+          "orientation", "axis x y z, angle rad", [](const S& t) { return t.orientation; },
+          [](S& t, const std::array<double, 4>& v) { t.orientation = v; }),
+      number<S>("stiffness", HOF_MEMBER(stiffness_n_per_m)),
+      number<S>("damping", HOF_MEMBER(damping_n_s_per_m)),
+      string_field<S>("device", HOF_MEMBER(device)),
+  };
+  return fields;
+}
+
+std::optional<std::string> check_tool(const procedures::ShapedToolConfig& tool) {
+  if (auto ok = procedures::validate(tool); !ok) return ok.error().message;
+  return std::nullopt;
 }
 
 const Fields<procedures::TissueNeedleParameters>& tissue_fields() {

@@ -121,6 +121,7 @@ std::string to_xml(const HofProject& p) {
   out += fmt::format("    <options {}/>\n", write_fields(detail::options_fields(), p));
   out += fmt::format("    <stylus {}/>\n", write_fields(detail::stylus_fields(), p));
   if (p.needle) out += needle_xml(*p.needle);
+  if (p.tool) out += fmt::format("    <tool {}/>\n", write_fields(detail::tool_fields(), *p.tool));
   if (p.effects.springs.empty() && p.effects.viscosities.empty() && p.effects.constants.empty()) {
     out += "    <effects/>\n";
   } else {

@@ -11,6 +11,7 @@
 #include "hof/mesh/boundary.h"
 #include "hof/mesh/hex_grid.h"
 #include "hof/mesh/mesh_io.h"
+#include "hof/scene/detail/project_fields.h"
 #include "hof/scene/detail/world_parts.h"
 #include "hof/scene/model_parameters.h"
 #include "hof/scene/sofa_scene.h"
@@ -524,6 +525,44 @@ Expected<void> add_project_scene(World& w, const std::filesystem::path& file) {
 
 /// What every input shares once its bodies are read: the project's settings, the unit, the
 /// device (the default probe when the world is bare).
+// The shaped tool (<tool>): the tool in the haptic loop and its reaction in the tissue of the
+// body it touches most. Its dimensions are SI; the scene's length unit converts them.
+Expected<void> add_shaped_tool(World& w) {
+  const procedures::ShapedToolConfig& config = *w.project.tool;
+  double metres_per_unit = 1.0;
+  if (w.length_unit == "mm") metres_per_unit = 1e-3;
+  if (w.length_unit == "cm") metres_per_unit = 1e-2;
+  if (w.length_unit == "dm") metres_per_unit = 1e-1;
+  std::optional<mesh::TriMesh> surface;
+  if (config.shape == procedures::ToolShape::kMesh) {
+    const std::filesystem::path path = std::filesystem::path(config.mesh).is_relative()
+                                           ? w.file.parent_path() / config.mesh
+                                           : std::filesystem::path(config.mesh);
+    auto read = procedures::read_tool_mesh(path);
+    if (!read) return std::unexpected(read.error());
+    surface = std::move(*read);
+  }
+  auto tool = procedures::ShapedTool::make(config, surface ? &*surface : nullptr, metres_per_unit);
+  if (!tool) {
+    Error e = tool.error();
+    e.file = w.file.string();
+    return std::unexpected(e);
+  }
+  std::vector<procedures::ToolBodySurface> bodies;
+  for (const coupling::SessionBody& b : w.bodies) {
+    procedures::ToolBodySurface s;
+    if (b.deformable()) {
+      s.triangles = b.surface.triangles;
+      s.vertex_count = b.surface.vertices.size();
+      s.mapping = b.mapping;
+    }
+    bodies.push_back(std::move(s));
+  }
+  w.config.tool = *tool;
+  w.config.tool_coupling = std::make_shared<procedures::ShapedTissueCoupling>(*tool, std::move(bodies));
+  return {};
+}
+
 Expected<World> finish_world(World w, bool sofa_scene, bool bare, const std::string& device_override) {
   if (auto ok = apply_body_models(w); !ok) return std::unexpected(ok.error());
   if (auto ok = apply_parameters(w); !ok) return std::unexpected(ok.error());
@@ -591,6 +630,9 @@ Expected<World> finish_world(World w, bool sofa_scene, bool bare, const std::str
     w.config.tool = *tool;
     w.config.tool_coupling = std::make_shared<procedures::NeedleTissueCoupling>(*tool);
   }
+  if (w.project.tool && !w.project.needle) {
+    if (auto ok = add_shaped_tool(w); !ok) return std::unexpected(ok.error());
+  }
   return w;
 }
 
@@ -624,6 +666,58 @@ std::optional<std::vector<coupling::Command>> live_commands(const HofProject& ne
     return std::nullopt;
   }
   return commands;
+}
+
+Expected<procedures::ShapedToolConfig> parse_tool_spec(std::string_view spec) {
+  procedures::ShapedToolConfig tool;
+  std::vector<std::pair<std::string, std::string>> pairs;
+  std::size_t start = 0;
+  bool first = true;
+  while (start <= spec.size()) {
+    const std::size_t end = std::min(spec.find(',', start), spec.size());
+    const std::string item(spec.substr(start, end - start));
+    if (first && item.find('=') == std::string::npos) {
+      pairs.emplace_back("shape", item);
+    } else if (const std::size_t eq = item.find('='); eq != std::string::npos) {
+      pairs.emplace_back(item.substr(0, eq), item.substr(eq + 1));
+    } else {
+      return make_error(
+          ErrorCode::kInvalidArgument,
+          fmt::format("tool \"{}\": \"{}\" is not ATTRIBUTE=VALUE (e.g. capsule,radius=0.004,length=0.05)", spec,
+                      item));
+    }
+    first = false;
+    start = end + 1;
+  }
+  for (const auto& [name, value] : pairs) {
+    const auto& fields = detail::tool_fields();
+    if (std::none_of(fields.begin(), fields.end(), [&](const auto& f) { return f.name == name; })) {
+      return make_error(ErrorCode::kInvalidArgument,
+                        fmt::format("tool \"{}\": unknown attribute \"{}\" (shape, radius, length, mesh, "
+                                    "orientation, stiffness, damping)",
+                                    spec, name));
+    }
+  }
+  const auto attribute = [&](std::string_view name) -> std::optional<std::string_view> {
+    for (const auto& [n, v] : pairs) {
+      if (n == name) return std::string_view(v);
+    }
+    return std::nullopt;
+  };
+  if (auto problem = detail::read_fields(detail::tool_fields(), "tool", attribute, tool))
+    return make_error(ErrorCode::kInvalidArgument, fmt::format("tool \"{}\": {}", spec, *problem));
+  if (auto problem = detail::check_tool(tool))
+    return make_error(ErrorCode::kInvalidArgument, fmt::format("tool \"{}\": {}", spec, *problem));
+  return tool;
+}
+
+Expected<void> mount_tool(World& w, const procedures::ShapedToolConfig& tool) {
+  if (auto problem = detail::check_tool(tool)) return make_error(ErrorCode::kInvalidArgument, *problem);
+  w.project.tool = tool;
+  w.project.needle.reset();
+  w.config.tool.reset();
+  w.config.tool_coupling.reset();
+  return add_shaped_tool(w);
 }
 
 Expected<World> build_world(const std::filesystem::path& file, const std::string& device_override) {

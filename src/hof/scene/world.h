@@ -98,6 +98,15 @@ struct World {
 [[nodiscard]] Expected<World> build_world(const HofProject& project, const std::filesystem::path& file,
                                           const std::string& device_override = {});
 
+/// A tool with a shape from a command-line spec (`hof run --tool`, Python's World.load):
+/// "SHAPE[,ATTRIBUTE=VALUE...]" with the attributes of the project's <tool> element, e.g.
+/// "capsule,radius=0.004,length=0.05", "sphere,radius=0.006", "mesh,mesh=tool.stl". Errors
+/// name the spec and the attribute.
+[[nodiscard]] Expected<procedures::ShapedToolConfig> parse_tool_spec(std::string_view spec);
+/// Mounts `tool` on the world's stylus in place of any needle or earlier tool (world.config's
+/// tool and tool coupling; project.tool). A mesh file is relative to the world's file.
+[[nodiscard]] Expected<void> mount_tool(World& w, const procedures::ShapedToolConfig& tool);
+
 /// A model as a deformable body, made as the builder makes every body of a world: the
 /// boundary of its volume elements (a hexahedral grid's, or itself for a surface model) as
 /// its touchable surface, mapped to its nodes. For those who hold a model configuration

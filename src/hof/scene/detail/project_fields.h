@@ -80,6 +80,10 @@ std::string write_fields(const Fields<T>& fields, const T& from);
 /// <stylus>: radius, length.
 [[nodiscard]] const Fields<HofProject>& stylus_fields();
 [[nodiscard]] const Fields<procedures::NeedleConfig>& needle_fields();
+/// <tool>: shape, radius, length, mesh, orientation, stiffness, damping, device.
+[[nodiscard]] const Fields<procedures::ShapedToolConfig>& tool_fields();
+/// procedures::validate of a shaped tool.
+[[nodiscard]] std::optional<std::string> check_tool(const procedures::ShapedToolConfig& tool);
 /// <tissue> (its body="" attribute aside: it names which body the set is for).
 [[nodiscard]] const Fields<procedures::TissueNeedleParameters>& tissue_fields();
 [[nodiscard]] const Fields<haptics::SpringEffect>& spring_effect_fields();

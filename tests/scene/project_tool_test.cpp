@@ -1,0 +1,116 @@
+// The project's <tool> (a rigid tool with a shape on the stylus), the --tool spec and the world
+// that mounts it: read, written back, and bad input refused with the file, line and attribute.
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "hof/scene/project.h"
+#include "hof/scene/world.h"
+
+namespace hof::scene {
+namespace {
+
+std::string project_text(const std::string& tool) {
+  return "<hof version=\"1\" name=\"t\">\n"
+         "  <mechanics scene=\"x.scn\" unit=\"m\"/>\n"
+         "  <haptics>\n"
+         "    " +
+         tool +
+         "\n"
+         "  </haptics>\n"
+         "</hof>\n";
+}
+
+std::filesystem::path temp_dir() {
+  const auto dir = std::filesystem::temp_directory_path() / "hof_project_tool_test";
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+// A unit cube as OBJ; `open` leaves out its last face.
+void write_cube(const std::filesystem::path& path, bool open) {
+  std::ofstream out(path);
+  out << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n";
+  out << "f 1 4 3\nf 1 3 2\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\nf 4 8 7\nf 4 7 3\nf 1 5 8\nf 1 8 4\n";
+  if (!open) out << "f 2 3 7\nf 2 7 6\n";
+}
+
+TEST(ProjectTool, ReadsAndWritesItBack) {
+  const auto dir = temp_dir();
+  auto p = parse_project(
+      project_text(R"(<tool shape="capsule" radius="0.004" length="0.05" orientation="0 1 0 1.5" stiffness="500"/>)"),
+      dir / "a.hof");
+  ASSERT_TRUE(p) << p.error().to_string();
+  ASSERT_TRUE(p->tool);
+  EXPECT_EQ(p->tool->shape, procedures::ToolShape::kCapsule);
+  EXPECT_EQ(p->tool->radius_m, 0.004);
+  EXPECT_EQ(p->tool->length_m, 0.05);
+  EXPECT_EQ(p->tool->orientation[3], 1.5);
+  EXPECT_EQ(p->tool->stiffness_n_per_m, 500.0);
+  ASSERT_TRUE(write_project(*p, dir / "a.hof"));
+  auto again = read_project(dir / "a.hof");
+  ASSERT_TRUE(again) << again.error().to_string();
+  EXPECT_EQ(again->tool, p->tool);
+  // Without <tool>: none.
+  auto none = parse_project(project_text(""), dir / "b.hof");
+  ASSERT_TRUE(none) << none.error().to_string();
+  EXPECT_FALSE(none->tool);
+}
+
+TEST(ProjectTool, BadInputNamesTheFileLineAndAttribute) {
+  const auto dir = temp_dir();
+  const auto refused = [&](const std::string& tool, const std::string& words) {
+    auto p = parse_project(project_text(tool), dir / "bad.hof");
+    ASSERT_FALSE(p) << tool;
+    EXPECT_NE(p.error().file.find("bad.hof"), std::string::npos);
+    EXPECT_EQ(p.error().line, 4) << p.error().to_string();
+    EXPECT_NE(p.error().message.find(words), std::string::npos) << p.error().to_string();
+  };
+  refused(R"(<tool shape="sphere" radius="-0.001"/>)", "radius");
+  refused(R"(<tool shape="capsule" radius="0.004" length="-0.01"/>)", "length");
+  refused(R"(<tool shape="cone"/>)", "sphere, capsule or mesh");
+  refused(R"(<tool shape="mesh"/>)", "mesh=");
+  refused(R"(<tool shape="mesh" mesh="nowhere.obj"/>)", "not found");
+  write_cube(dir / "open.obj", true);
+  refused(R"(<tool shape="mesh" mesh="open.obj"/>)", "not closed");
+  write_cube(dir / "cube.obj", false);
+  auto ok = parse_project(project_text(R"(<tool shape="mesh" mesh="cube.obj" radius="0.001"/>)"), dir / "ok.hof");
+  EXPECT_TRUE(ok) << ok.error().to_string();
+}
+
+TEST(ToolSpec, ParsesTheShapeAndAttributes) {
+  auto t = parse_tool_spec("capsule,radius=0.004,length=0.05,orientation=0 1 0 1.5");
+  ASSERT_TRUE(t) << t.error().to_string();
+  EXPECT_EQ(t->shape, procedures::ToolShape::kCapsule);
+  EXPECT_EQ(t->radius_m, 0.004);
+  EXPECT_EQ(t->length_m, 0.05);
+  EXPECT_EQ(t->orientation[1], 1.0);
+  EXPECT_TRUE(parse_tool_spec("sphere"));
+  EXPECT_NE(parse_tool_spec("sphere,radius=-1").error().message.find("radius"), std::string::npos);
+  EXPECT_NE(parse_tool_spec("sphere,size=1").error().message.find("unknown attribute \"size\""), std::string::npos);
+  EXPECT_NE(parse_tool_spec("sphere,0.01").error().message.find("ATTRIBUTE=VALUE"), std::string::npos);
+}
+
+TEST(ToolSpec, TheWorldMountsTheToolAndItsTissueCoupling) {
+  auto w = build_world(std::filesystem::path(HOF_SOURCE_DIR) / "examples/capsule-liver.hof");
+  ASSERT_TRUE(w) << w.error().to_string();
+  ASSERT_TRUE(w->project.tool);
+  ASSERT_TRUE(w->config.tool);
+  ASSERT_TRUE(w->config.tool_coupling);
+  const auto* tool = dynamic_cast<const procedures::ShapedTool*>(w->config.tool.get());
+  ASSERT_NE(tool, nullptr);
+  EXPECT_EQ(tool->primitives().size(), 1u);
+  EXPECT_NEAR(tool->primitives().front().b.norm(), 0.05, 1e-15);
+  // Mounted in place of it by the spec.
+  auto sphere = parse_tool_spec("sphere,radius=0.006");
+  ASSERT_TRUE(sphere);
+  ASSERT_TRUE(mount_tool(*w, *sphere));
+  tool = dynamic_cast<const procedures::ShapedTool*>(w->config.tool.get());
+  ASSERT_NE(tool, nullptr);
+  EXPECT_EQ(tool->primitives().front().radius, 0.006);
+}
+
+}  // namespace
+}  // namespace hof::scene
