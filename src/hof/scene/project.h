@@ -21,8 +21,8 @@
 #include "hof/haptics/safety.h"
 #include "hof/haptics/surface_material.h"
 #include "hof/procedures/needle.h"
-#include "hof/scene/model_parameters.h"
 #include "hof/procedures/shaped_tool.h"
+#include "hof/scene/model_parameters.h"
 
 namespace hof::scene {
 
