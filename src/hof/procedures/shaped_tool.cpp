@@ -15,6 +15,10 @@ namespace hof::procedures {
 
 namespace {
 
+// The time constant of the proxy velocity's low-pass filter: about one simulation step (the
+// rate at which the surfaces under the proxy move), s.
+constexpr double kProxyVelocityTimeConstant_s = 0.01;
+
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
 // Closest points of segments p1–q1 and p2–q2 (Ericson §5.1.9): parameters s, t in [0, 1].
@@ -451,6 +455,7 @@ Vec3 ShapedTool::tick(const haptics::ToolTickInput& in, std::span<Vec3> layer_fo
   }
   if (!initialised_) {
     proxy_ = last_proxy_ = x;
+    proxy_velocity_.setZero();
     initialised_ = true;
   }
   last_proxy_ = proxy_;
@@ -538,14 +543,21 @@ Vec3 ShapedTool::tick(const haptics::ToolTickInput& in, std::span<Vec3> layer_fo
       if (j < body_count) body_weights[j] += weight;
     }
   }
+  // The proxy's velocity, low-passed over about one simulation step: the surfaces it rests on
+  // move in jumps at the simulation's rate (a new snapshot every ~10 ticks), and the raw
+  // difference of one tick turned each jump into a damping spike of b · jump / 1 ms (the force
+  // chattered to the device's limit while the hand held still on the liver).
+  if (in.dt_s > 0.0) {
+    const Vec3 raw = (proxy_ - last_proxy_) / in.dt_s;
+    proxy_velocity_ += (in.dt_s / (kProxyVelocityTimeConstant_s + in.dt_s)) * (raw - proxy_velocity_);
+  }
   if (st.contact_count == 0) return Vec3::Zero();
 
   // The virtual coupling (Colgate et al. 1995): spring and damper between proxy and device.
   double k = in.max_stiffness_n_per_m;
   if (config_.stiffness_n_per_m > 0.0) k = std::min(k, config_.stiffness_n_per_m * metres_per_unit_);
   const double b = config_.damping_n_s_per_m * metres_per_unit_;
-  const Vec3 proxy_velocity = in.dt_s > 0.0 ? Vec3((proxy_ - last_proxy_) / in.dt_s) : Vec3::Zero();
-  Vec3 force = k * stretch + b * (proxy_velocity - in.velocity);
+  Vec3 force = k * stretch + b * (proxy_velocity_ - in.velocity);
   if (!force.allFinite()) force.setZero();
   for (std::size_t i = 0; i < count; ++i) st.torque += (points[i] - x).cross((weights[i] / total) * force);
   std::size_t most = 0;

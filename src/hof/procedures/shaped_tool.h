@@ -169,6 +169,7 @@ class ShapedTool final : public haptics::Tool {
   bool initialised_{false};
   Vec3 proxy_{Vec3::Zero()};
   Vec3 last_proxy_{Vec3::Zero()};
+  Vec3 proxy_velocity_{Vec3::Zero()};  // low-passed (see kProxyVelocityTimeConstant_s), world units/s
 };
 
 /// A body's surface as the coupling needs it: triangles over surface vertices, and how those

@@ -584,7 +584,11 @@ Expected<World> finish_world(World w, bool sofa_scene, bool bare, const std::str
     const bool given = !identity(w.project.position_calibration);
     const Vec3 effects_centre = default_probe_effects_centre(w.project.effects);
     const double radius = w.project.renderer == haptics::RendererKind::kRuspini ? w.project.proxy_radius_m : 0.0;
-    DefaultProbe probe = default_probe(w.bodies, spec.workspace_radius_m, k, spec.max_force_n,
+    // A shaped tool presses a deforming surface along its whole shape, and its contact still
+    // chatters as the surface moves at the simulation's rate (issue 37, left): the probe aims
+    // at a quarter of the force it would press a point with, to stay off the device's limit.
+    const double probe_force_limit_n = w.project.tool ? 0.25 * spec.max_force_n : spec.max_force_n;
+    DefaultProbe probe = default_probe(w.bodies, spec.workspace_radius_m, k, probe_force_limit_n,
                                        given ? &w.project.position_calibration : nullptr, spec.max_stiffness_n_per_m,
                                        effects_centre, radius);
     device = probe.device;
