@@ -133,7 +133,7 @@ TEST(WorldContact, OverASofaSceneTheProjectAddsAndReplaces) {
   EXPECT_DOUBLE_EQ(s.contact_distance_m, 0.0015);
   ASSERT_EQ(world->bodies.size(), 4u);  // Stomach, Liver, Support, Tray
   for (const auto& b : world->bodies) EXPECT_TRUE(b.collision.enabled) << b.name;
-  EXPECT_EQ(world->bodies[0].collision.stiffness_n_per_m, 1000.0);  // its contactStiffness
+  EXPECT_EQ(world->bodies[0].collision.stiffness_n_per_m, 5000.0);  // its contactStiffness
   EXPECT_EQ(world->bodies[3].name, "Tray");
   EXPECT_FALSE(world->bodies[3].collision.moving);
   // <contact> replaces the scene's settings; the SOFA bodies keep their models.
@@ -143,7 +143,7 @@ TEST(WorldContact, OverASofaSceneTheProjectAddsAndReplaces) {
   ASSERT_TRUE(world) << world.error().to_string();
   EXPECT_DOUBLE_EQ(world->config.contacts.alarm_distance_m, 0.01);
   EXPECT_DOUBLE_EQ(world->config.contacts.stiffness_n_per_m, 300.0);
-  EXPECT_EQ(world->bodies[0].collision.stiffness_n_per_m, 1000.0);
+  EXPECT_EQ(world->bodies[0].collision.stiffness_n_per_m, 5000.0);
   // A SOFA scene without collision models: contact="true" gives the body its whole surface.
   world = build_world(write("opt_in.hof", "<hof version=\"1\" name=\"in\">\n  <mechanics scene=\"" +
                                               std::string(HOF_SOURCE_DIR) +
