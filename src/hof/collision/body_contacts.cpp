@@ -17,17 +17,17 @@
 namespace hof::collision {
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr double kNoContact = std::numeric_limits<double>::infinity();
 
-const Vec3& corner(const TriangleMeshView& mesh, std::int32_t triangle, int k) {
+const Vec3& triangle_corner(const TriangleMeshView& mesh, std::int32_t triangle, int k) {
   return mesh.vertices[static_cast<std::size_t>(mesh.triangles[static_cast<std::size_t>(triangle)][k])];
 }
 
 // Unit front normal (b−a)×(c−a); zero for a degenerate triangle (the queries never return
 // one, but an edge may border one).
 Vec3 face_normal(const TriangleMeshView& mesh, std::int32_t triangle) {
-  const Vec3& a = corner(mesh, triangle, 0);
-  const Vec3 n = (corner(mesh, triangle, 1) - a).cross(corner(mesh, triangle, 2) - a);
+  const Vec3& a = triangle_corner(mesh, triangle, 0);
+  const Vec3 n = (triangle_corner(mesh, triangle, 1) - a).cross(triangle_corner(mesh, triangle, 2) - a);
   const double length = n.norm();
   return length > 0.0 ? Vec3(n / length) : Vec3(Vec3::Zero());
 }
@@ -212,8 +212,8 @@ void ContactDetector::detect(std::span<const CollisionBody> bodies, const Detect
     if (body.moving && trees_[i].refit(body.surface)) {
       trees_[i] = AabbTree::build(body.surface, trees_[i].options());  // the boxes had grown too loose
     }
-    Vec3 lo = Vec3::Constant(kInf);
-    Vec3 hi = Vec3::Constant(-kInf);
+    Vec3 lo = Vec3::Constant(kNoContact);
+    Vec3 hi = Vec3::Constant(-kNoContact);
     for (const Vec3& p : body.surface.vertices) {
       lo = lo.cwiseMin(p);
       hi = hi.cwiseMax(p);
@@ -304,12 +304,12 @@ void ContactDetector::points_against_triangles(std::span<const CollisionBody> bo
         const SweepHit hit = tree.first_hit_segment(b.surface, a.previous_vertices[v], p, TouchableFace::kFront);
         if (hit.triangle >= 0) {
           const Vec3 normal = face_normal(b.surface, hit.triangle);
-          const double depth = (p - corner(b.surface, hit.triangle, 0)).dot(normal);
+          const double depth = (p - triangle_corner(b.surface, hit.triangle, 0)).dot(normal);
           if (depth < 0.0) {
             Vec3 weights;
-            const Vec3 q = detail::closest_point_on_triangle(p, corner(b.surface, hit.triangle, 0),
-                                                             corner(b.surface, hit.triangle, 1),
-                                                             corner(b.surface, hit.triangle, 2), weights);
+            const Vec3 q = detail::closest_point_on_triangle(p, triangle_corner(b.surface, hit.triangle, 0),
+                                                             triangle_corner(b.surface, hit.triangle, 1),
+                                                             triangle_corner(b.surface, hit.triangle, 2), weights);
             emit(vi, p, hit.triangle, weights, q, normal, depth);
             if (known < 0) ++count;
             known = hit.triangle;
@@ -320,11 +320,11 @@ void ContactDetector::points_against_triangles(std::span<const CollisionBody> bo
       // Known to be inside: still reported while its nearest surface point is in front of it
       // (not on an open surface's rim: a vertex that slid off a floor's edge is free).
       if (known >= 0) {
-        const ClosestPoint cp = tree.closest_point(b.surface, p, kInf, TouchableFace::kFrontAndBack);
+        const ClosestPoint cp = tree.closest_point(b.surface, p, kNoContact, TouchableFace::kFrontAndBack);
         if (cp.triangle >= 0 && !on_rim(sb, cp)) {
           double distance = 0.0;
           Vec3 normal;
-          signed_gap(p, cp.point, cp.barycentric, corner(b.surface, cp.triangle, 0),
+          signed_gap(p, cp.point, cp.barycentric, triangle_corner(b.surface, cp.triangle, 0),
                      face_normal(b.surface, cp.triangle), distance, normal);
           if (distance < 0.0) {
             emit(vi, p, cp.triangle, cp.barycentric, cp.point, normal, distance);
@@ -346,8 +346,8 @@ void ContactDetector::points_against_triangles(std::span<const CollisionBody> bo
     if (cp.triangle < 0) continue;
     double distance = 0.0;
     Vec3 normal;
-    signed_gap(p, cp.point, cp.barycentric, corner(b.surface, cp.triangle, 0), face_normal(b.surface, cp.triangle),
-               distance, normal);
+    signed_gap(p, cp.point, cp.barycentric, triangle_corner(b.surface, cp.triangle, 0),
+               face_normal(b.surface, cp.triangle), distance, normal);
     emit(vi, p, cp.triangle, cp.barycentric, cp.point, normal, distance);
   }
 }
@@ -455,8 +455,8 @@ void ContactDetector::spheres_against_triangles(std::span<const CollisionBody> b
     if (cp.triangle < 0) continue;
     double gap = 0.0;
     Vec3 normal;
-    signed_gap(center, cp.point, cp.barycentric, corner(b.surface, cp.triangle, 0), face_normal(b.surface, cp.triangle),
-               gap, normal);
+    signed_gap(center, cp.point, cp.barycentric, triangle_corner(b.surface, cp.triangle, 0),
+               face_normal(b.surface, cp.triangle), gap, normal);
     BodyContact c;
     c.a = sphere_point(ia, static_cast<std::int32_t>(s), center - radius * normal);
     c.b = triangle_point(ib, b.surface, cp.triangle, cp.barycentric, cp.point);
