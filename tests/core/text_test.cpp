@@ -36,5 +36,13 @@ TEST(EditDistance, CountsInsertionsDeletionsAndSubstitutionsIgnoringCase) {
             edit_distance("MeshSpringForceFeild", "MeshSpringForceField"));
 }
 
+TEST(BlankSeparatedWords, SplitsOnSpacesTabsAndCarriageReturnsOnly) {
+  using V = std::vector<std::string_view>;
+  EXPECT_EQ(blank_separated_words("  sphe 0.5\t-1e-3  2 \r"), (V{"sphe", "0.5", "-1e-3", "2"}));
+  EXPECT_EQ(blank_separated_words("a,b;c"), (V{"a,b;c"}));  // only blanks separate
+  EXPECT_TRUE(blank_separated_words(" \t\r ").empty());
+  EXPECT_TRUE(blank_separated_words("").empty());
+}
+
 }  // namespace
 }  // namespace hof

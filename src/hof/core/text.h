@@ -7,6 +7,7 @@
 #include <cstddef>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace hof {
 
@@ -21,6 +22,10 @@ namespace hof {
   if (first == std::string_view::npos) return {};
   return text.substr(first, text.find_last_not_of(kWhitespace) - first + 1);
 }
+
+/// The blank-separated words of one line (blanks: space, tab, CR), in order: the tokens of the
+/// line-oriented text formats (SOFA's legacy files, `.sph`).
+[[nodiscard]] std::vector<std::string_view> blank_separated_words(std::string_view line);
 
 /// Edits (insert, delete or substitute a letter, ASCII case ignored) that turn `a` into `b`
 /// (Levenshtein distance): how close a mistyped name is to a known one.

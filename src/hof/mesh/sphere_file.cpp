@@ -8,24 +8,12 @@
 #include <string>
 #include <string_view>
 
+#include "hof/core/text.h"
 #include "hof/mesh/detail/text_reader.h"
 
 namespace hof::mesh {
 
 namespace {
-
-/// The blank-separated words of one line (a comment already cut off).
-std::vector<std::string_view> words_of(std::string_view line) {
-  std::vector<std::string_view> out;
-  std::size_t i = 0;
-  while (i < line.size()) {
-    while (i < line.size() && (line[i] == ' ' || line[i] == '\t' || line[i] == '\r')) ++i;
-    const std::size_t start = i;
-    while (i < line.size() && line[i] != ' ' && line[i] != '\t' && line[i] != '\r') ++i;
-    if (i > start) out.push_back(line.substr(start, i - start));
-  }
-  return out;
-}
 
 std::optional<double> number_of(std::string_view word) {
   double v = 0.0;
@@ -54,7 +42,7 @@ Expected<SphereSet> parse_sph(std::string_view text, const std::filesystem::path
     ++line_number;
     if (line_number == 1 && line.starts_with("\xEF\xBB\xBF")) line.remove_prefix(3);
     if (const std::size_t hash = line.find('#'); hash != std::string_view::npos) line = line.substr(0, hash);
-    const std::vector<std::string_view> w = words_of(line);
+    const std::vector<std::string_view> w = blank_separated_words(line);
     if (w.empty()) continue;
     if (!header) {
       if (w.size() != 2 || w[0] != "sph" || w[1] != "1.0") {

@@ -8,21 +8,10 @@
 
 #include <fmt/format.h>
 
+#include "hof/core/text.h"
+
 namespace hof::scene::detail {
 namespace {
-
-// Splits a line on blanks.
-std::vector<std::string_view> blank_separated_tokens(std::string_view line) {
-  std::vector<std::string_view> out;
-  std::size_t i = 0;
-  while (i < line.size()) {
-    while (i < line.size() && (line[i] == ' ' || line[i] == '\t' || line[i] == '\r')) ++i;
-    const std::size_t start = i;
-    while (i < line.size() && line[i] != ' ' && line[i] != '\t' && line[i] != '\r') ++i;
-    if (i > start) out.push_back(line.substr(start, i - start));
-  }
-  return out;
-}
 
 template <class T>
 bool parse_token(std::string_view s, T& value) {
@@ -52,7 +41,7 @@ Expected<LegacyMesh> read_legacy_mesh(const std::filesystem::path& path) {
   LegacyMesh out;
   for (std::size_t l = 0; l < lines->size(); ++l) {
     const auto line_no = static_cast<std::int64_t>(l + 1);
-    const auto tok = blank_separated_tokens((*lines)[l]);
+    const auto tok = blank_separated_words((*lines)[l]);
     if (tok.empty() || tok[0].starts_with('#')) continue;
     // `tetra` and `triangle` are kept; other element kinds are counted.
     std::size_t count = 0;
@@ -87,7 +76,7 @@ Expected<Xs3File> read_xs3(const std::filesystem::path& path) {
   std::int64_t declared = -1;
   for (std::size_t l = 0; l < lines->size(); ++l) {
     const auto line_no = static_cast<std::int64_t>(l + 1);
-    const auto tok = blank_separated_tokens((*lines)[l]);
+    const auto tok = blank_separated_words((*lines)[l]);
     if (tok.empty() || tok[0].starts_with('#')) continue;
     if (tok[0] == "Xsp") {
       header = true;
