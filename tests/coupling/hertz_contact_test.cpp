@@ -4,19 +4,20 @@
 // (K. L. Johnson, Contact Mechanics, Cambridge University Press 1985, §4.2, eq. 4.22–4.23;
 // a = √(R d) is the contact radius).
 //
-// The half-space is a quarter of a block, 10 R on each side, its two cut faces on symmetry
-// planes (x = 0 and z = 0 held along their normals only) and its bottom held; linear
-// tetrahedral FEM on a structured box graded towards the contact (a uniform core of cells of
-// size h under the sphere, then cells growing geometrically to the far faces), so the fine
-// meshes stay small. The sphere is a rigid body whose surface is its lower cap, finely
-// triangulated: each block node inside it is a penalty contact (node against surface), so the
-// contact forces act where the surface meets the sphere. Each depth is a session of its own,
-// stepped with implicit Euler at dt = 1 s until at rest (the block's inertia is then nothing
-// against its stiffness: each step is a Newton step on the static equilibrium with the
-// contacts of the step before), and the force is the total contact force on the sphere (four
-// times the quarter's). The approach d is the elastic indentation: the sphere's depth below
-// the undeformed surface less the deepest penetration of a block node into the sphere (the
-// penalty springs' own compression; with 1e5 N/m per contact it is under 0.1% of the depth).
+// The half-space is a quarter of a block, 20 R on each side, its two cut faces on symmetry planes
+// (x = 0 and z = 0 held along their normals only) and its bottom held; co-rotational tetrahedral
+// FEM (the first step from rest pushes the nodes the sphere starts in out by up to a cell, which
+// inverts linear elements, and linear FEM cannot recover) on a structured box graded towards the
+// contact (a uniform core of cells of size h under the sphere, then cells growing geometrically to
+// the far faces), so the fine meshes stay small. The sphere is a rigid body whose surface is its
+// lower cap, finely triangulated: each block node inside it is a penalty contact (node against
+// surface), so the contact forces act where the surface meets the sphere. Each depth is a session
+// of its own, stepped with implicit Euler at dt = 1 s until at rest (the block's inertia is then
+// nothing against its stiffness: each step is a Newton step on the static equilibrium with the
+// contacts of the step before), and the force is the total contact force on the sphere (four times
+// the quarter's). The approach d is the elastic indentation: the sphere's depth below the
+// undeformed surface less the deepest penetration of a block node into the sphere (the penalty
+// springs' own compression and the cap's facets; with 1e5 N/m per contact under 0.5%).
 //
 // The test runs a coarse mesh (h = R/5) and checks the force within the tolerance that mesh
 // reaches and that a finer one (h = R/8) is closer to Hertz; the convergence table of
@@ -278,7 +279,7 @@ TEST(HertzContact, DISABLED_ConvergenceTable) {
       "| mesh (h under the sphere) | elements | nodes | d/R | F_HoF (N) | F_Hertz (N) | error | penetration / d | "
       "steps |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|\n");
-  for (double fine_over_r : {1.0 / 5.0, 1.0 / 8.0, 1.0 / 12.0, 1.0 / 18.0, 1.0 / 25.0, 1.0 / 35.0}) {
+  for (double fine_over_r : {1.0 / 5.0, 1.0 / 8.0, 1.0 / 12.0, 1.0 / 18.0, 1.0 / 25.0}) {
     const MeshLevel level{fine_over_r};
     const Block b = quarter_block(level, 0);
     for (double d_over_r : {0.02, 0.05, 0.1}) {
