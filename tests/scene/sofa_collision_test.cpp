@@ -199,6 +199,34 @@ TEST_F(SofaCollisionFiles, ACollisionModelOnABodyWithNoSurfaceNamesItsLine) {
   EXPECT_NE(e.message.find("a collision model on a body with no surface"), std::string::npos) << e.message;
 }
 
+TEST_F(SofaCollisionFiles, AnObstacleCollisionModelWithNoTrianglesIsAnErrorWhenContactIsOn) {
+  // A rigid node with points but no triangles: with the scene's pipeline on, its collision
+  // models would collide nothing (it used to be a warning); without a pipeline it is not
+  // touchable and said so.
+  const std::string points =
+      "<Node name='Floor'>\n<MechanicalObject position='-1 -0.1 -1  1 -0.1 -1  1 -0.1 1'/>\n"
+      "<TriangleCollisionModel name='t' moving='0' simulated='0'/>\n<PointCollisionModel moving='0' "
+      "simulated='0'/>\n</Node>\n";
+  const Error e = error_of(scene(kPipeline, "", points));
+  EXPECT_EQ(e.line, 18);
+  EXPECT_NE(e.file.find("scene.scn"), std::string::npos) << e.file;
+  EXPECT_NE(e.message.find("TriangleCollisionModel 't' (line 18)"), std::string::npos) << e.message;
+  EXPECT_NE(e.message.find("a collision model on a body with no surface"), std::string::npos) << e.message;
+  auto s = read_sofa_scene(write("no_pipeline.scn", scene("", "", points)));
+  ASSERT_TRUE(s) << s.error().to_string();
+  EXPECT_TRUE(contains(s->warnings, "node 'root/Floor' has no triangles to touch; skipped"));
+}
+
+TEST_F(SofaCollisionFiles, ACollisionNodeNotMappedFromTheBodyIsNamedAsCollidingNothing) {
+  // The body's collision node without its Tetra2TriangleTopologicalMapping: not part of the body.
+  auto s = read_sofa_scene(write("unmapped.scn", scene(kPipeline,
+                                                       "<Node name='Collision'>\n<TriangleSetTopologyContainer/>\n"
+                                                       "<TriangleCollisionModel name='t'/>\n</Node>\n")));
+  ASSERT_TRUE(s) << s.error().to_string();
+  EXPECT_TRUE(contains(s->warnings, "TriangleCollisionModel 't' (line 17)"));
+  EXPECT_TRUE(contains(s->warnings, "not a body, an obstacle with triangles, or a node mapped from a body"));
+}
+
 TEST_F(SofaCollisionFiles, SpheresMissingOrMiscountedNameTheirLine) {
   Error e = error_of(scene(kPipeline,
                            "<Node name='s'>\n<SphereCollisionModel name='balls'/>\n"

@@ -113,6 +113,33 @@ TEST(WorldContact, PairsAndBodiesNotInTheWorldAreErrorsNamingTheProject) {
       << world.error().message;
 }
 
+TEST(WorldContact, BodiesAndPairsThatCannotCollideNameTheProjectsLine) {
+  write("sheet.x3d", kScene);
+  // contact="true" on a body the world does not have: the <body> element's line.
+  auto world = build_world(
+      write("optin.hof", project("  <bodies>\n    <body name=\"Kidney\" contact=\"true\"/>\n  </bodies>\n", "")));
+  ASSERT_FALSE(world);
+  EXPECT_NE(world.error().file.find("optin.hof"), std::string::npos) << world.error().to_string();
+  EXPECT_EQ(world.error().line, 4) << world.error().to_string();
+  EXPECT_NE(world.error().message.find("no body of that name"), std::string::npos) << world.error().message;
+  // A pair naming a body the world does not have: the <contact> element's line.
+  world =
+      build_world(write("pairline.hof", project("",
+                                                "  <contact>\n    <pair a=\"Sheet\" b=\"Kidney\" enabled=\"false\"/>\n"
+                                                "  </contact>\n")));
+  ASSERT_FALSE(world);
+  EXPECT_EQ(world.error().line, 3) << world.error().to_string();
+  EXPECT_NE(world.error().to_string().find("pairline.hof:3:"), std::string::npos) << world.error().to_string();
+  // An obstacle whose mesh has no triangles (points only): the <obstacle> element's line.
+  write("points.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n");
+  world = build_world(write("points.hof", project("  <bodies>\n    <obstacle name=\"Dots\" mesh=\"points.obj\"/>\n"
+                                                  "  </bodies>\n",
+                                                  "  <contact/>\n")));
+  ASSERT_FALSE(world);
+  EXPECT_NE(world.error().to_string().find("points.hof:4:"), std::string::npos) << world.error().to_string();
+  EXPECT_NE(world.error().message.find("no triangles"), std::string::npos) << world.error().message;
+}
+
 // Over a SOFA scene: the scene's pipeline turns contact on and its bodies keep their own
 // collision models; the project's obstacles collide with them; a <contact> replaces the
 // scene's settings; contact="true" gives a body without models its whole surface.

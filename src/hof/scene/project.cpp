@@ -231,7 +231,7 @@ void read_bodies(ProjectReader& r, const pugi::xml_node& bodies, HofProject& p) 
           for (int a = 0; a < 3; ++a) grid[static_cast<std::size_t>(a)] = static_cast<int>(n[a]);
         }
       }
-      p.bodies.push_back(BodySetup{name, surface, model, grid, contact});
+      p.bodies.push_back(BodySetup{name, surface, model, grid, contact, line_of(r.text, b.offset_debug())});
     } else if (tag == "obstacle") {
       ObstacleSetup o;
       o.name = name;
@@ -240,6 +240,7 @@ void read_bodies(ProjectReader& r, const pugi::xml_node& bodies, HofProject& p) 
       o.translation = r.get_vec(b, "translation", Vec3::Zero());
       o.surface = surface;
       o.contact = contact;
+      o.line = line_of(r.text, b.offset_debug());
       p.obstacles.push_back(std::move(o));
     } else {
       r.fail(b, fmt::format("unknown element <{}> in <bodies> (body, obstacle)", tag));
@@ -250,6 +251,7 @@ void read_bodies(ProjectReader& r, const pugi::xml_node& bodies, HofProject& p) 
 // <contact>: contact between bodies, and the pairs switched off (<pair a b enabled="false">).
 ContactSetup read_contact(ProjectReader& r, const pugi::xml_node& node) {
   ContactSetup c;
+  c.line = line_of(r.text, node.offset_debug());
   r.read(node, detail::contact_fields(), c.settings);
   if (auto problem = detail::check_contact(c.settings)) r.fail(node, *problem);
   for (const pugi::xml_node pair : node.children()) {

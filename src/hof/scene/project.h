@@ -73,6 +73,7 @@ struct BodySetup {
   /// where its scene gives it no collision model. Unset: with <contact>, every body collides
   /// (a SOFA body through the collision models its scene gives, else its whole surface).
   std::optional<bool> contact;
+  std::int64_t line{0};  ///< of its <body> element in the project file, for errors (0: not from a file)
 };
 
 /// A rigid, fixed obstacle the project adds to the scene (a table, a rib cage): a surface mesh
@@ -83,6 +84,7 @@ struct ObstacleSetup {
   Vec3 translation{Vec3::Zero()};                   ///< m, added to the mesh's coordinates
   std::optional<haptics::SurfaceMaterial> surface;  ///< else the project's
   std::optional<bool> contact;                      ///< as BodySetup::contact
+  std::int64_t line{0};                             ///< of its <obstacle> element, for errors (0: none)
 };
 
 /// Contact between bodies (<contact>): on for every body with a surface (its triangles, edges
@@ -101,6 +103,7 @@ struct ContactSetup {
                                      .disabled_pairs = {}};
   /// Pairs of bodies (by name, as <pair a="…" b="…" enabled="false"/>) that do not collide.
   std::vector<std::pair<std::string, std::string>> disabled_pairs;
+  std::int64_t line{0};  ///< of the <contact> element in the project file, for errors (0: not from a file)
 };
 
 /// A tissue region (a tumour, a stiffer lobe): the elements of a body (tetrahedra; a

@@ -136,6 +136,13 @@ Expected<SofaScene> Reader::run() {
   if (auto r = check_types_and_attributes(); !r) return std::unexpected(r.error());
   if (auto r = collect_models(*root_); !r) return std::unexpected(r.error());
   if (auto r = read_contacts(*root_); !r) return std::unexpected(r.error());
+  if (scene_.contacts.enabled && !models_without_surface_.empty()) {
+    const Component& c = *models_without_surface_.front();
+    return fail(c,
+                "a collision model on a body with no surface: its node has no triangles (give it a triangle "
+                "topology or a mesh loader), and the scene's collision pipeline asks for contact",
+                ErrorCode::kInvalidArgument);
+  }
   list_skipped(*root_);
   // Each component not simulated is named once: those that change SOFA's result have a warning
   // of their own (list_skipped); the others are listed here together.
@@ -459,6 +466,12 @@ bool needs_no_counterpart(std::string_view type) {
 // Why a component HoF does not simulate changes SOFA's result ("" when it does not).
 std::string_view what_changes(std::string_view type) {
   if (type.ends_with("CollisionModel") || type == "CubeModel" || type == "TriangleOctreeModel") {
+    // HoF's own kinds left unused: their node is no body, obstacle or node mapped from a body.
+    if (type.ends_with("CollisionModel") && (type.starts_with("Triangle") || type.starts_with("Line") ||
+                                             type.starts_with("Point") || type.starts_with("Sphere"))) {
+      return "its node is not a body, an obstacle with triangles, or a node mapped from a body (a mapping to "
+             "the body's state); this model collides nothing";
+    }
     return "HoF detects contact with triangle, line, point and sphere models only; this shape does not collide";
   }
   if (type.ends_with("Intersection"))

@@ -234,6 +234,7 @@ Expected<std::optional<SofaSceneObstacle>> Reader::make_obstacle(SceneNode& node
     data.has_positions = data.has_triangles = true;
   }
   if (!data.has_positions || data.positions.empty() || data.triangles.empty()) {
+    models_without_surface_.push_back(collision);
     warn(collision->line,
          fmt::format("{}: node '{}' has no triangles to touch; skipped", collision->label(), node.path));
     return std::optional<SofaSceneObstacle>{};

@@ -212,6 +212,9 @@ class Reader {
 
   std::set<const Component*> in_progress_;
   std::set<const SceneNode*> simulated_nodes_;  ///< nodes that became a body
+  /// Collision models of obstacle nodes with no triangles (make_obstacle skips them): an error
+  /// once read_contacts() finds the scene's collision pipeline on (they would collide nothing).
+  std::vector<const Component*> models_without_surface_;
   SofaScene scene_;
 };
 

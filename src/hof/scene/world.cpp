@@ -353,7 +353,7 @@ Expected<void> apply_bodies(World& w) {
     if (it == w.bodies.end()) {
       return make_error(ErrorCode::kInvalidArgument,
                         fmt::format("<body name=\"{}\">: no body of that name in the scene", setup.name),
-                        w.file.string());
+                        w.file.string(), setup.line);
     }
     if (setup.surface) it->material = setup.surface;
   }
@@ -362,7 +362,7 @@ Expected<void> apply_bodies(World& w) {
     auto read = mesh::read_mesh(path);
     if (!read) {
       Error e = read.error();
-      e.message = fmt::format("obstacle '{}': {} (in project {})", o.name, e.message, w.file.string());
+      e.message = fmt::format("obstacle '{}': {} (in project {}:{})", o.name, e.message, w.file.string(), o.line);
       return std::unexpected(e);
     }
     coupling::SessionBody body;
@@ -374,8 +374,12 @@ Expected<void> apply_bodies(World& w) {
       body.surface.triangles = read->mesh.triangles;
     }
     if (body.surface.triangles.empty()) {
-      return make_error(ErrorCode::kInvalidMesh, fmt::format("obstacle '{}' has no triangles to touch", o.name),
-                        path.string());
+      // Named by the project's line (the mesh file itself has no line to blame).
+      return make_error(ErrorCode::kInvalidMesh,
+                        fmt::format("<obstacle name=\"{}\">: its mesh {} has no triangles to touch (a collision "
+                                    "model on a body with no surface)",
+                                    o.name, path.string()),
+                        w.file.string(), o.line);
     }
     for (Vec3& p : body.surface.vertices) p += o.translation;
     body.material = o.surface;
@@ -461,7 +465,7 @@ void record_changes(HofProject& project, const coupling::Session& session) {
     auto body =
         std::find_if(project.bodies.begin(), project.bodies.end(), [&](const auto& b) { return b.name == name; });
     if (body == project.bodies.end()) {
-      project.bodies.push_back(BodySetup{name, material, {}, {}, {}});
+      project.bodies.push_back(BodySetup{name, material, {}, {}, {}, 0});
     } else {
       body->surface = material;
     }

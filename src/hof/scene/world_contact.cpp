@@ -12,14 +12,14 @@ namespace hof::scene::detail {
 
 namespace {
 
-Expected<std::int32_t> body_index(const World& w, const std::string& name, std::string_view what) {
+Expected<std::int32_t> body_index(const World& w, const std::string& name, std::string_view what, std::int64_t line) {
   for (std::size_t i = 0; i < w.bodies.size(); ++i)
     if (w.bodies[i].name == name) return static_cast<std::int32_t>(i);
   std::vector<std::string> names;
   for (const coupling::SessionBody& b : w.bodies) names.push_back(b.name);
   return make_error(ErrorCode::kInvalidArgument,
                     fmt::format("{}: no body '{}' in the world (bodies: {})", what, name, fmt::join(names, ", ")),
-                    w.file.string());
+                    w.file.string(), line);
 }
 
 // The body's whole surface as its collision models: triangles, edges and nodes.
@@ -59,14 +59,15 @@ Expected<void> apply_contact(World& w) {
     std::string_view tag;
     std::string name;
     bool collides;
+    std::int64_t line;
   };
   std::vector<Choice> choices;
   for (const BodySetup& setup : w.project.bodies)
-    if (setup.contact) choices.push_back({"body", setup.name, *setup.contact});
+    if (setup.contact) choices.push_back({"body", setup.name, *setup.contact, setup.line});
   for (const ObstacleSetup& o : w.project.obstacles)
-    if (o.contact) choices.push_back({"obstacle", o.name, *o.contact});
-  for (const auto& [tag, name, collides] : choices) {
-    auto index = body_index(w, name, fmt::format("<{} name=\"{}\" contact=\"{}\">", tag, name, collides));
+    if (o.contact) choices.push_back({"obstacle", o.name, *o.contact, o.line});
+  for (const auto& [tag, name, collides, line] : choices) {
+    auto index = body_index(w, name, fmt::format("<{} name=\"{}\" contact=\"{}\">", tag, name, collides), line);
     if (!index) return std::unexpected(index.error());
     coupling::SessionBody& b = w.bodies[static_cast<std::size_t>(*index)];
     if (!collides) {
@@ -77,7 +78,7 @@ Expected<void> apply_contact(World& w) {
                           fmt::format("<{} name=\"{}\" contact=\"true\">: a collision model on a body with no "
                                       "surface (it has no triangles)",
                                       tag, name),
-                          w.file.string());
+                          w.file.string(), line);
       }
       collide_whole_surface(b);
     }
@@ -85,16 +86,17 @@ Expected<void> apply_contact(World& w) {
   if (w.project.contact) {
     for (const auto& [a, b] : w.project.contact->disabled_pairs) {
       const std::string what = fmt::format("<contact><pair a=\"{}\" b=\"{}\">", a, b);
-      auto i = body_index(w, a, what);
+      const std::int64_t line = w.project.contact->line;
+      auto i = body_index(w, a, what, line);
       if (!i) return std::unexpected(i.error());
-      auto j = body_index(w, b, what);
+      auto j = body_index(w, b, what, line);
       if (!j) return std::unexpected(j.error());
       if (*i == *j) {
         return make_error(ErrorCode::kInvalidArgument,
                           fmt::format("{}: a pair needs two different bodies (selfCollision switches a body's "
                                       "contact with itself)",
                                       what),
-                          w.file.string());
+                          w.file.string(), line);
       }
       const std::pair<std::int32_t, std::int32_t> pair{std::min(*i, *j), std::max(*i, *j)};
       if (std::ranges::find(settings.disabled_pairs, pair) == settings.disabled_pairs.end())
