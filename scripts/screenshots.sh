@@ -69,6 +69,23 @@ quit
 ACTIONS
 xvfb-run -a -s "-screen 0 1280x720x24" build/release/bin/hof gui examples/liver-tumour-palpation.hof \
   --size 1280x720 --script "$work/tumour.txt"
+cat > "$work/contacts.txt" <<'ACTIONS'
+# organs resting on each other: a capsule on the mouse stylus, turned and pressed onto the
+# liver; the contacts between the bodies drawn (points, force arrows); the Tool panel
+wait 1
+contacts on
+tool capsule 0.08 0.006
+rotate 0 1 0 60
+show tool
+mouse 800 330 -0.01
+wait 0.5
+mouse 800 330 0.01
+wait 2
+screenshot docs/images/gui-tool-contacts.png
+quit
+ACTIONS
+xvfb-run -a -s "-screen 0 1280x720x24" build/release/bin/hof gui examples/organs-in-contact.hof \
+  --size 1280x720 --script "$work/contacts.txt"
 build/release/bin/hof run examples/liver-tumour-palpation.hof --headless --deterministic --quiet --out "$work/tumour-run"
 cp "$work/tumour-run/palpation.png" docs/images/tumour-palpation.png
 # The needle's force against depth, as `hof run` plots it.
@@ -77,4 +94,4 @@ cp "$work/needle-run/force_vs_depth.png" docs/images/needle-force-vs-depth.png
 cp "$work/needle-run/needle_force_over_time.png" docs/images/needle-force-over-time.png
 echo "screenshots: docs/images/gui-liver.png gui-press.png gui-displacement.png gui-mechanics.png gui-stress.png" \
      "gui-needle.png gui-needle-editor.png gui-needle-cube.png needle-force-vs-depth.png needle-force-over-time.png" \
-     "gui-tumour.png tumour-palpation.png"
+     "gui-tumour.png tumour-palpation.png gui-tool-contacts.png"

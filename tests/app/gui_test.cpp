@@ -13,6 +13,7 @@
 #include <regex>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "hof/app/gui/gui_script.h"
 #include "hof/haptics/device_backends/replay_device.h"
@@ -147,12 +148,34 @@ TEST(GuiScript, ReadsEveryActionAndNamesTheLineOfAnError) {
   EXPECT_EQ((*edits)[3].numbers.size(), 7u);
   EXPECT_TRUE((*edits)[4].numbers.empty());
 
-  for (const char* bad :
-       {"wait\n", "wait -1\n", "animate maybe\n", "set stiffness 0.4\n", "mouse 1\n", "screenshot a.jpg\n",
-        "save a.scn\n", "frobnicate\n", "step 0\n", "record a.txt\n", "record\n", "show toolbar\n",
-        "replace mechanics/Liver TetrahedronFEMForceField\n", "add mechanics/Liver/FEM X y\n", "remove haptics/x\n",
-        "replace mechanics/Liver/FEM T youngModulus\n", "region Liver sphere 0 0 0 1\n",
-        "region Liver cube 0 0 0 1 2\n"}) {
+  for (const char* bad : {"wait\n",
+                          "wait -1\n",
+                          "animate maybe\n",
+                          "set stiffness 0.4\n",
+                          "mouse 1\n",
+                          "screenshot a.jpg\n",
+                          "save a.scn\n",
+                          "frobnicate\n",
+                          "step 0\n",
+                          "record a.txt\n",
+                          "record\n",
+                          "show toolbar\n",
+                          "replace mechanics/Liver TetrahedronFEMForceField\n",
+                          "add mechanics/Liver/FEM X y\n",
+                          "remove haptics/x\n",
+                          "replace mechanics/Liver/FEM T youngModulus\n",
+                          "region Liver sphere 0 0 0 1\n",
+                          "region Liver cube 0 0 0 1 2\n",
+                          "tool\n",
+                          "tool capsule 0.08\n",
+                          "tool sphere -0.01\n",
+                          "tool cube 1\n",
+                          "tool mesh\n",
+                          "rotate 0 0 0 30\n",
+                          "rotate 1 0 0\n",
+                          "contacts maybe\n",
+                          "pair Liver off\n",
+                          "pair Liver Stomach sometimes\n"}) {
     auto e = hof::app::parse_script(std::string("wait 0\n") + bad, "s.txt");
     ASSERT_FALSE(e) << bad;
     EXPECT_EQ(e.error().line, 2) << bad;
@@ -329,6 +352,77 @@ TEST(GuiWindow, TheSceneTreeSwitchesTheForceFieldAddsARegionColoursByStressAndSa
   EXPECT_NE(refused.status, 0);
   EXPECT_NE(refused.output.find("no component 'nothing'"), std::string::npos) << refused.output;
   EXPECT_NE(refused.output.find("FEM"), std::string::npos) << refused.output;
+}
+
+TEST(GuiScript, ReadsTheToolTheTurnTheContactViewAndThePairSwitch) {
+  auto ok = hof::app::parse_script(
+      "tool capsule 0.08 0.006\ntool sphere 0.01\ntool mesh tool.stl\ntool mesh tool.stl 0.002\ntool point\n"
+      "tool needle\nrotate 1 0 0 30\ncontacts on\npair Liver Stomach off\nshow contacts\nshow tool\n",
+      "tool.txt");
+  ASSERT_TRUE(ok) << ok.error().to_string();
+  ASSERT_EQ(ok->size(), 11u);
+  EXPECT_EQ((*ok)[0].kind, ScriptAction::Kind::kTool);
+  EXPECT_EQ((*ok)[0].type, "capsule");
+  EXPECT_EQ((*ok)[0].numbers, (std::vector<double>{0.08, 0.006}));  // shaft length, then radius
+  EXPECT_EQ((*ok)[1].numbers, (std::vector<double>{0.01}));
+  EXPECT_EQ((*ok)[2].file, "tool.stl");
+  EXPECT_TRUE((*ok)[2].numbers.empty());
+  EXPECT_EQ((*ok)[3].numbers, (std::vector<double>{0.002}));
+  EXPECT_EQ((*ok)[4].type, "point");
+  EXPECT_EQ((*ok)[5].type, "needle");
+  EXPECT_EQ((*ok)[6].kind, ScriptAction::Kind::kRotate);
+  EXPECT_EQ((*ok)[6].numbers, (std::vector<double>{1, 0, 0, 30}));
+  EXPECT_EQ((*ok)[7].kind, ScriptAction::Kind::kContacts);
+  EXPECT_TRUE((*ok)[7].on);
+  EXPECT_EQ((*ok)[8].kind, ScriptAction::Kind::kPair);
+  EXPECT_EQ((*ok)[8].element, "Liver");
+  EXPECT_EQ((*ok)[8].attribute, "Stomach");
+  EXPECT_FALSE((*ok)[8].on);
+  EXPECT_EQ((*ok)[9].value, "contacts");
+}
+
+/// Pixels of the 3D view drawn in a contact point's colour (unlit: exact up to rounding).
+std::size_t pixels_of(const hof::render::Image& image, int r, int g, int b) {
+  std::size_t count = 0;
+  for (int y = 0; y < image.height; ++y) {
+    for (int x = kPanelWidth; x < image.width; ++x) {
+      const std::uint8_t* p = &image.rgb[3 * (static_cast<std::size_t>(y) * image.width + x)];
+      if (std::abs(p[0] - r) <= 3 && std::abs(p[1] - g) <= 3 && std::abs(p[2] - b) <= 3) ++count;
+    }
+  }
+  return count;
+}
+
+TEST(GuiWindow, TheToolMenuMountsACapsuleTheContactsAreDrawnAPairIsSwitchedOffAndTheToolSaved) {
+  const fs::path dir = scratch("tool");
+  const fs::path project = fs::path(HOF_SOURCE_DIR) / "examples/organs-in-contact.hof";
+  const fs::path saved = dir / "with-tool.hof";
+  const GuiRun run = run_gui(dir,
+                             "wait 1.5\ncontacts on\nshow contacts\nscreenshot " + (dir / "contacts.png").string() +
+                                 "\ntool capsule 0.08 0.006\nrotate 1 0 0 30\npair Liver Stomach off\nwait 1\n"
+                                 "screenshot " +
+                                 (dir / "tool.png").string() + "\nsave " + saved.string() + "\nquit\n",
+                             project);
+  ASSERT_EQ(run.status, 0) << run.output;
+  EXPECT_NE(run.output.find("the stylus carries a capsule"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("contact Stomach - Liver off"), std::string::npos) << run.output;
+  // The liver rests on the stomach and the stomach on the support: their contact points are
+  // drawn (orange on the first body of a contact, blue on the second).
+  auto contacts = hof::render::read_png(dir / "contacts.png");
+  ASSERT_TRUE(contacts) << contacts.error().to_string();
+  EXPECT_GT(pixels_of(*contacts, 255, 153, 26) + pixels_of(*contacts, 77, 204, 255), 50u) << "no contact points drawn";
+  // The saved project carries the capsule (length, then radius, as the script gave them).
+  auto reloaded = hof::scene::read_project(saved);
+  ASSERT_TRUE(reloaded) << reloaded.error().to_string();
+  ASSERT_TRUE(reloaded->tool);
+  EXPECT_EQ(reloaded->tool->shape, hof::procedures::ToolShape::kCapsule);
+  EXPECT_DOUBLE_EQ(reloaded->tool->length_m, 0.08);
+  EXPECT_DOUBLE_EQ(reloaded->tool->radius_m, 0.006);
+  EXPECT_FALSE(reloaded->needle);
+  // A tool whose mesh is not there is a clear error naming the file; the script stops.
+  const GuiRun missing = run_gui(dir, "tool mesh /nonexistent/tool.stl\nquit\n", project);
+  EXPECT_NE(missing.status, 0);
+  EXPECT_NE(missing.output.find("/nonexistent/tool.stl"), std::string::npos) << missing.output;
 }
 
 TEST(GuiWindow, AScriptErrorNamesItsLineAndTheKnownNames) {

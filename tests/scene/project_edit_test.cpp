@@ -111,5 +111,30 @@ TEST(CheckEdit, AnEmptyDeviceIsRefusedAndTheProjectIsNotChanged) {
   EXPECT_EQ(to_xml(p), before);
 }
 
+TEST(CheckEdit, AToolIsCheckedAsTheReaderChecksItAndTakesTheNeedlesPlace) {
+  HofProject p = project_with_needle_and_a_spring();
+  procedures::ShapedToolConfig capsule;
+  capsule.shape = procedures::ToolShape::kCapsule;
+  capsule.radius_m = 0.006;
+  capsule.length_m = 0.08;
+  ASSERT_TRUE(check_edit(p, project_edit::Tool{capsule}));
+  procedures::ShapedToolConfig bad = capsule;
+  bad.radius_m = -0.001;
+  const auto refused = check_edit(p, project_edit::Tool{bad});
+  ASSERT_FALSE(refused);
+  EXPECT_NE(refused.error().message.find("radius"), std::string::npos) << refused.error().message;
+  procedures::ShapedToolConfig no_file = capsule;
+  no_file.shape = procedures::ToolShape::kMesh;
+  EXPECT_FALSE(check_edit(p, project_edit::Tool{no_file})) << "a mesh tool names its file";
+  // Mounted, it replaces the needle (one tool on the stylus); nullopt takes it off.
+  apply_edit(p, project_edit::Tool{capsule});
+  ASSERT_TRUE(p.tool);
+  EXPECT_EQ(*p.tool, capsule);
+  EXPECT_FALSE(p.needle);
+  EXPECT_TRUE(check_edit(p, project_edit::Tool{std::nullopt}));
+  apply_edit(p, project_edit::Tool{std::nullopt});
+  EXPECT_FALSE(p.tool);
+}
+
 }  // namespace
 }  // namespace hof::scene

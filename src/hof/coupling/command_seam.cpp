@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <Eigen/LU>
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -65,8 +66,10 @@ CommandSeam::CommandSeam(const World& world)
     : fem_reaction_(world.config.coupling == ContactCoupling::kFemReaction),
       haptic_rate_hz_(world.config.haptics.rate_hz),
       submitted_calibration_(world.config.haptics.calibration) {
+  contacts_enabled_ = world.config.contacts.enabled;
   for (const BodyRuntime& r : world.bodies) {
     names_.push_back(r.body.name);
+    collides_.push_back(r.body.collision.enabled ? 1 : 0);
     validated_configs_.push_back(r.body.config.value_or(mechanics::ModelConfig{}));
     has_mechanics_.push_back(r.body.deformable() && r.body.config ? 1 : 0);
   }
@@ -294,6 +297,32 @@ Expected<void> CommandSeam::validate(command::SetRenderer& renderer) {
   return {};
 }
 
+Expected<void> CommandSeam::validate(command::SetContactPair& pair) {
+  if (!contacts_enabled_) {
+    return make_error(ErrorCode::kInvalidArgument,
+                      "contact pair: contact between bodies is off in this scene (a .hof <contact>, or a SOFA "
+                      "collision pipeline, turns it on)");
+  }
+  if (pair.a == pair.b) {
+    return make_error(ErrorCode::kInvalidArgument,
+                      "contact pair: a pair needs two different bodies (selfCollision switches a body's contact "
+                      "with itself)");
+  }
+  for (const BodyId id : {pair.a, pair.b}) {
+    const auto i = static_cast<std::size_t>(id);
+    if (i >= names_.size())
+      return make_error(ErrorCode::kInvalidArgument,
+                        fmt::format("contact pair: no body #{} (bodies: {})", i, body_names()));
+    if (!collides_[i]) {
+      return make_error(ErrorCode::kInvalidArgument,
+                        fmt::format("contact pair: body '{}' takes no part in contact between bodies (it has no "
+                                    "collision model)",
+                                    names_[i]));
+    }
+  }
+  return {};
+}
+
 std::vector<ParameterChange> CommandSeam::parameter_changes(bool with_queued) const {
   std::lock_guard lock(mutex_);
   take_reports();
@@ -469,6 +498,24 @@ bool CommandSeam::apply(const command::SetDevice& device, Applying& a) {
   if (!a.world.loop->switch_device(*device.opened)) return false;
   a.world.switched_devices.push_back(device.opened);
   a.log(fmt::format("device {}", device.label));
+  return true;
+}
+
+bool CommandSeam::apply(const command::SetContactPair& pair, Applying& a) {
+  // The settings keep the pair (smaller index first, sorted, as the scene builder gives them),
+  // and the contact pass takes it from its next pass.
+  const auto first = static_cast<std::int32_t>(std::min(pair.a, pair.b));
+  const auto second = static_cast<std::int32_t>(std::max(pair.a, pair.b));
+  auto& disabled = a.world.config.contacts.disabled_pairs;
+  const std::pair<std::int32_t, std::int32_t> key{first, second};
+  const auto at = std::lower_bound(disabled.begin(), disabled.end(), key);
+  const bool listed = at != disabled.end() && *at == key;
+  if (pair.enabled && listed) disabled.erase(at);
+  if (!pair.enabled && !listed) disabled.insert(at, key);
+  a.world.body_contacts.set_pair_enabled(static_cast<std::size_t>(first), static_cast<std::size_t>(second),
+                                         pair.enabled);
+  const auto name = [&](std::int32_t i) { return a.world.bodies[static_cast<std::size_t>(i)].body.name; };
+  a.log(fmt::format("contact {} - {} {}", name(first), name(second), pair.enabled ? "on" : "off"));
   return true;
 }
 

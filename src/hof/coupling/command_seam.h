@@ -98,10 +98,20 @@ struct SetModel {
   /// Filled by submit(): the model built from `config`.
   std::shared_ptr<mechanics::MechanicalModel> built;
 };
+/// Contact between two bodies switched off, or on again (ContactSettings::disabled_pairs),
+/// from the next step: the window's pair switch. Both bodies must take part in contact between
+/// bodies (BodyCollision::enabled), and the session's contact must be on; a pair is two
+/// different bodies (as a project's <contact><pair>: self-collision is a body's own setting).
+struct SetContactPair {
+  BodyId a{};
+  BodyId b{};
+  bool enabled{true};
+};
 }  // namespace command
-using Command = std::variant<command::SetParameter, command::Pause, command::Resume, command::SingleStep,
-                             command::Reset, command::SetMaterial, command::SetEffects, command::SetRenderer,
-                             command::SetForceLimit, command::SetDevice, command::SetModel, command::SetCalibration>;
+using Command =
+    std::variant<command::SetParameter, command::Pause, command::Resume, command::SingleStep, command::Reset,
+                 command::SetMaterial, command::SetEffects, command::SetRenderer, command::SetForceLimit,
+                 command::SetDevice, command::SetModel, command::SetCalibration, command::SetContactPair>;
 
 /// A parameter changed through the seam, to be saved with the project (scene::parameter_changes
 /// names it for the file: the project's <set>).
@@ -163,6 +173,7 @@ class CommandSeam {
   Expected<void> validate(command::SetEffects& effects);
   Expected<void> validate(command::SetForceLimit& limit);
   Expected<void> validate(command::SetRenderer& renderer);
+  Expected<void> validate(command::SetContactPair& pair);
   Expected<void> validate(command::SetDevice&) { return {}; }
   Expected<void> validate(command::Pause&) { return {}; }
   Expected<void> validate(command::Resume&) { return {}; }
@@ -182,12 +193,15 @@ class CommandSeam {
   bool apply(const command::SetCalibration& calibration, Applying& a);
   bool apply(const command::SetForceLimit& limit, Applying& a);
   bool apply(const command::SetDevice& device, Applying& a);
+  bool apply(const command::SetContactPair& pair, Applying& a);
   [[nodiscard]] std::string body_names() const;
   // The index of a body that has mechanics; errors name the body (`rigid`: why a rigid body is refused).
   [[nodiscard]] Expected<std::size_t> deformable_body(BodyId body, std::string_view rigid) const;
 
   std::vector<std::string> names_;   // the bodies' names (fixed)
   std::vector<char> has_mechanics_;  // per body, fixed: a model and its config
+  std::vector<char> collides_;       // per body, fixed: it takes part in contact between bodies
+  bool contacts_enabled_{false};     // the session's contact between bodies is on (fixed)
   bool fem_reaction_{false};         // the coupling needs dt equal to the haptic period
   double haptic_rate_hz_{1000.0};
   // A parameter command accepted, in submission order (applied: it is a change to save).

@@ -138,4 +138,6 @@ TripleBuffer<haptics::SurfaceSnapshot>& Session::graphics_surfaces(std::size_t l
 
 TripleBuffer<std::vector<std::vector<double>>>& Session::graphics_states() { return publisher_->graphics_states(); }
 
+TripleBuffer<BodyContactsView>& Session::graphics_contacts() { return publisher_->graphics_contacts(); }
+
 }  // namespace hof::coupling

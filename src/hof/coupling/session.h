@@ -41,6 +41,7 @@
 #include "hof/core/triple_buffer.h"
 #include "hof/coupling/command_seam.h"
 #include "hof/coupling/contact_settings.h"
+#include "hof/coupling/contact_view.h"
 #include "hof/coupling/surface_mapping.h"
 #include "hof/coupling/tool_coupling.h"
 #include "hof/haptics/device.h"
@@ -241,6 +242,9 @@ class Session {
   /// Latest node positions of every body (3N flat; empty for a rigid body), for a reader
   /// thread (the window's stress colours). Published with every step from the first call on.
   TripleBuffer<std::vector<std::vector<double>>>& graphics_states();
+  /// The last contact pass's contacts between bodies with their forces, for a reader thread
+  /// (the window's contact view). Published with every step from the first call on.
+  TripleBuffer<BodyContactsView>& graphics_contacts();
   /// Simulated time of the world so far, s (read it when no run is going on).
   [[nodiscard]] double simulated_time() const;
   /// The world simulation step dt (the smallest body dt), s.

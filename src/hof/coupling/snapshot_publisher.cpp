@@ -23,6 +23,23 @@ TripleBuffer<std::vector<std::vector<double>>>& SnapshotPublisher::graphics_stat
   return graphics_states_;
 }
 
+TripleBuffer<BodyContactsView>& SnapshotPublisher::graphics_contacts() {
+  contacts_wanted_.store(true, std::memory_order_release);
+  return graphics_contacts_;
+}
+
+void gather_body_contacts(const World& w, std::vector<BodyContactView>& out) {
+  out.clear();
+  const ContactSettings& settings = w.config.contacts;
+  for (const collision::BodyContact& c : w.body_contacts.contacts()) {
+    const auto a = static_cast<std::size_t>(c.a.body), b = static_cast<std::size_t>(c.b.body);
+    // The penalty response's spring (body_contact_pass.h): k (contact distance − gap) along n.
+    const double k = pair_contact_stiffness(settings, w.bodies[a].body.collision, w.bodies[b].body.collision);
+    out.push_back(BodyContactView{c.a.body, c.b.body, c.a.point, c.b.point, c.normal, c.distance,
+                                  k * (settings.contact_distance_m - c.distance) * c.normal});
+  }
+}
+
 void SnapshotPublisher::publish(double clock_s) {
   World& w = world_;
   const bool threaded = thread_.joinable();
@@ -67,6 +84,13 @@ void SnapshotPublisher::publish(double clock_s) {
       slot[i].assign(x.data(), x.data() + x.size());
     }
     graphics_states_.publish();
+  }
+  if (contacts_wanted_.load(std::memory_order_acquire)) {
+    BodyContactsView& slot = graphics_contacts_.write_slot();
+    slot.enabled = w.config.contacts.enabled;
+    slot.time_s = w.time_s;
+    gather_body_contacts(w, slot.contacts);
+    graphics_contacts_.publish();
   }
   w.contact_ticks_since_publish = 0;
 }

@@ -360,6 +360,11 @@ std::optional<std::string> problem_of(const HofProject& next, const ProjectEdit&
       if (auto ok = check_graphics(e.graphics); !ok) return ok.error().message;
       return std::nullopt;
     }
+    std::optional<std::string> operator()(const project_edit::Tool& e) const {
+      if (!e.tool) return std::nullopt;  // the point/sphere proxy
+      if (auto problem = check_each(detail::tool_fields(), "tool", *e.tool)) return problem;
+      return detail::check_tool(*e.tool);
+    }
   };
   return std::visit(Check{next}, edit);
 }
@@ -400,6 +405,10 @@ void apply_edit(HofProject& p, const ProjectEdit& edit) {
     void operator()(const project_edit::Needle& e) const { p.needle = e.needle; }
     void operator()(const project_edit::Effects& e) const { p.effects = e.effects; }
     void operator()(const project_edit::Graphics& e) const { p.graphics = e.graphics; }
+    void operator()(const project_edit::Tool& e) const {
+      p.tool = e.tool;
+      if (e.tool) p.needle.reset();  // one tool on the stylus (scene::mount_tool)
+    }
   };
   std::visit(Apply{p}, edit);
 }

@@ -9,6 +9,7 @@
 
 #include <array>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <variant>
@@ -57,6 +58,9 @@ struct Stylus {  ///< haptics/stylus: the drawn stylus
 struct Needle {  ///< haptics/needle and its tissue sets
   procedures::NeedleConfig needle;
 };
+struct Tool {  ///< haptics/tool: the shaped tool on the stylus (nullopt: none, the point/sphere proxy)
+  std::optional<procedures::ShapedToolConfig> tool;
+};
 struct Effects {  ///< haptics/effects/…: the force effects as a whole
   haptics::ForceEffects effects;
 };
@@ -69,7 +73,7 @@ using ProjectEdit =
     std::variant<project_edit::Device, project_edit::HapticRate, project_edit::Rendering, project_edit::Coupling,
                  project_edit::Calibration, project_edit::Surface, project_edit::ForceLimit, project_edit::Safety,
                  project_edit::BoundTree, project_edit::Stylus, project_edit::Needle, project_edit::Effects,
-                 project_edit::Graphics>;
+                 project_edit::Graphics, project_edit::Tool>;
 
 /// The edit that sets `attribute` of `element` to `value` in `project`, by the file's names
 /// (set_project_attribute lists them). Errors as the reader's, each naming element@attribute:
@@ -85,7 +89,8 @@ using ProjectEdit =
 /// (kInvalidArgument) is the reader's wording; nothing is changed.
 [[nodiscard]] Expected<void> check_edit(const HofProject& project, const ProjectEdit& edit);
 
-/// `edit` made in `project` (checked already: parse_project_edit or check_edit).
+/// `edit` made in `project` (checked already: parse_project_edit or check_edit). A tool
+/// mounted (project_edit::Tool with a shape) takes the needle's place, as scene::mount_tool.
 void apply_edit(HofProject& project, const ProjectEdit& edit);
 
 }  // namespace hof::scene

@@ -102,6 +102,31 @@ std::string parse_region(const std::vector<std::string>& w, ScriptAction& a) {
   return {};
 }
 
+std::string parse_tool(const std::vector<std::string>& w, ScriptAction& a) {
+  a.kind = ScriptAction::Kind::kTool;
+  const char* usage = "tool takes point, needle, sphere RADIUS, capsule LENGTH RADIUS or mesh FILE [RADIUS] (metres)";
+  if (w.size() < 2) return usage;
+  a.type = w[1];
+  std::size_t first_number = 2;
+  if (a.type == "mesh") {
+    if (w.size() < 3) return usage;
+    a.file = w[2];
+    first_number = 3;
+  }
+  const std::size_t expected = a.type == "point" || a.type == "needle" ? 2
+                               : a.type == "sphere"                    ? 3
+                               : a.type == "capsule"                   ? 4
+                               : a.type == "mesh"                      ? (w.size() == 4 ? 4 : 3)
+                                                                       : 0;
+  if (expected == 0 || w.size() != expected) return usage;
+  for (std::size_t i = first_number; i < w.size(); ++i) {
+    double v = 0.0;
+    if (!to_number(w[i], v) || v < 0.0) return fmt::format("'{}' is not a length in metres (>= 0)", w[i]);
+    a.numbers.push_back(v);
+  }
+  return {};
+}
+
 std::string parse_action(const std::string& line, const std::vector<std::string>& w, ScriptAction& a) {
   const std::string& verb = w[0];
   if (verb == "wait") {
@@ -113,6 +138,28 @@ std::string parse_action(const std::string& line, const std::vector<std::string>
     a.kind = ScriptAction::Kind::kNeedle;
     if (w.size() != 2 || (w[1] != "on" && w[1] != "off")) return "needle takes on or off";
     a.on = w[1] == "on";
+  } else if (verb == "tool") {
+    return parse_tool(w, a);
+  } else if (verb == "rotate") {
+    a.kind = ScriptAction::Kind::kRotate;
+    const char* usage = "rotate takes an axis X Y Z (not zero) and an angle in degrees";
+    if (w.size() != 5) return usage;
+    for (std::size_t i = 1; i < 5; ++i) {
+      double v = 0.0;
+      if (!to_number(w[i], v)) return usage;
+      a.numbers.push_back(v);
+    }
+    if (a.numbers[0] == 0.0 && a.numbers[1] == 0.0 && a.numbers[2] == 0.0) return usage;
+  } else if (verb == "contacts") {
+    a.kind = ScriptAction::Kind::kContacts;
+    if (w.size() != 2 || (w[1] != "on" && w[1] != "off")) return "contacts takes on or off (the debug view)";
+    a.on = w[1] == "on";
+  } else if (verb == "pair") {
+    a.kind = ScriptAction::Kind::kPair;
+    if (w.size() != 4 || (w[3] != "on" && w[3] != "off")) return "pair takes two bodies and on or off";
+    a.element = w[1];
+    a.attribute = w[2];
+    a.on = w[3] == "on";
   } else if (verb == "animate") {
     a.kind = ScriptAction::Kind::kAnimate;
     if (w.size() != 2 || (w[1] != "on" && w[1] != "off")) return "animate takes on or off";
@@ -145,9 +192,9 @@ std::string parse_action(const std::string& line, const std::vector<std::string>
     a.file = w[1];
   } else if (verb == "show") {
     a.kind = ScriptAction::Kind::kShow;
-    if (w.size() != 2 ||
-        (w[1] != "needle" && w[1] != "mechanics" && w[1] != "haptics" && w[1] != "graphics" && w[1] != "messages")) {
-      return "show takes a panel: needle, mechanics, haptics, graphics or messages";
+    if (w.size() != 2 || (w[1] != "tool" && w[1] != "contacts" && w[1] != "needle" && w[1] != "mechanics" &&
+                          w[1] != "haptics" && w[1] != "graphics" && w[1] != "messages")) {
+      return "show takes a panel: tool, contacts, needle, mechanics, haptics, graphics or messages";
     }
     a.value = w[1];
   } else if (verb == "record") {
@@ -170,8 +217,8 @@ std::string parse_action(const std::string& line, const std::vector<std::string>
     if (w.size() != 1) return "quit takes nothing";
   } else {
     return fmt::format(
-        "unknown action '{}' (known: wait, animate, step, needle, reset, set, replace, add, remove, region, mouse, "
-        "open, show, record, screenshot, save, quit)",
+        "unknown action '{}' (known: wait, animate, step, needle, tool, rotate, contacts, pair, reset, set, replace, "
+        "add, remove, region, mouse, open, show, record, screenshot, save, quit)",
         verb);
   }
   return {};

@@ -21,11 +21,19 @@
 ///   region clear                                    every region removed
 ///   needle on|off                mount the needle stylus (Haptics > Needle) or take it off;
 ///                                its settings: set haptics/needle/tissue@capsule 0.03
+///   tool point|needle            the stylus's tool (the Tool panel): the point proxy, the needle,
+///   tool sphere RADIUS             a sphere, a capsule (its shaft's length, then its radius, m)
+///   tool capsule LENGTH RADIUS     or a closed mesh (OBJ/STL; RADIUS: its spheres', default
+///   tool mesh FILE [RADIUS]        automatic)
+///   rotate X Y Z DEGREES         turns the mouse stylus's tool about the world axis (X, Y, Z)
+///   contacts on|off              the contacts' debug view (points and force arrows)
+///   pair BODY BODY on|off        contact between two bodies switched on or off (Contacts panel)
 ///   mouse X Y [DEPTH]            the mouse stylus under window pixel (X, Y), DEPTH metres
 ///                                beyond the touch plane (default 0)
 ///   open FILE                    as File > Open: a file that does not load shows its error and
 ///                                leaves the world as it was (the script goes on)
-///   show PANEL                   opens a panel: needle, mechanics, haptics, graphics, messages
+///   show PANEL                   opens a panel: tool, contacts, needle, mechanics, haptics,
+///                                graphics, messages
 ///   record FILE.csv | off        start recording the stylus (replay format), or stop and write it
 ///   screenshot FILE.png          the window as it is drawn
 ///   save FILE.hof                the project with every change made so far
@@ -45,6 +53,10 @@ struct ScriptAction {
     kWait,
     kAnimate,
     kNeedle,
+    kTool,
+    kRotate,
+    kContacts,
+    kPair,
     kStep,
     kReset,
     kSet,
@@ -60,16 +72,19 @@ struct ScriptAction {
   };
   Kind kind{Kind::kWait};
   int line{0};
-  double number{0.0};                     ///< wait: seconds; step: steps; mouse: x
-  double y{0.0}, depth{0.0};              ///< mouse
-  bool on{false};                         ///< animate; record (false: stop)
-  std::string element, attribute, value;  ///< set; edit: element = the path, value = replace|add|remove
-  std::string type, name;                 ///< edit: the new component's type and (add) name
+  double number{0.0};         ///< wait: seconds; step: steps; mouse: x
+  double y{0.0}, depth{0.0};  ///< mouse
+  bool on{false};             ///< animate; record (false: stop); contacts; pair
+  /// set; edit: element = the path, value = replace|add|remove; pair: element, attribute = the bodies
+  std::string element, attribute, value;
+  std::string type, name;  ///< edit: the new component's type and (add) name; tool: type = the kind
   std::vector<std::pair<std::string, std::string>> attributes;  ///< edit: KEY=VALUE
-  std::vector<double> numbers;  ///< region: centre and radius, or corners; then E (empty: clear)
-  bool box{false};              ///< region
-  std::filesystem::path file;   ///< screenshot, save, record
-  std::string text;             ///< the line as written
+  /// region: centre and radius, or corners; then E (empty: clear); tool: radius, or length and
+  /// radius; rotate: the axis and the angle (degrees)
+  std::vector<double> numbers;
+  bool box{false};             ///< region
+  std::filesystem::path file;  ///< screenshot, save, record; tool: the mesh
+  std::string text;            ///< the line as written
 };
 
 /// Reads and checks a script. Errors name the file and line.

@@ -271,6 +271,10 @@ void GuiWindow::draw_panels() {
   // sees them).
   apply(controls_panel(view()));
   if (ImGui::CollapsingHeader("Touch", ImGuiTreeNodeFlags_DefaultOpen)) apply(touch_panel(view()));
+  if (open_panel_ == "tool") ImGui::SetNextItemOpen(true);
+  if (ImGui::CollapsingHeader("Tool")) apply(tool_panel(view(), tool_panel_));
+  if (open_panel_ == "contacts") ImGui::SetNextItemOpen(true);
+  if (ImGui::CollapsingHeader("Contacts")) apply(contacts_panel(view(), view_options_));
   if (open_panel_ == "needle") ImGui::SetNextItemOpen(true);
   if (ImGui::CollapsingHeader("Needle")) apply(needle_panel(view()));
   if (open_panel_ == "mechanics") ImGui::SetNextItemOpen(true);
@@ -417,20 +421,38 @@ int GuiWindow::run(std::vector<ScriptAction> script, const std::string& script_n
 }
 
 WorldView GuiWindow::view() const {
-  return WorldView{file_,          project_,
-                   world_name_,    length_unit_,
-                   device_spec_,   session_.get(),
-                   needle_.get(),  mouse_ != nullptr,
-                   mouse_world_,   calibration_,
-                   max_force_n_,   workspace_radius_m_,
-                   bodies_,        bounds_min_,
-                   bounds_max_,    animating_,
-                   dirty_,         realtime_pacing_,
-                   last_,          stats_,
-                   plot_force_,    plot_indentation_,
-                   indentation_m_, reading_,
-                   contact_body_,  recording_ ? &*recording_ : nullptr,
-                   error_,         log_,
+  return WorldView{file_,
+                   project_,
+                   world_name_,
+                   length_unit_,
+                   device_spec_,
+                   session_.get(),
+                   needle_.get(),
+                   mouse_ != nullptr,
+                   mouse_world_,
+                   calibration_,
+                   max_force_n_,
+                   workspace_radius_m_,
+                   bodies_,
+                   shaped_tool_.get(),
+                   contact_settings_,
+                   disabled_pairs_,
+                   contacts_,
+                   bounds_min_,
+                   bounds_max_,
+                   animating_,
+                   dirty_,
+                   realtime_pacing_,
+                   last_,
+                   stats_,
+                   plot_force_,
+                   plot_indentation_,
+                   indentation_m_,
+                   reading_,
+                   contact_body_,
+                   recording_ ? &*recording_ : nullptr,
+                   error_,
+                   log_,
                    camera_};
 }
 
@@ -446,6 +468,9 @@ Expected<void> GuiWindow::apply(const GuiCommand& command) {
         using T = std::decay_t<decltype(c)>;
         if constexpr (std::is_same_v<T, coupling::Command>) {
           if (!session_) return {};
+          // The commands the window keeps track of (to save them, to show them) go its way.
+          if (const auto* set = std::get_if<coupling::command::SetParameter>(&c)) return set_parameter(*set);
+          if (const auto* pair = std::get_if<coupling::command::SetContactPair>(&c)) return set_contact_pair(*pair);
           return session_->submit(c);
         } else if constexpr (std::is_same_v<T, action::SetAttribute>) {
           return apply_set(c.element, c.attribute, c.value);

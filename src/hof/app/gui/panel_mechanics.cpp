@@ -144,11 +144,10 @@ GuiCommands mechanics_panel(const WorldView& w, MechanicsPanelState& ui) {
         double v = *value;
         ImGui::SetNextItemWidth(130);
         const std::string id = fmt::format("{}##{}/{}", parameter, b.name, p);
-        if (ImGui::InputDouble(id.c_str(), &v, 0.0, 0.0, "%.6g", ImGuiInputTextFlags_EnterReturnsTrue)) {
-          const std::string element =
-              component.empty() ? "mechanics/" + b.name : "mechanics/" + b.name + "/" + component;
-          out.push_back(action::SetAttribute{element, parameter, number_text(v)});
-        }
+        // A typed command: the parameter was resolved above, once (the window names it for a
+        // saved project and a recording).
+        if (ImGui::InputDouble(id.c_str(), &v, 0.0, 0.0, "%.6g", ImGuiInputTextFlags_EnterReturnsTrue))
+          out.push_back(coupling::Command{coupling::command::SetParameter{*body, *ref, v}});
       }
       ImGui::TreePop();
     }

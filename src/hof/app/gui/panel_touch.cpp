@@ -32,6 +32,19 @@ GuiCommands touch_panel(const WorldView& w) {
     ImGui::Text("depth %.2f %s, force along the needle %.3f N", to_shown * t.depth_m, length, t.axial_force_n);
     ImGui::Text("sent %.3f N, normal %.2f %.2f %.2f", w.last.force.norm(), t.normal.x(), t.normal.y(), t.normal.z());
     if (t.touched) ImGui::Text("entry  %.4f %.4f %.4f", t.entry.x(), t.entry.y(), t.entry.z());
+  } else if (w.tool && w.last.tool.active) {
+    // A tool with a shape: what its shape touches (it renders every surface itself).
+    const haptics::ToolState& t = w.last.tool;
+    ImGui::Text("%s tool: %s", std::string(procedures::shape_name(w.tool->config().shape)).c_str(),
+                t.contact_count > 0 ? "touching" : "free");
+    if (t.contact_count > 0) {
+      ImGui::Text("body %s, %d contact points", w.body_name(t.body, "?").c_str(), t.contact_count);
+      ImGui::Text("force  %.3f N  (%.2f %.2f %.2f)", w.last.force.norm(), w.last.force.x(), w.last.force.y(),
+                  w.last.force.z());
+      ImGui::Text("torque %.4f N·%s about the device point", t.torque.norm(), w.length_unit.c_str());
+    } else {
+      ImGui::TextDisabled("left-drag onto a body, wheel or W/S to press; Alt + left drag turns it");
+    }
   } else if (w.last.contact) {
     const std::string body = w.contact_body >= 0 && static_cast<std::size_t>(w.contact_body) < w.bodies.size()
                                  ? w.bodies[static_cast<std::size_t>(w.contact_body)].name

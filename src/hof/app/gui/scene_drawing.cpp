@@ -1,8 +1,10 @@
 // The 3D scene: the bodies (opaque, then transparent), the shapes only seen, the needle, the
-// debug views, the stylus with its proxy, contact and force.
+// debug views, the stylus with its proxy (or the tool with a shape at its pose), contact and
+// force, and the contacts' debug view.
 #include <epoxy/gl.h>
 
 #include <algorithm>
+#include <cmath>
 
 #include "hof/app/gui/detail/gui_window.h"
 #include "hof/app/gui/detail/scene_drawing.h"
@@ -81,6 +83,7 @@ void GuiWindow::draw_scene(int width, int height) {
   draw_bodies();
   draw_debug_views();
   draw_stylus();
+  if (view_options_.show_contacts) draw_contacts(scene_size());
   glViewport(0, 0, width, height);
 }
 
@@ -169,6 +172,10 @@ void GuiWindow::draw_stylus() {
   const double proxy_radius = std::max(
       project_.renderer == haptics::RendererKind::kRuspini ? project_.proxy_radius_m : project_.stylus_radius_m,
       0.004 * size);
+  if (last_.valid && shaped_tool_ && last_.tool.active) {
+    draw_tool(size);
+    return;
+  }
   if (last_.valid && !needle_) {
     const Vec3 shaft = (camera_.up_on_screen() * 0.8 - camera_.forward() * 0.6).normalized();
     const double length = std::clamp(project_.stylus_length_m, 0.05 * size, 0.6 * size);
@@ -244,6 +251,109 @@ void GuiWindow::draw_needle(double size) {
   if (last_.force.norm() > 1e-6) {
     renderer_->draw_arrow(hub, hub + last_.force * per_n, 0.0015 * size, render::Rgba(1.0f, 0.25f, 0.2f, 1.0f));
   }
+}
+
+void GuiWindow::draw_tool(double size) {
+  // The tool where its proxy is (the shape never ends a tick inside a surface), turned as the
+  // hand turns it; the device point (where the hand is) and the coupling between them.
+  const haptics::ToolState& t = last_.tool;
+  const Mat3 r = t.orientation.normalized().toRotationMatrix();
+  const Vec3 tip = t.tip;
+  const bool touching = t.contact_count > 0;
+  const render::Rgba steel =
+      touching ? render::Rgba(0.95f, 0.78f, 0.45f, 1.0f) : render::Rgba(0.78f, 0.8f, 0.84f, 1.0f);
+  if (tool_mesh_) {
+    Eigen::Matrix4f pose = Eigen::Matrix4f::Identity();
+    pose.topLeftCorner<3, 3>() = r.cast<float>();
+    pose.topRightCorner<3, 1>() = tip.cast<float>();
+    render::Material m;
+    m.diffuse = steel;
+    m.specular = {0.5f, 0.5f, 0.5f};
+    m.shininess = 0.5f;
+    renderer_->draw(*tool_mesh_, m, render::RenderMode::kShaded, pose);
+  } else {
+    for (const procedures::ToolPrimitive& p : shaped_tool_->primitives()) {
+      const Vec3 a = tip + r * p.a, b = tip + r * p.b;
+      renderer_->draw_sphere(a, p.radius, steel);
+      if ((b - a).norm() > 1e-12) {
+        renderer_->draw_cylinder(a, b, p.radius, steel);
+        renderer_->draw_sphere(b, p.radius, steel);
+      }
+    }
+  }
+  if (shaped_tool_->config().shape == procedures::ToolShape::kSphere) {
+    // A sphere shows no turn of its own: a thin handle along its +z (the shaft's side) does.
+    const double radius = shaped_tool_->primitives().front().radius;
+    renderer_->draw_cylinder(tip + r * Vec3(0, 0, radius), tip + r * Vec3(0, 0, radius + 0.15 * size),
+                             std::max(0.2 * radius, 0.0015 * size), render::Rgba(0.6f, 0.62f, 0.66f, 1.0f));
+  }
+  if (view_options_.show_device) {
+    const double marker = std::max(0.0025 * size, 0.3 * t.radius);
+    renderer_->draw_sphere(last_.device, marker, render::Rgba(0.95f, 0.95f, 0.3f, 1.0f));
+    const Vec3 segment[2] = {tip, last_.device};
+    renderer_->draw_lines(segment, render::Rgba(0.95f, 0.95f, 0.3f, 1.0f));
+  }
+  const double per_n =
+      view_options_.arrow_m_per_n > 0.0f ? view_options_.arrow_m_per_n : size / 3.0 / std::max(max_force_n_, 1e-6);
+  if (last_.force.norm() > 1e-6) {
+    renderer_->draw_arrow(tip, tip + last_.force * per_n, std::max(0.0015 * size, 0.3 * t.radius),
+                          render::Rgba(1.0f, 0.25f, 0.2f, 1.0f));
+  }
+}
+
+void GuiWindow::draw_contacts(double size) {
+  // Over everything (contacts lie between bodies, inside what is drawn): each contact's two
+  // points, and the force on its first body as an arrow, the largest a tenth of the scene.
+  glDisable(GL_DEPTH_TEST);
+  if (contacts_ && !contacts_->contacts.empty()) {
+    double largest = 0.0;
+    for (const coupling::BodyContactView& c : contacts_->contacts) largest = std::max(largest, c.force_on_a_n.norm());
+    const double per_n = largest > 0.0 ? view_options_.contact_arrow_scale * 0.1 * size / largest : 0.0;
+    std::vector<Vec3> a_points, b_points;
+    for (const coupling::BodyContactView& c : contacts_->contacts) {
+      a_points.push_back(c.point_a);
+      b_points.push_back(c.point_b);
+    }
+    renderer_->draw_points(a_points, render::Rgba(1.0f, 0.6f, 0.1f, 1.0f), 7.0f);
+    renderer_->draw_points(b_points, render::Rgba(0.3f, 0.8f, 1.0f, 1.0f), 7.0f);
+    for (const coupling::BodyContactView& c : contacts_->contacts) {
+      const Vec3 arrow = c.force_on_a_n * per_n;
+      // An arrow thinner as it is shorter, so that its head never hides its length; forces
+      // below a twentieth of the largest (at the automatic length) are left as points.
+      const double length = arrow.norm();
+      if (length < 0.005 * size) continue;
+      renderer_->draw_arrow(c.point_a, c.point_a + arrow, std::min(0.003 * size, 0.06 * length),
+                            render::Rgba(1.0f, 0.45f, 0.1f, 1.0f));
+    }
+  }
+  if (shaped_tool_ && last_.valid && last_.tool.active) {
+    // The tool's contact points: where its shape, at its pose, meets a surface (the test its
+    // tick makes: each part's distance to the triangles near it, within a hair of its radius).
+    const haptics::ToolState& t = last_.tool;
+    const Mat3 r = t.orientation.normalized().toRotationMatrix();
+    near_triangles_.resize(4096);
+    std::vector<Vec3> points;
+    for (const LayerView& l : layers_) {
+      const haptics::SurfaceSnapshot* s = l.latest;
+      if (!s || s->triangles.empty()) continue;
+      for (const procedures::ToolPrimitive& p : shaped_tool_->primitives()) {
+        const Vec3 a = t.tip + r * p.a, b = t.tip + r * p.b;
+        const double reach = 0.5 * (b - a).norm() + p.radius * 1.05;
+        const std::size_t found =
+            std::min(s->tree.triangles_near(0.5 * (a + b), reach, near_triangles_), near_triangles_.size());
+        for (std::size_t k = 0; k < found; ++k) {
+          const mesh::Tri& tri = s->triangles[static_cast<std::size_t>(near_triangles_[k])];
+          Vec3 on_segment, on_triangle, weights;
+          const double d = procedures::closest_segment_triangle(
+              a, b, s->vertices[static_cast<std::size_t>(tri[0])], s->vertices[static_cast<std::size_t>(tri[1])],
+              s->vertices[static_cast<std::size_t>(tri[2])], on_segment, on_triangle, weights);
+          if (d <= p.radius * 1.05) points.push_back(on_triangle);
+        }
+      }
+    }
+    renderer_->draw_points(points, render::Rgba(0.2f, 1.0f, 0.4f, 1.0f), 6.0f);
+  }
+  glEnable(GL_DEPTH_TEST);
 }
 
 }  // namespace hof::app::gui

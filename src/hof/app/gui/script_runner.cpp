@@ -6,6 +6,7 @@
 #include <cstdio>
 
 #include "hof/app/gui/detail/gui_window.h"
+#include "hof/app/gui/detail/panels.h"
 
 namespace hof::app::gui {
 
@@ -34,6 +35,59 @@ bool GuiWindow::step_script(std::vector<ScriptAction>& script, std::size_t& next
       case ScriptAction::Kind::kNeedle:
         if (auto ok = mount_needle(a.on); !ok) return fail(ok.error());
         break;
+      case ScriptAction::Kind::kTool: {
+        // Through the Tool panel's own commands.
+        ToolChoice choice;
+        choice.kind = a.type == "sphere"    ? ToolChoice::Kind::kSphere
+                      : a.type == "capsule" ? ToolChoice::Kind::kCapsule
+                      : a.type == "mesh"    ? ToolChoice::Kind::kMesh
+                      : a.type == "needle"  ? ToolChoice::Kind::kNeedle
+                                            : ToolChoice::Kind::kPoint;
+        if (choice.kind == ToolChoice::Kind::kCapsule) {
+          choice.length_m = a.numbers[0];
+          choice.radius_m = a.numbers[1];
+        } else if (!a.numbers.empty()) {
+          choice.radius_m = a.numbers[0];
+        } else if (choice.kind == ToolChoice::Kind::kMesh) {
+          choice.radius_m = 0.0;  // automatic
+        }
+        if (choice.kind == ToolChoice::Kind::kMesh) choice.mesh = std::filesystem::absolute(a.file).string();
+        if (!session_) return fail(Error{ErrorCode::kInvalidArgument, "no world is open", "", 0, -1});
+        for (const GuiCommand& c : tool_commands(project_, choice)) {
+          if (auto ok = apply(c); !ok) return fail(ok.error());
+        }
+        break;
+      }
+      case ScriptAction::Kind::kRotate:
+        if (!mouse_)
+          return fail(Error{ErrorCode::kInvalidArgument, "the stylus is not the mouse (device " + device_spec_ + ")",
+                            "", 0, -1});
+        turn_mouse_stylus(
+            Eigen::Quaterniond(Eigen::AngleAxisd(a.numbers[3] * 3.14159265358979323846 / 180.0,
+                                                 Vec3(a.numbers[0], a.numbers[1], a.numbers[2]).normalized())));
+        break;
+      case ScriptAction::Kind::kContacts:
+        view_options_.show_contacts = a.on;
+        break;
+      case ScriptAction::Kind::kPair: {
+        const auto index = [&](const std::string& body) -> Expected<std::int32_t> {
+          for (std::size_t i = 0; i < bodies_.size(); ++i) {
+            if (bodies_[i].name == body) return static_cast<std::int32_t>(i);
+          }
+          std::string names;
+          for (const BodyView& b : bodies_) names += (names.empty() ? "" : ", ") + b.name;
+          return make_error(ErrorCode::kInvalidArgument, fmt::format("no body '{}' (bodies: {})", body, names));
+        };
+        const auto first = index(a.element);
+        if (!first) return fail(first.error());
+        const auto second = index(a.attribute);
+        if (!second) return fail(second.error());
+        if (auto ok = apply(GuiCommand{coupling::Command{coupling::command::SetContactPair{
+                static_cast<coupling::BodyId>(*first), static_cast<coupling::BodyId>(*second), a.on}}});
+            !ok)
+          return fail(ok.error());
+        break;
+      }
       case ScriptAction::Kind::kStep:
         if (session_) {
           if (auto ok = session_->submit(coupling::command::SingleStep{static_cast<int>(a.number)}); !ok)

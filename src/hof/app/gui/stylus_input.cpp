@@ -1,6 +1,7 @@
 // The mouse stylus: a left drag moves it on a plane facing the camera (set just in front of
-// the surface under the cursor), the wheel or W/S push it in depth; the right and middle
-// buttons orbit, pan and zoom the camera.
+// the surface under the cursor), the wheel or W/S push it in depth; Alt + left drag (or the
+// arrow keys) turn the tool it carries, R turns it back; the right and middle buttons orbit,
+// pan and zoom the camera.
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>
 #include <imgui.h>
@@ -54,6 +55,17 @@ void GuiWindow::mouse_to(double window_x, double window_y, double depth_m, bool 
   set_mouse_target(origin + direction * (plane_depth / along));
 }
 
+void GuiWindow::set_mouse_orientation(const Eigen::Quaterniond& world) {
+  mouse_orientation_ = world.normalized();
+  // The haptic loop turns a reading by the calibration's orientation: the device is given the
+  // turn that comes out as `world`.
+  if (mouse_) mouse_->set_orientation(mouse_calibration().orientation.inverse() * mouse_orientation_);
+}
+
+void GuiWindow::turn_mouse_stylus(const Eigen::Quaterniond& rotation) {
+  set_mouse_orientation(rotation * mouse_orientation_);
+}
+
 void GuiWindow::handle_input() {
   ImGuiIO& io = ImGui::GetIO();
   double x = 0.0, y = 0.0;
@@ -68,7 +80,22 @@ void GuiWindow::handle_input() {
     if (ImGui::IsKeyPressed(GLFW_KEY_W)) push += depth_step;
     if (ImGui::IsKeyPressed(GLFW_KEY_S)) push -= depth_step;
   }
-  if (io.WantCaptureMouse && !dragging_stylus_) {
+  // Turning the tool (a 6-DOF hand on a 2-D mouse): the arrow keys by 15° about the screen's
+  // vertical and horizontal axes, R back to the project's orientation.
+  const Vec3 screen_up = camera_.up_on_screen();
+  const Vec3 screen_right = camera_.right();
+  if (mouse_ && shaped_tool_ && !io.WantCaptureKeyboard && !io.KeyCtrl) {
+    constexpr double kStep = 15.0 * 3.14159265358979323846 / 180.0;
+    const auto turn = [&](const Vec3& axis, double angle) {
+      turn_mouse_stylus(Eigen::Quaterniond(Eigen::AngleAxisd(angle, axis)));
+    };
+    if (ImGui::IsKeyPressed(GLFW_KEY_LEFT)) turn(screen_up, -kStep);
+    if (ImGui::IsKeyPressed(GLFW_KEY_RIGHT)) turn(screen_up, kStep);
+    if (ImGui::IsKeyPressed(GLFW_KEY_UP)) turn(screen_right, -kStep);
+    if (ImGui::IsKeyPressed(GLFW_KEY_DOWN)) turn(screen_right, kStep);
+    if (ImGui::IsKeyPressed(GLFW_KEY_R)) set_mouse_orientation(Eigen::Quaterniond::Identity());
+  }
+  if (io.WantCaptureMouse && !dragging_stylus_ && !turning_stylus_) {
     if (push != 0.0 && mouse_) {
       mouse_depth_m_ += push;
       set_mouse_target(mouse_world_ + camera_.forward() * push);
@@ -82,6 +109,18 @@ void GuiWindow::handle_input() {
   // Left: the stylus follows the cursor on a plane facing the camera (set where the drag
   // starts, just in front of the surface under the cursor). Right: orbit; middle or
   // shift+right: pan; wheel: zoom (while the stylus is held: depth).
+  // Alt + left drag turns the tool about the screen's axes (a trackball: 0.5° a pixel; the
+  // surface nearest the eye follows the cursor).
+  if (left && mouse_ && shaped_tool_ && (io.KeyAlt || turning_stylus_) && !dragging_stylus_) {
+    turning_stylus_ = true;
+    constexpr double kRadiansPerPixel = 0.5 * 3.14159265358979323846 / 180.0;
+    if (dx != 0.0 || dy != 0.0) {
+      const Vec3 axis = (screen_up * dx + screen_right * dy).normalized();
+      turn_mouse_stylus(Eigen::Quaterniond(Eigen::AngleAxisd(kRadiansPerPixel * std::hypot(dx, dy), axis)));
+    }
+    return;
+  }
+  turning_stylus_ = false;
   if (left && mouse_) {
     if (!dragging_stylus_) {
       mouse_to(x, y, 0.0, true);

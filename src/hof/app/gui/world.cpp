@@ -21,6 +21,8 @@ std::vector<BodyView> body_views(const scene::World& world) {
     v.name = b.name;
     v.deformable = b.deformable();
     v.layer = b.layer;
+    v.collides = b.collision.enabled;
+    v.group = b.collision.group;
     if (b.config) v.set_structure(*b.config);
     if (const auto a = world.appearances.find(b.name); a != world.appearances.end()) {
       render::Material m;
@@ -45,6 +47,9 @@ void GuiWindow::close_session() {
     session_.reset();
   }
   needle_.reset();
+  shaped_tool_.reset();
+  tool_mesh_.reset();
+  contacts_ = nullptr;
   mouse_ = nullptr;
 }
 
@@ -114,6 +119,11 @@ Expected<void> GuiWindow::open(const std::filesystem::path& file, const scene::H
   calibration_pending_ = false;
   session_ = std::move(*made);
   needle_ = std::dynamic_pointer_cast<procedures::NeedleTool>(config.tool);
+  shaped_tool_ = std::dynamic_pointer_cast<const procedures::ShapedTool>(config.tool);
+  contact_settings_ = config.contacts;
+  disabled_pairs_ = std::set<BodyPair>(config.contacts.disabled_pairs.begin(), config.contacts.disabled_pairs.end());
+  tool_panel_.synced = false;
+  mouse_orientation_ = Eigen::Quaterniond::Identity();
   needle_phase_ = procedures::NeedlePhase::kFree;
   mouse_ = mouse;
   calibration_ = config.haptics.calibration;
@@ -129,6 +139,7 @@ Expected<void> GuiWindow::open(const std::filesystem::path& file, const scene::H
   dirty_ = false;
   error_.clear();
   take_world_shapes(world->visuals);
+  take_tool_shape();
   plot_force_.assign(kPlotPoints, 0.0f);
   plot_indentation_.assign(kPlotPoints, 0.0f);
   next_plot_time_ = 0.0;
@@ -149,6 +160,21 @@ Expected<void> GuiWindow::open(const std::filesystem::path& file, const scene::H
                      bodies_.size() == 1 ? "y" : "ies", spec),
          false);
   return {};
+}
+
+void GuiWindow::take_tool_shape() {
+  // A mesh tool is drawn as its surface (its contact spheres sample it); read again here, as
+  // the builder read it (relative to the project), in the tool's frame in world units.
+  if (!shaped_tool_ || shaped_tool_->config().shape != procedures::ToolShape::kMesh) return;
+  const std::filesystem::path mesh = shaped_tool_->config().mesh;
+  auto surface = procedures::read_tool_mesh(mesh.is_relative() ? file_.parent_path() / mesh : mesh);
+  if (!surface) return;  // the builder read it: only a file changed since could fail; drawn as spheres
+  for (Vec3& v : surface->vertices) v /= shaped_tool_->metres_per_unit();
+  const haptics::SurfaceSnapshot s = haptics::make_snapshot(*surface);  // for its vertex normals
+  tool_mesh_.emplace();
+  tool_mesh_->set_triangles(s.triangles);
+  tool_mesh_->set_positions(s.vertices);
+  tool_mesh_->set_normals(s.vertex_normals);
 }
 
 void GuiWindow::take_world_shapes(const std::vector<scene::VisualShape>& visuals) {
@@ -287,18 +313,34 @@ Expected<void> GuiWindow::mount_needle(bool on) {
   if (file_.extension() == ".x3d")
     return make_error(ErrorCode::kUnsupported, "the needle is mounted in a .hof project (save the scene as one)");
   scene::HofProject next = project_;
-  // The parameters changed so far go with the reopened world.
-  scene::record_parameters(next, scene::parameter_changes(*session_));
-  scene::record_parameters(next, submitted_changes_);
   if (on) {
     next.needle = procedures::NeedleConfig{};
+    next.tool.reset();  // one tool on the stylus
   } else {
     next.needle.reset();
   }
-  if (auto ok = open(file_, &next); !ok) return ok;
-  dirty_ = true;
+  if (auto ok = reopen_with(std::move(next)); !ok) return ok;
   report(on ? "the needle is mounted: its tissue parameters are in the Needle panel" : "the needle is taken off",
          false);
+  return {};
+}
+
+Expected<void> GuiWindow::reopen_with(scene::HofProject next) {
+  // The parameters changed so far go with the reopened world.
+  scene::record_parameters(next, scene::parameter_changes(*session_));
+  scene::record_parameters(next, submitted_changes_);
+  const render::OrbitCamera camera = camera_;
+  const Eigen::Quaterniond turned = mouse_orientation_;
+  const Vec3 stylus = mouse_world_;
+  if (auto ok = open(file_, &next); !ok) return ok;
+  // The user looks where they looked, the stylus stays where it was, turned as it was.
+  camera_ = camera;
+  if (mouse_) {
+    mouse_world_ = plane_point_ = stylus;
+    mouse_->place((calibration_.position.inverse() * mouse_world_.homogeneous()).head<3>());
+    set_mouse_orientation(turned);
+  }
+  dirty_ = true;
   return {};
 }
 

@@ -9,6 +9,7 @@
 
 #include "hof/app/gui/detail/component_switch.h"
 #include "hof/app/gui/detail/gui_window.h"
+#include "hof/app/gui/detail/panels.h"
 #include "hof/haptics/device_backends/mouse_device.h"
 #include "hof/scene/device_config.h"
 #include "hof/scene/model_parameters.h"
@@ -82,16 +83,38 @@ Expected<void> GuiWindow::set_mechanics_parameter(const std::string& element, co
     return make_error(ErrorCode::kInvalidArgument, fmt::format("'{}': '{}' is not a number", name, value));
   }
   auto command = scene::parameter_command(*session_, body, component, attribute, v);
-  if (auto ok = command ? session_->submit(*command) : Expected<void>(std::unexpected(command.error())); !ok) {
-    Error e = ok.error();
+  if (!command) {
+    Error e = command.error();
     e.message = fmt::format("'{}': {}", name, e.message);
     return std::unexpected(e);
   }
-  for (BodyView& b : bodies_) {
-    if (b.name == body) b.stress.reset();  // its moduli may have changed
+  return set_parameter(*command, name);
+}
+
+Expected<void> GuiWindow::set_parameter(const coupling::command::SetParameter& set, const std::string& name) {
+  if (!session_) return make_error(ErrorCode::kInvalidArgument, "no world is open");
+  const auto i = static_cast<std::size_t>(set.body);
+  if (i >= bodies_.size() || !bodies_[i].structure)
+    return make_error(ErrorCode::kInvalidArgument, fmt::format("no deformable body #{}", i));
+  BodyView& b = bodies_[i];
+  // Named as the body's model names it now (for the project's <set> and the recording).
+  const std::string path = scene::parameter_path(current_config(b), set.parameter);
+  const std::size_t slash = path.find('/');
+  const std::string component = path.substr(0, slash);
+  const std::string parameter = slash == std::string::npos ? path : path.substr(slash + 1);
+  const std::string setting = fmt::format(
+      "{}@{}", component.empty() ? "mechanics/" + b.name : "mechanics/" + b.name + "/" + component, parameter);
+  if (auto ok = session_->submit(set); !ok) {
+    Error e = ok.error();
+    e.message = fmt::format("'{}': {}", name.empty() ? setting : name, e.message);
+    return std::unexpected(e);
   }
-  submitted_changes_.push_back(scene::ParameterChange{body, component, attribute, v});
-  if (recording_) recording_->events.push_back(fmt::format("{:.3f}: set {} {}", recording_->seconds(), name, value));
+  b.stress.reset();  // its moduli may have changed
+  submitted_changes_.push_back(scene::ParameterChange{b.name, component, parameter, set.value});
+  if (recording_) {
+    recording_->events.push_back(
+        fmt::format("{:.3f}: set {} {}", recording_->seconds(), setting, number_text(set.value)));
+  }
   dirty_ = true;
   return {};
 }
@@ -218,8 +241,59 @@ Expected<void> GuiWindow::edit_project(const action::EditProject& edit) {
     e.message = fmt::format("'{}': {}", name, e.message);
     return std::unexpected(e);
   }
+  if (std::holds_alternative<scene::project_edit::Tool>(edit.edit)) {
+    scene::HofProject next = project_;
+    scene::apply_edit(next, edit.edit);
+    return set_tool(next, edit.settings);
+  }
   if (auto ok = apply_project_edit(edit.edit, name); !ok) return ok;
   note_settings(edit.settings);
+  return {};
+}
+
+Expected<void> GuiWindow::set_tool(const scene::HofProject& next, const std::vector<std::string>& settings) {
+  if (file_.extension() == ".x3d")
+    return make_error(ErrorCode::kUnsupported, "a tool is mounted in a .hof project (save the scene as one)");
+  // The tool is part of the world the session was made with (the haptic loop's tool, the
+  // tissue coupling): the world is opened again with it, as for the needle. A tool that does
+  // not build (a mesh not found or not closed) leaves the world as it was.
+  if (auto ok = reopen_with(next); !ok) {
+    Error e = ok.error();
+    e.message = "the tool is not mounted: " + e.message;
+    return std::unexpected(e);
+  }
+  note_settings(settings);
+  report(project_.tool ? fmt::format("the stylus carries a {} (Tool panel; turn it with Alt + left drag)",
+                                     procedures::shape_name(project_.tool->shape))
+                       : std::string("the stylus is the point proxy again"),
+         false);
+  return {};
+}
+
+Expected<void> GuiWindow::set_contact_pair(const coupling::command::SetContactPair& pair) {
+  if (!session_) return make_error(ErrorCode::kInvalidArgument, "no world is open");
+  if (auto ok = session_->submit(pair); !ok) return ok;
+  const auto a = static_cast<std::int32_t>(std::min(pair.a, pair.b));
+  const auto b = static_cast<std::int32_t>(std::max(pair.a, pair.b));
+  if (pair.enabled) {
+    disabled_pairs_.erase(BodyPair{a, b});
+  } else {
+    disabled_pairs_.insert(BodyPair{a, b});
+  }
+  const std::string& name_a = bodies_[static_cast<std::size_t>(a)].name;
+  const std::string& name_b = bodies_[static_cast<std::size_t>(b)].name;
+  if (project_.contact) {
+    // The project's <contact><pair enabled="false"> list, by name: a save keeps the switch.
+    auto& pairs = project_.contact->disabled_pairs;
+    std::erase_if(pairs, [&](const auto& p) {
+      return (p.first == name_a && p.second == name_b) || (p.first == name_b && p.second == name_a);
+    });
+    if (!pair.enabled) pairs.emplace_back(name_a, name_b);
+    note_settings({fmt::format("contact/pair {} {} {}", name_a, name_b, pair.enabled ? "on" : "off")});
+  }
+  report(fmt::format("contact {} - {} {}{}", name_a, name_b, pair.enabled ? "on" : "off",
+                     project_.contact ? "" : " (the scene's collision pipeline sets its pairs: not saved)"),
+         false);
   return {};
 }
 

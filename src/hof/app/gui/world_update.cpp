@@ -34,6 +34,12 @@ void GuiWindow::update_from_loops() {
     }
   }
   update_stress();
+  if (contact_settings_.enabled) {
+    // Published from this first call on; read without a lock (a triple buffer).
+    auto& contacts = session_->graphics_contacts();
+    contacts.acquire();
+    contacts_ = &contacts.read();
+  }
   if (calibration_pending_ && session_->calibrations_applied() >= calibrations_submitted_) {
     calibration_pending_ = false;
     if (mouse_) mouse_->place((calibration_.position.inverse() * mouse_world_.homogeneous()).head<3>());

@@ -58,6 +58,14 @@ class BodyContactPass {
 
   /// The last pass's contacts within the contact distance (body indices are the world's).
   [[nodiscard]] std::span<const collision::BodyContact> contacts() const { return active_contacts_; }
+  /// Switches the contact of bodies `a` and `b` (world indices) off or on from the next pass
+  /// (command::SetContactPair; the caller keeps ContactSettings::disabled_pairs). Nothing
+  /// while the pass is inactive.
+  void set_pair_enabled(std::size_t a, std::size_t b, bool enabled) {
+    const std::size_t n = due_.size();
+    if (!active_ || a >= n || b >= n) return;
+    pair_disabled_[a * n + b] = pair_disabled_[b * n + a] = enabled ? 0 : 1;
+  }
 
  private:
   struct Member {

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "hof/core/triple_buffer.h"
+#include "hof/coupling/contact_view.h"
 #include "hof/coupling/detail/world_step.h"
 
 namespace hof::coupling::detail {
@@ -36,6 +37,9 @@ class SnapshotPublisher {
   TripleBuffer<haptics::SurfaceSnapshot>& graphics_surfaces(std::size_t layer);
   /// Every body's node positions; from the first call on, every step publishes into it.
   TripleBuffer<std::vector<std::vector<double>>>& graphics_states();
+  /// The last contact pass's contacts between bodies; from the first call on, every step
+  /// publishes into it.
+  TripleBuffer<BodyContactsView>& graphics_contacts();
 
  private:
   struct LayerJob {  // a layer's shape after a step, staged for its snapshot
@@ -58,6 +62,14 @@ class SnapshotPublisher {
   std::atomic<bool> graphics_wanted_{false};
   std::atomic<bool> states_wanted_{false};
   TripleBuffer<std::vector<std::vector<double>>> graphics_states_;
+  std::atomic<bool> contacts_wanted_{false};
+  TripleBuffer<BodyContactsView> graphics_contacts_;
 };
+
+/// The contacts between bodies of the world's last contact pass, with the force its response
+/// gave each, into `out` (cleared first; its storage reused). The one place a reader's view of
+/// the contact response is made: a response that solves its contacts otherwise (constraints)
+/// fills it from its own pass here.
+void gather_body_contacts(const World& world, std::vector<BodyContactView>& out);
 
 }  // namespace hof::coupling::detail

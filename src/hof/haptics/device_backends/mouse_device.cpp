@@ -25,6 +25,14 @@ void MouseDevice::place(const Vec3& position_m) {
   target_.publish();
 }
 
+void MouseDevice::set_orientation(const Eigen::Quaterniond& orientation) {
+  const double norm = orientation.coeffs().norm();
+  if (!orientation.coeffs().allFinite() || !(norm > 0.0)) return;
+  writer_.orientation = Eigen::Quaterniond(orientation.coeffs() / norm);
+  target_.write_slot() = writer_;
+  target_.publish();
+}
+
 DeviceReading MouseDevice::read(double time_s) {
   target_.acquire();
   const Target& target = target_.read();
@@ -46,6 +54,7 @@ DeviceReading MouseDevice::read(double time_s) {
   r.time_s = time_s;
   r.position_m = position_;
   r.velocity_m_per_s = velocity_;
+  r.orientation = target.orientation;
   r.buttons = target.buttons;
   r.valid = true;
   return r;

@@ -31,6 +31,9 @@ class MouseDevice final : public Device {
   /// Jumps to `position_m` at once (no filtering): the stylus placed anew. The first reading
   /// is there even if a target was set since (it is then followed from there).
   void place(const Vec3& position_m);
+  /// The stylus's orientation (device frame; identity until set): the window turns a tool
+  /// with a shape with the mouse. Taken as it is (no filtering). One writer thread.
+  void set_orientation(const Eigen::Quaterniond& orientation);
 
  private:
   struct Target {
@@ -38,6 +41,7 @@ class MouseDevice final : public Device {
     Vec3 placed_at{Vec3::Zero()};  // where the stylus starts after place() (the target may have moved on)
     std::uint32_t buttons{0};
     std::uint64_t placed{0};  // changes when place() asks for a jump
+    Eigen::Quaterniond orientation{Eigen::Quaterniond::Identity()};
   };
   DeviceSpec spec_;
   double smoothing_s_;

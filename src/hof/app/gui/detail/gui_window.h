@@ -65,6 +65,7 @@ class GuiWindow {
   // The world (world.cpp).
   void close_session();
   void take_world_shapes(const std::vector<scene::VisualShape>& visuals);
+  void take_tool_shape();
   void place_mouse_stylus_in_front();
   void reset_camera();
   void set_animating(bool on);
@@ -74,6 +75,9 @@ class GuiWindow {
   scene::HofProject project_for(const std::filesystem::path& path) const;
   /// Mounts (or takes off) the needle: the world is opened again from the project in memory.
   Expected<void> mount_needle(bool on);
+  /// The world opened again from `next` (the parameters changed so far go with it; the camera
+  /// and the mouse stylus's turn stay): a tool mounted or taken off.
+  Expected<void> reopen_with(scene::HofProject next);
   // Edits (world_edits.cpp).
   /// A setting by the project file's names (a script's `set`, a panel's SetAttribute): parsed
   /// into a typed edit at scene/'s edge, then applied.
@@ -83,6 +87,9 @@ class GuiWindow {
   Expected<void> apply_project_edit(const scene::ProjectEdit& edit, const std::string& name);
   Expected<void> set_mechanics_parameter(const std::string& element, const std::string& attribute,
                                          const std::string& value);
+  /// A typed parameter command (a panel's, or a script's once named): submitted, kept for a
+  /// save (by the scene's names) and a recording. `name` prefixes its errors ("" : none).
+  Expected<void> set_parameter(const coupling::command::SetParameter& set, const std::string& name = {});
   Expected<void> set_device(const scene::HofProject& next, const std::string& name);
   /// A structural change (the scene made inline in the project and edited; and/or the material
   /// regions replaced): the world's models are rebuilt from it and swapped in through the seam.
@@ -91,6 +98,12 @@ class GuiWindow {
   /// A component's switch to another type, with the values that carry over (E, ν, masses).
   Expected<void> switch_component(const std::string& body, const std::string& component, const std::string& choice);
   Expected<void> set_effects(const haptics::ForceEffects& effects);
+  /// A pair of bodies' contact switched off or on (submitted; kept in the project's <contact>
+  /// when it has one, so that a save keeps it).
+  Expected<void> set_contact_pair(const coupling::command::SetContactPair& pair);
+  /// Another tool on the stylus (a panel's typed edit of the project's <tool>): the world is
+  /// opened again with it.
+  Expected<void> set_tool(const scene::HofProject& next, const std::vector<std::string>& settings);
   /// A panel's typed edit of the project: checked (scene::check_edit), then applied.
   Expected<void> edit_project(const action::EditProject& edit);
   Expected<void> set_graphics(const action::SetGraphics& edit);
@@ -115,6 +128,10 @@ class GuiWindow {
   std::optional<Vec3> pick(double x_px, double y_px) const;
   void mouse_to(double window_x, double window_y, double depth_m, bool new_plane);
   void set_mouse_target(const Vec3& world);
+  /// Turns the mouse stylus (and the tool it carries) by `rotation` (world frame), or back to
+  /// the project's orientation (identity).
+  void turn_mouse_stylus(const Eigen::Quaterniond& rotation);
+  void set_mouse_orientation(const Eigen::Quaterniond& world);
   void handle_input();
   // The 3D scene (scene_drawing.cpp).
   void draw_scene(int width, int height);
@@ -122,6 +139,10 @@ class GuiWindow {
   void draw_debug_views();
   void draw_stylus();
   void draw_needle(double size);
+  /// The shaped tool at its pose (sphere, capsule or mesh), the device, the force.
+  void draw_tool(double size);
+  /// The debug view of contacts: between bodies (points, force arrows) and the tool's.
+  void draw_contacts(double size);
   // The script (script_runner.cpp).
   bool step_script(std::vector<ScriptAction>& script, std::size_t& next, const std::string& name, int& status);
 
@@ -149,7 +170,15 @@ class GuiWindow {
   bool default_probe_{false};
   std::unique_ptr<coupling::Session> session_;
   haptics::MouseDevice* mouse_{nullptr};
-  std::shared_ptr<procedures::NeedleTool> needle_;  // the needle stylus, when the project mounts one
+  std::shared_ptr<procedures::NeedleTool> needle_;             // the needle stylus, when the project mounts one
+  std::shared_ptr<const procedures::ShapedTool> shaped_tool_;  // a tool with a shape, when mounted
+  std::optional<render::MeshBuffer> tool_mesh_;                // a mesh tool's surface (tool frame, world units)
+  // Contact between bodies: the settings, the pairs off, the last pass's contacts (read from
+  // the session's triple buffer, valid until the next acquire).
+  coupling::ContactSettings contact_settings_;
+  std::set<BodyPair> disabled_pairs_;
+  const coupling::BodyContactsView* contacts_{nullptr};
+  std::vector<std::int32_t> near_triangles_;                              // scratch of the tool's contact points
   procedures::NeedlePhase needle_phase_{procedures::NeedlePhase::kFree};  // at the last tick
   haptics::Calibration calibration_;
   double max_force_n_{8.0};
@@ -184,6 +213,8 @@ class GuiWindow {
   Vec3 mouse_world_{Vec3::Zero()};
   double mouse_depth_m_{0.0};
   bool dragging_stylus_{false};
+  bool turning_stylus_{false};
+  Eigen::Quaterniond mouse_orientation_{Eigen::Quaterniond::Identity()};  // world frame
   double last_x_{0.0}, last_y_{0.0};
 
   ViewOptions view_options_;
@@ -199,6 +230,7 @@ class GuiWindow {
   // The panels' own inputs.
   MechanicsPanelState mechanics_panel_;
   HapticsPanelState haptics_panel_;
+  ToolPanelState tool_panel_;
 
   // Messages and dialogs.
   std::string error_;

@@ -6,6 +6,8 @@
 /// to use next) are its state, passed in beside the view.
 
 #include <array>
+#include <cstdint>
+#include <string>
 
 #include "hof/app/gui/detail/gui_command.h"
 #include "hof/app/gui/detail/world_view.h"
@@ -36,6 +38,28 @@ struct HapticsPanelState {
 [[nodiscard]] GuiCommands haptics_panel(const WorldView& w, HapticsPanelState& ui);
 /// The project's graphics settings, and the window's debug views (`view`, edited in place).
 [[nodiscard]] GuiCommands graphics_panel(const WorldView& w, ViewOptions& view);
+/// What the Tool panel and a script's `tool` choose: the stylus's tool.
+struct ToolChoice {
+  enum class Kind : std::uint8_t { kPoint, kSphere, kCapsule, kMesh, kNeedle };
+  Kind kind{Kind::kPoint};
+  double radius_m{0.005};  ///< sphere, capsule; mesh: its spheres' (0: automatic)
+  double length_m{0.05};   ///< capsule: the shaft
+  std::string mesh;        ///< mesh: the OBJ/STL file
+};
+/// The commands that put `choice` on the stylus in `project` (a shaped tool keeps the
+/// project's orientation, stiffness and damping; the point takes off any tool and the needle).
+[[nodiscard]] GuiCommands tool_commands(const scene::HofProject& project, const ToolChoice& choice);
+
+struct ToolPanelState {
+  bool synced{false};  // the inputs taken from the project (false: again at the next draw)
+  int kind{0};         // ToolChoice::Kind
+  float radius_mm{5.0f}, length_mm{50.0f};
+  std::array<char, 512> mesh{};
+};
+/// The tool on the stylus: the point/sphere proxy, a sphere, a capsule, a mesh or the needle.
+[[nodiscard]] GuiCommands tool_panel(const WorldView& w, ToolPanelState& ui);
+/// Contact between bodies: the debug view (`view`, edited in place), the pairs switched off or on.
+[[nodiscard]] GuiCommands contacts_panel(const WorldView& w, ViewOptions& view);
 /// The log of messages.
 [[nodiscard]] GuiCommands messages_panel(const WorldView& w);
 

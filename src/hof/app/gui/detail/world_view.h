@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <memory>
 #include <optional>
+#include <set>
 #include <string>
 #include <utility>
 #include <vector>
@@ -20,6 +21,7 @@
 #include "hof/haptics/surface_snapshot.h"
 #include "hof/mechanics/von_mises_stress.h"
 #include "hof/procedures/needle.h"
+#include "hof/procedures/shaped_tool.h"
 #include "hof/render/camera.h"
 #include "hof/render/gl_renderer.h"
 #include "hof/scene/model_parameters.h"
@@ -63,6 +65,8 @@ struct BodyView {
   std::optional<render::Material> material;  // the file's (an X3D Material), else the project's
   bool deformable{false};
   int layer{0};
+  bool collides{false};    // it takes part in contact between bodies (its collision models)
+  std::int32_t group{-1};  // its collision group (SOFA `group`; bodies of one group never touch)
   /// The model as it was last built (the world opened, or a structural edit): its mesh and
   /// components. Not its current values: those are the session's (Session::parameter()); the
   /// window never keeps a second copy of them.
@@ -156,7 +160,13 @@ struct ViewOptions {
   bool show_device{true};
   bool show_regions{true};
   float arrow_m_per_n{0.0f};  // 0: automatic (an 8 N force as long as a third of the scene)
+  /// Contacts: between bodies (points, force arrows) and the shaped tool's contact points.
+  bool show_contacts{false};
+  float contact_arrow_scale{1.0f};  // × the automatic length (the largest force a tenth of the scene)
 };
+
+/// A pair of bodies by world index, the smaller first.
+using BodyPair = std::pair<std::int32_t, std::int32_t>;
 
 /// The world on screen as the panels read it: references into the window, valid for one frame.
 struct WorldView {
@@ -173,6 +183,12 @@ struct WorldView {
   double max_force_n;
   double workspace_radius_m;
   const std::vector<BodyView>& bodies;
+  const procedures::ShapedTool* tool;  ///< the tool with a shape on the stylus, when the project mounts one
+  /// Contact between bodies: the session's settings, the pairs switched off, the last pass's
+  /// contacts (null: none published yet).
+  const coupling::ContactSettings& contact_settings;
+  const std::set<BodyPair>& disabled_pairs;
+  const coupling::BodyContactsView* contacts;
   Vec3 bounds_min, bounds_max;
   bool animating, dirty, realtime_pacing;
   // Telemetry.
