@@ -459,6 +459,8 @@ bool advance_bodies(World& w, SessionReport& report) {
     }
     due[k]->next_step_s += due[k]->body.model->dt_s;
   }
+  // Friction constraints: the steps just taken were the free motion; the contacts correct it.
+  if (w.body_contacts.active()) w.body_contacts.correct(w, w.due_flags, report);
   w.time_s = next_time;
   return true;
 }

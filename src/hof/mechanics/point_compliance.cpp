@@ -2,6 +2,7 @@
 #include "hof/mechanics/detail/solver_workspace.h"
 
 #include "hof/mechanics/detail/assembly.h"
+#include "hof/mechanics/detail/linear_solve.h"
 #include "hof/mechanics/detail/vector_kernels.h"
 #include "hof/mechanics/forces.h"
 
@@ -66,6 +67,26 @@ bool compute_point_compliance(const MechanicalModel& model, MechanicalState& sta
   // The true compliance is symmetric; remove the solver's round-off asymmetry.
   compliance = 0.5 * (compliance + compliance.transpose()).eval();
   return compliance.allFinite();
+}
+
+bool system_diagonal_block(const MechanicalModel& model, const MechanicalState& state, std::int32_t node, Mat3& block) {
+  if (model.ode.kind != OdeSolverKind::kEulerImplicit || !state.work || node < 0 ||
+      static_cast<std::size_t>(node) >= model.node_count())
+    return false;
+  const detail::SolverWorkspace& w = *state.work;
+  if (w.system_assembled_step < 0) return false;
+  const std::int64_t slot = w.system.diagonal_slot(node);
+  if (detail::uses_single_precision(model)) {
+    // The CG then reads (and the assembly may fill) only the single-precision copy.
+    const float* values = w.system.single_block(slot);
+    for (int q = 0; q < 3; ++q) {
+      for (int i = 0; i < 3; ++i)
+        block(i, q) = static_cast<double>(values[BlockSparseMatrix::kSingleColumnStride * q + i]);
+    }
+  } else {
+    block = w.system.block(slot);
+  }
+  return true;
 }
 
 }  // namespace hof::mechanics

@@ -20,4 +20,12 @@ namespace hof::mechanics {
 bool compute_point_compliance(const MechanicalModel& model, MechanicalState& state, std::span<const std::int32_t> nodes,
                               std::span<const double> weights, Mat3& compliance, int max_iterations = 5000);
 
+/// The node's 3x3 diagonal block of the matrix the last implicit Euler step solved,
+/// A = (1 + h r_M) M + h (h + r_K) K (plus the external stiffness), kg, with the rows and
+/// columns of held dofs as the projection left them. False when the state holds no such
+/// matrix (another integrator, before the first step, or after compute_point_compliance
+/// replaced it by K) or the node is out of range. Reads only; no allocation. The contact
+/// constraints' compliance h²·A_ii⁻¹ (coupling/detail/body_contact_constraints.h).
+bool system_diagonal_block(const MechanicalModel& model, const MechanicalState& state, std::int32_t node, Mat3& block);
+
 }  // namespace hof::mechanics

@@ -15,19 +15,6 @@ namespace {
 // Room kept for contacts at the start (the list grows past it only when a pass finds more).
 constexpr std::size_t kInitialContactCapacity = 4096;
 
-std::size_t point_vertex_count(collision::PrimitiveKind kind) {
-  switch (kind) {
-    case collision::PrimitiveKind::kVertex:
-    case collision::PrimitiveKind::kSphere:
-      return 1;
-    case collision::PrimitiveKind::kEdge:
-      return 2;
-    case collision::PrimitiveKind::kTriangle:
-      return 3;
-  }
-  return 0;
-}
-
 bool has_elements(const mechanics::MechanicalModel& model) {
   return !model.hexahedra.empty() || !model.tets.empty() || !model.triangles.empty();
 }
@@ -94,73 +81,32 @@ Expected<void> validate_contacts(const ContactSettings& settings, std::span<cons
 void BodyContactPass::init(World& w) {
   active_ = w.config.contacts.enabled;
   if (!active_) return;
+  constraints_on_ = w.config.contacts.response == ContactResponse::kFrictionConstraint &&
+                    w.config.contacts.experimental_constraint_solver;
   const std::size_t n = w.bodies.size();
-  for (std::size_t i = 0; i < n; ++i) {
-    const BodyRuntime& r = w.bodies[i];
-    if (!r.body.collision.enabled) continue;
-    Member m;
-    m.body = i;
-    m.previous = r.surface_positions;
-    m.spheres = r.body.collision.sphere_centers;
-    if (r.body.deformable() && !m.spheres.empty()) {
-      // The centres follow the volume as SOFA's BarycentricMapping makes them, by the same maps
-      // as the surface: trilinear in hexahedra, barycentric in tetrahedra, onto triangles.
-      const mechanics::MechanicalModel& model = *r.body.model;
-      auto mapping =
-          !model.hexahedra.empty() ? SurfaceMapping::trilinear(model.rest_positions, model.hexahedra, m.spheres)
-          : !model.tets.empty()    ? SurfaceMapping::barycentric(model.rest_positions, model.tets, m.spheres)
-                                   : SurfaceMapping::onto_triangles(model.rest_positions, model.triangles, m.spheres);
-      if (mapping) {  // validate_contacts made sure there are elements
-        m.sphere_mapping = std::move(*mapping);
-        m.spheres_mapped = true;
-      }
-    }
-    members_.push_back(std::move(m));
-  }
-  views_.resize(members_.size());
-  for (std::size_t k = 0; k < members_.size(); ++k) {
-    const Member& m = members_[k];
-    const BodyRuntime& r = w.bodies[m.body];
-    const BodyCollision& c = r.body.collision;
-    collision::CollisionBody& v = views_[k];
-    v.surface = {r.surface_positions, r.body.surface.triangles};
-    v.previous_vertices = m.previous;
-    v.triangles = c.triangles;
-    v.lines = c.lines;
-    v.points = c.points;
-    v.sphere_centers = m.spheres;
-    v.sphere_radii = c.sphere_radii;
-    // A rigid body never moves and never reacts: an obstacle (SOFA: moving="0" simulated="0").
-    v.moving = r.body.deformable();
-    v.simulated = r.body.deformable() && c.simulated;
-    v.group = c.group;
-    v.self_collision = c.self_collision.value_or(w.config.contacts.self_collision);
-  }
-  detector_.reset(views_, w.config.tree);
-  detected_.reserve(kInitialContactCapacity);
+  detection_.init(w);
   active_contacts_.reserve(kInitialContactCapacity);
   force_sum_.assign(n, Vec3::Zero());
   contact_count_.assign(n, 0);
   due_.assign(n, 0);
-  pair_disabled_.assign(n * n, 0);
-  for (const auto& [first, second] : w.config.contacts.disabled_pairs) {
-    const auto a = static_cast<std::size_t>(first), b = static_cast<std::size_t>(second);
-    pair_disabled_[a * n + b] = pair_disabled_[b * n + a] = 1;
+  if (constraints()) {
+    constraints_.init(w);
+    return;  // no springs: no stiffness entries
   }
   // Room for the stiffness entries of many contacts on each body (a contact point carries at
   // most kMaxPointWeights nodes): filling them then allocates nothing.
   // (It grows past that only when a pass has more.)
-  for (const Member& m : members_) {
-    BodyRuntime& r = w.bodies[m.body];
-    if (!r.body.deformable()) continue;
+  detection_.for_each_body([&](std::size_t b) {
+    const BodyRuntime& r = w.bodies[b];
+    if (!r.body.deformable()) return;
     stiffness_capacity_ = std::max(stiffness_capacity_,
                                    std::min<std::size_t>(kInitialContactCapacity, 4 * r.body.surface.vertices.size()) *
                                        SurfaceMapping::kMaxPointWeights);
-  }
-  for (const Member& m : members_) {
-    BodyRuntime& r = w.bodies[m.body];
+  });
+  detection_.for_each_body([&](std::size_t b) {
+    BodyRuntime& r = w.bodies[b];
     if (r.body.deformable()) r.state.external_stiffness.reserve(stiffness_capacity_);
-  }
+  });
 }
 
 void BodyContactPass::add_side(World& w, const collision::ContactPoint& side, const Vec3& force,
@@ -174,20 +120,7 @@ void BodyContactPass::add_side(World& w, const collision::ContactPoint& side, co
   if (!r.body.deformable() || !r.body.collision.simulated || !due_[b]) return;
   std::array<std::int32_t, SurfaceMapping::kMaxPointWeights> nodes{};
   std::array<double, SurfaceMapping::kMaxPointWeights> weights{};
-  std::size_t count = 0;
-  const std::size_t vertices = point_vertex_count(side.kind);
-  if (side.kind == collision::PrimitiveKind::kSphere) {
-    const Member* member = nullptr;
-    for (const Member& m : members_) {
-      if (m.body == b) member = &m;
-    }
-    if (member == nullptr || !member->spheres_mapped) return;
-    const std::array<double, 1> one{1.0};
-    count = member->sphere_mapping.point_weights(std::span(side.vertices.data(), 1), one, nodes, weights);
-  } else {
-    count = r.body.mapping.point_weights(std::span(side.vertices.data(), vertices),
-                                         std::span(side.weights.data(), vertices), nodes, weights);
-  }
+  const std::size_t count = detection_.point_weights(w, side, nodes, weights);
   double* f = r.state.external_force.data();
   for (std::size_t k = 0; k < count; ++k) {
     const auto node = static_cast<std::size_t>(nodes[k]);
@@ -204,38 +137,30 @@ void BodyContactPass::add_side(World& w, const collision::ContactPoint& side, co
 void BodyContactPass::apply(World& w, std::span<const char> due, SessionReport& report) {
   if (!active_) return;
   const ContactSettings& settings = w.config.contacts;
+  if (constraints()) {
+    constraints_.save_start(w, due);  // correct() after the step
+    return;
+  }
+  // Without the (unfinished) constraint solver, friction contacts are penalty springs.
   if (settings.response == ContactResponse::kFrictionConstraint) report.friction_solved_as_penalty = true;
   std::fill(due_.begin(), due_.end(), 0);
   std::copy(due.begin(), due.begin() + static_cast<std::ptrdiff_t>(std::min(due.size(), due_.size())), due_.begin());
-  for (Member& m : members_) {
-    BodyRuntime& r = w.bodies[m.body];
-    if (!r.body.deformable()) continue;
-    if (due_[m.body]) r.state.external_stiffness.clear();  // keeps its capacity
+  detection_.for_each_body([&](std::size_t b) {
+    BodyRuntime& r = w.bodies[b];
+    if (!r.body.deformable()) return;
+    if (due_[b]) r.state.external_stiffness.clear();  // keeps its capacity
     // A command gave the body a new state (a reset, another model): room again for the
-    // entries, and no continuous motion from where it was (a reset jumps back to rest, which
-    // must not count as crossing what lies between).
+    // entries (and detection forgets where it was, begin_pass).
     if (r.state.external_stiffness.capacity() < stiffness_capacity_)
       r.state.external_stiffness.reserve(stiffness_capacity_);
-    if (r.state.steps < m.steps_seen)
-      std::copy(r.surface_positions.begin(), r.surface_positions.end(), m.previous.begin());
-    m.steps_seen = r.state.steps;
-    if (m.spheres_mapped) {
-      m.sphere_mapping.apply({r.state.x.data(), static_cast<std::size_t>(r.state.x.size())}, m.spheres);
-    }
-  }
+  });
+  detection_.begin_pass(w);
   // The surfaces are where the last step left them (the publisher mapped them after it).
-  detector_.detect(views_, {settings.alarm_distance_m}, detected_);
+  detection_.detect(w, settings.contact_distance_m, active_contacts_);
   std::fill(force_sum_.begin(), force_sum_.end(), Vec3::Zero());
   std::fill(contact_count_.begin(), contact_count_.end(), 0);
-  active_contacts_.clear();
-  const std::size_t n = w.bodies.size();
-  for (collision::BodyContact c : detected_) {
-    if (!(c.distance < settings.contact_distance_m)) continue;
-    // Detector body indices are the members'; from here on they are the world's.
-    c.a.body = static_cast<std::int32_t>(members_[static_cast<std::size_t>(c.a.body)].body);
-    c.b.body = static_cast<std::int32_t>(members_[static_cast<std::size_t>(c.b.body)].body);
+  for (const collision::BodyContact& c : active_contacts_) {
     const auto a = static_cast<std::size_t>(c.a.body), b = static_cast<std::size_t>(c.b.body);
-    if (pair_disabled_[a * n + b]) continue;
     const double k = pair_contact_stiffness(settings, w.bodies[a].body.collision, w.bodies[b].body.collision);
     // PenalityContactForceField: a spring pushing the two points apart along the normal
     // (from b toward a) by the depth below the contact distance; −∂f/∂x = k n nᵀ while active.
@@ -243,19 +168,22 @@ void BodyContactPass::apply(World& w, std::span<const char> due, SessionReport& 
     const Mat3 stiffness = k * c.normal * c.normal.transpose();
     add_side(w, c.a, force, stiffness);
     add_side(w, c.b, -force, stiffness);
-    active_contacts_.push_back(c);
   }
-  for (Member& m : members_) {
-    BodyRuntime& r = w.bodies[m.body];
-    std::copy(r.surface_positions.begin(), r.surface_positions.end(), m.previous.begin());
-    BodyReport& br = r.report;
-    br.body_contacts = contact_count_[m.body];
+  detection_.end_pass(w);
+  detection_.for_each_body([&](std::size_t b) {
+    BodyReport& br = w.bodies[b].report;
+    br.body_contacts = contact_count_[b];
     br.max_body_contacts = std::max(br.max_body_contacts, br.body_contacts);
-    br.body_contact_force_n = force_sum_[m.body];
-    br.max_body_contact_force_n = std::max(br.max_body_contact_force_n, force_sum_[m.body].norm());
-  }
+    br.body_contact_force_n = force_sum_[b];
+    br.max_body_contact_force_n = std::max(br.max_body_contact_force_n, force_sum_[b].norm());
+  });
   report.body_contacts = static_cast<std::int64_t>(active_contacts_.size());
   report.max_body_contacts = std::max(report.max_body_contacts, report.body_contacts);
+}
+
+void BodyContactPass::correct(World& w, std::span<const char> due, SessionReport& report) {
+  if (!active_ || !constraints()) return;
+  constraints_.apply(w, detection_, due, report, active_contacts_);
 }
 
 }  // namespace hof::coupling::detail

@@ -9,7 +9,11 @@
 /// vertices and through the body's SurfaceMapping onto its nodes (state.external_force), and
 /// the spring's stiffness k·n·nᵀ goes into the body's implicit solve
 /// (MechanicalState::external_stiffness), so that stiff contact stays stable at dt 10–20 ms.
-/// ContactResponse::kFrictionConstraint is solved the same way for now (the report says so).
+/// ContactResponse::kFrictionConstraint is solved the same way (the report says so) unless
+/// ContactSettings::experimental_constraint_solver asks for the constraint response
+/// (body_contact_constraints.h): then apply() only saves the start of the step and correct(),
+/// after the due bodies have stepped, solves the contacts as constraints with Coulomb
+/// friction. Either way contacts() lists the last pass's.
 
 #include <cstdint>
 #include <span>
@@ -17,6 +21,8 @@
 
 #include "hof/collision/body_contacts.h"
 #include "hof/coupling/contact_settings.h"
+#include "hof/coupling/detail/body_contact_constraints.h"
+#include "hof/coupling/detail/body_contact_detection.h"
 #include "hof/coupling/session.h"
 #include "hof/coupling/surface_mapping.h"
 
@@ -54,9 +60,17 @@ class BodyContactPass {
   /// external_force (load_contacts cleared it) and rewrites their external_stiffness. Counts
   /// the contacts and the forces in `report` and the bodies' reports. No allocation once the
   /// contact list has grown to the most contacts any pass found.
+  /// With the constraint response, only the bodies' start of step is saved (correct() then
+  /// does the work).
   void apply(World& world, std::span<const char> due, SessionReport& report);
 
-  /// The last pass's contacts within the contact distance (body indices are the world's).
+  /// After the due bodies stepped (their free motion), with the constraint response
+  /// (kFrictionConstraint and experimental_constraint_solver): the constraint pass (BodyContactConstraints::apply)
+  /// corrects their positions and velocities. Nothing with the penalty response.
+  void correct(World& world, std::span<const char> due, SessionReport& report);
+
+  /// The last pass's contacts within the contact distance (friction constraints: those that
+  /// pushed, normal force > 0); body indices are the world's.
   [[nodiscard]] std::span<const collision::BodyContact> contacts() const { return active_contacts_; }
   /// Switches the contact of bodies `a` and `b` (world indices) off or on from the next pass
   /// (command::SetContactPair; the caller keeps ContactSettings::disabled_pairs). Nothing
@@ -68,27 +82,18 @@ class BodyContactPass {
   }
 
  private:
-  struct Member {
-    std::size_t body{0};            // index into World::bodies
-    std::vector<Vec3> previous;     // its surface at the last pass (continuous detection)
-    std::vector<Vec3> spheres;      // its sphere centres now
-    SurfaceMapping sphere_mapping;  // deformable bodies with spheres: volume → centres
-    bool spheres_mapped{false};
-    std::int64_t steps_seen{0};  // its state's step count at the last pass (a drop: a reset)
-  };
-
+  // Whether the contacts are solved as constraints (body_contact_constraints.h).
+  [[nodiscard]] bool constraints() const { return constraints_on_; }
   // Adds `force` (and the stiffness k·n·nᵀ, lumped) at one side's contact point.
   void add_side(World& world, const collision::ContactPoint& side, const Vec3& force, const Mat3& stiffness);
 
   bool active_{false};
-  std::vector<Member> members_;
-  std::vector<collision::CollisionBody> views_;
-  collision::ContactDetector detector_;
-  std::vector<collision::BodyContact> detected_;
+  bool constraints_on_{false};
+  BodyContactDetection detection_;
+  BodyContactConstraints constraints_;  // kFrictionConstraint only
   std::vector<collision::BodyContact> active_contacts_;
   std::vector<Vec3> force_sum_;              // (bodies) this pass's contact force on each body
   std::vector<std::int64_t> contact_count_;  // (bodies) this pass's contacts of each body
-  std::vector<std::uint8_t> pair_disabled_;  // (bodies²) the settings' disabled pairs
   std::vector<char> due_;                    // (bodies) this pass's due bodies
   std::size_t stiffness_capacity_{0};        // entries reserved per body for external_stiffness
 };
