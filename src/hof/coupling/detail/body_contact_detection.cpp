@@ -74,6 +74,7 @@ void BodyContactDetection::init(World& w) {
   }
   detector_.reset(views_, w.config.tree);
   detected_.reserve(kInitialContactCapacity);
+  bodies_ = n;
   pair_disabled_.assign(n * n, 0);
   for (const auto& [first, second] : w.config.contacts.disabled_pairs) {
     const auto a = static_cast<std::size_t>(first), b = static_cast<std::size_t>(second);

@@ -47,6 +47,14 @@ class BodyContactDetection {
     for (const Member& m : members_) f(m.body);
   }
 
+  /// Switches the contact of bodies `a` and `b` (world indices) off or on from the next pass
+  /// (command::SetContactPair). Nothing for indices outside the world set up by init().
+  void set_pair_enabled(std::size_t a, std::size_t b, bool enabled) {
+    const std::size_t n = bodies_;
+    if (a >= n || b >= n) return;
+    pair_disabled_[a * n + b] = pair_disabled_[b * n + a] = enabled ? 0 : 1;
+  }
+
  private:
   struct Member {
     std::size_t body{0};            // index into World::bodies
@@ -62,6 +70,7 @@ class BodyContactDetection {
   std::vector<collision::CollisionBody> views_;
   collision::ContactDetector detector_;
   std::vector<collision::BodyContact> detected_;
+  std::size_t bodies_{0};                    // the world's bodies at init()
   std::vector<std::uint8_t> pair_disabled_;  // (bodies²) the settings' disabled pairs
 };
 

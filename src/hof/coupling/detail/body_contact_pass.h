@@ -76,9 +76,7 @@ class BodyContactPass {
   /// (command::SetContactPair; the caller keeps ContactSettings::disabled_pairs). Nothing
   /// while the pass is inactive.
   void set_pair_enabled(std::size_t a, std::size_t b, bool enabled) {
-    const std::size_t n = due_.size();
-    if (!active_ || a >= n || b >= n) return;
-    pair_disabled_[a * n + b] = pair_disabled_[b * n + a] = enabled ? 0 : 1;
+    if (active_) detection_.set_pair_enabled(a, b, enabled);
   }
 
  private:
