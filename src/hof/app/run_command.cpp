@@ -229,7 +229,19 @@ int run_session(const RunOptions& options) {
   config.haptics.realtime_priority = !options.deterministic;
   config.simulation_threads = options.simulation_threads;
   config.pin_threads = options.pin_threads;
-  auto made = coupling::Session::make(std::move(world->bodies), std::move(*device), config);
+  // The project's other hands (<tool device=…>), each on its own device.
+  std::vector<std::unique_ptr<haptics::Device>> more_devices;
+  for (coupling::HandConfig& hand : config.more_hands) {
+    hand.haptics.realtime_priority = config.haptics.realtime_priority;
+    auto opened = scene::open_device(hand.device);
+    if (!opened) {
+      Error e = opened.error();
+      e.message = fmt::format("{} (a <tool>'s device in {})", e.message, options.file.string());
+      return fail(e);
+    }
+    more_devices.push_back(std::move(*opened));
+  }
+  auto made = coupling::Session::make(std::move(world->bodies), std::move(*device), std::move(more_devices), config);
   if (!made) return fail(made.error());
   coupling::Session& session = **made;
 
@@ -355,6 +367,19 @@ int run_check(const CheckOptions& options) {
     if (const auto& t = world->project.tool) {
       std::printf("  tool: %s, radius %g m%s\n", std::string(procedures::shape_name(t->shape)).c_str(), t->radius_m,
                   t->shape == procedures::ToolShape::kCapsule ? fmt::format(", shaft {} m", t->length_m).c_str() : "");
+    }
+    for (std::size_t h = 0; h < world->project.hands.size(); ++h) {
+      const scene::HandSetup& hand = world->project.hands[h];
+      const procedures::ShapedToolConfig& t = hand.tool;
+      std::printf("  hand %zu: %s, radius %g m%s, device %s%s\n", h + 2,
+                  std::string(procedures::shape_name(t.shape)).c_str(), t.radius_m,
+                  t.shape == procedures::ToolShape::kCapsule ? fmt::format(", shaft {} m", t.length_m).c_str() : "",
+                  valid_utf8(t.device).c_str(),
+                  hand.max_force_n > 0.0 ? fmt::format(", force limit {} N", hand.max_force_n).c_str() : "");
+      if (auto device = scene::open_device(world->config.more_hands[h].device); !device) {
+        std::printf("%s\n", device.error().to_string().c_str());
+        ++problems;
+      }
     }
     for (const auto& d : world->defaults) std::printf("default: %s\n", valid_utf8(d).c_str());
     // The components not simulated are named once, in the warnings below; those that need no
