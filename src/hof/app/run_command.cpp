@@ -208,6 +208,22 @@ int run_session(const RunOptions& options) {
     if (!tool) return fail(tool.error());
     if (auto mounted = scene::mount_tool(*world, *tool); !mounted) return fail(mounted.error());
   }
+  // --device given again: the next hands' devices (a project with <tool device=…>), in order.
+  if (options.more_devices.size() > world->config.more_hands.size()) {
+    return fail(
+        fmt::format("--device given {} times but {} has {} hand(s) (one <tool device=...> for each hand "
+                    "after the first)",
+                    1 + options.more_devices.size(), options.file.string(), 1 + world->config.more_hands.size()));
+  }
+  for (std::size_t h = 0; h < options.more_devices.size(); ++h) {
+    const std::string& spec = options.more_devices[h];
+    const bool taken =
+        spec == world->device ||
+        std::any_of(world->config.more_hands.begin(), world->config.more_hands.begin() + static_cast<std::ptrdiff_t>(h),
+                    [&](const auto& other) { return other.device == spec; });
+    if (taken) return fail(fmt::format("--device {}: given for two hands (each device carries one tool)", spec));
+    world->config.more_hands[h].device = spec;
+  }
   if (!world->nothing_to_touch.empty()) {
     // Shown by `hof gui`, but a headless run would render nothing: its own status, one line.
     std::fprintf(stderr, "hof: %s: %s; `hof gui` shows it\n", options.file.c_str(),

@@ -13,7 +13,7 @@ namespace hof::coupling {
 Session::Session(std::vector<SessionBody> bodies, std::unique_ptr<haptics::Device> device,
                  std::vector<std::unique_ptr<haptics::Device>> more_devices, const SessionConfig& config)
     : world_(std::make_unique<detail::World>()) {
-  detail::init_world(*world_, std::move(bodies), std::move(device), std::move(more_devices), config);
+  detail::init_world(*world_, std::move(bodies), std::move(device), config, std::move(more_devices));
   publisher_ = std::make_unique<detail::SnapshotPublisher>(*world_);
   seam_ = std::make_unique<CommandSeam>(*world_);
   runner_ = std::make_unique<detail::SessionRunner>(*world_, *seam_, *publisher_);
@@ -35,7 +35,11 @@ Expected<std::unique_ptr<Session>> Session::make(SessionBody body, std::unique_p
 
 Expected<std::unique_ptr<Session>> Session::make(std::vector<SessionBody> bodies,
                                                  std::unique_ptr<haptics::Device> device, const SessionConfig& config) {
-  return make(std::move(bodies), std::move(device), {}, config);
+  // One device given: the first hand only (a caller that opens no other device, the window).
+  if (config.more_hands.empty()) return make(std::move(bodies), std::move(device), {}, config);
+  SessionConfig first_hand = config;
+  first_hand.more_hands.clear();
+  return make(std::move(bodies), std::move(device), {}, first_hand);
 }
 
 Expected<std::unique_ptr<Session>> Session::make(std::vector<SessionBody> bodies,

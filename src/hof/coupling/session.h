@@ -203,6 +203,7 @@ class SessionRunner;
 
 class Session {
  public:
+  /// One device: the first hand only (config.more_hands is left out).
   static Expected<std::unique_ptr<Session>> make(std::vector<SessionBody> bodies,
                                                  std::unique_ptr<haptics::Device> device, const SessionConfig& config);
   /// Several hands: `more_devices[i]` is the device of config.more_hands[i].

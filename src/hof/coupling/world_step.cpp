@@ -143,9 +143,11 @@ Vec3 BodyRuntime::fem_reaction(const mesh::Tri& tri, const std::array<double, 3>
 }
 
 void init_world(World& w, std::vector<SessionBody> bodies, std::unique_ptr<haptics::Device> device,
-                std::vector<std::unique_ptr<haptics::Device>> more_devices, const SessionConfig& config) {
+                const SessionConfig& config, std::vector<std::unique_ptr<haptics::Device>> more_devices) {
   w.device = std::move(device);
   w.config = config;
+  // Hands without a device (Session::make refuses them) are left out.
+  if (more_devices.size() < w.config.more_hands.size()) w.config.more_hands.resize(more_devices.size());
   double dt = std::numeric_limits<double>::infinity();
   for (SessionBody& b : bodies) {
     BodyRuntime r;
@@ -162,7 +164,7 @@ void init_world(World& w, std::vector<SessionBody> bodies, std::unique_ptr<hapti
     }
     r.surface_positions = r.body.surface.vertices;
     r.surface_velocities.assign(r.body.surface.vertices.size(), Vec3::Zero());
-    r.loads.resize(1 + config.more_hands.size());
+    r.loads.resize(1 + w.config.more_hands.size());
     w.bodies.push_back(std::move(r));
   }
   w.due.reserve(w.bodies.size());

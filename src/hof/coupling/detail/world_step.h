@@ -168,8 +168,9 @@ struct World {
 };
 
 /// Makes the world of `bodies` (checked by Session::make) and its hands' haptic loops.
+/// `more_devices[i]` is the device of config.more_hands[i].
 void init_world(World& world, std::vector<SessionBody> bodies, std::unique_ptr<haptics::Device> device,
-                std::vector<std::unique_ptr<haptics::Device>> more_devices, const SessionConfig& config);
+                const SessionConfig& config, std::vector<std::unique_ptr<haptics::Device>> more_devices = {});
 /// Hands: the first (World::loop) and the more_hands.
 [[nodiscard]] inline std::size_t hand_count(const World& w) { return 1 + w.more_hands.size(); }
 [[nodiscard]] inline haptics::HapticLoop& hand_loop(World& w, std::size_t hand) {
