@@ -112,5 +112,81 @@ TEST(ToolSpec, TheWorldMountsTheToolAndItsTissueCoupling) {
   EXPECT_EQ(tool->primitives().front().radius, 0.006);
 }
 
+// Two hands (<tool device=…>): the first tool without device= is the project device's; each
+// other device is one more hand with its tool and its own force limit, written back as read.
+TEST(ProjectHands, TwoToolsOnTwoDevicesAreReadIntoTheTypedConfig) {
+  const auto dir = temp_dir();
+  const std::string tools =
+      R"(<tool shape="capsule" radius="0.004" length="0.05"/>)"
+      "\n    "
+      R"(<tool shape="sphere" radius="0.006" device="scripted:poke,start=0.03;0;0.1" maxForce="2"/>)";
+  auto p = parse_project(project_text(tools), dir / "hands.hof");
+  ASSERT_TRUE(p) << p.error().to_string();
+  ASSERT_TRUE(p->tool);
+  EXPECT_EQ(p->tool->shape, procedures::ToolShape::kCapsule);
+  ASSERT_EQ(p->hands.size(), 1u);
+  EXPECT_EQ(p->hands[0].tool.shape, procedures::ToolShape::kSphere);
+  EXPECT_EQ(p->hands[0].tool.radius_m, 0.006);
+  EXPECT_EQ(p->hands[0].tool.device, "scripted:poke,start=0.03;0;0.1");
+  EXPECT_EQ(p->hands[0].max_force_n, 2.0);
+  EXPECT_EQ(p->hands[0].line, 5);
+  ASSERT_TRUE(write_project(*p, dir / "hands.hof"));
+  auto again = read_project(dir / "hands.hof");
+  ASSERT_TRUE(again) << again.error().to_string();
+  EXPECT_EQ(again->tool, p->tool);
+  ASSERT_EQ(again->hands.size(), 1u);
+  EXPECT_EQ(again->hands[0].tool, p->hands[0].tool);
+  EXPECT_EQ(again->hands[0].max_force_n, 2.0);
+
+  // A project without a device of its own: the first tool's device is the first hand.
+  auto named = parse_project(
+      project_text(R"(<tool shape="sphere" device="scripted:poke"/><tool shape="sphere" device="scripted:hold"/>)"),
+      dir / "named.hof");
+  ASSERT_TRUE(named) << named.error().to_string();
+  EXPECT_EQ(named->device, "scripted:poke");
+  ASSERT_TRUE(named->tool);
+  ASSERT_EQ(named->hands.size(), 1u);
+  EXPECT_EQ(named->hands[0].tool.device, "scripted:hold");
+}
+
+// The bundled two-hand example: a world with two hands, each with its tool, device and limit.
+TEST(ProjectHands, TheWorldOfTheTwoHandExampleHasBothHands) {
+  auto w = build_world(std::filesystem::path(HOF_SOURCE_DIR) / "examples/two-hands-liver.hof");
+  ASSERT_TRUE(w) << w.error().to_string();
+  ASSERT_TRUE(w->config.tool);
+  ASSERT_EQ(w->config.more_hands.size(), 1u);
+  const coupling::HandConfig& hand = w->config.more_hands[0];
+  ASSERT_TRUE(hand.tool);
+  ASSERT_TRUE(hand.tool_coupling);
+  EXPECT_NE(hand.tool, w->config.tool);
+  EXPECT_TRUE(hand.device.starts_with("scripted:"));
+  EXPECT_NE(hand.device, w->device);
+  EXPECT_GT(hand.haptics.safety.max_force_n, 0.0);
+  EXPECT_NE(hand.haptics.safety.max_force_n, w->config.haptics.safety.max_force_n);
+  EXPECT_EQ(hand.haptics.rate_hz, w->config.haptics.rate_hz);
+}
+
+TEST(ProjectHands, BadInputNamesTheFileAndLine) {
+  const auto dir = temp_dir();
+  const auto refused = [&](const std::string& tools, std::int64_t line, const std::string& words) {
+    auto p = parse_project(project_text(tools), dir / "bad-hands.hof");
+    ASSERT_FALSE(p) << tools;
+    EXPECT_NE(p.error().file.find("bad-hands.hof"), std::string::npos);
+    EXPECT_EQ(p.error().line, line) << p.error().to_string();
+    EXPECT_NE(p.error().message.find(words), std::string::npos) << p.error().to_string();
+  };
+  // An unknown device.
+  refused(R"(<tool shape="sphere" device="telepathy"/>)", 4, "device=\"telepathy\"");
+  refused(R"(<tool shape="sphere" device="scripted:wave"/>)", 4, "device=\"scripted:wave\"");
+  // Two tools on the same device: another hand's, or the first hand's twice.
+  refused(
+      "<tool shape=\"sphere\"/>\n    <tool shape=\"sphere\" device=\"scripted:hold\"/>\n"
+      "    <tool shape=\"capsule\" device=\"scripted:hold\"/>",
+      6, "a second <tool> on the device \"scripted:hold\" (the first is at line 5)");
+  refused("<tool shape=\"sphere\"/>\n    <tool shape=\"capsule\"/>", 5, "a second <tool> on the device");
+  // A force limit that is not a limit.
+  refused(R"(<tool shape="sphere" device="scripted:hold" maxForce="-1"/>)", 4, "maxForce");
+}
+
 }  // namespace
 }  // namespace hof::scene

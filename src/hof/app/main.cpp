@@ -4,6 +4,7 @@
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <string>
+#include <vector>
 
 #include "hof/app/bench_command.h"
 #include "hof/app/evaluation.h"
@@ -88,7 +89,7 @@ void add_run_command(CLI::App& app, int& status) {
   static hof::app::RunOptions run;
   static double seconds = 0.0;
   static long steps = 0;
-  static std::string device;
+  static std::vector<std::string> run_devices;  // hof run: --device, once per hand
   static std::string tool;
   static std::string out;
   CLI::App* run_cmd =
@@ -102,8 +103,9 @@ void add_run_command(CLI::App& app, int& status) {
                           "Length of the run in seconds (default 5, or a scripted motion's whole length when longer)");
   auto* steps_opt = run_cmd->add_option("--steps", steps, "Length of the run in simulation steps");
   seconds_opt->excludes(steps_opt);
-  run_cmd->add_option("--device", device,
-                      "Device spec, e.g. scripted:poke, replay:FILE.csv, udp:5005, virtual-hand:poke");
+  run_cmd->add_option("--device", run_devices,
+                      "Device spec, e.g. scripted:poke, replay:FILE.csv, udp:5005, virtual-hand:poke; given again: "
+                      "the next hand's (a project with <tool device=...>)");
   run_cmd->add_option("--tool", tool,
                       "A tool with a shape on the stylus, as the project's <tool>: sphere,radius=0.005 | "
                       "capsule,radius=0.004,length=0.05[,orientation=0 1 0 1.57] | mesh,mesh=FILE.stl");
@@ -131,7 +133,8 @@ void add_run_command(CLI::App& app, int& status) {
   run_cmd->callback([&, seconds_opt, steps_opt] {
     if (seconds_opt->count()) run.seconds = seconds;
     if (steps_opt->count()) run.steps = steps;
-    if (!device.empty()) run.device = device;
+    if (!run_devices.empty() && !run_devices.front().empty()) run.device = run_devices.front();
+    if (run_devices.size() > 1) run.more_devices.assign(run_devices.begin() + 1, run_devices.end());
     if (!tool.empty()) run.tool = tool;
     if (!out.empty()) run.out = out;
     status = hof::app::run_session(run);

@@ -208,6 +208,22 @@ int run_session(const RunOptions& options) {
     if (!tool) return fail(tool.error());
     if (auto mounted = scene::mount_tool(*world, *tool); !mounted) return fail(mounted.error());
   }
+  // --device given again: the next hands' devices (a project with <tool device=…>), in order.
+  if (options.more_devices.size() > world->config.more_hands.size()) {
+    return fail(
+        fmt::format("--device given {} times but {} has {} hand(s) (one <tool device=...> for each hand "
+                    "after the first)",
+                    1 + options.more_devices.size(), options.file.string(), 1 + world->config.more_hands.size()));
+  }
+  for (std::size_t h = 0; h < options.more_devices.size(); ++h) {
+    const std::string& spec = options.more_devices[h];
+    const bool taken =
+        spec == world->device ||
+        std::any_of(world->config.more_hands.begin(), world->config.more_hands.begin() + static_cast<std::ptrdiff_t>(h),
+                    [&](const auto& other) { return other.device == spec; });
+    if (taken) return fail(fmt::format("--device {}: given for two hands (each device carries one tool)", spec));
+    world->config.more_hands[h].device = spec;
+  }
   if (!world->nothing_to_touch.empty()) {
     // Shown by `hof gui`, but a headless run would render nothing: its own status, one line.
     std::fprintf(stderr, "hof: %s: %s; `hof gui` shows it\n", options.file.c_str(),
@@ -229,7 +245,19 @@ int run_session(const RunOptions& options) {
   config.haptics.realtime_priority = !options.deterministic;
   config.simulation_threads = options.simulation_threads;
   config.pin_threads = options.pin_threads;
-  auto made = coupling::Session::make(std::move(world->bodies), std::move(*device), config);
+  // The project's other hands (<tool device=…>), each on its own device.
+  std::vector<std::unique_ptr<haptics::Device>> more_devices;
+  for (coupling::HandConfig& hand : config.more_hands) {
+    hand.haptics.realtime_priority = config.haptics.realtime_priority;
+    auto opened = scene::open_device(hand.device);
+    if (!opened) {
+      Error e = opened.error();
+      e.message = fmt::format("{} (a <tool>'s device in {})", e.message, options.file.string());
+      return fail(e);
+    }
+    more_devices.push_back(std::move(*opened));
+  }
+  auto made = coupling::Session::make(std::move(world->bodies), std::move(*device), std::move(more_devices), config);
   if (!made) return fail(made.error());
   coupling::Session& session = **made;
 
@@ -355,6 +383,19 @@ int run_check(const CheckOptions& options) {
     if (const auto& t = world->project.tool) {
       std::printf("  tool: %s, radius %g m%s\n", std::string(procedures::shape_name(t->shape)).c_str(), t->radius_m,
                   t->shape == procedures::ToolShape::kCapsule ? fmt::format(", shaft {} m", t->length_m).c_str() : "");
+    }
+    for (std::size_t h = 0; h < world->project.hands.size(); ++h) {
+      const scene::HandSetup& hand = world->project.hands[h];
+      const procedures::ShapedToolConfig& t = hand.tool;
+      std::printf("  hand %zu: %s, radius %g m%s, device %s%s\n", h + 2,
+                  std::string(procedures::shape_name(t.shape)).c_str(), t.radius_m,
+                  t.shape == procedures::ToolShape::kCapsule ? fmt::format(", shaft {} m", t.length_m).c_str() : "",
+                  valid_utf8(t.device).c_str(),
+                  hand.max_force_n > 0.0 ? fmt::format(", force limit {} N", hand.max_force_n).c_str() : "");
+      if (auto device = scene::open_device(world->config.more_hands[h].device); !device) {
+        std::printf("%s\n", device.error().to_string().c_str());
+        ++problems;
+      }
     }
     for (const auto& d : world->defaults) std::printf("default: %s\n", valid_utf8(d).c_str());
     // The components not simulated are named once, in the warnings below; those that need no

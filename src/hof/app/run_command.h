@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "hof/haptics/cpu_keep_awake.h"
 
@@ -18,6 +19,7 @@ struct RunOptions {
   std::optional<double> seconds;             ///< run length (default 5 s)
   std::optional<long> steps;                 ///< or a number of simulation steps
   std::optional<std::string> device;         ///< overrides the project's device
+  std::vector<std::string> more_devices;     ///< --device again: the project's next hands' devices, in order
   std::optional<std::string> tool;           ///< a shaped tool on the stylus (scene::parse_tool_spec)
   std::optional<std::filesystem::path> out;  ///< report folder
   double telemetry_rate_hz{0.0};             ///< 0 = every haptic tick

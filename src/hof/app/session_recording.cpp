@@ -38,6 +38,16 @@ std::string file_safe(const std::string& name) {
 
 std::string csv_number(double v) { return fmt::format("{:.9g}", v); }
 
+// What hand `h` carries: the first hand's tool or needle, the others' <tool device=…>.
+std::string hand_tool_name(const scene::World& world, std::size_t h) {
+  if (h == 0) {
+    if (world.project.needle) return "needle";
+    return world.project.tool ? std::string(procedures::shape_name(world.project.tool->shape)) : "point";
+  }
+  return h - 1 < world.project.hands.size() ? std::string(procedures::shape_name(world.project.hands[h - 1].tool.shape))
+                                            : "point";
+}
+
 // What a needle run measured, for the report and its plots.
 struct NeedleRun {
   bool mounted{false};
@@ -487,6 +497,28 @@ std::string RunRecording::summary_json(const coupling::SessionReport& report, co
                       {"probe_started_inside", b.probe_started_inside}});
   }
   summary["bodies"] = bodies;
+  // Two hands or more (<tool device=…>): each hand's figures (the ones above are the first's).
+  // Not written for one device, whose report stays as it was.
+  if (report.hands.size() >= 2) {
+    nlohmann::json hands = nlohmann::json::array();
+    for (std::size_t h = 0; h < report.hands.size(); ++h) {
+      const coupling::HandReport& hand = report.hands[h];
+      hands.push_back({{"device", json_safe(hand.device)},
+                       {"tool", hand_tool_name(world, h)},
+                       {"haptic_ticks", hand.haptic_ticks},
+                       {"max_force_n", hand.max_force_n},
+                       {"force_limit_n", hand.max_force_limit_n},
+                       {"contact_time_s", hand.contact_time_s},
+                       {"clamped_contact_ticks", hand.clamped_contact_ticks},
+                       {"safety",
+                        {{"clamped_ticks", hand.safety.clamped},
+                         {"rate_limited_ticks", hand.safety.rate_limited},
+                         {"non_finite_ticks", hand.safety.non_finite},
+                         {"no_reading_ticks", hand.safety.no_reading},
+                         {"watchdog_ticks", hand.safety.watchdog}}}});
+    }
+    summary["hands"] = hands;
+  }
   // The single-body key of earlier reports (kept for scripts that read it).
   summary["models"] = nlohmann::json::array();
   for (const coupling::BodyReport& b : report.bodies) {
@@ -613,6 +645,18 @@ void RunRecording::print(const coupling::SessionReport& report, bool determinist
           static_cast<long long>(b.body_contacts), static_cast<long long>(b.max_body_contacts),
           b.body_contact_force_n.x(), b.body_contact_force_n.y(), b.body_contact_force_n.z(),
           b.max_body_contact_force_n);
+    }
+  }
+  if (report.hands.size() >= 2) {
+    for (std::size_t h = 0; h < report.hands.size(); ++h) {
+      const coupling::HandReport& hand = report.hands[h];
+      std::printf(
+          "  hand %zu      %s on %s: contact %.3f s, max force %.3f N (limit %.3f N), clamped %lld contact ticks, "
+          "safety: %llu clamped, %llu no reading, %llu watchdog\n",
+          h + 1, hand_tool_name(world, h).c_str(), json_safe(hand.device).c_str(), hand.contact_time_s,
+          hand.max_force_n, hand.max_force_limit_n, static_cast<long long>(hand.clamped_contact_ticks),
+          static_cast<unsigned long long>(hand.safety.clamped), static_cast<unsigned long long>(hand.safety.no_reading),
+          static_cast<unsigned long long>(hand.safety.watchdog));
     }
   }
   if (report.friction_solved_as_penalty)

@@ -445,8 +445,10 @@ bool CommandSeam::apply(const command::Reset&, Applying& a) {
     r.state = mechanics::make_state(*r.body.model);
     r.threads = 0;
     detail::fit_threads(a.world, r);
-    r.reaction_sum.setZero();
-    r.contact_ticks = 0;
+    for (detail::HandLoad& load : r.loads) {
+      load.reaction_sum.setZero();
+      load.contact_ticks = 0;
+    }
   }
   a.log("reset");
   return true;

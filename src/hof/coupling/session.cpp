@@ -2,15 +2,18 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+
 #include "hof/coupling/detail/session_runner.h"
 #include "hof/coupling/detail/snapshot_publisher.h"
 #include "hof/coupling/detail/world_step.h"
 
 namespace hof::coupling {
 
-Session::Session(std::vector<SessionBody> bodies, std::unique_ptr<haptics::Device> device, const SessionConfig& config)
+Session::Session(std::vector<SessionBody> bodies, std::unique_ptr<haptics::Device> device,
+                 std::vector<std::unique_ptr<haptics::Device>> more_devices, const SessionConfig& config)
     : world_(std::make_unique<detail::World>()) {
-  detail::init_world(*world_, std::move(bodies), std::move(device), config);
+  detail::init_world(*world_, std::move(bodies), std::move(device), config, std::move(more_devices));
   publisher_ = std::make_unique<detail::SnapshotPublisher>(*world_);
   seam_ = std::make_unique<CommandSeam>(*world_);
   runner_ = std::make_unique<detail::SessionRunner>(*world_, *seam_, *publisher_);
@@ -32,7 +35,46 @@ Expected<std::unique_ptr<Session>> Session::make(SessionBody body, std::unique_p
 
 Expected<std::unique_ptr<Session>> Session::make(std::vector<SessionBody> bodies,
                                                  std::unique_ptr<haptics::Device> device, const SessionConfig& config) {
+  // One device given: the first hand only (a caller that opens no other device, the window).
+  if (config.more_hands.empty()) return make(std::move(bodies), std::move(device), {}, config);
+  SessionConfig first_hand = config;
+  first_hand.more_hands.clear();
+  return make(std::move(bodies), std::move(device), {}, first_hand);
+}
+
+Expected<std::unique_ptr<Session>> Session::make(std::vector<SessionBody> bodies,
+                                                 std::unique_ptr<haptics::Device> device,
+                                                 std::vector<std::unique_ptr<haptics::Device>> more_devices,
+                                                 const SessionConfig& config) {
   if (!device) return make_error(ErrorCode::kInvalidArgument, "session: no device");
+  if (more_devices.size() != config.more_hands.size()) {
+    return make_error(ErrorCode::kInvalidArgument,
+                      fmt::format("session: {} more hand(s) configured but {} device(s) given for them",
+                                  config.more_hands.size(), more_devices.size()));
+  }
+  for (std::size_t h = 0; h < more_devices.size(); ++h) {
+    const HandConfig& hand = config.more_hands[h];
+    const std::string name = fmt::format("session: hand {} ({})", h + 2, hand.device);
+    if (!more_devices[h]) return make_error(ErrorCode::kInvalidArgument, name + ": no device");
+    if (more_devices[h].get() == device.get()) {
+      return make_error(ErrorCode::kInvalidArgument, name + ": the same device as the first hand");
+    }
+    // Virtual time ticks every hand in lock-step with the simulation.
+    if (hand.haptics.rate_hz != config.haptics.rate_hz) {
+      return make_error(ErrorCode::kInvalidArgument,
+                        fmt::format("{}: haptic rate {} Hz, the first hand's is {} Hz (every hand ticks at one rate)",
+                                    name, hand.haptics.rate_hz, config.haptics.rate_hz));
+    }
+    if (hand.tool && hand.tool == config.tool) {
+      return make_error(ErrorCode::kInvalidArgument, name + ": carries the first hand's tool (each hand its own)");
+    }
+    for (std::size_t k = 0; k < h; ++k) {
+      if (hand.tool && hand.tool == config.more_hands[k].tool) {
+        return make_error(ErrorCode::kInvalidArgument,
+                          fmt::format("{}: carries hand {}'s tool (each hand its own)", name, k + 2));
+      }
+    }
+  }
   for (const SessionBody& body : bodies) {
     if (body.deformable() && body.mapping.surface_vertex_count() != body.surface.vertices.size()) {
       return make_error(ErrorCode::kInvalidArgument,
@@ -63,7 +105,8 @@ Expected<std::unique_ptr<Session>> Session::make(std::vector<SessionBody> bodies
       }
     }
   }
-  auto session = std::unique_ptr<Session>(new Session(std::move(bodies), std::move(device), config));
+  auto session =
+      std::unique_ptr<Session>(new Session(std::move(bodies), std::move(device), std::move(more_devices), config));
   session->publisher_->publish(0.0);
   return session;
 }
@@ -117,6 +160,10 @@ std::size_t Session::layer_count() const { return world_->layers.size(); }
 double Session::simulated_time() const { return world_->time_s; }
 double Session::dt() const { return world_->dt.load(std::memory_order_relaxed); }
 const haptics::HapticLoop& Session::haptic_loop() const { return *world_->loop; }
+std::size_t Session::hand_count() const { return detail::hand_count(*world_); }
+const haptics::HapticLoop& Session::haptic_loop(std::size_t hand) const {
+  return detail::hand_loop(*world_, std::min(hand, detail::hand_count(*world_) - 1));
+}
 
 std::int32_t Session::body_of_triangle(std::int32_t triangle, std::int32_t layer) const {
   if (layer < 0 || static_cast<std::size_t>(layer) >= world_->layers.size()) return -1;

@@ -22,6 +22,14 @@
 ///    ContactCoupling).
 /// Bodies collide with each other when config.contacts asks for it (penalty springs:
 /// coupling/detail/body_contact_pass.h); otherwise each feels only the proxy.
+///
+/// Hands (issue 37, two devices at once): the device given to make() is the first hand; each
+/// SessionConfig::more_hands entry, with its own device, is one more, with its own haptic loop
+/// (renderer and proxy, safety filter and force limit, calibration) and its own tool. Every
+/// hand renders the same surfaces (a snapshot buffer per hand: a TripleBuffer has one reader),
+/// its contacts become forces on the bodies it touched, and it feels only its own tool's force.
+/// The first hand is the session's as it was before: telemetry, fall-through, the compliance
+/// and FEM-reaction local models, the commands (calibration, force limit, device switch).
 
 #include <atomic>
 #include <chrono>
@@ -68,6 +76,16 @@ enum class ContactCoupling : std::uint8_t {
   kFemReaction,
 };
 
+/// One more hand beyond the first (its device is given to Session::make beside the first's).
+struct HandConfig {
+  std::string device;  ///< the device spec it was opened from (reported)
+  /// Its loop: its own safety (force limit), calibration and renderer; the rate must be the
+  /// first hand's (virtual time ticks every hand in lock-step).
+  haptics::HapticLoopConfig haptics;
+  std::shared_ptr<haptics::Tool> tool;  ///< its tool (null: a point/sphere stylus)
+  std::shared_ptr<ToolTissueCoupling> tool_coupling;
+};
+
 struct SessionConfig {
   haptics::HapticLoopConfig haptics;  ///< rate, renderer, surface, safety, calibration
   ContactCoupling coupling{ContactCoupling::kBarycentric};
@@ -79,6 +97,10 @@ struct SessionConfig {
   std::shared_ptr<ToolTissueCoupling> tool_coupling;
   /// Contact between bodies (off unless the scene asks for it).
   ContactSettings contacts{};
+  /// The first hand's device spec (reported beside the others'; may be empty).
+  std::string device;
+  /// The hands beyond the first (empty: one device, as before).
+  std::vector<HandConfig> more_hands;
   /// Threads of the simulation in real time (0: automatic, every core but one, which the
   /// haptic loop and the window share). Virtual-time runs step on the caller's thread.
   int simulation_threads{0};
@@ -124,6 +146,17 @@ struct BodyReport {
   double max_body_contact_force_n{0.0};     ///< the largest |total| at any pass, N
 };
 
+/// What a run measured for one hand (device, loop and tool).
+struct HandReport {
+  std::string device;                     ///< its device spec, or the device's name when none was given
+  double max_force_n{0.0};                ///< the largest force sent to its device
+  double contact_time_s{0.0};             ///< ticks in contact with a body
+  std::int64_t clamped_contact_ticks{0};  ///< contact ticks whose force its safety clamped
+  std::int64_t haptic_ticks{0};
+  double max_force_limit_n{0.0};  ///< its device's force limit (its safety's, N)
+  haptics::SafetyCounters safety;
+};
+
 /// What a run measured.
 struct SessionReport {
   double simulated_s{0.0};
@@ -154,6 +187,8 @@ struct SessionReport {
   /// contacts were solved as penalty springs, without friction.
   bool friction_solved_as_penalty{false};
   std::vector<BodyReport> bodies;
+  /// Every hand, the first first (its figures are the ones above, which stay the first hand's).
+  std::vector<HandReport> hands;
   std::vector<std::string> applied_commands;  ///< "step N: what", in order
   haptics::PeriodStats haptic_periods;
   haptics::SafetyCounters safety;
@@ -169,8 +204,14 @@ class SessionRunner;
 
 class Session {
  public:
+  /// One device: the first hand only (config.more_hands is left out).
   static Expected<std::unique_ptr<Session>> make(std::vector<SessionBody> bodies,
                                                  std::unique_ptr<haptics::Device> device, const SessionConfig& config);
+  /// Several hands: `more_devices[i]` is the device of config.more_hands[i].
+  static Expected<std::unique_ptr<Session>> make(std::vector<SessionBody> bodies,
+                                                 std::unique_ptr<haptics::Device> device,
+                                                 std::vector<std::unique_ptr<haptics::Device>> more_devices,
+                                                 const SessionConfig& config);
   /// One deformable body (the common case).
   static Expected<std::unique_ptr<Session>> make(SessionBody body, std::unique_ptr<haptics::Device> device,
                                                  const SessionConfig& config);
@@ -254,10 +295,15 @@ class Session {
   /// SetCalibration commands the simulation has passed to the haptic loop so far (any thread:
   /// a caller that moves a stylus in device coordinates waits for its change to arrive).
   [[nodiscard]] std::uint64_t calibrations_applied() const;
+  /// The first hand's haptic loop.
   [[nodiscard]] const haptics::HapticLoop& haptic_loop() const;
+  /// Hands: 1 + config.more_hands.size(); hand 0 is haptic_loop().
+  [[nodiscard]] std::size_t hand_count() const;
+  [[nodiscard]] const haptics::HapticLoop& haptic_loop(std::size_t hand) const;
 
  private:
-  Session(std::vector<SessionBody> bodies, std::unique_ptr<haptics::Device> device, const SessionConfig& config);
+  Session(std::vector<SessionBody> bodies, std::unique_ptr<haptics::Device> device,
+          std::vector<std::unique_ptr<haptics::Device>> more_devices, const SessionConfig& config);
 
   // The world and the parts that step it (coupling/detail/): the seam's commands reach the
   // world through step_world(), which the runner calls; the publisher makes its snapshots.

@@ -27,6 +27,25 @@ std::string failure_of(const haptics::Device& device) {
   return why.empty() ? std::string("the device stopped working") : why;
 }
 
+// The first hand whose device has failed (null: none).
+const haptics::Device* failed_device(World& w) {
+  for (std::size_t h = 0; h < hand_count(w); ++h) {
+    const haptics::Device& device = hand_loop(w, h).device();
+    if (device.health() == haptics::DeviceHealth::kFailed) return &device;
+  }
+  return nullptr;
+}
+
+// The telemetry of the hands after the first: not logged (the telemetry file is the first
+// hand's); drained so that its ring never holds stale rows.
+void drain_other_telemetry(World& w) {
+  haptics::HapticSample sample;
+  for (auto& hand : w.more_hands) {
+    while (hand->loop->telemetry().pop(sample)) {
+    }
+  }
+}
+
 }  // namespace
 
 void SessionRunner::begin() {
@@ -43,6 +62,7 @@ void SessionRunner::finish_report(SessionReport& report, const StateTimer& timer
   report.rate_in_contact = StateTimer::rate(timer.contact, timer.contact_s);
   report.haptic_periods = world_.loop->period_stats();
   report.safety = world_.loop->safety_counters();
+  report.hands = hand_reports(world_);
   report.bodies.clear();
   for (const BodyRuntime& r : world_.bodies) {
     BodyReport b = r.report;
@@ -57,18 +77,31 @@ std::int64_t SessionRunner::fade_out(std::int64_t tick, double tick_period, cons
   // rest rather than holding the last force. The fade takes fade_out_s, then the slew limit
   // brings what is left to zero; the count bounds it should a device's spec make the force
   // never settle.
+  // Every hand fades (the longest fade of them bounds the count).
   haptics::HapticLoop& loop = *world_.loop;
-  const haptics::SafetyConfig& safety = world_.config.haptics.safety;
-  const haptics::DeviceSpec& spec = loop.device().spec();
-  const double slew_s = spec.max_force_rate_n_per_s > 0.0 ? spec.max_force_n / spec.max_force_rate_n_per_s : 0.0;
-  const auto fade_ticks = static_cast<std::int64_t>(std::ceil((safety.fade_out_s + slew_s) / tick_period)) + 2;
+  std::int64_t fade_ticks = 0;
+  for (std::size_t h = 0; h < hand_count(world_); ++h) {
+    const haptics::SafetyConfig& safety =
+        h == 0 ? world_.config.haptics.safety : world_.more_hands[h - 1]->config.haptics.safety;
+    const haptics::DeviceSpec& spec = hand_loop(world_, h).device().spec();
+    const double slew_s = spec.max_force_rate_n_per_s > 0.0 ? spec.max_force_n / spec.max_force_rate_n_per_s : 0.0;
+    fade_ticks =
+        std::max(fade_ticks, static_cast<std::int64_t>(std::ceil((safety.fade_out_s + slew_s) / tick_period)) + 2);
+  }
   haptics::HapticSample sample;
   for (std::int64_t k = 0; k < fade_ticks; ++k, ++tick) {
-    loop.tick(static_cast<double>(world_.virtual_ticks + tick) * tick_period);
+    const double time_s = static_cast<double>(world_.virtual_ticks + tick) * tick_period;
+    loop.tick(time_s);
     bool at_rest = false;
     while (loop.telemetry().pop(sample)) {
       at_rest = sample.force.isZero(0.0);
       if (on_sample) on_sample(sample);
+    }
+    for (auto& hand : world_.more_hands) {
+      hand->loop->tick(time_s);
+      bool hand_at_rest = false;
+      while (hand->loop->telemetry().pop(sample)) hand_at_rest = sample.force.isZero(0.0);
+      at_rest = at_rest && hand_at_rest;
     }
     if (at_rest) {
       ++tick;
@@ -77,7 +110,9 @@ std::int64_t SessionRunner::fade_out(std::int64_t tick, double tick_period, cons
   }
   // Their contacts act on nothing (the bodies no longer step).
   haptics::HapticContact c;
-  while (loop.contacts().pop(c)) {
+  for (std::size_t h = 0; h < hand_count(world_); ++h) {
+    while (hand_loop(world_, h).contacts().pop(c)) {
+    }
   }
   return tick;
 }
@@ -97,17 +132,22 @@ SessionReport SessionRunner::run_virtual(double seconds, const SampleSink& on_sa
     // N haptic ticks per simulation step (dt may change through a command).
     const auto ticks_per_step = std::max<std::int64_t>(1, std::llround(world_.dt / tick_period));
     for (std::int64_t k = 0; k < ticks_per_step; ++k, ++tick) {
-      loop.tick(static_cast<double>(world_.virtual_ticks + tick) * tick_period);
+      // Every hand ticks at the same virtual time, the first first: lock-step, deterministic.
+      const double time_s = static_cast<double>(world_.virtual_ticks + tick) * tick_period;
+      loop.tick(time_s);
       while (loop.telemetry().pop(sample)) {
         if (on_sample) on_sample(sample);
       }
+      for (auto& hand : world_.more_hands) hand->loop->tick(time_s);
+      drain_other_telemetry(world_);
     }
     const bool stepped = step_world(world_, seam_, publisher_, report, timer,
                                     static_cast<double>(world_.virtual_ticks + tick) * tick_period);
     // A device that has failed (unplugged, its SDK in error) gives no reading: the force fades
     // as for a divergence, and the run ends, saying why.
-    const bool device_failed = loop.device().health() == haptics::DeviceHealth::kFailed;
-    if (device_failed && report.device_failure.empty()) report.device_failure = failure_of(loop.device());
+    const haptics::Device* failed = failed_device(world_);
+    const bool device_failed = failed != nullptr;
+    if (device_failed && report.device_failure.empty()) report.device_failure = failure_of(*failed);
     if (!stepped || device_failed) {
       tick = fade_out(tick, tick_period, on_sample);
       break;
@@ -187,6 +227,16 @@ void SessionRunner::start_realtime() {
   world_.loop->set_cpu(cpu_plan_.haptic);
   publisher_.start(cpu_plan_.pinned() ? cpu_plan_.haptic : -1);
   world_.loop->start();
+  // Every other hand on a thread of its own, beside the first on the haptic CPU (rather than
+  // one thread ticking every hand in turn, as CHAI3D does): a device with a servo loop of its
+  // own (OpenHaptics, Device::start_servo) calls its ticks on its clock, so two such devices
+  // cannot share one thread; and a hand whose device is slow to answer (a UDP bridge waiting,
+  // an SDK read) then delays only its own ticks, never the other hand's. A tick takes tens of
+  // microseconds of each millisecond: two fit on one CPU.
+  for (auto& hand : world_.more_hands) {
+    hand->loop->set_cpu(cpu_plan_.haptic);
+    hand->loop->start();
+  }
   sim_thread_ = std::thread([this] { simulation_thread(); });
 }
 
@@ -195,6 +245,7 @@ void SessionRunner::poll(const SampleSink& on_sample) {
   while (world_.loop->telemetry().pop(sample)) {
     if (on_sample) on_sample(sample);
   }
+  drain_other_telemetry(world_);
 }
 
 SessionReport SessionRunner::stop_realtime(const SampleSink& on_sample) {
@@ -203,10 +254,13 @@ SessionReport SessionRunner::stop_realtime(const SampleSink& on_sample) {
   sim_thread_.join();
   publisher_.stop();
   world_.loop->stop();
+  for (auto& hand : world_.more_hands) hand->loop->stop();
   poll(on_sample);
   // Contacts of the ticks after the last step are not applied.
   haptics::HapticContact c;
-  while (world_.loop->contacts().pop(c)) {
+  for (std::size_t h = 0; h < hand_count(world_); ++h) {
+    while (hand_loop(world_, h).contacts().pop(c)) {
+    }
   }
   rt_report_.haptic_ticks = static_cast<std::int64_t>(world_.loop->ticks());
   // Virtual-time runs step on the caller's thread with every core again.
@@ -222,7 +276,6 @@ SessionReport SessionRunner::run_realtime(double seconds, const SampleSink& on_s
   std::int64_t polls = 0;
   std::optional<double> device_failed_at;
   std::string device_failure;
-  haptics::HapticLoop& loop = *world_.loop;
   for (;;) {
     const double elapsed = seconds_between(start, Clock::now());
     if (elapsed >= seconds || sim_finished_.load(std::memory_order_acquire) ||
@@ -230,14 +283,14 @@ SessionReport SessionRunner::run_realtime(double seconds, const SampleSink& on_s
       break;
     // A device that has failed: the haptic loop fades its force out (it gives no reading);
     // once that has had its time, the run ends, saying why.
-    if (loop.device().health() == haptics::DeviceHealth::kFailed) {
+    if (const haptics::Device* failed = failed_device(world_)) {
       if (!device_failed_at) device_failed_at = elapsed;
       const haptics::SafetyConfig& safety = world_.config.haptics.safety;
-      const haptics::DeviceSpec& spec = loop.device().spec();
+      const haptics::DeviceSpec& spec = failed->spec();
       const double fade_s = safety.fade_out_s +
                             (spec.max_force_rate_n_per_s > 0.0 ? spec.max_force_n / spec.max_force_rate_n_per_s : 0.0);
       if (elapsed - *device_failed_at > fade_s + 0.01) {
-        device_failure = failure_of(loop.device());
+        device_failure = failure_of(*failed);
         break;
       }
     }

@@ -113,6 +113,17 @@ void SnapshotPublisher::make_snapshot_of(std::size_t l, std::span<const Vec3> po
     shown.sequence = layer.graphics.published() + 1;
     layer.graphics.publish();
   }
+  // Every other hand reads the same shape through a buffer of its own (one reader each),
+  // copied from this one. The contact's local model is the first hand's contact point: the
+  // others render the surface alone.
+  for (auto& hand : world_.more_hands) {
+    TripleBuffer<haptics::SurfaceSnapshot>& buffer = *hand->surfaces[l];
+    haptics::SurfaceSnapshot& theirs = buffer.write_slot();
+    haptics::copy_snapshot_geometry(theirs, slot);
+    theirs.sequence = buffer.published() + 1;
+    theirs.local = haptics::LocalContactModel{};
+    buffer.publish();
+  }
   layer.surfaces.publish();
 }
 

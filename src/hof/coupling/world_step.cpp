@@ -143,9 +143,11 @@ Vec3 BodyRuntime::fem_reaction(const mesh::Tri& tri, const std::array<double, 3>
 }
 
 void init_world(World& w, std::vector<SessionBody> bodies, std::unique_ptr<haptics::Device> device,
-                const SessionConfig& config) {
+                const SessionConfig& config, std::vector<std::unique_ptr<haptics::Device>> more_devices) {
   w.device = std::move(device);
   w.config = config;
+  // Hands without a device (Session::make refuses them) are left out.
+  if (more_devices.size() < w.config.more_hands.size()) w.config.more_hands.resize(more_devices.size());
   double dt = std::numeric_limits<double>::infinity();
   for (SessionBody& b : bodies) {
     BodyRuntime r;
@@ -162,6 +164,7 @@ void init_world(World& w, std::vector<SessionBody> bodies, std::unique_ptr<hapti
     }
     r.surface_positions = r.body.surface.vertices;
     r.surface_velocities.assign(r.body.surface.vertices.size(), Vec3::Zero());
+    r.loads.resize(1 + w.config.more_hands.size());
     w.bodies.push_back(std::move(r));
   }
   w.due.reserve(w.bodies.size());
@@ -194,12 +197,59 @@ void init_world(World& w, std::vector<SessionBody> bodies, std::unique_ptr<hapti
       *w.device, std::span<TripleBuffer<haptics::SurfaceSnapshot>* const>(buffers), w.config.haptics, &w.settings);
   w.loop->set_tool(w.config.tool.get());
   w.last_device = w.device.get();
+  w.first_hand.device = w.config.device.empty() ? std::string(w.device->backend()) : w.config.device;
+  // The other hands: each its own loop on its own snapshot buffers (filled by the publisher).
+  for (std::size_t h = 0; h < w.config.more_hands.size(); ++h) {
+    auto hand = std::make_unique<HandRuntime>();
+    hand->config = w.config.more_hands[h];
+    hand->device = std::move(more_devices[h]);
+    hand->report.device = hand->config.device.empty() ? std::string(hand->device->backend()) : hand->config.device;
+    std::vector<TripleBuffer<haptics::SurfaceSnapshot>*> hand_buffers;
+    for (const auto& layer : w.layers) {
+      auto buffer = std::make_unique<TripleBuffer<haptics::SurfaceSnapshot>>();
+      buffer->write_slot() = layer->rest;
+      buffer->read_mutable() = layer->rest;
+      buffer->publish();
+      buffer->write_slot() = layer->rest;
+      hand_buffers.push_back(buffer.get());
+      hand->surfaces.push_back(std::move(buffer));
+    }
+    hand->loop = std::make_unique<haptics::HapticLoop>(
+        *hand->device, std::span<TripleBuffer<haptics::SurfaceSnapshot>* const>(hand_buffers), hand->config.haptics,
+        &hand->settings);
+    hand->loop->set_tool(hand->config.tool.get());
+    w.more_hands.push_back(std::move(hand));
+  }
   publish_settings(w);
+}
+
+std::vector<HandReport> hand_reports(World& w) {
+  std::vector<HandReport> hands;
+  for (std::size_t h = 0; h < hand_count(w); ++h) {
+    HandReport figures = h == 0 ? w.first_hand : w.more_hands[h - 1]->report;
+    haptics::HapticLoop& loop = hand_loop(w, h);
+    figures.safety = loop.safety_counters();
+    const double configured =
+        h == 0 ? w.current_settings.max_force_n : w.more_hands[h - 1]->config.haptics.safety.max_force_n;
+    const double device_limit = loop.device().spec().max_force_n;
+    figures.max_force_limit_n = configured > 0.0 ? std::min(configured, device_limit) : device_limit;
+    hands.push_back(std::move(figures));
+  }
+  return hands;
 }
 
 void publish_settings(World& w) {
   w.settings.write_slot() = w.current_settings;
   w.settings.publish();
+  // The other hands take the surfaces, renderer and effects the commands set, and keep their
+  // own force limit and calibration (the commands for those are the first hand's).
+  for (auto& hand : w.more_hands) {
+    haptics::HapticSettings& slot = hand->settings.write_slot();
+    slot = w.current_settings;
+    slot.max_force_n = hand->config.haptics.safety.max_force_n;
+    slot.calibration = hand->config.haptics.calibration;
+    hand->settings.publish();
+  }
 }
 
 void fit_threads(const World& w, BodyRuntime& r) {
@@ -223,6 +273,13 @@ void begin_run(World& w) {
     r.report = std::move(fresh);
     r.inside_since_start = false;
   }
+  const auto fresh_hand = [](HandReport& figures) {
+    HandReport fresh;
+    fresh.device = figures.device;
+    figures = std::move(fresh);
+  };
+  fresh_hand(w.first_hand);
+  for (auto& hand : w.more_hands) fresh_hand(hand->report);
   w.first_reading_seen = false;
   w.contact_ticks_this_step = 0;
 }
@@ -237,10 +294,7 @@ bool step_world(World& w, CommandSeam& seam, SnapshotPublisher& publisher, Sessi
   // Rigid bodies never step: their contact is not accumulated (it acts on nothing).
   for (BodyRuntime& r : w.bodies) {
     if (r.body.deformable()) continue;
-    r.reaction_sum.setZero();
-    r.contact_ticks = 0;
-    r.tool_force_sum.setZero();
-    r.tool_ticks = 0;
+    for (HandLoad& load : r.loads) load.clear();
   }
   w.ticks_since_step = 0;
   const auto step_start = Clock::now();
@@ -250,7 +304,7 @@ bool step_world(World& w, CommandSeam& seam, SnapshotPublisher& publisher, Sessi
     if (!advance_bodies(w, report)) {
       // Nothing more is published: the haptic loop fades the force out now rather than
       // rendering the last geometry until it is old enough for the watchdog.
-      w.loop->set_simulation_failed(true);
+      for (std::size_t h = 0; h < hand_count(w); ++h) hand_loop(w, h).set_simulation_failed(true);
       return false;
     }
     ++report.simulation_steps;
@@ -260,7 +314,10 @@ bool step_world(World& w, CommandSeam& seam, SnapshotPublisher& publisher, Sessi
   publisher.publish(clock_s);
   // Stepping again after a failure (a reset or a new model took the divergence away): the
   // geometry just published is trusted again, and the force fades back in.
-  if (stepping && w.loop->simulation_failed()) w.loop->set_simulation_failed(false);
+  for (std::size_t h = 0; h < hand_count(w); ++h) {
+    haptics::HapticLoop& loop = hand_loop(w, h);
+    if (stepping && loop.simulation_failed()) loop.set_simulation_failed(false);
+  }
   double moving = 0.0;
   for (const BodyRuntime& r : w.bodies) {
     if (r.body.deformable() && r.state.v.size()) moving = std::max(moving, r.state.v.cwiseAbs().maxCoeff());
@@ -269,32 +326,44 @@ bool step_world(World& w, CommandSeam& seam, SnapshotPublisher& publisher, Sessi
   return true;
 }
 
-void take_contacts(World& w, SessionReport& report) {
-  const double period = w.loop->nominal_period_s();
+namespace {
+
+// One hand's contacts since the last step. The first hand's also drive what the world keeps
+// of the stylus (the proxies, the last contact for the local model, the report's figures).
+void take_hand_contacts(World& w, std::size_t hand, SessionReport& report) {
+  const bool first = hand == 0;
+  haptics::HapticLoop& loop = hand_loop(w, hand);
+  HandReport& figures = first ? w.first_hand : w.more_hands[hand - 1]->report;
+  const double period = loop.nominal_period_s();
   haptics::HapticContact c;
-  while (w.loop->contacts().pop(c)) {
-    ++w.ticks_since_step;
-    ++report.haptic_ticks;
-    w.last_tick_valid = c.valid;
-    if (c.valid) {
-      for (std::size_t l = 0; l < w.layers.size(); ++l) {
-        w.layers[l]->proxy = c.layers[l].proxy;
-        w.layers[l]->proxy_triangle = l < c.layer_count && c.layers[l].contact ? c.layers[l].triangle : -1;
-      }
-      w.last_proxy_valid = true;
-    }
+  while (loop.contacts().pop(c)) {
+    ++figures.haptic_ticks;
     const double force = c.force.norm();
-    report.max_force_n = std::max(report.max_force_n, force);
+    figures.max_force_n = std::max(figures.max_force_n, force);
+    if (first) {
+      ++w.ticks_since_step;
+      ++report.haptic_ticks;
+      w.last_tick_valid = c.valid;
+      if (c.valid) {
+        for (std::size_t l = 0; l < w.layers.size(); ++l) {
+          w.layers[l]->proxy = c.layers[l].proxy;
+          w.layers[l]->proxy_triangle = l < c.layer_count && c.layers[l].contact ? c.layers[l].triangle : -1;
+        }
+        w.last_proxy_valid = true;
+      }
+      report.max_force_n = std::max(report.max_force_n, force);
+    }
     bool any = false;
     if (c.tool.active && c.tool.body >= 0 && static_cast<std::size_t>(c.tool.body) < w.bodies.size()) {
       // The tool in a body: its reaction goes through the tool's coupling at the body's step.
       BodyRuntime& r = w.bodies[static_cast<std::size_t>(c.tool.body)];
-      r.tool_force_sum += c.tool.force;
-      ++r.tool_ticks;
-      r.last_tool = c.tool;
+      HandLoad& load = r.loads[hand];
+      load.tool_force_sum += c.tool.force;
+      ++load.tool_ticks;
+      load.last_tool = c.tool;
       r.report.contact_time_s += period;
       r.report.max_force_n = std::max(r.report.max_force_n, c.tool.force.norm());
-      w.last_body = c.tool.body;
+      if (first) w.last_body = c.tool.body;
       any = true;
     }
     for (std::size_t l = 0; l < w.layers.size() && l < c.layer_count; ++l) {
@@ -306,23 +375,35 @@ void take_contacts(World& w, SessionReport& report) {
       const auto b = static_cast<std::size_t>(rest.parts[static_cast<std::size_t>(part)].body);
       if (c.tool.active && c.tool.body == static_cast<std::int32_t>(b)) continue;  // the tool's (above)
       BodyRuntime& r = w.bodies[b];
-      r.reaction_sum -= layer.load;  // the tissue feels the opposite of what the tool pushes with
-      ++r.contact_ticks;
-      r.last_triangle = layer.triangle - rest.parts[static_cast<std::size_t>(part)].first_triangle;
-      r.last_barycentric = layer.barycentric;
+      HandLoad& load = r.loads[hand];
+      load.reaction_sum -= layer.load;  // the tissue feels the opposite of what the tool pushes with
+      ++load.contact_ticks;
+      load.last_triangle = layer.triangle - rest.parts[static_cast<std::size_t>(part)].first_triangle;
+      load.last_barycentric = layer.barycentric;
       r.report.contact_time_s += period;
       r.report.max_force_n = std::max(r.report.max_force_n, layer.force.norm());
-      w.last_body = static_cast<std::int32_t>(b);
-      w.last_triangle = layer.triangle;
-      w.last_barycentric = layer.barycentric;
+      if (first) {
+        w.last_body = static_cast<std::int32_t>(b);
+        w.last_triangle = layer.triangle;
+        w.last_barycentric = layer.barycentric;
+      }
       any = true;
     }
     if (!any) continue;
+    figures.contact_time_s += period;
+    if (c.clamped) ++figures.clamped_contact_ticks;
+    if (!first) continue;
     ++w.contact_ticks_this_step;
     report.contact_time_s += period;
     if (c.clamped) ++report.clamped_contact_ticks;
     ++w.contact_ticks_since_publish;
   }
+}
+
+}  // namespace
+
+void take_contacts(World& w, SessionReport& report) {
+  for (std::size_t hand = 0; hand < hand_count(w); ++hand) take_hand_contacts(w, hand, report);
 }
 
 void count_fall_through(World& w, SessionReport& report) {
@@ -382,32 +463,35 @@ namespace {
 void load_contacts(World& w, BodyRuntime& r, std::int64_t haptic_ticks) {
   r.state.external_force.setZero();
   const std::int64_t ticks = std::max<std::int64_t>(1, haptic_ticks - r.ticks_at_last_step);
-  if (r.contact_ticks > 0 && r.last_triangle >= 0) {
-    const Vec3 reaction = r.reaction_sum / static_cast<double>(ticks);
-    const mesh::Tri& tri = r.body.surface.triangles[static_cast<std::size_t>(r.last_triangle)];
-    std::span<double> forces{r.state.external_force.data(), static_cast<std::size_t>(r.state.external_force.size())};
-    if (w.config.coupling == ContactCoupling::kClosestVertex) {
-      int nearest = 0;
-      for (int k = 1; k < 3; ++k) {
-        if (r.last_barycentric[k] > r.last_barycentric[nearest]) nearest = k;
+  std::span<double> forces{r.state.external_force.data(), static_cast<std::size_t>(r.state.external_force.size())};
+  // Every hand's load adds up on the body (the first hand's first).
+  for (std::size_t hand = 0; hand < r.loads.size(); ++hand) {
+    HandLoad& load = r.loads[hand];
+    if (load.contact_ticks > 0 && load.last_triangle >= 0) {
+      const Vec3 reaction = load.reaction_sum / static_cast<double>(ticks);
+      const mesh::Tri& tri = r.body.surface.triangles[static_cast<std::size_t>(load.last_triangle)];
+      if (w.config.coupling == ContactCoupling::kClosestVertex) {
+        int nearest = 0;
+        for (int k = 1; k < 3; ++k) {
+          if (load.last_barycentric[k] > load.last_barycentric[nearest]) nearest = k;
+        }
+        r.body.mapping.add_vertex_force(tri[nearest], reaction, forces);
+      } else {
+        for (int k = 0; k < 3; ++k)
+          r.body.mapping.add_vertex_force(tri[k], load.last_barycentric[k] * reaction, forces);
       }
-      r.body.mapping.add_vertex_force(tri[nearest], reaction, forces);
-    } else {
-      for (int k = 0; k < 3; ++k) r.body.mapping.add_vertex_force(tri[k], r.last_barycentric[k] * reaction, forces);
     }
+    ToolTissueCoupling* coupling =
+        hand == 0 ? w.config.tool_coupling.get() : w.more_hands[hand - 1]->config.tool_coupling.get();
+    if (load.tool_ticks > 0 && coupling) {
+      // The tool's force averaged over this body's ticks since its last step (it acted only
+      // during the ticks it was in the body), at the tool's latest place.
+      haptics::ToolState tool = load.last_tool;
+      tool.force = load.tool_force_sum / static_cast<double>(ticks);
+      coupling->add_tissue_forces(tool, *r.body.model, r.state, forces);
+    }
+    load.clear();
   }
-  if (r.tool_ticks > 0 && w.config.tool_coupling) {
-    // The tool's force averaged over this body's ticks since its last step (it acted only
-    // during the ticks it was in the body), at the tool's latest place.
-    haptics::ToolState tool = r.last_tool;
-    tool.force = r.tool_force_sum / static_cast<double>(ticks);
-    std::span<double> forces{r.state.external_force.data(), static_cast<std::size_t>(r.state.external_force.size())};
-    w.config.tool_coupling->add_tissue_forces(tool, *r.body.model, r.state, forces);
-  }
-  r.tool_force_sum.setZero();
-  r.tool_ticks = 0;
-  r.reaction_sum.setZero();
-  r.contact_ticks = 0;
   r.ticks_at_last_step = haptic_ticks;
 }
 

@@ -60,7 +60,20 @@ class PyWorld {
     coupling::SessionConfig config = world.config;
     // Only a real-time run has a haptic thread to raise; virtual time ignores it.
     config.haptics.realtime_priority = true;
-    auto session = coupling::Session::make(std::move(world.bodies), std::move(*device), config);
+    // The project's other hands (<tool device=…>), each on its own device.
+    std::vector<std::unique_ptr<haptics::Device>> more_devices;
+    for (coupling::HandConfig& hand : config.more_hands) {
+      hand.haptics.realtime_priority = true;
+      auto opened = scene::open_device(hand.device);
+      if (!opened) {
+        Error e = opened.error();
+        e.message = fmt::format("{} (a <tool>'s device in {})", e.message, world.file.string());
+        raise(e);
+      }
+      more_devices.push_back(std::move(*opened));
+    }
+    auto session =
+        coupling::Session::make(std::move(world.bodies), std::move(*device), std::move(more_devices), config);
     if (!session) raise(session.error());
     return std::make_unique<PyWorld>(std::move(world), std::move(*session));
   }

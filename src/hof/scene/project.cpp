@@ -1,6 +1,7 @@
 #include "hof/scene/project.h"
 #include "hof/mesh/xml_depth.h"
 #include "hof/scene/detail/project_fields.h"
+#include "hof/scene/device_config.h"
 
 #include "hof/core/file_write.h"
 
@@ -11,6 +12,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <charconv>
 #include <fstream>
 #include <pugixml.hpp>
@@ -276,6 +278,73 @@ ContactSetup read_contact(ProjectReader& r, const pugi::xml_node& node) {
   return c;
 }
 
+// Every <tool> of <haptics>: the first hand's (no device=, or the project's device) and one
+// more hand for each other device (HofProject::hands).
+void read_tools(ProjectReader& r, const pugi::xml_node& h, HofProject& p) {
+  struct Written {
+    procedures::ShapedToolConfig tool;
+    double max_force_n{0.0};
+    pugi::xml_node node;
+  };
+  std::vector<Written> tools;
+  for (const pugi::xml_node t : h.children("tool")) {
+    Written w{{}, 0.0, t};
+    r.read(t, detail::tool_fields(), w.tool);
+    w.max_force_n = r.get(t, "maxForce", 0.0);
+    if (!(w.max_force_n >= 0.0))
+      r.fail(t, fmt::format("<tool> maxForce must be >= 0 N (0: <safety> maxForce), got {}", w.max_force_n));
+    if (auto problem = detail::check_tool(w.tool)) r.fail(t, *problem);
+    if (w.tool.shape == procedures::ToolShape::kMesh && !w.tool.mesh.empty()) {
+      const std::filesystem::path mesh = std::filesystem::path(r.file).parent_path() / w.tool.mesh;
+      if (auto surface = procedures::read_tool_mesh(mesh); !surface) {
+        r.fail(t, fmt::format("<tool> mesh=\"{}\": {}", w.tool.mesh, surface.error().to_string()));
+      }
+    }
+    if (!w.tool.device.empty()) {
+      // Checked as the CLI's --device is (a replay file beside the project, as the project's own).
+      std::string spec = w.tool.device;
+      if (const std::string_view replay = "replay:"; spec.starts_with(replay)) {
+        const std::filesystem::path recording = spec.substr(replay.size());
+        if (recording.is_relative())
+          spec = std::string(replay) + (std::filesystem::path(r.file).parent_path() / recording).string();
+      }
+      if (spec != "auto") {
+        if (auto parsed = parse_device_spec(spec); !parsed)
+          r.fail(t, fmt::format("<tool> device=\"{}\": {}", w.tool.device, parsed.error().message));
+      }
+    }
+    tools.push_back(std::move(w));
+  }
+  if (tools.empty()) return;
+  const auto is_first_hands = [&](const Written& w) { return w.tool.device.empty() || w.tool.device == p.device; };
+  // A project without a device of its own: its first tool's device is the first hand.
+  if (p.device == "auto" && std::none_of(tools.begin(), tools.end(), is_first_hands))
+    p.device = tools.front().tool.device;
+  for (std::size_t i = 0; i < tools.size(); ++i) {
+    const Written& w = tools[i];
+    for (std::size_t k = 0; k < i; ++k) {
+      const bool same = is_first_hands(w) ? is_first_hands(tools[k]) : tools[k].tool.device == w.tool.device;
+      if (same) {
+        r.fail(w.node, fmt::format("a second <tool> on the device \"{}\" (the first is at line {}): each device "
+                                   "carries one tool",
+                                   is_first_hands(w) ? p.device : w.tool.device,
+                                   line_of(r.text, tools[k].node.offset_debug())));
+        return;
+      }
+    }
+    if (is_first_hands(w)) {
+      if (p.needle) r.fail(w.node, "<tool> and <needle>: the stylus carries one of them");
+      if (w.max_force_n > 0.0)
+        r.fail(w.node,
+               "<tool> maxForce: the first device's limit is <safety> maxForce (maxForce is for a tool on "
+               "another device)");
+      p.tool = w.tool;
+    } else {
+      p.hands.push_back(HandSetup{w.tool, w.max_force_n, line_of(r.text, w.node.offset_debug())});
+    }
+  }
+}
+
 // <haptics>: the device, rate, renderer, contact coupling, calibration, surface, options,
 // stylus, needle, force effects and safety.
 void read_haptics(ProjectReader& r, const pugi::xml_node& h, HofProject& p) {
@@ -285,19 +354,7 @@ void read_haptics(ProjectReader& r, const pugi::xml_node& h, HofProject& p) {
   if (const pugi::xml_node o = h.child("options")) r.read(o, detail::options_fields(), p);
   if (const pugi::xml_node st = h.child("stylus")) r.read(st, detail::stylus_fields(), p);
   if (const pugi::xml_node n = h.child("needle")) p.needle = read_needle(r, n);
-  if (const pugi::xml_node t = h.child("tool")) {
-    procedures::ShapedToolConfig tool;
-    r.read(t, detail::tool_fields(), tool);
-    if (auto problem = detail::check_tool(tool)) r.fail(t, *problem);
-    if (p.needle) r.fail(t, "<tool> and <needle>: the stylus carries one of them");
-    if (tool.shape == procedures::ToolShape::kMesh && !tool.mesh.empty()) {
-      const std::filesystem::path mesh = std::filesystem::path(r.file).parent_path() / tool.mesh;
-      if (auto surface = procedures::read_tool_mesh(mesh); !surface) {
-        r.fail(t, fmt::format("<tool> mesh=\"{}\": {}", tool.mesh, surface.error().to_string()));
-      }
-    }
-    p.tool = tool;
-  }
+  read_tools(r, h, p);
   for (const pugi::xml_node e : h.child("effects").children()) {
     const std::string type = e.name();
     if (type == "SpringEffect") {

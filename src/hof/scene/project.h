@@ -126,6 +126,15 @@ struct MaterialRegion {
   std::optional<double> mass_density_kg_per_m3;       ///< needs a DiagonalMass (per area on a membrane)
 };
 
+/// A hand beyond the first: a <tool device="SPEC"> whose device is not the project's.
+struct HandSetup {
+  procedures::ShapedToolConfig tool;  ///< `tool.device`: the device spec that carries it
+  /// Its own force limit (<tool maxForce>), N; 0: the project's (<safety maxForce>).
+  double max_force_n{0.0};
+  std::int64_t line{0};  ///< where the project gives it (errors while the world is built)
+  bool operator==(const HandSetup&) const = default;
+};
+
 struct HofProject {
   std::string name{"untitled"};
   std::filesystem::path mechanics_scene;  ///< as written in the file (relative to it); empty when inline
@@ -164,6 +173,11 @@ struct HofProject {
   /// A rigid tool with a shape on the stylus (<tool> in <haptics>); `mesh` resolved against the
   /// project's folder. Not with a needle.
   std::optional<procedures::ShapedToolConfig> tool;
+  /// More hands (two devices at once, issue 37): each <tool device="SPEC"> whose SPEC is not
+  /// `device` is a device of its own with that tool, in the order written. A <tool> without
+  /// device= (or naming `device`) is the first hand's, `tool` above. A project whose device is
+  /// "auto" and whose tools all name devices takes the first one's device as its own.
+  std::vector<HandSetup> hands;
   GraphicsSetup graphics;
 };
 

@@ -122,6 +122,10 @@ std::string to_xml(const HofProject& p) {
   out += fmt::format("    <stylus {}/>\n", write_fields(detail::stylus_fields(), p));
   if (p.needle) out += needle_xml(*p.needle);
   if (p.tool) out += fmt::format("    <tool {}/>\n", write_fields(detail::tool_fields(), *p.tool));
+  for (const HandSetup& hand : p.hands) {
+    out += fmt::format("    <tool {}{}/>\n", write_fields(detail::tool_fields(), hand.tool),
+                       hand.max_force_n > 0.0 ? fmt::format(" maxForce=\"{}\"", hand.max_force_n) : std::string());
+  }
   if (p.effects.springs.empty() && p.effects.viscosities.empty() && p.effects.constants.empty()) {
     out += "    <effects/>\n";
   } else {

@@ -531,8 +531,11 @@ Expected<void> add_project_scene(World& w, const std::filesystem::path& file) {
 /// device (the default probe when the world is bare).
 // The shaped tool (<tool>): the tool in the haptic loop and its reaction in the tissue of the
 // body it touches most. Its dimensions are SI; the scene's length unit converts them.
-Expected<void> add_shaped_tool(World& w) {
-  const procedures::ShapedToolConfig& config = *w.project.tool;
+struct MadeTool {
+  std::shared_ptr<procedures::ShapedTool> tool;
+  std::shared_ptr<procedures::ShapedTissueCoupling> coupling;
+};
+Expected<MadeTool> make_shaped_tool(const World& w, const procedures::ShapedToolConfig& config) {
   double metres_per_unit = 1.0;
   if (w.length_unit == "mm") metres_per_unit = 1e-3;
   if (w.length_unit == "cm") metres_per_unit = 1e-2;
@@ -562,8 +565,57 @@ Expected<void> add_shaped_tool(World& w) {
     }
     bodies.push_back(std::move(s));
   }
-  w.config.tool = *tool;
-  w.config.tool_coupling = std::make_shared<procedures::ShapedTissueCoupling>(*tool, std::move(bodies));
+  return MadeTool{*tool, std::make_shared<procedures::ShapedTissueCoupling>(*tool, std::move(bodies))};
+}
+
+Expected<void> add_shaped_tool(World& w) {
+  auto made = make_shaped_tool(w, *w.project.tool);
+  if (!made) return std::unexpected(made.error());
+  w.config.tool = made->tool;
+  w.config.tool_coupling = made->coupling;
+  return {};
+}
+
+// The hands beyond the first (project.hands): each its device spec, its tool, its own force
+// limit, and the calibration the file gave (the default probe's fitted one is the first hand's).
+Expected<void> add_hands(World& w) {
+  for (const HandSetup& setup : w.project.hands) {
+    coupling::HandConfig hand;
+    hand.device = setup.tool.device;
+    // A recording the hand replays is found beside the project, as the project's own.
+    if (const std::string_view replay = "replay:"; hand.device.starts_with(replay)) {
+      const std::filesystem::path recording = hand.device.substr(replay.size());
+      if (recording.is_relative() && !w.file.parent_path().empty())
+        hand.device = std::string(replay) + (w.file.parent_path() / recording).string();
+    }
+    if (hand.device == w.device) {
+      return make_error(ErrorCode::kInvalidArgument,
+                        fmt::format("<tool> device=\"{}\": the first hand's device too (each device carries one tool)",
+                                    setup.tool.device),
+                        w.file.string(), setup.line);
+    }
+    for (const coupling::HandConfig& other : w.config.more_hands) {
+      if (other.device == hand.device)
+        return make_error(ErrorCode::kInvalidArgument,
+                          fmt::format("<tool> device=\"{}\": a second tool on that device", setup.tool.device),
+                          w.file.string(), setup.line);
+    }
+    hand.haptics = w.config.haptics;
+    if (setup.max_force_n > 0.0) hand.haptics.safety.max_force_n = setup.max_force_n;
+    for (int r = 0; r < 4; ++r) {
+      for (int k = 0; k < 4; ++k)
+        hand.haptics.calibration.position(r, k) = w.file_calibration[static_cast<std::size_t>(4 * r + k)];
+    }
+    auto made = make_shaped_tool(w, setup.tool);
+    if (!made) {
+      Error e = made.error();
+      e.line = setup.line;
+      return std::unexpected(e);
+    }
+    hand.tool = made->tool;
+    hand.tool_coupling = made->coupling;
+    w.config.more_hands.push_back(std::move(hand));
+  }
   return {};
 }
 
@@ -641,6 +693,8 @@ Expected<World> finish_world(World w, bool sofa_scene, bool bare, const std::str
   if (w.project.tool && !w.project.needle) {
     if (auto ok = add_shaped_tool(w); !ok) return std::unexpected(ok.error());
   }
+  w.config.device = w.device;
+  if (auto ok = add_hands(w); !ok) return std::unexpected(ok.error());
   return w;
 }
 

@@ -39,21 +39,34 @@ constexpr std::size_t kFemReactionPatchCapacity = 4096;
 /// The FEM-reaction coupling needs one simulation step per haptic tick.
 bool fem_reaction_step_fits(double dt_s, double rate_hz);
 
+/// What one hand left on a body since the body last stepped.
+struct HandLoad {
+  // The proxy's contact: its reaction summed, where it touched last.
+  Vec3 reaction_sum{Vec3::Zero()};
+  int contact_ticks{0};
+  std::int32_t last_triangle{-1};  // local to the body's surface
+  Vec3 last_barycentric{Vec3::Zero()};
+  // The tool in or on this body: its force summed, its latest state.
+  Vec3 tool_force_sum{Vec3::Zero()};
+  int tool_ticks{0};
+  haptics::ToolState last_tool;
+
+  void clear() {
+    reaction_sum.setZero();
+    contact_ticks = 0;
+    tool_force_sum.setZero();
+    tool_ticks = 0;
+  }
+};
+
 /// A body and what the world keeps of it between steps.
 struct BodyRuntime {
   SessionBody body;
   mechanics::MechanicalState state;  // deformable bodies
   std::vector<Vec3> surface_positions, surface_velocities;
-  // Contact since this body last stepped.
-  Vec3 reaction_sum{Vec3::Zero()};
-  int contact_ticks{0};
+  // Contact since this body last stepped, one load per hand (the first hand's first).
+  std::vector<HandLoad> loads;
   std::int64_t ticks_at_last_step{0};
-  std::int32_t last_triangle{-1};  // local to the body's surface
-  Vec3 last_barycentric{Vec3::Zero()};
-  // The tool in or on this body since it last stepped: its force summed, its latest state.
-  Vec3 tool_force_sum{Vec3::Zero()};
-  int tool_ticks{0};
-  haptics::ToolState last_tool;
   double next_step_s{0.0};
   BodyReport report;
   bool inside_since_start{false};
@@ -101,6 +114,19 @@ struct StateTimer {
   static double rate(std::int64_t n, double s) { return s > 0.0 ? static_cast<double>(n) / s : 0.0; }
 };
 
+/// A hand beyond the first: its device, its haptic loop and what that reads and writes. The
+/// first hand is World's own device, loop and settings (the commands reach it).
+struct HandRuntime {
+  HandConfig config;
+  std::unique_ptr<haptics::Device> device;  // declared before the loop: it outlives it
+  // Its snapshot of each layer (a TripleBuffer has one reader): filled by the publisher
+  // from the first hand's, never computed twice.
+  std::vector<std::unique_ptr<TripleBuffer<haptics::SurfaceSnapshot>>> surfaces;
+  TripleBuffer<haptics::HapticSettings> settings;
+  std::unique_ptr<haptics::HapticLoop> loop;
+  HandReport report;
+};
+
 /// Everything the simulation steps and the haptic loop it feeds. Written by the simulation
 /// thread only (in real time) or by the caller's (virtual time); the atomics are read anywhere.
 struct World {
@@ -120,7 +146,9 @@ struct World {
   haptics::Device* last_device{nullptr};           // the device the ticks used at the last step
   TripleBuffer<haptics::HapticSettings> settings;  // to the haptic loop
   haptics::HapticSettings current_settings;
-  std::unique_ptr<haptics::HapticLoop> loop;
+  std::unique_ptr<haptics::HapticLoop> loop;  // the first hand's
+  HandReport first_hand;                      // the first hand's figures (the report's are its too)
+  std::vector<std::unique_ptr<HandRuntime>> more_hands;
   // Contact since the last step.
   int ticks_since_step{0};
   std::int32_t last_body{-1};
@@ -139,9 +167,17 @@ struct World {
   std::atomic<std::uint64_t> steps_taken{0};
 };
 
-/// Makes the world of `bodies` (checked by Session::make) and its haptic loop.
+/// Makes the world of `bodies` (checked by Session::make) and its hands' haptic loops.
+/// `more_devices[i]` is the device of config.more_hands[i].
 void init_world(World& world, std::vector<SessionBody> bodies, std::unique_ptr<haptics::Device> device,
-                const SessionConfig& config);
+                const SessionConfig& config, std::vector<std::unique_ptr<haptics::Device>> more_devices = {});
+/// Hands: the first (World::loop) and the more_hands.
+[[nodiscard]] inline std::size_t hand_count(const World& w) { return 1 + w.more_hands.size(); }
+[[nodiscard]] inline haptics::HapticLoop& hand_loop(World& w, std::size_t hand) {
+  return hand == 0 ? *w.loop : *w.more_hands[hand - 1]->loop;
+}
+/// The hands' reports as they stand (the first's, then the others').
+[[nodiscard]] std::vector<HandReport> hand_reports(World& world);
 
 /// The one stepping function: commands, contact forces, every due body steps, publish.
 /// Returns false on divergence (report.divergence says which body and why).
