@@ -395,6 +395,9 @@ double ShapedTool::deepest(const Vec3& position, const Mat3& r) const {
     for (std::size_t i = 0; i < candidate_count_; ++i) {
       const Candidate& c = candidates_[i];
       if (!may_reach(c, segment, p.radius, tolerance_)) continue;
+      const double da = c.normal.dot(a) - c.offset;  // as in resolve: a lower bound first
+      const double db = c.normal.dot(b) - c.offset;
+      if (da * db > 0.0 && p.radius - std::min(std::abs(da), std::abs(db)) <= worst) continue;
       const mesh::Tri& t = c.surface->triangles[static_cast<std::size_t>(c.triangle)];
       Vec3 on_segment, on_triangle, w;
       const double d = closest_segment_triangle(a, b, c.surface->vertices[t[0]], c.surface->vertices[t[1]],
@@ -419,6 +422,13 @@ bool ShapedTool::resolve(Vec3& position, const Mat3& r, const Vec3& reference, P
       for (std::size_t i = 0; i < candidate_count_; ++i) {
         const Candidate& c = candidates_[i];
         if (!may_reach(c, segment, p.radius, tolerance_)) continue;
+        // The segment's distance to the triangle's plane (both ends on one side) bounds its
+        // distance to the triangle from below: a triangle whose plane is no deeper than the
+        // deepest overlap found so far cannot be deeper (on a flat patch, the neighbours of
+        // the face under the shape: no exact test for them).
+        const double da = c.normal.dot(a) - c.offset;
+        const double db = c.normal.dot(b) - c.offset;
+        if (da * db > 0.0 && p.radius - std::min(std::abs(da), std::abs(db)) <= worst) continue;
         const mesh::Tri& t = c.surface->triangles[static_cast<std::size_t>(c.triangle)];
         const Vec3& p0 = c.surface->vertices[t[0]];
         const Vec3& p1 = c.surface->vertices[t[1]];
