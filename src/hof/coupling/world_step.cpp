@@ -515,6 +515,15 @@ bool advance_bodies(World& w, SessionReport& report) {
     for (BodyRuntime* r : due) w.due_flags[static_cast<std::size_t>(r - w.bodies.data())] = 1;
     w.body_contacts.apply(w, w.due_flags, report);
   }
+  if (w.config.tool_coupling) {
+    // The tool's reaction stiffness joins the contact springs (the pass above rewrote them;
+    // without the pass, nothing else writes them).
+    for (BodyRuntime* r : due) {
+      if (!w.body_contacts.active()) r->state.external_stiffness.clear();
+      w.config.tool_coupling->add_tissue_stiffness(static_cast<std::int32_t>(r - w.bodies.data()),
+                                                   r->state.external_stiffness);
+    }
+  }
   // Every due body steps; several in parallel (each body's own loops are thread-count
   // independent, so results do not depend on how they are spread).
   std::vector<char>& ok = w.step_ok;

@@ -297,7 +297,6 @@ ShapedTool::ShapedTool(const ShapedToolConfig& config, std::vector<ToolPrimitive
   max_step_ = 0.5 * smallest;
   tolerance_ = 1e-6 * smallest;
   candidates_.resize(kMaxCandidates);
-  query_.resize(kMaxCandidates);
 }
 
 void ShapedTool::restart() {
@@ -334,39 +333,56 @@ bool ShapedTool::may_reach(const Candidate& c, const Segment& s, double radius, 
 }
 
 void ShapedTool::gather(const haptics::ToolTickInput& in, const Mat3& r, const Vec3& from, const Vec3& to) {
-  // One sphere around the whole motion of the shape this tick, from each layer's bound tree.
-  const Vec3 centre = 0.5 * (from + to) + r * bound_centre_;
-  const double motion = (to - from).norm();
-  const double reach = 0.5 * motion + bound_radius_ + 2.0 * max_step_;
-  // A single primitive (a sphere, a capsule) keeps only the triangles its own swept segment
-  // may reach: a thin shaft's neighbourhood, not its bounding sphere's.
+  // The box around the whole motion of the shape this tick, from each layer's bound tree: a
+  // single primitive (a sphere, a capsule) sweeps its segment from `from` to `to`, and the box
+  // of the segment's two placements holds the swept shaft (the box of a thin shaft's
+  // neighbourhood, not of its bounding sphere: a capsule lying along an axis gathers a quarter
+  // of the sphere's triangles); a mesh tool sweeps its bounding sphere. The margin is the
+  // radius and two sub-moves (the pushes move the proxy off the straight path).
   const bool prune = primitives_.size() == 1;
   const ToolPrimitive& p = primitives_.front();
-  const Segment axis(from + r * p.a, from + r * p.b);
+  const double motion = (to - from).norm();
   const double slack = motion + 2.0 * max_step_;
+  Eigen::AlignedBox3d box;
+  double inflate = 2.0 * max_step_;
+  if (prune) {
+    box.extend(from + r * p.a);
+    box.extend(from + r * p.b);
+    box.extend(to + r * p.a);
+    box.extend(to + r * p.b);
+    inflate += p.radius;
+  } else {
+    box.extend(from + r * bound_centre_);
+    box.extend(to + r * bound_centre_);
+    inflate += bound_radius_;
+  }
+  // The triangles the shaft's own segment may reach (its bounding sphere against the segment
+  // where the tick starts, with the motion as slack): fewer exact tests in the pushes.
+  const Segment axis(from + r * p.a, from + r * p.b);
   candidate_count_ = 0;
   for (const haptics::SurfaceSnapshot* s : in.surfaces) {
     if (s == nullptr || s->triangles.empty()) continue;
-    const std::size_t room = kMaxCandidates - candidate_count_;
-    if (room == 0) break;
-    const std::size_t found = s->tree.triangles_near(centre, reach, std::span<std::int32_t>(query_.data(), room));
-    for (std::size_t i = 0; i < std::min(found, room); ++i) {
+    if (candidate_count_ == kMaxCandidates) break;
+    s->tree.visit_overlapping(box.min(), box.max(), inflate, [&](std::int32_t triangle) {
+      if (candidate_count_ == kMaxCandidates) return;  // bounded: the rest are not felt this tick
       Candidate& c = candidates_[candidate_count_];
-      c.surface = s;
-      c.triangle = query_[i];
-      const mesh::Tri& t = s->triangles[static_cast<std::size_t>(c.triangle)];
+      const mesh::Tri& t = s->triangles[static_cast<std::size_t>(triangle)];
       const Vec3& p0 = s->vertices[t[0]];
-      bounding_sphere(p0, s->vertices[t[1]], s->vertices[t[2]], c.centre, c.radius);
+      const Vec3& p1 = s->vertices[t[1]];
+      const Vec3& p2 = s->vertices[t[2]];
+      bounding_sphere(p0, p1, p2, c.centre, c.radius);
       if (prune) {
         const double keep = c.radius + p.radius + slack;
-        if (axis.distance_squared(c.centre) > keep * keep) continue;
+        if (!(axis.distance_squared(c.centre) <= keep * keep)) return;
       }
-      const Vec3 n = (s->vertices[t[1]] - p0).cross(s->vertices[t[2]] - p0);
+      c.surface = s;
+      c.triangle = triangle;
+      const Vec3 n = (p1 - p0).cross(p2 - p0);
       const double area = n.norm();
       c.normal = area > 0.0 && std::isfinite(area) ? Vec3(n / area) : Vec3::Zero();
       c.offset = c.normal.dot(p0);
       ++candidate_count_;
-    }
+    });
   }
 }
 
@@ -379,6 +395,9 @@ double ShapedTool::deepest(const Vec3& position, const Mat3& r) const {
     for (std::size_t i = 0; i < candidate_count_; ++i) {
       const Candidate& c = candidates_[i];
       if (!may_reach(c, segment, p.radius, tolerance_)) continue;
+      const double da = c.normal.dot(a) - c.offset;  // as in resolve: a lower bound first
+      const double db = c.normal.dot(b) - c.offset;
+      if (da * db > 0.0 && p.radius - std::min(std::abs(da), std::abs(db)) <= worst) continue;
       const mesh::Tri& t = c.surface->triangles[static_cast<std::size_t>(c.triangle)];
       Vec3 on_segment, on_triangle, w;
       const double d = closest_segment_triangle(a, b, c.surface->vertices[t[0]], c.surface->vertices[t[1]],
@@ -403,6 +422,13 @@ bool ShapedTool::resolve(Vec3& position, const Mat3& r, const Vec3& reference, P
       for (std::size_t i = 0; i < candidate_count_; ++i) {
         const Candidate& c = candidates_[i];
         if (!may_reach(c, segment, p.radius, tolerance_)) continue;
+        // The segment's distance to the triangle's plane (both ends on one side) bounds its
+        // distance to the triangle from below: a triangle whose plane is no deeper than the
+        // deepest overlap found so far cannot be deeper (on a flat patch, the neighbours of
+        // the face under the shape: no exact test for them).
+        const double da = c.normal.dot(a) - c.offset;
+        const double db = c.normal.dot(b) - c.offset;
+        if (da * db > 0.0 && p.radius - std::min(std::abs(da), std::abs(db)) <= worst) continue;
         const mesh::Tri& t = c.surface->triangles[static_cast<std::size_t>(c.triangle)];
         const Vec3& p0 = c.surface->vertices[t[0]];
         const Vec3& p1 = c.surface->vertices[t[1]];
@@ -557,6 +583,7 @@ Vec3 ShapedTool::tick(const haptics::ToolTickInput& in, std::span<Vec3> layer_fo
   double k = in.max_stiffness_n_per_m;
   if (config_.stiffness_n_per_m > 0.0) k = std::min(k, config_.stiffness_n_per_m * metres_per_unit_);
   const double b = config_.damping_n_s_per_m * metres_per_unit_;
+  coupling_stiffness_.store(k, std::memory_order_relaxed);
   Vec3 force = k * stretch + b * (proxy_velocity_ - in.velocity);
   if (!force.allFinite()) force.setZero();
   for (std::size_t i = 0; i < count; ++i) st.torque += (points[i] - x).cross((weights[i] / total) * force);
@@ -590,6 +617,7 @@ void ShapedTissueCoupling::add_tissue_forces(const haptics::ToolState& tool, con
                                              const mechanics::MechanicalState& state, std::span<double> forces) {
   (void)model;
   contacts_.clear();
+  pending_body_ = -1;
   if (tool.body < 0 || static_cast<std::size_t>(tool.body) >= bodies_.size()) return;
   const ToolBodySurface& body = bodies_[static_cast<std::size_t>(tool.body)];
   if (body.triangles.empty() || body.vertex_count == 0 || !tool.force.allFinite()) return;
@@ -640,11 +668,43 @@ void ShapedTissueCoupling::add_tissue_forces(const haptics::ToolState& tool, con
     contacts_.assign(1, nearest);
     total = 1.0;
   }
+  total_weight_ = total;
+  // The reaction follows the surface: the hand's spring shortens by as much as the surface
+  // under the proxy gives way along the contact normal.
+  const Vec3 n = tool.normal.allFinite() ? tool.normal : Vec3::Zero();
+  const double k = tool_->coupling_stiffness();
+  if (n.squaredNorm() > 0.5 && std::isfinite(k) && k > 0.0) {
+    pending_body_ = tool.body;
+    pending_stiffness_ = k * (n * n.transpose());
+  }
   const Vec3 reaction = -tool.force;
   for (const Contact& c : contacts_) {
     const Vec3 share = (c.weight / total) * reaction;
     const mesh::Tri& tri = body.triangles[static_cast<std::size_t>(c.triangle)];
-    for (int k = 0; k < 3; ++k) body.mapping.add_vertex_force(tri[k], c.barycentric[k] * share, forces);
+    for (int v = 0; v < 3; ++v) body.mapping.add_vertex_force(tri[v], c.barycentric[v] * share, forces);
+  }
+}
+
+void ShapedTissueCoupling::add_tissue_stiffness(std::int32_t body, std::vector<mechanics::NodeStiffness>& stiffness) {
+  if (body != pending_body_ || body < 0 || static_cast<std::size_t>(body) >= bodies_.size()) return;
+  pending_body_ = -1;
+  if (!(total_weight_ > 0.0)) return;
+  const ToolBodySurface& surface = bodies_[static_cast<std::size_t>(body)];
+  // As the reaction was shared: by contact weight, by barycentric weight over the triangle's
+  // vertices, by the mapping over the nodes. Summed onto each node's diagonal block (as the
+  // body contacts' springs are, coupling/detail/body_contact_pass.cpp): a rigid motion of the
+  // contact's nodes gets the spring's exact force change, and A keeps its pattern.
+  std::array<std::int32_t, coupling::SurfaceMapping::kMaxPointWeights> nodes{};
+  std::array<double, coupling::SurfaceMapping::kMaxPointWeights> weights{};
+  for (const Contact& c : contacts_) {
+    const mesh::Tri& tri = surface.triangles[static_cast<std::size_t>(c.triangle)];
+    const std::array<std::int32_t, 3> vertices{tri[0], tri[1], tri[2]};
+    const std::array<double, 3> bary{c.barycentric[0], c.barycentric[1], c.barycentric[2]};
+    const std::size_t count = surface.mapping.point_weights(vertices, bary, nodes, weights);
+    const double share = c.weight / total_weight_;
+    for (std::size_t i = 0; i < count; ++i) {
+      if (weights[i] != 0.0) stiffness.push_back({nodes[i], (share * weights[i]) * pending_stiffness_});
+    }
   }
 }
 
