@@ -512,10 +512,9 @@ TEST(ShapedTissueCoupling, ACapsuleSweptSidewaysDisplacesTheTissueAlongTheShaft)
 
 // Chatter: a capsule lying across the liver's top, pressed 6 mm past the surface at the device's
 // full stiffness (3 kN/m, several times the soft liver's own under the shaft) and held: the
-// force the hand feels settles and stays steady (the coupling spring's reaction is in the
-// tissue's implicit solve, ShapedTissueCoupling::add_tissue_stiffness). On this simple liver the
-// press was steady before that too; the default probe's press on the medium liver was not (its
-// figures: docs/performance.md, "A tool with a shape").
+// force the hand feels settles and stays steady. On this simple liver the press is steady; the
+// default probe's press on the medium liver still swings at full force (docs/performance.md,
+// "A tool with a shape"), which this test does not catch.
 TEST(ShapedTissueCoupling, AFullForceSteadyPressOnTheLiverIsSmooth) {
   Liver liver = make_liver();
   const double r = 0.004, length = 0.04;

@@ -28,17 +28,6 @@ class ToolTissueCoupling {
   /// Called on the simulation thread, only while the tool is in or on body `tool.body`.
   virtual void add_tissue_forces(const haptics::ToolState& tool, const mechanics::MechanicalModel& model,
                                  const mechanics::MechanicalState& state, std::span<double> forces) = 0;
-
-  /// The stiffness of the reaction last added to body `body` (its change as the body's nodes
-  /// move, −∂f/∂x, as blocks on the nodes' diagonal), appended to `stiffness` — the body's
-  /// MechanicalState::external_stiffness — for the implicit solve: a reaction that follows
-  /// the tissue (a coupling spring pressed by the hand) is then implicit in the step, not a
-  /// force held constant over it, which a stiff spring on soft tissue overshoots step after
-  /// step (chatter). Called after add_tissue_forces in the same step. Default: none.
-  virtual void add_tissue_stiffness(std::int32_t body, std::vector<mechanics::NodeStiffness>& stiffness) {
-    (void)body;
-    (void)stiffness;
-  }
 };
 
 }  // namespace hof::coupling

@@ -515,24 +515,6 @@ bool advance_bodies(World& w, SessionReport& report) {
     for (BodyRuntime* r : due) w.due_flags[static_cast<std::size_t>(r - w.bodies.data())] = 1;
     w.body_contacts.apply(w, w.due_flags, report);
   }
-  // Every hand's tool reaction stiffness joins the contact springs (the pass above rewrote
-  // them; without the pass, nothing else writes them).
-  const auto hand_coupling = [&w](std::size_t hand) {
-    return hand == 0 ? w.config.tool_coupling.get() : w.more_hands[hand - 1]->config.tool_coupling.get();
-  };
-  const std::size_t hand_count = 1 + w.more_hands.size();
-  bool any_tool_coupling = false;
-  for (std::size_t hand = 0; hand < hand_count; ++hand) any_tool_coupling = any_tool_coupling || hand_coupling(hand);
-  if (any_tool_coupling) {
-    for (BodyRuntime* r : due) {
-      if (!w.body_contacts.active()) r->state.external_stiffness.clear();
-      for (std::size_t hand = 0; hand < hand_count; ++hand) {
-        if (ToolTissueCoupling* coupling = hand_coupling(hand)) {
-          coupling->add_tissue_stiffness(static_cast<std::int32_t>(r - w.bodies.data()), r->state.external_stiffness);
-        }
-      }
-    }
-  }
   // Every due body steps; several in parallel (each body's own loops are thread-count
   // independent, so results do not depend on how they are spread).
   std::vector<char>& ok = w.step_ok;

@@ -583,7 +583,6 @@ Vec3 ShapedTool::tick(const haptics::ToolTickInput& in, std::span<Vec3> layer_fo
   double k = in.max_stiffness_n_per_m;
   if (config_.stiffness_n_per_m > 0.0) k = std::min(k, config_.stiffness_n_per_m * metres_per_unit_);
   const double b = config_.damping_n_s_per_m * metres_per_unit_;
-  coupling_stiffness_.store(k, std::memory_order_relaxed);
   Vec3 force = k * stretch + b * (proxy_velocity_ - in.velocity);
   if (!force.allFinite()) force.setZero();
   for (std::size_t i = 0; i < count; ++i) st.torque += (points[i] - x).cross((weights[i] / total) * force);
@@ -617,7 +616,6 @@ void ShapedTissueCoupling::add_tissue_forces(const haptics::ToolState& tool, con
                                              const mechanics::MechanicalState& state, std::span<double> forces) {
   (void)model;
   contacts_.clear();
-  pending_body_ = -1;
   if (tool.body < 0 || static_cast<std::size_t>(tool.body) >= bodies_.size()) return;
   const ToolBodySurface& body = bodies_[static_cast<std::size_t>(tool.body)];
   if (body.triangles.empty() || body.vertex_count == 0 || !tool.force.allFinite()) return;
@@ -668,43 +666,11 @@ void ShapedTissueCoupling::add_tissue_forces(const haptics::ToolState& tool, con
     contacts_.assign(1, nearest);
     total = 1.0;
   }
-  total_weight_ = total;
-  // The reaction follows the surface: the hand's spring shortens by as much as the surface
-  // under the proxy gives way along the contact normal.
-  const Vec3 n = tool.normal.allFinite() ? tool.normal : Vec3::Zero();
-  const double k = tool_->coupling_stiffness();
-  if (n.squaredNorm() > 0.5 && std::isfinite(k) && k > 0.0) {
-    pending_body_ = tool.body;
-    pending_stiffness_ = k * (n * n.transpose());
-  }
   const Vec3 reaction = -tool.force;
   for (const Contact& c : contacts_) {
     const Vec3 share = (c.weight / total) * reaction;
     const mesh::Tri& tri = body.triangles[static_cast<std::size_t>(c.triangle)];
     for (int v = 0; v < 3; ++v) body.mapping.add_vertex_force(tri[v], c.barycentric[v] * share, forces);
-  }
-}
-
-void ShapedTissueCoupling::add_tissue_stiffness(std::int32_t body, std::vector<mechanics::NodeStiffness>& stiffness) {
-  if (body != pending_body_ || body < 0 || static_cast<std::size_t>(body) >= bodies_.size()) return;
-  pending_body_ = -1;
-  if (!(total_weight_ > 0.0)) return;
-  const ToolBodySurface& surface = bodies_[static_cast<std::size_t>(body)];
-  // As the reaction was shared: by contact weight, by barycentric weight over the triangle's
-  // vertices, by the mapping over the nodes. Summed onto each node's diagonal block (as the
-  // body contacts' springs are, coupling/detail/body_contact_pass.cpp): a rigid motion of the
-  // contact's nodes gets the spring's exact force change, and A keeps its pattern.
-  std::array<std::int32_t, coupling::SurfaceMapping::kMaxPointWeights> nodes{};
-  std::array<double, coupling::SurfaceMapping::kMaxPointWeights> weights{};
-  for (const Contact& c : contacts_) {
-    const mesh::Tri& tri = surface.triangles[static_cast<std::size_t>(c.triangle)];
-    const std::array<std::int32_t, 3> vertices{tri[0], tri[1], tri[2]};
-    const std::array<double, 3> bary{c.barycentric[0], c.barycentric[1], c.barycentric[2]};
-    const std::size_t count = surface.mapping.point_weights(vertices, bary, nodes, weights);
-    const double share = c.weight / total_weight_;
-    for (std::size_t i = 0; i < count; ++i) {
-      if (weights[i] != 0.0) stiffness.push_back({nodes[i], (share * weights[i]) * pending_stiffness_});
-    }
   }
 }
 

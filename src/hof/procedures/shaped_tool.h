@@ -29,18 +29,13 @@
 /// shared over the contacts by weight, over each triangle's vertices by the closest point's
 /// barycentric weights, and over the nodes through the body's SurfaceMapping: the forces on the
 /// tissue sum to −F exactly. A tool touching two bodies gives its whole reaction to the one it
-/// touches most (the loop carries one body per tick). The reaction follows the surface (the
-/// hand's spring shortens as the tissue under the proxy gives way), so its stiffness k n nᵀ goes
-/// into the body's implicit solve, shared over the nodes as the force is: with the force alone,
-/// held over a step, a coupling spring stiffer than the soft tissue under it overshot step
-/// after step (the force chattered).
+/// touches most (the loop carries one body per tick).
 ///
 /// Closest points: C. Ericson, "Real-Time Collision Detection", Morgan Kaufmann 2005, §5.1.5
 /// (point–triangle), §5.1.9 (segment–segment) and §5.1.10 (segment–triangle: an intersection,
 /// else the least of the endpoints against the triangle and the segment against its edges).
 
 #include <array>
-#include <atomic>
 #include <cstdint>
 #include <filesystem>
 #include <memory>
@@ -124,10 +119,6 @@ class ShapedTool final : public haptics::Tool {
   [[nodiscard]] double metres_per_unit() const { return metres_per_unit_; }
   /// The proxy's tip (world), for tests and drawing.
   [[nodiscard]] const Vec3& proxy() const { return proxy_; }
-  /// The coupling spring's stiffness the last tick used, N per world unit (0 before a tick):
-  /// the tissue's reaction changes by it as the surface under the proxy moves. Read by the
-  /// simulation thread (ShapedTissueCoupling), written by the haptic tick.
-  [[nodiscard]] double coupling_stiffness() const { return coupling_stiffness_.load(std::memory_order_relaxed); }
 
  private:
   ShapedTool(const ShapedToolConfig& config, std::vector<ToolPrimitive> primitives, double metres_per_unit);
@@ -178,7 +169,6 @@ class ShapedTool final : public haptics::Tool {
   Vec3 proxy_{Vec3::Zero()};
   Vec3 last_proxy_{Vec3::Zero()};
   Vec3 proxy_velocity_{Vec3::Zero()};  // low-passed (see kProxyVelocityTimeConstant_s), world units/s
-  std::atomic<double> coupling_stiffness_{0.0};
 };
 
 /// A body's surface as the coupling needs it: triangles over surface vertices, and how those
@@ -195,10 +185,6 @@ class ShapedTissueCoupling final : public coupling::ToolTissueCoupling {
   ShapedTissueCoupling(std::shared_ptr<const ShapedTool> tool, std::vector<ToolBodySurface> bodies);
   void add_tissue_forces(const haptics::ToolState& tool, const mechanics::MechanicalModel& model,
                          const mechanics::MechanicalState& state, std::span<double> forces) override;
-  /// The coupling spring k n nᵀ (n the contact normal) shared over the last contacts' nodes
-  /// as the reaction was: w_i k n nᵀ on node i's diagonal block.
-  void add_tissue_stiffness(std::int32_t body, std::vector<mechanics::NodeStiffness>& stiffness) override;
-
   /// One contact of the last call, for tests.
   struct Contact {
     std::int32_t triangle{-1};
@@ -213,9 +199,6 @@ class ShapedTissueCoupling final : public coupling::ToolTissueCoupling {
   std::vector<ToolBodySurface> bodies_;
   std::vector<Vec3> positions_;    // scratch: the body's surface now
   std::vector<Contact> contacts_;  // scratch
-  double total_weight_{0.0};       // of contacts_
-  std::int32_t pending_body_{-1};  // the body the last reaction went to, until its stiffness is taken
-  Mat3 pending_stiffness_{Mat3::Zero()};
 };
 
 }  // namespace hof::procedures
