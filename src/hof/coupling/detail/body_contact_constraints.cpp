@@ -14,9 +14,8 @@ namespace hof::coupling::detail {
 
 namespace {
 
-// Room kept for contacts (and the nodes they act on) at the start; the lists grow past it
-// only when a pass has more.
-constexpr std::size_t kInitialContactCapacity = 4096;
+// The nodes a contact acts on, room kept per contact at the start (the lists grow past it
+// only when a pass has more).
 constexpr std::size_t kInitialEntriesPerContact = 8;
 
 // Rows n, t1, t2: an orthonormal frame whose tangents depend only on n (deterministic). The

@@ -9,9 +9,6 @@ namespace hof::coupling::detail {
 
 namespace {
 
-// Room kept for contacts at the start (the list grows past it only when a pass finds more).
-constexpr std::size_t kInitialContactCapacity = 4096;
-
 std::size_t point_vertex_count(collision::PrimitiveKind kind) {
   switch (kind) {
     case collision::PrimitiveKind::kVertex:

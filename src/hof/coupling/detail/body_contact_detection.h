@@ -7,6 +7,7 @@
 /// contact point to the nodes that carry it (surface weights → nodes through the body's
 /// SurfaceMapping, or through the sphere centres' own mapping).
 
+#include <cstddef>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -17,6 +18,10 @@
 namespace hof::coupling::detail {
 
 struct World;
+
+/// Room the contact passes keep for contacts at the start (their lists grow past it only when
+/// a pass finds more).
+inline constexpr std::size_t kInitialContactCapacity = 4096;
 
 class BodyContactDetection {
  public:

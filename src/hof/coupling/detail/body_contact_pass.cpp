@@ -12,9 +12,6 @@ namespace hof::coupling::detail {
 
 namespace {
 
-// Room kept for contacts at the start (the list grows past it only when a pass finds more).
-constexpr std::size_t kInitialContactCapacity = 4096;
-
 bool has_elements(const mechanics::MechanicalModel& model) {
   return !model.hexahedra.empty() || !model.tets.empty() || !model.triangles.empty();
 }
