@@ -349,15 +349,7 @@ void BodyContactConstraints::apply(World& w, BodyContactDetection& detection, st
     ++contact_count_[static_cast<std::size_t>(contact.b.body)];
     pushing.push_back(contact);
   }
-  detection.for_each_body([&](std::size_t b) {
-    BodyReport& br = w.bodies[b].report;
-    br.body_contacts = contact_count_[b];
-    br.max_body_contacts = std::max(br.max_body_contacts, br.body_contacts);
-    br.body_contact_force_n = force_sum_[b];
-    br.max_body_contact_force_n = std::max(br.max_body_contact_force_n, force_sum_[b].norm());
-  });
-  report.body_contacts = static_cast<std::int64_t>(pushing.size());
-  report.max_body_contacts = std::max(report.max_body_contacts, report.body_contacts);
+  detection.report_pass(w, contact_count_, force_sum_, pushing.size(), report);
 }
 
 }  // namespace hof::coupling::detail

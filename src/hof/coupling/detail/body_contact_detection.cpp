@@ -131,4 +131,18 @@ std::size_t BodyContactDetection::point_weights(const World& w, const collision:
                                       std::span(side.weights.data(), vertices), nodes, weights);
 }
 
+void BodyContactDetection::report_pass(World& w, std::span<const std::int64_t> contact_count,
+                                       std::span<const Vec3> force_sum, std::size_t contacts,
+                                       SessionReport& report) const {
+  for (const Member& m : members_) {
+    BodyReport& br = w.bodies[m.body].report;
+    br.body_contacts = contact_count[m.body];
+    br.max_body_contacts = std::max(br.max_body_contacts, br.body_contacts);
+    br.body_contact_force_n = force_sum[m.body];
+    br.max_body_contact_force_n = std::max(br.max_body_contact_force_n, force_sum[m.body].norm());
+  }
+  report.body_contacts = static_cast<std::int64_t>(contacts);
+  report.max_body_contacts = std::max(report.max_body_contacts, report.body_contacts);
+}
+
 }  // namespace hof::coupling::detail

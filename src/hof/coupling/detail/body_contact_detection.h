@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "hof/collision/body_contacts.h"
+#include "hof/coupling/session.h"
 #include "hof/coupling/surface_mapping.h"
 
 namespace hof::coupling::detail {
@@ -51,6 +52,13 @@ class BodyContactDetection {
   void for_each_body(F&& f) const {
     for (const Member& m : members_) f(m.body);
   }
+
+  /// Puts one pass's figures in the reports: each body taking part gets its contact count and
+  /// total force (`contact_count`, `force_sum` by world body index) and its largest so far;
+  /// the session's report the pass's `contacts` and its largest. The penalty and the
+  /// constraint pass report alike.
+  void report_pass(World& world, std::span<const std::int64_t> contact_count, std::span<const Vec3> force_sum,
+                   std::size_t contacts, SessionReport& report) const;
 
   /// Switches the contact of bodies `a` and `b` (world indices) off or on from the next pass
   /// (command::SetContactPair). Nothing for indices outside the world set up by init().

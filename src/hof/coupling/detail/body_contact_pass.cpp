@@ -167,15 +167,7 @@ void BodyContactPass::apply(World& w, std::span<const char> due, SessionReport& 
     add_side(w, c.b, -force, stiffness);
   }
   detection_.end_pass(w);
-  detection_.for_each_body([&](std::size_t b) {
-    BodyReport& br = w.bodies[b].report;
-    br.body_contacts = contact_count_[b];
-    br.max_body_contacts = std::max(br.max_body_contacts, br.body_contacts);
-    br.body_contact_force_n = force_sum_[b];
-    br.max_body_contact_force_n = std::max(br.max_body_contact_force_n, force_sum_[b].norm());
-  });
-  report.body_contacts = static_cast<std::int64_t>(active_contacts_.size());
-  report.max_body_contacts = std::max(report.max_body_contacts, report.body_contacts);
+  detection_.report_pass(w, contact_count_, force_sum_, active_contacts_.size(), report);
 }
 
 void BodyContactPass::correct(World& w, std::span<const char> due, SessionReport& report) {
